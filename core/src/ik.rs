@@ -1,0 +1,278 @@
+//! Inverse kinematics: damped least squares (Levenberg–Marquardt damping) within the joint
+//! limits, from the caller's seed and a fixed set of further seeds; the converged solution
+//! nearest the caller's seed is returned. Effects are compensated: the pose reached is
+//! [`Robot::fk`] of the returned readings.
+
+use core::f64::consts::PI;
+
+use nalgebra::{Cholesky, SMatrix, SVector, Vector3, Vector6};
+
+use crate::error::{Error, Quantity, Result, check_finite};
+use crate::kinematics::Frames;
+use crate::model::{JointState, Robot};
+use crate::params::CyclicTerm;
+use crate::pose::{Transform, rotation_log};
+
+/// Options of [`solve_ik`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IkOptions {
+    /// Iterations per seed.
+    pub max_iterations: u32,
+    /// Convergence: position residual below this [m].
+    pub tol_pos_m: f64,
+    /// Convergence: orientation residual below this [rad].
+    pub tol_rot_rad: f64,
+    /// Seeds tried after the caller's (a deterministic Halton sequence over the limits,
+    /// clipped to ±π).
+    pub extra_seeds: usize,
+    /// Stop at the first seed that converges (faster; the answer is then the solution
+    /// reached from the earliest converging seed rather than the nearest of all).
+    pub first_solution: bool,
+}
+
+impl Default for IkOptions {
+    fn default() -> Self {
+        IkOptions {
+            max_iterations: 200,
+            tol_pos_m: 1e-11,
+            tol_rot_rad: 1e-11,
+            extra_seeds: 16,
+            first_solution: false,
+        }
+    }
+}
+
+/// A solution of [`solve_ik`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IkSolution<const N: usize> {
+    /// Joint readings [rad], within the limits.
+    pub q: [f64; N],
+    /// Position residual [m].
+    pub residual_pos_m: f64,
+    /// Orientation residual [rad].
+    pub residual_rot_rad: f64,
+    /// Iterations used for the chosen seed.
+    pub iterations: u32,
+    /// Which seed converged to it (0 = the caller's).
+    pub seed_index: usize,
+}
+
+const PRIMES: [u32; 20] = [
+    2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53, 59, 61, 67, 71,
+];
+
+fn halton(index: u32, base: u32) -> f64 {
+    let (mut f, mut r, mut i) = (1.0, 0.0, index);
+    while i > 0 {
+        f /= f64::from(base);
+        r += f * f64::from(i % base);
+        i /= base;
+    }
+    r
+}
+
+/// Solves `fk(q) = target` for readings `q` within the joint limits.
+///
+/// `seed` supplies the start configuration and, for models with backlash or thermal
+/// effects, the approach directions and temperature to compensate. Returns the converged
+/// configuration nearest to `seed.q` (joints whose range spans more than 2π are shifted by
+/// ±2π towards the seed when that stays within limits), or [`Error::Unreachable`] with the
+/// best residual found.
+///
+/// ```
+/// use kincal::{aria, ik::{solve_ik, IkOptions}, JointState};
+/// let robot = aria::nominal();
+/// let target = aria::tool_pose(0).unwrap();
+/// let sol = solve_ik(&robot, &target, &JointState::new(aria::TOOL_SEED_Q), &IkOptions::default()).unwrap();
+/// assert!(sol.residual_pos_m < 1e-9);
+/// ```
+pub fn solve_ik<const N: usize>(
+    robot: &Robot<N>,
+    target: &Transform,
+    seed: &JointState<N>,
+    opts: &IkOptions,
+) -> Result<IkSolution<N>> {
+    seed.validate()?;
+    let t = target.translation.vector;
+    check_finite(t.as_slice(), Quantity::Position)?;
+    check_finite(target.rotation.matrix().as_slice(), Quantity::Orientation)?;
+    check_finite(
+        &[opts.tol_pos_m, opts.tol_rot_rad],
+        Quantity::Setting,
+    )?;
+    let limits = robot.limits();
+    let mut best: Option<IkSolution<N>> = None;
+    let mut best_dist = f64::INFINITY;
+    let mut best_residual = (f64::INFINITY, f64::INFINITY);
+    for s in 0..=opts.extra_seeds {
+        let mut start = seed.q;
+        if s > 0 {
+            for (j, v) in start.iter_mut().enumerate() {
+                let lo = limits[j].lower.max(-PI);
+                let hi = limits[j].upper.min(PI);
+                let u = halton(s as u32, PRIMES[j % PRIMES.len()]);
+                *v = if hi > lo { lo + u * (hi - lo) } else { limits[j].lower };
+            }
+        }
+        let mut st = *seed;
+        st.q = start;
+        let (sol, res) = descend(robot, target, st, opts)?;
+        if res.0 + res.1 < best_residual.0 + best_residual.1 {
+            best_residual = res;
+        }
+        if let Some(mut sol) = sol {
+            sol.seed_index = s;
+            shift_towards(&mut sol.q, &seed.q, robot);
+            let dist: f64 = sol
+                .q
+                .iter()
+                .zip(seed.q.iter())
+                .map(|(a, b)| (a - b) * (a - b))
+                .sum();
+            if dist < best_dist {
+                best_dist = dist;
+                best = Some(sol);
+            }
+            if opts.first_solution {
+                break;
+            }
+        }
+    }
+    best.ok_or(Error::Unreachable {
+        residual_pos_m: best_residual.0,
+        residual_rot_rad: best_residual.1,
+    })
+}
+
+/// Moves joints by ±2π towards `seed` where the limits allow (same pose, nearer readings).
+fn shift_towards<const N: usize>(q: &mut [f64; N], seed: &[f64; N], robot: &Robot<N>) {
+    for j in 0..N {
+        let lim = robot.limits()[j];
+        for k in [-2.0 * PI, 2.0 * PI] {
+            let cand = q[j] + k;
+            if lim.contains(cand) && (cand - seed[j]).abs() < (q[j] - seed[j]).abs() {
+                q[j] = cand;
+            }
+        }
+    }
+}
+
+fn residual<const N: usize>(
+    robot: &Robot<N>,
+    target: &Transform,
+    state: &JointState<N>,
+    frames: &mut Frames<N>,
+) -> Result<Vector6<f64>> {
+    robot.fk_frames(state, frames)?;
+    let dp = target.translation.vector - frames.t_base_ee.translation.vector;
+    let dr = rotation_log(&(target.rotation.matrix() * frames.t_base_ee.rotation.matrix().transpose()));
+    Ok(Vector6::new(dp.x, dp.y, dp.z, dr.x, dr.y, dr.z))
+}
+
+type Outcome<const N: usize> = (Option<IkSolution<N>>, (f64, f64));
+
+/// One damped least-squares descent from `state.q`, projected onto the limits.
+fn descend<const N: usize>(
+    robot: &Robot<N>,
+    target: &Transform,
+    mut state: JointState<N>,
+    opts: &IkOptions,
+) -> Result<Outcome<N>> {
+    let limits = robot.limits();
+    let clamp = |q: &mut [f64; N]| {
+        for (v, l) in q.iter_mut().zip(limits.iter()) {
+            *v = v.clamp(l.lower, l.upper);
+        }
+    };
+    clamp(&mut state.q);
+    let mut frames = Frames::default();
+    let mut e = residual(robot, target, &state, &mut frames)?;
+    let mut lambda = 1e-6;
+    let norms = |e: &Vector6<f64>| (e.fixed_rows::<3>(0).norm(), e.fixed_rows::<3>(3).norm());
+    for it in 0..opts.max_iterations {
+        let (ep, er) = norms(&e);
+        if ep < opts.tol_pos_m && er < opts.tol_rot_rad {
+            return Ok((
+                Some(IkSolution {
+                    q: state.q,
+                    residual_pos_m: ep,
+                    residual_rot_rad: er,
+                    iterations: it,
+                    seed_index: 0,
+                }),
+                (ep, er),
+            ));
+        }
+        let j = joint_jacobian(robot, &state, &frames);
+        let jjt = j * j.transpose();
+        let mut accepted = false;
+        while lambda < 1e9 {
+            let damped = jjt + SMatrix::<f64, 6, 6>::identity() * lambda;
+            let Some(chol) = Cholesky::new(damped) else {
+                lambda *= 10.0;
+                continue;
+            };
+            let dq: SVector<f64, N> = j.transpose() * chol.solve(&e);
+            let mut trial = state;
+            for (k, v) in trial.q.iter_mut().enumerate() {
+                *v += dq[k];
+            }
+            clamp(&mut trial.q);
+            let mut f2 = Frames::default();
+            let e2 = residual(robot, target, &trial, &mut f2)?;
+            if e2.norm_squared() < e.norm_squared() {
+                state = trial;
+                e = e2;
+                frames = f2;
+                lambda = (lambda * 0.1).max(1e-12);
+                accepted = true;
+                break;
+            }
+            lambda *= 10.0;
+        }
+        if !accepted {
+            break;
+        }
+    }
+    Ok((None, norms(&e)))
+}
+
+/// The 6×N Jacobian of the pose with respect to the readings: the θ0 columns times
+/// dθ_j/dq_j of the scale and cyclic effects (compliance's dependence on q is neglected;
+/// it only slows convergence slightly).
+fn joint_jacobian<const N: usize>(
+    robot: &Robot<N>,
+    state: &JointState<N>,
+    f: &Frames<N>,
+) -> SMatrix<f64, 6, N> {
+    let pe = f.t_base_ee.translation.vector;
+    let e = robot.effect_params();
+    let mut j = SMatrix::<f64, 6, N>::zeros();
+    for i in 0..N {
+        let (p_prev, z_prev): (Vector3<f64>, Vector3<f64>) = if i == 0 {
+            (
+                f.t_base_0.translation.vector,
+                f.t_base_0.rotation.matrix().column(2).into_owned(),
+            )
+        } else {
+            (
+                f.t_base_link[i - 1].translation.vector,
+                f.t_base_link[i - 1].rotation.matrix().column(2).into_owned(),
+            )
+        };
+        let q = state.q[i];
+        let (s1, c1) = crate::math::sin_cos(q);
+        let c = &e.cyclic[i];
+        let dtheta = 1.0
+            + e.scale[i]
+            + c[CyclicTerm::Sin1 as usize] * c1
+            - c[CyclicTerm::Cos1 as usize] * s1
+            + 2.0 * c[CyclicTerm::Sin2 as usize] * (c1 * c1 - s1 * s1)
+            - 4.0 * c[CyclicTerm::Cos2 as usize] * s1 * c1;
+        let lin = z_prev.cross(&(pe - p_prev)) * dtheta;
+        let ang = z_prev * dtheta;
+        j.fixed_view_mut::<3, 1>(0, i).copy_from(&lin);
+        j.fixed_view_mut::<3, 1>(3, i).copy_from(&ang);
+    }
+    j
+}

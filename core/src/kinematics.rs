@@ -1,0 +1,266 @@
+//! Forward kinematics, every intermediate frame, the gravity torques of the mass model, and
+//! the analytic identification Jacobian (eq. 13a–e) with base, tool and effect columns.
+
+use nalgebra::{Matrix3, Vector3};
+
+use crate::error::{Error, Result};
+use crate::model::{Geometry, JointState, Robot};
+use crate::params::{CyclicTerm, FrameParam, LinkParam, ParamId};
+use crate::pose::{Transform, so3_left_jacobian, transform};
+
+/// Row order of every identification Jacobian column: `[Δp (3, m); Δφ (3, rad)]`, both in the
+/// base frame — the same order as [`crate::pose::PoseError`].
+pub type JacobianColumn = [f64; 6];
+
+/// Every frame of one FK evaluation, in the base frame. Needed by the Jacobian.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Frames<const N: usize> {
+    /// `T_0^b`: frame 0 (before joint 1) in the base frame.
+    pub t_base_0: Transform,
+    /// `t_base_link[i]` = `T_0^b·A_1···A_{i+1}`: frame i+1 in the base frame.
+    pub t_base_link: [Transform; N],
+    /// x axis of link i+1's intermediate frame (after `Rz·Tz·Tx`, before `Rx(α)·Ry(β)`):
+    /// the axis of a_{i+1} and α_{i+1}. Equals frame i+1's x axis when β = 0.
+    pub x_mid: [Vector3<f64>; N],
+    /// `T_e^b`: end effector (tool) in the base frame.
+    pub t_base_ee: Transform,
+    /// Factor applied to every d and a (thermal expansion; 1 without it).
+    pub length_scale: f64,
+}
+
+impl<const N: usize> Default for Frames<N> {
+    fn default() -> Self {
+        Frames {
+            t_base_0: Transform::identity(),
+            t_base_link: [Transform::identity(); N],
+            x_mid: [Vector3::zeros(); N],
+            t_base_ee: Transform::identity(),
+            length_scale: 1.0,
+        }
+    }
+}
+
+/// FK of a geometry at angles `angles` (q + Δθ, without θ0), lengths times `scale`.
+/// `on_link(i, R_mid, R_i, p_i)` sees each link's intermediate rotation and frame.
+#[inline(always)]
+fn chain<const N: usize>(
+    g: &Geometry<N>,
+    angles: &[f64; N],
+    scale: f64,
+    mut on_link: impl FnMut(usize, &Matrix3<f64>, &Matrix3<f64>, &Vector3<f64>),
+) -> Transform {
+    let mut r = *g.t_base.rotation.matrix();
+    let mut p = g.t_base.translation.vector;
+    for i in 0..N {
+        let l = &g.links[i];
+        let (s, c) = crate::math::sin_cos(angles[i] + l.theta0);
+        let c0 = r.column(0).into_owned();
+        let c1 = r.column(1).into_owned();
+        // R_prev·Rz(θ): only the first two columns change.
+        let mut m = r;
+        m.set_column(0, &(c0 * c + c1 * s));
+        m.set_column(1, &(c1 * c - c0 * s));
+        // p_i = p_{i-1} + R_prev·Rz(θ)·(a, 0, d).
+        p += m.column(0) * (l.a * scale) + m.column(2) * (l.d * scale);
+        r = m * g.link_rot[i];
+        on_link(i, &m, &r, &p);
+    }
+    transform(r, p) * g.t_tool
+}
+
+impl<const N: usize> Robot<N> {
+    /// End-effector pose `T_e^b` for the joint state (effects applied).
+    ///
+    /// ```
+    /// use kincal::{aria, JointState};
+    /// let robot = aria::nominal();
+    /// let t = robot.fk(&JointState::new([0.0; 6])).unwrap();
+    /// // Arm stretched up: 0.205 + 0.41 + 0.336 + 0.202 m above the base, offset by a_3 and d_5.
+    /// assert!((t.translation.z - (0.205 + 0.41 + 0.03 + 0.336 + 0.202 - 0.03)).abs() < 1.0);
+    /// ```
+    pub fn fk(&self, state: &JointState<N>) -> Result<Transform> {
+        let angles = self.joint_angles(state)?;
+        let scale = self.length_scale(state)?;
+        Ok(chain(&self.geom, &angles, scale, |_, _, _, _| {}))
+    }
+
+    /// End-effector pose for readings `q` alone (models without backlash/thermal).
+    pub fn fk_q(&self, q: &[f64; N]) -> Result<Transform> {
+        self.fk(&JointState::new(*q))
+    }
+
+    /// FK with every intermediate frame written into `frames`.
+    pub fn fk_frames(&self, state: &JointState<N>, frames: &mut Frames<N>) -> Result<()> {
+        let angles = self.joint_angles(state)?;
+        let scale = self.length_scale(state)?;
+        self.frames_at(&angles, scale, frames);
+        Ok(())
+    }
+
+    fn frames_at(&self, angles: &[f64; N], scale: f64, frames: &mut Frames<N>) {
+        frames.t_base_0 = self.geom.t_base;
+        frames.length_scale = scale;
+        let (links, x_mid) = (&mut frames.t_base_link, &mut frames.x_mid);
+        frames.t_base_ee = chain(&self.geom, angles, scale, |i, m, r, p| {
+            links[i] = transform(*r, *p);
+            x_mid[i] = m.column(0).into_owned();
+        });
+    }
+
+    /// Gravity torque τ_j about each joint axis [N·m] at readings `q`, from the mass model
+    /// and the nominal geometry (spec/effects.md): `τ_j = z_{j−1}·Σ_{k≥j}(c_k − p_{j−1}) ×
+    /// (m_k·g)`. With this sign a positive compliance moves a joint the way gravity pulls.
+    #[must_use]
+    pub fn gravity_torques(&self, q: &[f64; N]) -> [f64; N] {
+        let mut p = [Vector3::zeros(); N];
+        let mut z = [Vector3::zeros(); N];
+        let ee = chain(&self.nominal, q, 1.0, |i, _, r, pi| {
+            p[i] = *pi;
+            z[i] = r.column(2).into_owned();
+        });
+        let g = self.gravity();
+        let base_p = self.nominal.t_base.translation.vector;
+        let base_z = self.nominal.t_base.rotation.matrix().column(2).into_owned();
+        // Accumulate from the tip: first moment Σ m_k c_k and mass Σ m_k of links k ≥ j.
+        let mut moment = ee.translation.vector * self.mass.tool_mass_kg;
+        let mut mass = self.mass.tool_mass_kg;
+        let mut tau = [0.0; N];
+        for j in (0..N).rev() {
+            let (p_prev, z_prev) = if j == 0 {
+                (base_p, base_z)
+            } else {
+                (p[j - 1], z[j - 1])
+            };
+            let m = self.mass.link_masses_kg[j];
+            moment += (p_prev + p[j]) * (0.5 * m);
+            mass += m;
+            tau[j] = z_prev.dot(&(moment - p_prev * mass).cross(&g));
+        }
+        tau
+    }
+
+    /// The analytic identification Jacobian at `state`: column `i` is `∂[p; φ]/∂param_i`
+    /// (rows `[Δp; Δφ]` in the base frame, see [`JacobianColumn`]); returns the pose.
+    ///
+    /// `jac.len()` must be [`Robot::NUM_GEOMETRIC_PARAMS`] (links, base, tool) or
+    /// [`Robot::NUM_PARAMS`] (also the effect columns). Link columns follow eq. (13a–e):
+    /// θ0_i → `[z_{i−1} × (p_e − p_{i−1}); z_{i−1}]`, d_i → `[z_{i−1}; 0]`, a_i → `[x_i; 0]`,
+    /// α_i → `[x_i × (p_e − p_i); x_i]`, β_i → `[y_i × (p_e − p_i); y_i]`, with x_i the x
+    /// axis before Ry(β_i) (exact for β ≠ 0). Base and tool columns use the SO(3) left
+    /// Jacobian of their rotation vectors, so they are exact away from zero too. Effect
+    /// columns are the θ0 column times ∂Δθ_j/∂param; the thermal column is
+    /// `(T − 20)·Σ_i (d_i·col(d_i) + a_i·col(a_i))`. Columns of effects whose input is
+    /// missing (approach directions, temperature) are zero.
+    pub fn jacobian(&self, state: &JointState<N>, jac: &mut [JacobianColumn]) -> Result<Transform> {
+        let full = if jac.len() == Self::NUM_PARAMS {
+            true
+        } else if jac.len() == Self::NUM_GEOMETRIC_PARAMS {
+            false
+        } else {
+            return Err(Error::DimensionMismatch {
+                expected: Self::NUM_GEOMETRIC_PARAMS,
+                found: jac.len(),
+            });
+        };
+        let angles = self.joint_angles(state)?;
+        let scale = self.length_scale(state)?;
+        let mut f = Frames::default();
+        self.frames_at(&angles, scale, &mut f);
+        let pe = f.t_base_ee.translation.vector;
+        let col = |lin: Vector3<f64>, ang: Vector3<f64>| [lin.x, lin.y, lin.z, ang.x, ang.y, ang.z];
+        let zero = Vector3::zeros();
+        for i in 0..N {
+            let (p_prev, z_prev) = if i == 0 {
+                (
+                    f.t_base_0.translation.vector,
+                    f.t_base_0.rotation.matrix().column(2).into_owned(),
+                )
+            } else {
+                (
+                    f.t_base_link[i - 1].translation.vector,
+                    f.t_base_link[i - 1].rotation.matrix().column(2).into_owned(),
+                )
+            };
+            let pi = f.t_base_link[i].translation.vector;
+            let yi = f.t_base_link[i].rotation.matrix().column(1).into_owned();
+            let xm = f.x_mid[i];
+            let idx = |k: LinkParam| ParamId::Link { link: i, kind: k }.index(N).0;
+            jac[idx(LinkParam::Theta0)] = col(z_prev.cross(&(pe - p_prev)), z_prev);
+            jac[idx(LinkParam::D)] = col(z_prev * scale, zero);
+            jac[idx(LinkParam::A)] = col(xm * scale, zero);
+            jac[idx(LinkParam::Alpha)] = col(xm.cross(&(pe - pi)), xm);
+            jac[idx(LinkParam::Beta)] = col(yi.cross(&(pe - pi)), yi);
+        }
+        // Base: T_0^b = Trans(p)·Rot(r); a change dr rotates everything after it about the
+        // base-frame axis J_l(r)·dr through p.
+        let base_p = f.t_base_0.translation.vector;
+        let jl_base = so3_left_jacobian(&Vector3::new(
+            self.geom.base[3],
+            self.geom.base[4],
+            self.geom.base[5],
+        ));
+        // Tool: T_e = T_N·Trans(p)·Rot(r); dp moves along R_N's axes, dr rotates about
+        // R_e·J_r(r)·dr with J_r(r) = J_l(r)ᵀ.
+        let r_n = f
+            .t_base_link
+            .last()
+            .map_or(*f.t_base_0.rotation.matrix(), |t| *t.rotation.matrix());
+        let r_e = *f.t_base_ee.rotation.matrix();
+        let jr_tool = so3_left_jacobian(&Vector3::new(
+            self.geom.tool[3],
+            self.geom.tool[4],
+            self.geom.tool[5],
+        ))
+        .transpose();
+        for k in FrameParam::ALL {
+            let ax = k as usize % 3;
+            let (b, t) = if (k as usize) < 3 {
+                (
+                    col(Vector3::ith(ax, 1.0), zero),
+                    col(r_n.column(ax).into_owned(), zero),
+                )
+            } else {
+                let w = jl_base.column(ax).into_owned();
+                let wt = r_e * jr_tool.column(ax);
+                (col(w.cross(&(pe - base_p)), w), col(zero, wt))
+            };
+            jac[ParamId::Base(k).index(N).0] = b;
+            jac[ParamId::Tool(k).index(N).0] = t;
+        }
+        if full {
+            self.effect_columns(state, scale, jac);
+        }
+        Ok(f.t_base_ee)
+    }
+
+    /// Effect columns, from the θ0, d and a columns already in `jac`.
+    fn effect_columns(&self, state: &JointState<N>, scale: f64, jac: &mut [JacobianColumn]) {
+        let tau = self.gravity_torques(&state.q);
+        let approach = state.approach.unwrap_or([0.0; N]);
+        let scaled = |c: JacobianColumn, f: f64| c.map(|v| v * f);
+        let mut thermal = [0.0; 6];
+        for j in 0..N {
+            let th = jac[ParamId::Link { link: j, kind: LinkParam::Theta0 }.index(N).0];
+            let q = state.q[j];
+            let (s1, c1) = crate::math::sin_cos(q);
+            let terms = [s1, c1, 2.0 * s1 * c1, c1 * c1 - s1 * s1];
+            jac[ParamId::Compliance(j).index(N).0] = scaled(th, tau[j]);
+            jac[ParamId::Scale(j).index(N).0] = scaled(th, q);
+            for t in CyclicTerm::ALL {
+                jac[ParamId::Cyclic(j, t).index(N).0] = scaled(th, terms[t as usize]);
+            }
+            jac[ParamId::Backlash(j).index(N).0] = scaled(th, approach[j]);
+            // The d and a columns carry the factor `scale`; ∂/∂(scaled length) = col/scale.
+            let l = &self.geom.links[j];
+            let dcol = jac[ParamId::Link { link: j, kind: LinkParam::D }.index(N).0];
+            let acol = jac[ParamId::Link { link: j, kind: LinkParam::A }.index(N).0];
+            for r in 0..6 {
+                thermal[r] += (l.d * dcol[r] + l.a * acol[r]) / scale;
+            }
+        }
+        let dt = state
+            .temp_c
+            .map_or(0.0, |t| t - crate::model::THERMAL_REFERENCE_C);
+        jac[ParamId::Thermal.index(N).0] = scaled(thermal, dt);
+    }
+}

@@ -1,0 +1,24 @@
+#![doc = include_str!("../README.md")]
+#![no_std]
+#![deny(missing_docs)]
+#![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used, clippy::panic))]
+
+#[cfg(test)]
+extern crate std;
+
+pub mod aria;
+pub mod effects;
+pub mod error;
+pub mod ik;
+pub mod kinematics;
+mod math;
+pub mod model;
+pub mod params;
+pub mod pose;
+
+pub use effects::{Effect, EffectSet};
+pub use error::{Error, JointIndex, ParamIndex, PoseIndex, Quantity, Result};
+pub use kinematics::{Frames, JacobianColumn};
+pub use model::{JointLimits, JointState, LengthParam, Link, MassModel, Robot};
+pub use params::{ParamId, ParamSet};
+pub use pose::{OrientationError, PoseError, Transform};
