@@ -6,6 +6,7 @@
 #[cfg(test)]
 extern crate std;
 
+pub mod any;
 pub mod aria;
 pub mod effects;
 pub mod error;

@@ -1,0 +1,107 @@
+//! A robot whose joint count is known only at run time (from a file or a C caller), as one
+//! enum over the supported counts, so the shells (C ABI, CLI) dispatch once with
+//! [`with_any_robot!`](crate::with_any_robot) and call the generic core. No heap: the enum is
+//! as large as its largest variant.
+
+use crate::error::{Error, Result};
+use crate::model::{JointLimits, Link, Robot};
+
+/// Largest joint count a run-time robot may have.
+pub const MAX_JOINTS: usize = 8;
+
+/// A [`Robot`] with 1 to [`MAX_JOINTS`] joints.
+#[derive(Debug, Clone, PartialEq)]
+#[allow(missing_docs)]
+pub enum AnyRobot {
+    J1(Robot<1>),
+    J2(Robot<2>),
+    J3(Robot<3>),
+    J4(Robot<4>),
+    J5(Robot<5>),
+    J6(Robot<6>),
+    J7(Robot<7>),
+    J8(Robot<8>),
+}
+
+/// Runs `$body` with `$r` bound to the concrete `Robot<N>` inside an [`AnyRobot`] (by value,
+/// reference or mutable reference, following the expression given). Inside `$body`, the
+/// const `N` is not nameable; use generic helper functions.
+///
+/// ```
+/// use kincal::{any::AnyRobot, aria, with_any_robot};
+/// let any = AnyRobot::from(aria::nominal());
+/// let n = with_any_robot!(&any, r => r.links().len());
+/// assert_eq!(n, 6);
+/// ```
+#[macro_export]
+macro_rules! with_any_robot {
+    ($any:expr, $r:ident => $body:expr) => {
+        match $any {
+            $crate::any::AnyRobot::J1($r) => $body,
+            $crate::any::AnyRobot::J2($r) => $body,
+            $crate::any::AnyRobot::J3($r) => $body,
+            $crate::any::AnyRobot::J4($r) => $body,
+            $crate::any::AnyRobot::J5($r) => $body,
+            $crate::any::AnyRobot::J6($r) => $body,
+            $crate::any::AnyRobot::J7($r) => $body,
+            $crate::any::AnyRobot::J8($r) => $body,
+        }
+    };
+}
+
+macro_rules! impl_from {
+    ($($v:ident $n:literal),*) => {$(
+        impl From<Robot<$n>> for AnyRobot {
+            fn from(r: Robot<$n>) -> Self {
+                AnyRobot::$v(r)
+            }
+        }
+    )*};
+}
+impl_from!(J1 1, J2 2, J3 3, J4 4, J5 5, J6 6, J7 7, J8 8);
+
+fn build<const N: usize>(links: &[Link], limits: &[JointLimits]) -> Result<Robot<N>> {
+    let l: [Link; N] = links.try_into().map_err(|_| Error::DimensionMismatch {
+        expected: N,
+        found: links.len(),
+    })?;
+    let m: [JointLimits; N] = limits.try_into().map_err(|_| Error::DimensionMismatch {
+        expected: N,
+        found: limits.len(),
+    })?;
+    Robot::new(l, m)
+}
+
+impl AnyRobot {
+    /// A robot from slices of links and limits of equal length 1..=[`MAX_JOINTS`].
+    pub fn new(links: &[Link], limits: &[JointLimits]) -> Result<Self> {
+        if links.len() != limits.len() {
+            return Err(Error::DimensionMismatch {
+                expected: links.len(),
+                found: limits.len(),
+            });
+        }
+        Ok(match links.len() {
+            1 => build::<1>(links, limits)?.into(),
+            2 => build::<2>(links, limits)?.into(),
+            3 => build::<3>(links, limits)?.into(),
+            4 => build::<4>(links, limits)?.into(),
+            5 => build::<5>(links, limits)?.into(),
+            6 => build::<6>(links, limits)?.into(),
+            7 => build::<7>(links, limits)?.into(),
+            8 => build::<8>(links, limits)?.into(),
+            n => {
+                return Err(Error::CapacityExceeded {
+                    needed: n,
+                    capacity: MAX_JOINTS,
+                });
+            }
+        })
+    }
+
+    /// Number of joints.
+    #[must_use]
+    pub fn n_joints(&self) -> usize {
+        with_any_robot!(self, r => r.links().len())
+    }
+}
