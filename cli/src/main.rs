@@ -1,1 +1,7 @@
+//! `kincal`: the command-line tool (commands land with the identification issue).
+#![allow(dead_code)]
+
+mod files;
+mod measurements;
+
 fn main() {}
