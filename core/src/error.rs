@@ -176,7 +176,10 @@ impl fmt::Display for Error {
                 "rank deficient: numerical rank {rank}, {required} required"
             ),
             Error::CapacityExceeded { needed, capacity } => {
-                write!(f, "capacity exceeded: {needed} needed, {capacity} available")
+                write!(
+                    f,
+                    "capacity exceeded: {needed} needed, {capacity} available"
+                )
             }
             Error::TooFewData { found, needed } => {
                 write!(f, "too few data: {found} given, at least {needed} needed")

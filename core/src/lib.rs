@@ -1,7 +1,13 @@
 #![doc = include_str!("../README.md")]
 #![no_std]
 #![deny(missing_docs)]
-#![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used, clippy::panic))]
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+// Numerical kernels index several same-length arrays by one loop counter; iterator chains
+// would hide that structure.
+#![allow(clippy::needless_range_loop)]
 
 #[cfg(test)]
 extern crate std;
@@ -12,6 +18,7 @@ pub mod effects;
 pub mod error;
 pub mod ik;
 pub mod kinematics;
+pub mod linalg;
 mod math;
 pub mod model;
 pub mod params;
