@@ -23,6 +23,7 @@ mod math;
 pub mod model;
 pub mod params;
 pub mod pose;
+pub mod validation;
 
 pub use effects::{Effect, EffectSet};
 pub use error::{Error, JointIndex, ParamIndex, PoseIndex, Quantity, Result};
