@@ -16,6 +16,7 @@ pub mod any;
 pub mod aria;
 pub mod effects;
 pub mod error;
+pub mod identify;
 pub mod ik;
 pub mod kinematics;
 pub mod linalg;
