@@ -24,6 +24,7 @@ mod math;
 pub mod model;
 pub mod params;
 pub mod pose;
+pub mod rng;
 pub mod validation;
 
 pub use effects::{Effect, EffectSet};

@@ -27,6 +27,10 @@ use crate::params::ParamSet;
 /// residuals at rounding level (~1e-14), identifiable ones far above this.
 pub const STRUCTURAL_TOL: f64 = 1e-9;
 
+/// A column shorter than this times the longest requested column counts as zero: e.g. the
+/// compliance column of a joint whose gravity torque vanishes except for rounding.
+pub const ZERO_COLUMN_REL: f64 = 1e-10;
+
 /// A parameter that was not kept and the kept parameter its column aligns with most.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Partner {
@@ -232,8 +236,14 @@ fn greedy<const P: usize>(
 ) -> Result<ParamSet> {
     let mut kept = ParamSet::new();
     let mut n_basis = 0;
+    let longest = (0..n).map(|k| column_norm(ws, k)).fold(0.0, f64::max);
     for k in 0..n {
         let norm = column_norm(ws, k);
+        let norm = if norm > ZERO_COLUMN_REL * longest {
+            norm
+        } else {
+            0.0
+        };
         let r = ws.lsq.r();
         for i in 0..n {
             ws.tmp[i] = if i <= k && norm > 0.0 {

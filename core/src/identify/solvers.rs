@@ -145,15 +145,22 @@ fn get_x<const N: usize, const P: usize>(
     Ok(())
 }
 
-/// `robot` with the fitted parameters set to `x + step`.
+/// `robot` with the fitted parameters set to `x + step` (clipped to `bounds` when given, so
+/// a parameter moved onto a bound sits exactly on it).
 fn apply<const N: usize, const P: usize>(
     robot: &Robot<N>,
     n: usize,
     ws: &Workspace<P>,
+    bounds: Option<&super::Bounds>,
 ) -> Result<Robot<N>> {
     let mut r = *robot;
     for k in 0..n {
-        r.set_param(ParamIndex(ws.cols[k]), ws.x[k] + ws.step[k])?;
+        let i = ws.cols[k];
+        let mut v = ws.x[k] + ws.step[k];
+        if let Some(b) = bounds {
+            v = v.clamp(b.lower[i], b.upper[i]);
+        }
+        r.set_param(ParamIndex(i), v)?;
     }
     Ok(r)
 }
@@ -214,7 +221,7 @@ fn gauss_newton<const N: usize, const P: usize>(
         let xn = scaled_norm(ws, n, &ws.x);
         let mut accepted = None;
         for _ in 0..30 {
-            let trial = apply(robot, n, ws)?;
+            let trial = apply(robot, n, ws, None)?;
             let c2 = cost(&trial, data, opts)?;
             if c2 <= c {
                 accepted = Some((trial, c2));
@@ -293,7 +300,7 @@ fn levenberg_marquardt<const N: usize, const P: usize>(
             if it == 0 {
                 delta = delta.min(pnorm);
             }
-            let trial = apply(robot, n, ws)?;
+            let trial = apply(robot, n, ws, None)?;
             let fnorm1 = sqrt(cost(&trial, data, opts)?);
             let actred = if 0.1 * fnorm1 < fnorm {
                 1.0 - (fnorm1 / fnorm) * (fnorm1 / fnorm)
@@ -446,7 +453,7 @@ fn bounded<const N: usize, const P: usize>(
                 let target = (ws.x[k] + ws.tmp[f]).clamp(b.lower[i], b.upper[i]);
                 ws.step[k] = target - ws.x[k];
             }
-            let trial = apply(robot, n, ws)?;
+            let trial = apply(robot, n, ws, Some(b))?;
             let c2 = cost(&trial, data, opts)?;
             if c2 < c {
                 let dx = scaled_norm(ws, n, &ws.step);
