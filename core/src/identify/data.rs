@@ -132,10 +132,29 @@ pub(crate) fn accumulate<const N: usize, const P: usize>(
     ws: &mut Workspace<P>,
 ) -> Result<f64> {
     ws.lsq.reset(n_cols)?;
+    ws.to_gram = false;
     let mut c = 0.0;
     for m in data {
         c += add_rows(robot, &m.state, Some(&m.pose), m.mask, opts, n_cols, ws)?;
     }
+    Ok(c)
+}
+
+/// As [`accumulate`], into the normal equations `ws.gram` (the fast path of the iterations).
+pub(crate) fn accumulate_gram<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    opts: &IdentifyOptions<'_>,
+    n_cols: usize,
+    ws: &mut Workspace<P>,
+) -> Result<f64> {
+    ws.gram.reset(n_cols)?;
+    ws.to_gram = true;
+    let mut c = 0.0;
+    for m in data {
+        c += add_rows(robot, &m.state, Some(&m.pose), m.mask, opts, n_cols, ws)?;
+    }
+    ws.to_gram = false;
     Ok(c)
 }
 
@@ -179,7 +198,11 @@ pub(crate) fn add_rows<const N: usize, const P: usize>(
             let v = jac.get(col).map_or(0.0, |jc| jc[k]);
             ws.row[j] = v * ws.colscale[j];
         }
-        ws.lsq.add_row_weighted(&ws.row[..n_cols], e[k], w)?;
+        if ws.to_gram {
+            ws.gram.add_row_weighted(&ws.row[..n_cols], e[k], w)?;
+        } else {
+            ws.lsq.add_row_weighted(&ws.row[..n_cols], e[k], w)?;
+        }
         c += w * e[k] * e[k];
     }
     Ok(c)

@@ -121,7 +121,8 @@ pub fn analyze<const N: usize, const P: usize>(
     // 1. Structural: generic configurations.
     load_cols(ws, requested.iter());
     ws.lsq.reset(p)?;
-    let samples = 32 + p as u32;
+    // Rows (6 per sample) outnumber the parameters about twice over: generic enough.
+    let samples = 8 + p as u32 / 3;
     let limits = robot.limits();
     for s in 1..=samples {
         let mut st = JointState::new([0.0; N]);
