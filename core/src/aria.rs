@@ -131,9 +131,9 @@ pub const TOOL_SEED_Q: [f64; N] = [0.4813, 0.7750, -1.0383, 3.6605, 1.1053, -2.8
 /// Table 2 pose `l` (zero-based) as a transform.
 #[must_use]
 pub fn tool_pose(l: usize) -> Option<Transform> {
-    TOOL_POSES.get(l).map(|(xyz, rpy_deg)| {
-        pose_from_xyz_rpy(*xyz, rpy_deg.map(|d| d.to_radians()))
-    })
+    TOOL_POSES
+        .get(l)
+        .map(|(xyz, rpy_deg)| pose_from_xyz_rpy(*xyz, rpy_deg.map(|d| d.to_radians())))
 }
 
 /// The nominal ARIA (Table 1) with limits and mass model.
@@ -160,10 +160,12 @@ pub fn real_identified() -> Robot<N> {
 pub fn with_links(links: [Link; N]) -> Robot<N> {
     let mut r = nominal();
     for (i, l) in links.iter().enumerate() {
-        for (k, v) in [l.theta0, l.d, l.a, l.alpha, l.beta].into_iter().enumerate() {
+        for (k, v) in [l.theta0, l.d, l.a, l.alpha, l.beta]
+            .into_iter()
+            .enumerate()
+        {
             let _ = r.set_param(crate::error::ParamIndex(5 * i + k), v);
         }
     }
     r
 }
-

@@ -178,7 +178,11 @@ impl<const N: usize> Robot<N> {
             } else {
                 (
                     f.t_base_link[i - 1].translation.vector,
-                    f.t_base_link[i - 1].rotation.matrix().column(2).into_owned(),
+                    f.t_base_link[i - 1]
+                        .rotation
+                        .matrix()
+                        .column(2)
+                        .into_owned(),
                 )
             };
             let pi = f.t_base_link[i].translation.vector;
@@ -240,7 +244,12 @@ impl<const N: usize> Robot<N> {
         let scaled = |c: JacobianColumn, f: f64| c.map(|v| v * f);
         let mut thermal = [0.0; 6];
         for j in 0..N {
-            let th = jac[ParamId::Link { link: j, kind: LinkParam::Theta0 }.index(N).0];
+            let th = jac[ParamId::Link {
+                link: j,
+                kind: LinkParam::Theta0,
+            }
+            .index(N)
+            .0];
             let q = state.q[j];
             let (s1, c1) = crate::math::sin_cos(q);
             let terms = [s1, c1, 2.0 * s1 * c1, c1 * c1 - s1 * s1];
@@ -252,8 +261,18 @@ impl<const N: usize> Robot<N> {
             jac[ParamId::Backlash(j).index(N).0] = scaled(th, approach[j]);
             // The d and a columns carry the factor `scale`; ∂/∂(scaled length) = col/scale.
             let l = &self.geom.links[j];
-            let dcol = jac[ParamId::Link { link: j, kind: LinkParam::D }.index(N).0];
-            let acol = jac[ParamId::Link { link: j, kind: LinkParam::A }.index(N).0];
+            let dcol = jac[ParamId::Link {
+                link: j,
+                kind: LinkParam::D,
+            }
+            .index(N)
+            .0];
+            let acol = jac[ParamId::Link {
+                link: j,
+                kind: LinkParam::A,
+            }
+            .index(N)
+            .0];
             for r in 0..6 {
                 thermal[r] += (l.d * dcol[r] + l.a * acol[r]) / scale;
             }

@@ -1,13 +1,17 @@
 #![doc = include_str!("../README.md")]
 #![no_std]
 #![deny(missing_docs)]
-#![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used, clippy::panic))]
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
 
 #[cfg(test)]
 extern crate std;
 
 pub mod any;
 pub mod aria;
+pub mod axis_chain;
 pub mod effects;
 pub mod error;
 pub mod ik;
@@ -16,6 +20,7 @@ mod math;
 pub mod model;
 pub mod params;
 pub mod pose;
+pub mod registration;
 
 pub use effects::{Effect, EffectSet};
 pub use error::{Error, JointIndex, ParamIndex, PoseIndex, Quantity, Result};
