@@ -236,13 +236,16 @@ fn pick(
     }))
 }
 
+/// A 3-vector picked from one of its forms: key used, its span, value in SI units.
+type Picked3 = (String, Range<usize>, [f64; 3]);
+
 fn pick3(
     src: &Source<'_>,
     key: &str,
     plain: &SV3,
     suffixed: &SV3,
     unit: Unit,
-) -> Result<Option<(String, Range<usize>, [f64; 3])>, DescriptionError> {
+) -> Result<Option<Picked3>, DescriptionError> {
     let suffix = match unit {
         Unit::Length => "_mm",
         Unit::Angle => "_deg",

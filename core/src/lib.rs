@@ -5,6 +5,9 @@
     not(test),
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
+// Numerical kernels index several same-length arrays by one loop counter; iterator chains
+// would hide that structure.
+#![allow(clippy::needless_range_loop)]
 
 #[cfg(test)]
 extern crate std;
@@ -14,13 +17,17 @@ pub mod aria;
 pub mod axis_chain;
 pub mod effects;
 pub mod error;
+pub mod identify;
 pub mod ik;
 pub mod kinematics;
+pub mod linalg;
 mod math;
 pub mod model;
 pub mod params;
 pub mod pose;
 pub mod registration;
+pub mod rng;
+pub mod validation;
 
 pub use effects::{Effect, EffectSet};
 pub use error::{Error, JointIndex, ParamIndex, PoseIndex, Quantity, Result};

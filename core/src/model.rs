@@ -145,13 +145,15 @@ impl<const N: usize> JointState<N> {
     /// Checks that every number is finite and approach directions are −1, 0 or +1.
     pub fn validate(&self) -> Result<()> {
         check_finite(&self.q, Quantity::JointReading)?;
-        if let Some(s) = &self.approach {
-            if let Some(index) = s.iter().position(|&v| v != -1.0 && v != 0.0 && v != 1.0) {
-                return Err(Error::NonFinite {
-                    what: Quantity::ApproachDirection,
-                    index,
-                });
-            }
+        if let Some(index) = self
+            .approach
+            .as_ref()
+            .and_then(|s| s.iter().position(|&v| v != -1.0 && v != 0.0 && v != 1.0))
+        {
+            return Err(Error::NonFinite {
+                what: Quantity::ApproachDirection,
+                index,
+            });
         }
         if let Some(t) = self.temp_c {
             check_finite(&[t], Quantity::Temperature)?;

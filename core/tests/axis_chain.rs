@@ -179,9 +179,9 @@ fn check_chain<const N: usize>(rng: &mut Rng, chain: &AxisChain<N>) -> f64 {
     }
     // The d/β choice follows axis parallelism, as Robot::auto_length_params decides it.
     let auto = robot.auto_length_params();
-    for i in 0..N.saturating_sub(1) {
-        let ui = chain.axes[i].direction.normalize();
-        let uj = chain.axes[i + 1].direction.normalize();
+    for (i, pair) in chain.axes.windows(2).enumerate() {
+        let ui = pair[0].direction.normalize();
+        let uj = pair[1].direction.normalize();
         let angle = ui.dot(&uj).abs().min(1.0).acos();
         let expect = if angle < PARALLEL_AXES_TOL_RAD {
             LengthParam::Beta

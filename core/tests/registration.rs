@@ -320,8 +320,8 @@ fn moved_and_missing_markers_are_named() {
     assert!((reg.markers()[1].threshold_m - 4.0 * sigma / 2f64.sqrt()).abs() < 1e-15);
     // The missing marker's predicted position is where it should have been.
     let p4 = apply(&t, &PROBE[4]);
-    for k in 0..3 {
-        assert!((reg.markers()[4].predicted_m[k] - p4[k]).abs() < 1e-3);
+    for (got, want) in reg.markers()[4].predicted_m.iter().zip(p4) {
+        assert!((got - want).abs() < 1e-3);
     }
     // Without the outlier search the fit is flagged inconsistent.
     let opts = RegistrationOptions {
