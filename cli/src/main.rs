@@ -4,5 +4,6 @@
 mod files;
 mod measurements;
 mod robot_file;
+mod urdf;
 
 fn main() {}
