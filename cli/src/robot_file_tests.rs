@@ -146,3 +146,37 @@ fn errors_name_file_line_key_reason() {
     let e = parse_robot_description("name = \"x\"\n[[joint]\n", "s.toml").unwrap_err();
     assert_eq!(e.line, Some(2), "{e}");
 }
+
+/// The example in docs/robot-description.md parses to what the text says.
+#[test]
+fn documented_example_parses() {
+    let doc = std::fs::read_to_string(workspace_root().join("docs/robot-description.md")).unwrap();
+    let start = doc.find("```toml\n").expect("toml block") + "```toml\n".len();
+    let end = start + doc[start..].find("```").unwrap();
+    let example = &doc[start..end];
+    let desc = parse_robot_description(example, "planar2.toml").expect("example");
+    assert_eq!(desc.joint_names, vec!["shoulder", "elbow"]);
+    let AnyRobot::J2(r) = &desc.robot else {
+        panic!("expected 2 joints");
+    };
+    assert_eq!(r.length_params()[0], LengthParam::Beta);
+    assert!((r.base()[2] - 0.4).abs() < 1e-15);
+    assert!((r.base()[5] - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+    assert_eq!(r.tool()[2], 0.05);
+    assert_eq!(r.mass().tool_mass_kg, 0.5);
+    // The error lines quoted in the doc.
+    let errs = [
+        example.replacen("a_mm = 300\n", "a_mm = 300\na = 0.3\n", 1),
+        example.replacen("upper_deg = 170", "upper = -3", 1),
+        example.replacen("tool_kg = 0.5", "weight = 0.5", 1),
+    ];
+    for text in errs {
+        let e = parse_robot_description(&text, "planar2.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            doc.contains(&format!("    {e}\n")),
+            "doc does not quote: {e}"
+        );
+    }
+}
