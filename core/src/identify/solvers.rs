@@ -73,6 +73,7 @@ pub fn identify_with_analysis<const N: usize, const P: usize>(
     }
     let rows: usize = data
         .iter()
+        .filter(|m| m.weight > 0.0)
         .map(|m| (0..6).filter(|&k| m.mask.has(k)).count())
         .sum();
     if n == 0 || (!analysis.data_deficient.is_empty() && !opts.allow_data_deficiency) {
