@@ -72,7 +72,9 @@ fn halton(index: u32, base: u32) -> f64 {
 }
 
 /// Runs the analysis for `opts.requested` on `data` at `robot`'s current parameters. The
-/// singular values of the identifiable set are left in the workspace.
+/// singular values of the identifiable set are left in the workspace. Data without a pose
+/// of positive weight is [`Error::TooFewData`] (0 rows found, one per requested parameter
+/// needed at least).
 pub fn analyze<const N: usize, const P: usize>(
     robot: &Robot<N>,
     data: &[Measurement<N>],
@@ -106,6 +108,14 @@ pub fn analyze<const N: usize, const P: usize>(
         union |= m.mask.0;
         any_approach |= m.state.approach.is_some();
         any_temp |= m.state.temp_c.is_some();
+    }
+    if union == 0 {
+        // No pose in the fit: nothing can be said, not even which parameters are
+        // structurally redundant (that depends on the measured components).
+        return Err(Error::TooFewData {
+            found: 0,
+            needed: p,
+        });
     }
     let mask = ComponentMask(union);
     let mut out = Identifiability {
