@@ -81,6 +81,49 @@ pub fn analyze<const N: usize, const P: usize>(
     opts: &IdentifyOptions<'_>,
     ws: &mut Workspace<P>,
 ) -> Result<Identifiability> {
+    let mut out = Identifiability::empty(opts.requested);
+    analyze_into(robot, data, opts, ws, &mut out)?;
+    Ok(out)
+}
+
+impl Identifiability {
+    /// Nothing identified yet of `requested`.
+    pub(crate) const fn empty(requested: ParamSet) -> Self {
+        Identifiability {
+            requested,
+            identifiable: ParamSet::new(),
+            structural: ParamSet::new(),
+            data_deficient: ParamSet::new(),
+            rank: 0,
+            condition_number: f64::INFINITY,
+            partner: [None; MAX_MODEL_PARAMS],
+        }
+    }
+}
+
+impl Identifiability {
+    /// [`Identifiability::empty`] in place (no temporary of this size on the stack).
+    fn reset(&mut self, requested: ParamSet) {
+        self.requested = requested;
+        self.identifiable = ParamSet::new();
+        self.structural = ParamSet::new();
+        self.data_deficient = ParamSet::new();
+        self.rank = 0;
+        self.condition_number = f64::INFINITY;
+        for p in self.partner.iter_mut() {
+            *p = None;
+        }
+    }
+}
+
+/// [`analyze`] into the caller's `out` (so that callers keep one copy on the stack).
+pub(crate) fn analyze_into<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    opts: &IdentifyOptions<'_>,
+    ws: &mut Workspace<P>,
+    out: &mut Identifiability,
+) -> Result<()> {
     super::data::validate(data)?;
     let requested = opts.requested;
     let p = requested.len();
@@ -118,15 +161,7 @@ pub fn analyze<const N: usize, const P: usize>(
         });
     }
     let mask = ComponentMask(union);
-    let mut out = Identifiability {
-        requested,
-        identifiable: ParamSet::new(),
-        structural: ParamSet::new(),
-        data_deficient: ParamSet::new(),
-        rank: 0,
-        condition_number: f64::INFINITY,
-        partner: [None; MAX_MODEL_PARAMS],
-    };
+    out.reset(requested);
 
     // 1. Structural: generic configurations.
     load_cols(ws, requested.iter());
@@ -217,7 +252,7 @@ pub fn analyze<const N: usize, const P: usize>(
             f64::INFINITY
         };
     }
-    Ok(out)
+    Ok(())
 }
 
 fn load_cols<const P: usize>(ws: &mut Workspace<P>, cols: impl Iterator<Item = usize>) {

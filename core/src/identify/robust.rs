@@ -30,7 +30,9 @@
 //! on the bit patterns of the (non-negative) norms.
 
 use super::data::{Measurement, residual_stats};
-use super::{Identification, IdentifyOptions, Workspace, identify, identify_with_analysis};
+use super::identifiability::analyze_into;
+use super::solvers::{check_identify_options, check_inputs, identify_into};
+use super::{Identification, IdentifyOptions, Workspace};
 use crate::error::{Error, Quantity, Result, check_finite};
 use crate::math::sqrt;
 use crate::model::Robot;
@@ -462,13 +464,24 @@ pub fn identify_robust<const N: usize, const P: usize>(
         r.prior_weight = m.weight;
         r.robust_weight = 1.0;
     }
-    let out = reweighted(robot, data, opts, ropts, report, ws);
+    let mut out = RobustIdentification {
+        fit: Identification::start(robot, opts.algorithm, None),
+        test: ResidualTest {
+            scale_pos_m: 0.0,
+            scale_rot_rad: 0.0,
+            n_suspect: 0,
+            worst: None,
+        },
+        reweights: 0,
+    };
+    let status = reweighted(robot, data, opts, ropts, report, ws, &mut out);
     for (m, r) in data.iter_mut().zip(report.iter()) {
         m.weight = r.prior_weight;
     }
-    out
+    status.map(|()| out)
 }
 
+/// The iteration of [`identify_robust`], in `out` (the weights in `data` are left changed).
 fn reweighted<const N: usize, const P: usize>(
     robot: &Robot<N>,
     data: &mut [Measurement<N>],
@@ -476,10 +489,15 @@ fn reweighted<const N: usize, const P: usize>(
     ropts: &RobustOptions,
     report: &mut [PoseResidual],
     ws: &mut Workspace<P>,
-) -> Result<RobustIdentification<N>> {
-    let mut fit = identify(robot, data, opts, ws)?;
-    let analysis = fit.analysis;
-    let mut reweights = 0;
+    out: &mut RobustIdentification<N>,
+) -> Result<()> {
+    // The plain least-squares fit, with its identifiability analysis kept for every
+    // reweighted fit (the weights stay positive, so the poses in the fit do not change).
+    check_identify_options(opts)?;
+    check_inputs(data, opts)?;
+    analyze_into(robot, data, opts, ws, &mut out.fit.analysis)?;
+    identify_into(data, opts, ws, &mut out.fit)?;
+    let rank = out.fit.analysis.rank;
     let phases: &[Loss] = match ropts.loss {
         Loss::Huber => &[Loss::Huber],
         Loss::Cauchy => &[Loss::Huber, Loss::Cauchy],
@@ -487,7 +505,7 @@ fn reweighted<const N: usize, const P: usize>(
     for &loss in phases {
         let mut converged = false;
         for _ in 0..ropts.max_reweights {
-            test_at(&fit.robot, data, analysis.rank, ropts, report)?;
+            test_at(&out.fit.robot, data, rank, ropts, report)?;
             let mut change: f64 = 0.0;
             for (m, r) in data.iter_mut().zip(report.iter_mut()) {
                 let k = usize::from(r.components.clamp(1, 6)) - 1;
@@ -496,26 +514,23 @@ fn reweighted<const N: usize, const P: usize>(
                 r.robust_weight = w;
                 m.weight = r.prior_weight * w;
             }
-            if change <= ropts.weight_tol && reweights > 0 {
+            if change <= ropts.weight_tol && out.reweights > 0 {
                 converged = true;
                 break;
             }
-            fit = identify_with_analysis(&fit.robot, data, opts, &analysis, ws)?;
-            reweights += 1;
+            // Warm start from the last fit.
+            identify_into(data, opts, ws, &mut out.fit)?;
+            out.reweights += 1;
         }
         if !converged {
             return Err(Error::NotConverged {
-                iterations: reweights,
+                iterations: out.reweights,
             });
         }
     }
     // Initial residuals of the reported fit: those of the caller's model, with the final
     // weights.
-    fit.initial = residual_stats(robot, data, opts)?;
-    let test = test_at(&fit.robot, data, analysis.rank, ropts, report)?;
-    Ok(RobustIdentification {
-        fit,
-        test,
-        reweights,
-    })
+    out.fit.initial = residual_stats(robot, data, opts)?;
+    out.test = test_at(&out.fit.robot, data, rank, ropts, report)?;
+    Ok(())
 }
