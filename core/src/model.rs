@@ -258,10 +258,14 @@ impl<const N: usize> Robot<N> {
             });
         }
         for (i, l) in links.iter().enumerate() {
+            // Flat parameter index 5·i + k (θ0, d, a, α, β), as in [`crate::params`].
             check_finite(&[l.theta0, l.d, l.a, l.alpha, l.beta], Quantity::Parameter).map_err(
-                |_| Error::NonFinite {
-                    what: Quantity::Parameter,
-                    index: 5 * i,
+                |e| match e {
+                    Error::NonFinite { what, index } => Error::NonFinite {
+                        what,
+                        index: 5 * i + index,
+                    },
+                    other => other,
                 },
             )?;
         }
