@@ -161,10 +161,10 @@ fn branches(robot: &Robot<6>, target: &Transform, count: usize) -> Vec<[f64; 6]>
     let mut found: Vec<[f64; 6]> = Vec::new();
     for _ in 0..count {
         let seed = JointState::new(rng.q_within(robot.limits()));
-        if let Ok(sol) = solve_ik(robot, target, &seed, &opts) {
-            if found.iter().all(|f| max_abs(f, &sol.q) > 0.1) {
-                found.push(sol.q);
-            }
+        if let Ok(sol) = solve_ik(robot, target, &seed, &opts)
+            && found.iter().all(|f| max_abs(f, &sol.q) > 0.1)
+        {
+            found.push(sol.q);
         }
     }
     found
