@@ -3,5 +3,7 @@
 
 mod files;
 mod measurements;
+mod robot_file;
+mod urdf;
 
 fn main() {}

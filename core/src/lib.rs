@@ -14,8 +14,10 @@ extern crate std;
 
 pub mod any;
 pub mod aria;
+pub mod axis_chain;
 pub mod effects;
 pub mod error;
+pub mod identify;
 pub mod ik;
 pub mod kinematics;
 pub mod linalg;
@@ -23,6 +25,9 @@ mod math;
 pub mod model;
 pub mod params;
 pub mod pose;
+pub mod registration;
+pub mod rng;
+pub mod validation;
 
 pub use effects::{Effect, EffectSet};
 pub use error::{Error, JointIndex, ParamIndex, PoseIndex, Quantity, Result};
