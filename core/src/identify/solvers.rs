@@ -218,10 +218,10 @@ fn factor_gram<const P: usize>(
             if let Some(s) = inv_scale {
                 v *= s[a] * s[b];
             }
-            if a == b {
-                if let Some((lambda, d)) = damping {
-                    v += lambda * d[a] * d[a];
-                }
+            if a == b
+                && let Some((lambda, d)) = damping
+            {
+                v += lambda * d[a] * d[a];
             }
             ws.v[a][b] = v;
         }

@@ -120,7 +120,9 @@ pub fn cholesky_upper<const P: usize>(
         for i in 0..k {
             d -= r[i][k] * r[i][k];
         }
-        if !(d > rel_tol * dmax) || !d.is_finite() {
+        // Not (d > rel_tol·dmax), NaN included.
+        if d.partial_cmp(&(rel_tol * dmax)) != Some(core::cmp::Ordering::Greater) || !d.is_finite()
+        {
             return Err(Error::RankDeficient {
                 rank: k,
                 required: n,
