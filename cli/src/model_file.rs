@@ -732,3 +732,106 @@ impl ModelFile {
             .and_then(|c| Algorithm::parse(&c.algorithm))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use kincal::aria;
+
+    /// A robot with every parameter moved off its nominal value (links, base, tool and
+    /// effects), so the round trip covers the whole layout.
+    fn perturbed() -> Robot<6> {
+        let mut r = aria::virtual_truth();
+        let mut s: u64 = 0x1234_5678;
+        for i in 0..Robot::<6>::NUM_PARAMS {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let u = (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            let v = r.param(ParamIndex(i)).unwrap() + 1e-3 * u;
+            r.set_param(ParamIndex(i), v).unwrap();
+        }
+        r
+    }
+
+    #[test]
+    fn model_file_reloads_the_same_robot_bit_for_bit() {
+        let r = perturbed();
+        let file = ModelFile {
+            schema_version: SCHEMA_VERSION.into(),
+            format: FORMAT.into(),
+            generator: generator(),
+            robot: RobotJson::from_robot("aria", &r, &aria::nominal(), None, EffectSet::NONE),
+            calibration: None,
+        };
+        let text = file.to_json();
+        let back = parse(&text, "mem").unwrap();
+        assert_eq!(back, file);
+        let loaded = back.robot.robot::<6>().unwrap();
+        assert_eq!(loaded, r, "every field of the core robot");
+        for q in [[0.1, 0.2, -0.3, 0.4, 0.5, -0.6], aria::TOOL_SEED_Q] {
+            let mut st = kincal::JointState::new(q);
+            st.approach = Some([1.0, -1.0, 0.0, 1.0, 1.0, -1.0]);
+            st.temp_c = Some(31.5);
+            let (a, b) = (r.fk(&st).unwrap(), loaded.fk(&st).unwrap());
+            assert_eq!(a.to_homogeneous(), b.to_homogeneous());
+        }
+        // The nominal variant gives back the initial values.
+        let nom = back.robot.nominal_robot::<6>().unwrap();
+        for i in 0..Robot::<6>::NUM_PARAMS {
+            assert_eq!(
+                nom.param(ParamIndex(i)).unwrap().to_bits(),
+                aria::nominal().param(ParamIndex(i)).unwrap().to_bits()
+            );
+        }
+    }
+
+    #[test]
+    fn json_numbers_round_trip_exactly() {
+        let mut s: u64 = 99;
+        let mut values = vec![
+            0.1 + 0.2,
+            5e-324,
+            f64::MAX,
+            f64::MIN_POSITIVE,
+            -0.0,
+            1.0 / 3.0,
+            std::f64::consts::FRAC_PI_2,
+            f64::from_bits(0x000F_FFFF_FFFF_FFFF),
+        ];
+        for _ in 0..20_000 {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let v = f64::from_bits(s);
+            if v.is_finite() {
+                values.push(v);
+            }
+        }
+        let text = serde_json::to_string(&values).unwrap();
+        let back: Vec<f64> = serde_json::from_str(&text).unwrap();
+        for (a, b) in values.iter().zip(&back) {
+            assert_eq!(a.to_bits(), b.to_bits(), "{a:e}");
+        }
+    }
+
+    #[test]
+    fn newer_major_version_is_refused_and_minor_accepted() {
+        let file = ModelFile::nominal("aria", &aria::nominal());
+        let text = file.to_json();
+        let newer = text.replace("\"schema_version\": \"1.0\"", "\"schema_version\": \"2.0\"");
+        let e = parse(&newer, "m.json").unwrap_err();
+        assert_eq!(e.exit, crate::error::Exit::Input);
+        assert!(e.message.contains("newer"), "{}", e.message);
+        let minor = text.replace(
+            "\"schema_version\": \"1.0\"",
+            "\"schema_version\": \"1.7\", \"a_future_field\": [1, 2]",
+        );
+        assert!(parse(&minor, "m.json").is_ok());
+        let broken = text.replace("\"label\": \"d_1\"", "\"label\": \"d_9\"");
+        let f = parse(&broken, "m.json").unwrap();
+        assert!(f.robot.robot::<6>().unwrap_err().contains("d_9"));
+        let bad = parse("{\"schema_version\": \"1.0\",\n \"format\": 3}", "m.json").unwrap_err();
+        assert!(bad.message.starts_with("m.json:2:"), "{}", bad.message);
+    }
+}
