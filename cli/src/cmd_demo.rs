@@ -58,7 +58,7 @@ report.txt with everything printed. The sim-to-real diagnosis part is not in thi
 pub const EXAMPLE: &str = "\
 Example:
   cargo run --release -p kincal-cli -- demo
-  kincal demo --out /tmp/aria-demo --seed 7 --noise-pos-mm 0.2";
+  kincal demo --out aria-demo --seed 7 --noise-pos-mm 0.2";
 
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
