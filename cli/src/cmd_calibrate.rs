@@ -210,12 +210,13 @@ fn calibrate<const N: usize>(start: &Robot<N>, name: &str, args: &Args) -> Resul
     }
     crate::files::write_atomic(&args.out, &inputs, |w| w.write_all(text.as_bytes()))?;
 
-    print!("{}", summary(&cal, name, &set.source, meas.len(), rows));
-    println!(
-        "Model written to {} ({} model).",
+    let mut out = summary(&cal, name, &set.source, meas.len(), rows);
+    out.push_str(&format!(
+        "Model written to {} ({} model).\n",
         args.out.display(),
         cal.runs[0].ident.algorithm.name().to_uppercase()
-    );
+    ));
+    report::emit(&out);
     Ok(())
 }
 

@@ -587,6 +587,6 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     let _ = writeln!(text, "Done in {:.2} s.", t0.elapsed().as_secs_f64());
     let report_path = out_dir.join("report.txt");
     crate::files::write_atomic(&report_path, &[], |w| w.write_all(text.as_bytes()))?;
-    print!("{text}");
+    report::emit(&text);
     Ok(())
 }

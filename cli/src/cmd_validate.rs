@@ -468,6 +468,6 @@ fn validate<const N: usize>(
     if let Some(p) = &args.json {
         let _ = writeln!(out, "Report written to {}", p.display());
     }
-    print!("{out}");
+    crate::report::emit(&out);
     Ok(())
 }

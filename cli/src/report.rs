@@ -9,6 +9,14 @@ use kincal::{ParamId, ParamIndex, ParamSet};
 use crate::calibration::{Calibration, Consensus};
 use crate::units::display_unit;
 
+/// Writes a report to stdout. A closed pipe (`kincal … | head`) is not an error: the
+/// outputs are already written.
+pub fn emit(text: &str) {
+    use std::io::Write as _;
+    let mut out = std::io::stdout().lock();
+    let _ = out.write_all(text.as_bytes()).and_then(|()| out.flush());
+}
+
 /// A plain text table: first column left-aligned, the others right-aligned.
 #[derive(Debug, Clone, Default)]
 pub struct Table {
