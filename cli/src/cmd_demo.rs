@@ -3,8 +3,8 @@
 //! Truth: the Table 3 robot. Data: the ten Table 2 calibration-tool poses solved by inverse
 //! kinematics on the truth, once noise-free and once with Gaussian instrument noise.
 //! Identification: OLS, OPT1 and OPT2 from the Table 1 nominal model. Validation: a grid of
-//! poses in the biopsy region above the tool plate (see [`REGION`]), measured noise-free on
-//! the truth, so the errors shown are the identified models' own errors.
+//! poses in the assumed biopsy working region above the tool plate (see [`GRID`]), measured
+//! noise-free on the truth, so the errors shown are the identified models' own errors.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -13,7 +13,8 @@ use std::time::Instant;
 use kincal::aria;
 use kincal::identify::Algorithm;
 use kincal::ik::{IkOptions, solve_ik};
-use kincal::pose::{matrix_to_quaternion, pose_from_xyz_rpy, rotation_exp, transform};
+use kincal::pose::{matrix_to_quaternion, rotation_exp, transform};
+use kincal::rng::SplitMix64;
 use kincal::{JointState, ParamIndex, Robot, Transform};
 use nalgebra::Vector3;
 use rayon::prelude::*;
@@ -27,7 +28,6 @@ use crate::measurements::{
     MeasurementRow, MeasurementSet, Orientation, OrientationForm, write_measurements_csv,
 };
 use crate::model_file::{DataJson, ModelFile};
-use crate::noise::Rng;
 use crate::plot::{self, Series};
 use crate::report::{self, Table};
 use crate::units::display_unit;
@@ -43,11 +43,11 @@ The paper's simulation study end to end on the built-in ARIA, with no set-up:
    widened to --bounds-mm (5 mm) and --bounds-deg (60°): the paper's 5° would exclude the
    truth, whose θ0_4 = −0.8 rad (−45.8°) and α_2 = 0.1 rad (5.7°) lie outside ±5° of Table 1.
 4. A parameter table like the paper's Table 3 (nominal, truth, the three estimates).
-5. Validation on a 4×4×3 grid of poses in the biopsy region above the tool plate: x, y within
-   ±0.15 m of the tool circle's centre (0.316, 0.354) m, z from 0.235 m (the plate) to
-   0.435 m, roll −150°/−160°/−170° and yaw −30°/0°/30° (the needle pointing down, tilted
-   like the tool's poses); poses IK cannot reach within the limits are skipped. The
-   validation poses are measured noise-free on the truth, so the errors are the models'.
+5. Validation on a 4×4×3 grid of positions in the biopsy working region above the tool
+   plate (assumed, the paper gives no numbers: the box the Table 2 circle spans, x 0.066–
+   0.566 m, y 0.116–0.592 m, z 0.235–0.335 m), each with roll −150° and −160° as on the
+   tool (96 poses); poses IK cannot reach within the limits are skipped. The validation
+   poses are measured noise-free on the truth, so the errors are the models'.
 6. The verdict against the paper's targets: every pose e_p < 1 mm and e_φ < 0.66°.
 
 Writes to --out (default demo-out/): the data sets (CSV), the model files (JSON, all three
@@ -82,56 +82,20 @@ pub struct Args {
     pub bounds_deg: f64,
 }
 
-/// The validation region above the tool plate: centre (x, y) [m], half-width [m], z range [m].
-pub const REGION: RegionSpec = RegionSpec {
-    centre_xy: [0.316, 0.354],
-    half_width_m: 0.15,
-    z_m: [0.235, 0.435],
-    n_xy: 4,
-    n_z: 3,
-    roll_deg: [-150.0, -160.0, -170.0],
-    yaw_deg: [-30.0, 0.0, 30.0],
-};
+/// Validation grid over the (assumed) working region `aria::WORKING_REGION_*`: positions
+/// per axis (corners included); each position is taken with roll −150° and −160°.
+pub const GRID: [usize; 3] = [4, 4, 3];
 
-/// A grid of validation poses.
-#[derive(Debug, Clone, Copy)]
-pub struct RegionSpec {
-    pub centre_xy: [f64; 2],
-    pub half_width_m: f64,
-    pub z_m: [f64; 2],
-    pub n_xy: usize,
-    pub n_z: usize,
-    pub roll_deg: [f64; 3],
-    pub yaw_deg: [f64; 3],
+fn region_text(v: [f64; 3]) -> String {
+    format!("({}, {}, {})", v[0], v[1], v[2])
 }
 
-impl RegionSpec {
-    /// Target poses, x fastest.
-    pub fn poses(&self) -> Vec<Transform> {
-        let lin = |a: f64, b: f64, n: usize, k: usize| {
-            if n < 2 {
-                0.5 * (a + b)
-            } else {
-                a + (b - a) * k as f64 / (n - 1) as f64
-            }
-        };
-        let mut out = Vec::new();
-        let h = self.half_width_m;
-        for iz in 0..self.n_z {
-            for iy in 0..self.n_xy {
-                for ix in 0..self.n_xy {
-                    let i = out.len();
-                    let x = self.centre_xy[0] + lin(-h, h, self.n_xy, ix);
-                    let y = self.centre_xy[1] + lin(-h, h, self.n_xy, iy);
-                    let z = lin(self.z_m[0], self.z_m[1], self.n_z, iz);
-                    let roll = self.roll_deg[i % 3].to_radians();
-                    let yaw = self.yaw_deg[(i / 3) % 3].to_radians();
-                    out.push(pose_from_xyz_rpy([x, y, z], [roll, 0.0, yaw]));
-                }
-            }
-        }
-        out
-    }
+/// The validation target poses (`aria::working_region_grid`).
+fn region_poses() -> Vec<Transform> {
+    let mut out = vec![Transform::identity(); 2 * GRID[0] * GRID[1] * GRID[2]];
+    let n = aria::working_region_grid(GRID[0], GRID[1], GRID[2], &mut out);
+    out.truncate(n);
+    out
 }
 
 const N: usize = aria::N;
@@ -200,9 +164,9 @@ fn write_set(path: &Path, comments: &[String], rows: Vec<MeasurementRow>) -> Res
 }
 
 /// Measured pose with Gaussian noise: p + N(0, σ_p²) per axis, R ← exp(δ)·R with δ ~ N(0, σ_r²).
-fn noisy(t: &Transform, rng: &mut Rng, sigma_pos_m: f64, sigma_rot_rad: f64) -> Transform {
-    let dp = Vector3::new(rng.gaussian(), rng.gaussian(), rng.gaussian()) * sigma_pos_m;
-    let dr = Vector3::new(rng.gaussian(), rng.gaussian(), rng.gaussian()) * sigma_rot_rad;
+fn noisy(t: &Transform, rng: &mut SplitMix64, sigma_pos_m: f64, sigma_rot_rad: f64) -> Transform {
+    let dp = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * sigma_pos_m;
+    let dr = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * sigma_rot_rad;
     transform(
         rotation_exp(&dr) * t.rotation.matrix(),
         t.translation.vector + dp,
@@ -310,13 +274,13 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             }
         }
     }
-    let grid = REGION.poses();
+    let grid = region_poses();
     let q_val = ik_all(&truth, &grid);
     pb.finish_and_clear();
 
     let sigma_p = args.noise_pos_mm * 1e-3;
     let sigma_r = args.noise_rot_deg.to_radians();
-    let mut rng = Rng::new(args.seed);
+    let mut rng = SplitMix64::new(args.seed);
     let exact: Vec<Transform> = q_cal
         .iter()
         .map(|q| truth.fk_q(q))
@@ -377,15 +341,12 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         &[
             common[0].clone(),
             format!(
-                " poses: {}x{}x{} grid in the biopsy region above the tool plate (x, y within +-{} m of ({}, {}) m, z {}..{} m), measured noise-free on the truth",
-                REGION.n_xy,
-                REGION.n_xy,
-                REGION.n_z,
-                REGION.half_width_m,
-                REGION.centre_xy[0],
-                REGION.centre_xy[1],
-                REGION.z_m[0],
-                REGION.z_m[1]
+                " poses: {}x{}x{} grid x 2 orientations in the working region {} m .. {} m (kincal::aria::working_region_grid), measured noise-free on the truth",
+                GRID[0],
+                GRID[1],
+                GRID[2],
+                region_text(aria::WORKING_REGION_MIN_M),
+                region_text(aria::WORKING_REGION_MAX_M)
             ),
         ],
         val_rows,
@@ -401,14 +362,11 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     );
     let _ = writeln!(
         text,
-        "Validation: {n_val} of {} grid poses in the biopsy region reachable ({}): x, y within ±{} m of ({}, {}) m, z {}–{} m.",
+        "Validation: {n_val} of {} grid poses in the assumed biopsy working region reachable ({}):\n  box {} m to {} m, roll −150° and −160°.",
         grid.len(),
         path_val.display(),
-        REGION.half_width_m,
-        REGION.centre_xy[0],
-        REGION.centre_xy[1],
-        REGION.z_m[0],
-        REGION.z_m[1]
+        region_text(aria::WORKING_REGION_MIN_M),
+        region_text(aria::WORKING_REGION_MAX_M)
     );
     let _ = writeln!(
         text,

@@ -136,6 +136,7 @@ pub fn measurements<const N: usize>(set: &MeasurementSet) -> Result<Vec<Measurem
                 state: joint_state::<N>(row),
                 pose,
                 mask,
+                weight: 1.0,
             })
         })
         .collect()

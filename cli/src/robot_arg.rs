@@ -50,18 +50,29 @@ fn built_in(name: &str) -> Option<RobotSpec> {
     }
 }
 
-/// Loads a robot description file. Hook for the robot-description (TOML) and URDF loaders,
-/// which land in their own modules; until then only built-in robots resolve.
+/// Loads a robot description file: URDF (`.urdf`, the unique chain from the root link to
+/// the single leaf) or the TOML description of docs/robot-description.md (anything else).
 fn load_robot_file(path: &Path) -> Result<RobotSpec, CliError> {
-    Err(CliError::usage(format!(
-        "{}: robot description files are not supported by this build yet; use a built-in robot ({})",
-        path.display(),
-        BUILT_IN
-            .iter()
-            .map(|(n, _)| *n)
-            .collect::<Vec<_>>()
-            .join(", ")
-    )))
+    let is_urdf = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("urdf"));
+    if is_urdf {
+        let imported = crate::urdf::import_urdf_file(path, &crate::urdf::ChainSelection::default())
+            .map_err(|e| CliError::input(e.to_string()))?;
+        for note in &imported.notes {
+            eprintln!("kincal: note: {}: {note}", path.display());
+        }
+        return Ok(RobotSpec {
+            name: imported.robot_name,
+            robot: imported.robot,
+        });
+    }
+    let desc =
+        crate::robot_file::load_robot_file(path).map_err(|e| CliError::input(e.to_string()))?;
+    Ok(RobotSpec {
+        name: desc.name,
+        robot: desc.robot,
+    })
 }
 
 /// A resolved MODEL.

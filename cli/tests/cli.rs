@@ -588,3 +588,46 @@ fn demo_runs_and_writes_its_files() {
     );
     assert_eq!(code(&o), 0, "{}", stderr(&o));
 }
+
+#[test]
+fn a_robot_description_file_is_a_robot() {
+    let f = Fixture::new();
+    let toml = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/robots/aria.toml");
+    let toml = toml.to_str().unwrap();
+    let o = f.run(&["calibrate", "data.csv", "--robot", toml, "--out", "m.json"]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let m = f.json("m.json");
+    let identified: Vec<Value> = m["robot"]["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|p| p["identified"] == true)
+        .cloned()
+        .collect();
+    assert_recovers_truth(&identified, "from aria.toml");
+    // The description is a MODEL too, and its nominal model equals the built-in one.
+    let o = f.run(&["predict", toml, "data.csv", "--out", "a.csv"]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let o = f.run(&["predict", "aria", "data.csv", "--out", "b.csv"]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    assert_eq!(
+        fs::read(f.path("a.csv")).unwrap(),
+        fs::read(f.path("b.csv")).unwrap()
+    );
+    // A broken description is bad input with its position.
+    fs::write(
+        f.path("bad.toml"),
+        "name = \"x\"\n[[joint]]\nd = \"oops\"\n",
+    )
+    .unwrap();
+    let o = f.run(&[
+        "calibrate",
+        "data.csv",
+        "--robot",
+        "bad.toml",
+        "--out",
+        "m2.json",
+    ]);
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    assert!(stderr(&o).contains("bad.toml:"), "{}", stderr(&o));
+}

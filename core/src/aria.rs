@@ -169,3 +169,43 @@ pub fn with_links(links: [Link; N]) -> Robot<N> {
     }
     r
 }
+
+/// **Assumed** biopsy working region (the paper gives no numbers): the box above the
+/// calibration tool's plate that the Table 2 circle spans, x ∈ [0.066, 0.566] m,
+/// y ∈ [0.116, 0.592] m, z ∈ [0.235, 0.335] m, with the tool tilted 150°–160° about x
+/// (needle pointing down and outwards) as on the calibration tool.
+pub const WORKING_REGION_MIN_M: [f64; 3] = [0.066, 0.116, 0.235];
+/// Upper corner of the working region [m] (see [`WORKING_REGION_MIN_M`]).
+pub const WORKING_REGION_MAX_M: [f64; 3] = [0.566, 0.592, 0.335];
+
+/// The validation grid over the working region: `nx × ny × nz` positions (corners
+/// included) times two orientations (roll −150° and −160°, as Table 2), returned in
+/// `out` in x-major order; returns how many were written (`out` may be shorter).
+pub fn working_region_grid(nx: usize, ny: usize, nz: usize, out: &mut [Transform]) -> usize {
+    let lin = |k: usize, n: usize, lo: f64, hi: f64| {
+        if n <= 1 {
+            0.5 * (lo + hi)
+        } else {
+            lo + (hi - lo) * k as f64 / (n - 1) as f64
+        }
+    };
+    let mut w = 0;
+    for ix in 0..nx {
+        for iy in 0..ny {
+            for iz in 0..nz {
+                for roll_deg in [-150.0f64, -160.0] {
+                    let xyz = [
+                        lin(ix, nx, WORKING_REGION_MIN_M[0], WORKING_REGION_MAX_M[0]),
+                        lin(iy, ny, WORKING_REGION_MIN_M[1], WORKING_REGION_MAX_M[1]),
+                        lin(iz, nz, WORKING_REGION_MIN_M[2], WORKING_REGION_MAX_M[2]),
+                    ];
+                    if let Some(slot) = out.get_mut(w) {
+                        *slot = pose_from_xyz_rpy(xyz, [roll_deg.to_radians(), 0.0, 0.0]);
+                        w += 1;
+                    }
+                }
+            }
+        }
+    }
+    w
+}

@@ -133,6 +133,11 @@ pub enum Error {
         /// Its value.
         value: f64,
     },
+    /// A joint axis given with a zero (or non-normalisable) direction.
+    DegenerateAxis {
+        /// The joint.
+        joint: JointIndex,
+    },
 }
 
 impl fmt::Display for Error {
@@ -187,6 +192,9 @@ impl fmt::Display for Error {
             Error::BadPose { pose } => write!(f, "pose {} cannot be used", pose.0 + 1),
             Error::BoundViolated { param, value } => {
                 write!(f, "parameter {} = {value} violates its bound", param.0)
+            }
+            Error::DegenerateAxis { joint } => {
+                write!(f, "joint {} axis has a zero direction", joint.0 + 1)
             }
         }
     }

@@ -14,6 +14,7 @@ extern crate std;
 
 pub mod any;
 pub mod aria;
+pub mod axis_chain;
 pub mod effects;
 pub mod error;
 pub mod identify;
@@ -24,6 +25,8 @@ mod math;
 pub mod model;
 pub mod params;
 pub mod pose;
+pub mod registration;
+pub mod rng;
 pub mod validation;
 
 pub use effects::{Effect, EffectSet};

@@ -29,3 +29,7 @@ pub(crate) fn hypot(x: f64, y: f64) -> f64 {
 pub(crate) fn asin(x: f64) -> f64 {
     libm::asin(x)
 }
+#[inline(always)]
+pub(crate) fn ln(x: f64) -> f64 {
+    libm::log(x)
+}

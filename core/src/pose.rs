@@ -71,22 +71,30 @@ pub fn rpy_to_matrix(roll: f64, pitch: f64, yaw: f64) -> Matrix3<f64> {
 
 /// Inverse of [`rpy_to_matrix`]: `[roll, pitch, yaw]` with pitch in [−π/2, π/2].
 ///
-/// At gimbal lock (|pitch| = π/2, detected when `cos(pitch) < 1e-12`) roll and yaw are
-/// not separable; roll is set to 0 and the whole rotation about z goes into yaw, so the
-/// returned angles still reproduce the matrix.
+/// At gimbal lock (|pitch| = π/2, detected when `cos(pitch) < 1e-15`) roll and yaw are
+/// not separable; roll is set to ~0 and the whole rotation about z goes into yaw, so the
+/// returned angles still reproduce the matrix (to ~cos(pitch) < 1e-15).
+///
+/// Yaw is taken first and roll and pitch are read from `Rz(−yaw)·R = Ry(pitch)·Rx(roll)`,
+/// so the angles reproduce the matrix to rounding (a few 1e-16) also *near* gimbal lock,
+/// where reading roll from `r21, r22` (both ~cos(pitch)) would lose digits.
 #[must_use]
 pub fn matrix_to_rpy(r: &Matrix3<f64>) -> [f64; 3] {
     let cp = hypot(r[(0, 0)], r[(1, 0)]);
-    let pitch = atan2(-r[(2, 0)], cp);
-    if cp < 1e-12 {
-        [0.0, pitch, atan2(-r[(0, 1)], r[(1, 1)])]
+    let lock = cp < 1e-15;
+    let yaw = if lock {
+        atan2(-r[(0, 1)], r[(1, 1)])
     } else {
-        [
-            atan2(r[(2, 1)], r[(2, 2)]),
-            pitch,
-            atan2(r[(1, 0)], r[(0, 0)]),
-        ]
-    }
+        atan2(r[(1, 0)], r[(0, 0)])
+    };
+    let (sy, cy) = sin_cos(yaw);
+    // Rz(−yaw)·R: its rows 0 and 1 are cy·r0 + sy·r1 and −sy·r0 + cy·r1.
+    let r00 = cy * r[(0, 0)] + sy * r[(1, 0)];
+    let r11 = -sy * r[(0, 1)] + cy * r[(1, 1)];
+    let r12 = -sy * r[(0, 2)] + cy * r[(1, 2)];
+    let roll = atan2(-r12, r11);
+    let pitch = atan2(-r[(2, 0)], if lock { cp } else { r00 });
+    [roll, pitch, yaw]
 }
 
 /// Rotation matrix of the quaternion `[w, x, y, z]`, normalised first.

@@ -18,7 +18,7 @@ mod workspace;
 
 pub use data::{ComponentMask, Measurement, ResidualStats, residual_stats};
 pub use identifiability::{Identifiability, analyze};
-pub use solvers::identify;
+pub use solvers::{identify, identify_with_analysis};
 pub use workspace::Workspace;
 
 use crate::error::ParamIndex;

@@ -1,16 +1,16 @@
 //! The three identification algorithms on the identifiable parameter set, and the
 //! parameter covariance of the result.
 
-use super::data::{accumulate, cost, residual_stats, validate};
+use super::data::{accumulate, accumulate_gram, cost, residual_stats, validate};
 use super::{
     Algorithm, CORRELATION_REPORT_THRESHOLD, Correlation, Identification, IdentifyOptions,
     MAX_CORRELATED_PAIRS, MAX_MODEL_PARAMS, Workspace, analyze,
 };
 use crate::effects::Effect;
 use crate::error::{Error, ParamIndex, Quantity, Result, check_finite};
-use crate::linalg::lm::{lm_parameter, solve_damped};
+use crate::linalg::lm::lm_parameter;
 use crate::linalg::minnorm::min_norm_solve;
-use crate::linalg::tri::upper_inverse_gram;
+use crate::linalg::tri::{solve_upper, solve_upper_transpose, upper_inverse_gram};
 use crate::math::sqrt;
 use crate::model::Robot;
 use crate::params::{ParamId, ParamSet};
@@ -48,9 +48,32 @@ pub fn identify<const N: usize, const P: usize>(
     }
     check_inputs(data, opts)?;
     let analysis = analyze(robot, data, opts, ws)?;
+    identify_with_analysis(robot, data, opts, &analysis, ws)
+}
+
+/// As [`identify`] with the identifiability analysis already done (by [`analyze`] on the
+/// same kind of data: same requested parameters, components and auxiliary inputs), e.g.
+/// once per design in a Monte-Carlo study. Only `analysis.identifiable` is fitted.
+pub fn identify_with_analysis<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    opts: &IdentifyOptions<'_>,
+    analysis: &super::Identifiability,
+    ws: &mut Workspace<P>,
+) -> Result<Identification<N>> {
+    validate(data)?;
+    check_inputs(data, opts)?;
+    let analysis = *analysis;
     let n = analysis.rank;
+    if n > P || analysis.identifiable.len() != n {
+        return Err(Error::CapacityExceeded {
+            needed: analysis.identifiable.len(),
+            capacity: P,
+        });
+    }
     let rows: usize = data
         .iter()
+        .filter(|m| m.weight > 0.0)
         .map(|m| (0..6).filter(|&k| m.mask.has(k)).count())
         .sum();
     if n == 0 || (!analysis.data_deficient.is_empty() && !opts.allow_data_deficiency) {
@@ -145,25 +168,24 @@ fn get_x<const N: usize, const P: usize>(
     Ok(())
 }
 
-/// `robot` with the fitted parameters set to `x + step`.
+/// `robot` with the fitted parameters set to `x + step` (clipped to `bounds` when given, so
+/// a parameter moved onto a bound sits exactly on it).
 fn apply<const N: usize, const P: usize>(
     robot: &Robot<N>,
     n: usize,
     ws: &Workspace<P>,
+    bounds: Option<&super::Bounds>,
 ) -> Result<Robot<N>> {
     let mut r = *robot;
     for k in 0..n {
-        r.set_param(ParamIndex(ws.cols[k]), ws.x[k] + ws.step[k])?;
+        let i = ws.cols[k];
+        let mut v = ws.x[k] + ws.step[k];
+        if let Some(b) = bounds {
+            v = v.clamp(b.lower[i], b.upper[i]);
+        }
+        r.set_param(ParamIndex(i), v)?;
     }
     Ok(r)
-}
-
-/// Column norms of the current `ws.lsq` R into `ws.diag`.
-fn column_norms<const P: usize>(ws: &mut Workspace<P>, n: usize) {
-    let r = ws.lsq.r();
-    for k in 0..n {
-        ws.diag[k] = sqrt((0..=k).map(|i| r[i][k] * r[i][k]).sum::<f64>());
-    }
 }
 
 fn unit_scale<const P: usize>(ws: &mut Workspace<P>, n: usize) {
@@ -180,8 +202,43 @@ fn scaled_norm<const P: usize>(ws: &Workspace<P>, n: usize, v: &[f64; P]) -> f64
     )
 }
 
-/// OLS: Gauss–Newton, minimum-norm step on unit-scaled columns (lsqminnorm), halving the
-/// step up to 30 times when the cost rises.
+/// Cholesky factor of the (optionally damped, optionally column-scaled) Gram matrix of the
+/// columns `sel` into `ws.mat`: `A = D⁻¹·G[sel,sel]·D⁻¹ + λ·E²` with `D = scale`.
+fn factor_gram<const P: usize>(
+    ws: &mut Workspace<P>,
+    sel: &[usize],
+    inv_scale: Option<&[f64]>,
+    damping: Option<(f64, &[f64])>,
+) -> Result<()> {
+    let m = sel.len();
+    let g = ws.gram.gram();
+    for a in 0..m {
+        for b in a..m {
+            let (i, j) = (sel[a].min(sel[b]), sel[a].max(sel[b]));
+            let mut v = g[i][j];
+            if let Some(s) = inv_scale {
+                v *= s[a] * s[b];
+            }
+            if let (true, Some((lambda, d))) = (a == b, damping) {
+                v += lambda * d[a] * d[a];
+            }
+            ws.v[a][b] = v;
+        }
+    }
+    crate::linalg::gram::cholesky_upper(&ws.v, m, 1e-14, &mut ws.mat)
+}
+
+/// Solves `RᵀR·x = rhs` with `R = ws.mat` in place in `x`.
+fn solve_normal<const P: usize>(ws: &Workspace<P>, n: usize, x: &mut [f64]) -> Result<()> {
+    solve_upper_transpose(&ws.mat, n, x)?;
+    solve_upper(&ws.mat, n, x)
+}
+
+/// OLS: Gauss–Newton with the minimum-norm least-squares step (as `lsqminnorm`) on
+/// unit-scaled columns, halving the step up to 30 times when the cost rises. The step comes
+/// from the Cholesky factor of the scaled normal equations — for the full-rank identifiable
+/// set that is the unique, hence minimum-norm, solution — and from the SVD of the Givens
+/// factor when the normal equations are numerically singular at an iterate.
 fn gauss_newton<const N: usize, const P: usize>(
     robot: &mut Robot<N>,
     data: &[Measurement<N>],
@@ -192,21 +249,29 @@ fn gauss_newton<const N: usize, const P: usize>(
     for it in 0..opts.max_iterations {
         get_x(robot, n, ws)?;
         unit_scale(ws, n);
-        let c = accumulate(robot, data, opts, n, ws)?;
+        let c = accumulate_gram(robot, data, opts, n, ws)?;
         if c <= opts.abs_cost_tol {
             return Ok(it);
         }
-        column_norms(ws, n);
         for k in 0..n {
-            ws.colscale[k] = if ws.diag[k] > 0.0 {
-                1.0 / ws.diag[k]
-            } else {
-                1.0
-            };
+            let d = sqrt(ws.gram.gram()[k][k]);
+            ws.diag[k] = if d > 0.0 { d } else { 1.0 };
+            ws.colscale[k] = 1.0 / ws.diag[k];
+            ws.free[k] = k;
         }
-        accumulate(robot, data, opts, n, ws)?;
-        let Workspace { lsq, step, svd, .. } = ws;
-        min_norm_solve(lsq.r(), n, &lsq.qtb()[..n], None, &mut step[..n], svd)?;
+        let (sel, inv) = (ws.free, ws.colscale);
+        if factor_gram(ws, &sel[..n], Some(&inv[..n]), None).is_ok() {
+            for k in 0..n {
+                ws.step[k] = ws.gram.atb()[k] * ws.colscale[k];
+            }
+            let mut z = ws.step;
+            solve_normal(ws, n, &mut z[..n])?;
+            ws.step = z;
+        } else {
+            accumulate(robot, data, opts, n, ws)?;
+            let Workspace { lsq, step, svd, .. } = ws;
+            min_norm_solve(lsq.r(), n, &lsq.qtb()[..n], None, &mut step[..n], svd)?;
+        }
         for k in 0..n {
             ws.step[k] *= ws.colscale[k];
         }
@@ -214,7 +279,7 @@ fn gauss_newton<const N: usize, const P: usize>(
         let xn = scaled_norm(ws, n, &ws.x);
         let mut accepted = None;
         for _ in 0..30 {
-            let trial = apply(robot, n, ws)?;
+            let trial = apply(robot, n, ws, None)?;
             let c2 = cost(&trial, data, opts)?;
             if c2 <= c {
                 accepted = Some((trial, c2));
@@ -238,7 +303,8 @@ fn gauss_newton<const N: usize, const P: usize>(
     })
 }
 
-/// OPT2: MINPACK `lmder` — trust region on the scaled step, λ from `lmpar`.
+/// OPT2: MINPACK `lmder` — trust region on the scaled step, λ from `lmpar` — on the
+/// triangular factor of the normal equations (Givens factor if they are singular).
 fn levenberg_marquardt<const N: usize, const P: usize>(
     robot: &mut Robot<N>,
     data: &[Measurement<N>],
@@ -249,21 +315,34 @@ fn levenberg_marquardt<const N: usize, const P: usize>(
     const FACTOR: f64 = 100.0;
     let mut delta = 0.0;
     let mut lambda = 0.0;
-    let mut fnorm2;
     for k in 0..n {
         ws.diag[k] = 0.0;
+        ws.free[k] = k;
     }
     for it in 0..opts.max_iterations {
         get_x(robot, n, ws)?;
         unit_scale(ws, n);
-        fnorm2 = accumulate(robot, data, opts, n, ws)?;
+        let fnorm2 = accumulate_gram(robot, data, opts, n, ws)?;
         if fnorm2 <= opts.abs_cost_tol {
             return Ok(it);
         }
+        let sel = ws.free;
+        if factor_gram(ws, &sel[..n], None, None).is_ok() {
+            // qtb = R⁻ᵀ·Jᵀe, so that RᵀR x = Rᵀ qtb is the Gauss–Newton system.
+            let mut q = *ws.gram.atb();
+            solve_upper_transpose(&ws.mat, n, &mut q[..n])?;
+            ws.tmp = q;
+        } else {
+            accumulate(robot, data, opts, n, ws)?;
+            // Row by row: a whole P×P copy would land on the stack.
+            for i in 0..n {
+                ws.mat[i] = ws.lsq.r()[i];
+            }
+            ws.tmp = *ws.lsq.qtb();
+        }
         // MINPACK scaling: D_k = max over iterations of the column norms.
-        let r = ws.lsq.r();
         for k in 0..n {
-            let cn = sqrt((0..=k).map(|i| r[i][k] * r[i][k]).sum::<f64>());
+            let cn = sqrt(ws.gram.gram()[k][k]);
             ws.diag[k] = ws.diag[k].max(if cn > 0.0 { cn } else { 1.0 });
         }
         let xnorm = scaled_norm(ws, n, &ws.x);
@@ -273,17 +352,18 @@ fn levenberg_marquardt<const N: usize, const P: usize>(
         let fnorm = sqrt(fnorm2);
         loop {
             let Workspace {
-                lsq,
+                mat,
                 diag,
                 step,
+                tmp,
                 damped,
                 ..
             } = ws;
             lambda = lm_parameter(
-                lsq.r(),
+                mat,
                 n,
                 &diag[..n],
-                &lsq.qtb()[..n],
+                &tmp[..n],
                 delta,
                 lambda,
                 &mut step[..n],
@@ -293,7 +373,7 @@ fn levenberg_marquardt<const N: usize, const P: usize>(
             if it == 0 {
                 delta = delta.min(pnorm);
             }
-            let trial = apply(robot, n, ws)?;
+            let trial = apply(robot, n, ws, None)?;
             let fnorm1 = sqrt(cost(&trial, data, opts)?);
             let actred = if 0.1 * fnorm1 < fnorm {
                 1.0 - (fnorm1 / fnorm) * (fnorm1 / fnorm)
@@ -301,10 +381,9 @@ fn levenberg_marquardt<const N: usize, const P: usize>(
                 -1.0
             };
             // |J p| = |R p|.
-            let r = ws.lsq.r();
             let mut jp2 = 0.0;
             for i in 0..n {
-                let s: f64 = (i..n).map(|j| r[i][j] * ws.step[j]).sum();
+                let s: f64 = (i..n).map(|j| ws.mat[i][j] * ws.step[j]).sum();
                 jp2 += s * s;
             }
             let temp1 = sqrt(jp2) / fnorm;
@@ -352,8 +431,8 @@ fn levenberg_marquardt<const N: usize, const P: usize>(
 }
 
 /// OPT1: projected Levenberg–Marquardt with an active set. Parameters on a bound whose
-/// gradient points outwards are held; the damped step of the others is clipped to the
-/// box; λ shrinks after a successful step and grows after a failed one.
+/// descent direction points outwards are held; the damped step of the others is clipped to
+/// the box; λ shrinks after a successful step and grows after a failed one.
 fn bounded<const N: usize, const P: usize>(
     robot: &mut Robot<N>,
     data: &[Measurement<N>],
@@ -382,22 +461,18 @@ fn bounded<const N: usize, const P: usize>(
     for it in 0..opts.max_iterations {
         get_x(robot, n, ws)?;
         unit_scale(ws, n);
-        let c = accumulate(robot, data, opts, n, ws)?;
+        let c = accumulate_gram(robot, data, opts, n, ws)?;
         if c <= opts.abs_cost_tol {
             return Ok(it);
         }
-        column_norms(ws, n);
-        // Gradient of −cost/2 along each parameter: Rᵀ·qtb.
-        let r = ws.lsq.r();
-        for k in 0..n {
-            ws.tmp[k] = (0..=k).map(|i| r[i][k] * ws.lsq.qtb()[i]).sum();
-        }
-        // Free set: not on a bound with the descent direction pointing outwards.
+        // Descent direction of the cost along each parameter: Jᵀe.
         let mut nf = 0;
         for k in 0..n {
             let i = ws.cols[k];
-            let held = (ws.x[k] <= b.lower[i] && ws.tmp[k] < 0.0)
-                || (ws.x[k] >= b.upper[i] && ws.tmp[k] > 0.0);
+            let gk = ws.gram.atb()[k];
+            let held = (ws.x[k] <= b.lower[i] && gk < 0.0) || (ws.x[k] >= b.upper[i] && gk > 0.0);
+            let d = sqrt(ws.gram.gram()[k][k]);
+            ws.diag[k] = if d > 0.0 { d } else { 1.0 };
             if !held {
                 ws.free[nf] = k;
                 nf += 1;
@@ -406,58 +481,41 @@ fn bounded<const N: usize, const P: usize>(
         if nf == 0 {
             return Ok(it);
         }
-        // Reduced problem: rows of R restricted to the free columns, refactored.
-        ws.lsq2.reset(nf)?;
-        for i in 0..n {
-            for f in 0..nf {
-                ws.row[f] = ws.lsq.r()[i][ws.free[f]];
-            }
-            let qi = ws.lsq.qtb()[i];
-            ws.lsq2.add_row(&ws.row[..nf], qi)?;
-        }
         let mut improved = false;
         for _ in 0..40 {
+            let sel = ws.free;
             for f in 0..nf {
-                let d = ws.diag[ws.free[f]];
-                ws.row[f] = if d > 0.0 { d } else { 1.0 };
+                ws.row[f] = ws.diag[sel[f]];
             }
-            let Workspace {
-                lsq2,
-                row,
-                tmp,
-                damped,
-                ..
-            } = ws;
-            solve_damped(
-                lsq2.r(),
-                nf,
-                &row[..nf],
-                lambda,
-                &lsq2.qtb()[..nf],
-                &mut tmp[..nf],
-                damped,
-            )?;
-            for k in 0..n {
-                ws.step[k] = 0.0;
-            }
-            for f in 0..nf {
-                let k = ws.free[f];
-                let i = ws.cols[k];
-                let target = (ws.x[k] + ws.tmp[f]).clamp(b.lower[i], b.upper[i]);
-                ws.step[k] = target - ws.x[k];
-            }
-            let trial = apply(robot, n, ws)?;
-            let c2 = cost(&trial, data, opts)?;
-            if c2 < c {
-                let dx = scaled_norm(ws, n, &ws.step);
-                let xn = scaled_norm(ws, n, &ws.x);
-                *robot = trial;
-                lambda = (lambda / 3.0).max(1e-15);
-                improved = true;
-                if dx <= opts.xtol * (xn + opts.xtol) || (c - c2) <= opts.ftol * c {
-                    return Ok(it + 1);
+            let d = ws.row;
+            if factor_gram(ws, &sel[..nf], None, Some((lambda, &d[..nf]))).is_ok() {
+                let mut z = [0.0; P];
+                for f in 0..nf {
+                    z[f] = ws.gram.atb()[sel[f]];
                 }
-                break;
+                solve_normal(ws, nf, &mut z[..nf])?;
+                for k in 0..n {
+                    ws.step[k] = 0.0;
+                }
+                for f in 0..nf {
+                    let k = sel[f];
+                    let i = ws.cols[k];
+                    let target = (ws.x[k] + z[f]).clamp(b.lower[i], b.upper[i]);
+                    ws.step[k] = target - ws.x[k];
+                }
+                let trial = apply(robot, n, ws, Some(b))?;
+                let c2 = cost(&trial, data, opts)?;
+                if c2 < c {
+                    let dx = scaled_norm(ws, n, &ws.step);
+                    let xn = scaled_norm(ws, n, &ws.x);
+                    *robot = trial;
+                    lambda = (lambda / 3.0).max(1e-15);
+                    improved = true;
+                    if dx <= opts.xtol * (xn + opts.xtol) || (c - c2) <= opts.ftol * c {
+                        return Ok(it + 1);
+                    }
+                    break;
+                }
             }
             lambda *= 4.0;
             if lambda > 1e16 {
@@ -485,10 +543,26 @@ fn covariance<const N: usize, const P: usize>(
     out: &mut Identification<N>,
 ) -> Result<()> {
     unit_scale(ws, n);
-    let c = accumulate(robot, data, opts, n, ws)?;
+    let c = accumulate_gram(robot, data, opts, n, ws)?;
     out.sigma2 = if rows > n { c / (rows - n) as f64 } else { 0.0 };
-    let Workspace { lsq, mat, .. } = ws;
-    if upper_inverse_gram(lsq.r(), n, mat).is_err() {
+    for k in 0..n {
+        ws.free[k] = k;
+    }
+    let sel = ws.free;
+    // Covariance (RᵀR)⁻¹ from the normal equations (2–3 digits suffice for standard
+    // errors); the backward-stable Givens factor when they are numerically singular.
+    if factor_gram(ws, &sel[..n], None, None).is_err() {
+        accumulate(robot, data, opts, n, ws)?;
+        for i in 0..n {
+            ws.v[i] = ws.lsq.r()[i];
+        }
+    } else {
+        for i in 0..n {
+            ws.v[i] = ws.mat[i];
+        }
+    }
+    let Workspace { v, mat, .. } = ws;
+    if upper_inverse_gram(v, n, mat).is_err() {
         // Identifiable at the start but singular at the optimum: report no errors.
         return Ok(());
     }

@@ -3,6 +3,7 @@
 //! a `Box` on a host).
 
 use super::MAX_MODEL_PARAMS;
+use crate::linalg::gram::GramAccumulator;
 use crate::linalg::lm::DampedScratch;
 use crate::linalg::lsq::LsqAccumulator;
 use crate::linalg::minnorm::SvdScratch;
@@ -13,7 +14,9 @@ use crate::linalg::minnorm::SvdScratch;
 #[derive(Debug, Clone)]
 pub struct Workspace<const P: usize> {
     pub(crate) lsq: LsqAccumulator<P>,
-    pub(crate) lsq2: LsqAccumulator<P>,
+    pub(crate) gram: GramAccumulator<P>,
+    /// Whether rows go to `gram` (iterations) or `lsq` (analysis, covariance).
+    pub(crate) to_gram: bool,
     pub(crate) damped: DampedScratch<P>,
     pub(crate) svd: SvdScratch<P>,
     /// Scratch matrix (orthonormal basis, covariance).
@@ -42,7 +45,8 @@ impl<const P: usize> Workspace<P> {
     pub const fn new() -> Self {
         Workspace {
             lsq: LsqAccumulator::new(),
-            lsq2: LsqAccumulator::new(),
+            gram: GramAccumulator::new(),
+            to_gram: false,
             damped: DampedScratch::new(),
             svd: SvdScratch::new(),
             mat: [[0.0; P]; P],
