@@ -1,29 +1,6 @@
 //! `kincal`: the command-line tool of the kincal calibration toolkit (spec/cli.md).
 
-mod args;
-mod calibration;
-mod cmd_calibrate;
-mod cmd_demo;
-mod cmd_predict;
-mod cmd_validate;
-mod data;
-mod error;
-// Tested modules whose API is wider than the commands use so far.
-#[allow(dead_code)]
-mod files;
-#[allow(dead_code)]
-mod measurements;
-mod model_file;
-mod plot;
-mod progress;
-mod report;
-mod robot_arg;
-#[allow(dead_code)]
-mod robot_file;
-mod units;
-// URDF import serves ROBOT arguments; the export has no command yet.
-#[allow(dead_code)]
-mod urdf;
+use kincal_cli::{cmd_calibrate, cmd_demo, cmd_predict, cmd_validate};
 
 use std::process::ExitCode;
 

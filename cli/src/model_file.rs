@@ -261,6 +261,7 @@ fn finite_or_none(v: f64) -> Option<f64> {
 }
 
 /// Per-parameter calibration status used when describing a robot.
+#[derive(Debug)]
 pub struct ParamInfo<'a> {
     pub analysis: &'a Identifiability,
     pub std_errors: &'a [f64],
