@@ -563,6 +563,16 @@ impl<'a> Parser<'a> {
                 .map_err(|e| self.io_err(Some(at), e))?;
             let content = raw.strip_suffix(b"\n").unwrap_or(&raw);
             let content = content.strip_suffix(b"\r").unwrap_or(content);
+            if content.contains(&b'\r') {
+                // A lone CR would end the line for the CSV records but not here, and the
+                // comment could not be written back (found by fuzzing).
+                return Err(self.err(
+                    Some(at),
+                    None,
+                    "comment line contains a carriage return (CR) before its end: expected \
+                     one line ending in LF or CR LF",
+                ));
+            }
             match std::str::from_utf8(&content[1..]) {
                 Ok(c) => comments.push(c.to_string()),
                 Err(e) => {
@@ -1271,6 +1281,17 @@ mod tests {
             "reason {:?} lacks {words:?}",
             e.reason
         );
+    }
+
+    /// Regression (fuzz/measurements_csv): a comment holding a lone CR was accepted but
+    /// could not be written back; it is now refused with its line.
+    #[test]
+    fn comment_with_a_lone_carriage_return_is_refused() {
+        let text = "#\rh\nq1,q2,q3,q4,q5,q6,x,y,z\n6,9,6,3,6,1,6,6,6";
+        rejects(text, &opts(6), Some(1), None, "carriage return");
+        // CR LF line ends stay fine.
+        let m = parse("# a\r\n# b\r\nq1\r\n0.5\r\n", 1).unwrap();
+        assert_eq!(m.comments, vec![" a", " b"]);
     }
 
     /// Two joints, full RPY pose; a handy base for rejection tests.
