@@ -16,8 +16,10 @@ mod identifiability;
 mod solvers;
 mod workspace;
 
+pub(crate) use data::validate as validate_data;
 pub use data::{ComponentMask, Measurement, ResidualStats, residual_stats};
-pub use identifiability::{Identifiability, analyze};
+pub(crate) use identifiability::structural_step;
+pub use identifiability::{Identifiability, Partner, analyze};
 pub use solvers::{identify, identify_with_analysis};
 pub use workspace::Workspace;
 
