@@ -489,3 +489,59 @@ pub fn real_aria() -> Result<Robot<6>> {
     }
     Ok(truth)
 }
+
+/// The motion-capture experiment on the "real ARIA": 60 poses of the biopsy region, 20 of
+/// them measured twice, 0.1 mm / 0.02° noise, no approach directions or temperatures (the
+/// paper's set-up records neither).
+#[must_use]
+pub fn real_aria_training() -> SessionConfig {
+    SessionConfig {
+        record_approach: false,
+        temperature_c: None,
+        ..SessionConfig::blind_training()
+    }
+}
+
+/// Validation poses of the "real ARIA" study (never used for fitting).
+pub const REAL_ARIA_VALIDATION_POSES: usize = 40;
+
+/// Seed of the "real ARIA" sessions.
+pub const REAL_ARIA_SESSION_SEED: u64 = 0x0a21_a000;
+
+/// The "real ARIA" study the CLI demo ends with and the tests check: the true arm
+/// ([`real_aria`]), a training session ([`real_aria_training`]) written into
+/// `train`/`groups` (length at least its `measurements()`), and
+/// [`REAL_ARIA_VALIDATION_POSES`] noisy validation poses written into `validation`.
+/// Returns the true arm and the number of training measurements.
+pub fn real_aria_study(
+    train: &mut [Measurement<6>],
+    groups: &mut [u32],
+    validation: &mut [Measurement<6>],
+) -> Result<(Robot<6>, usize)> {
+    let truth = real_aria()?;
+    let rng = SplitMix64::new(REAL_ARIA_SESSION_SEED);
+    let cfg = real_aria_training();
+    let n = simulate_session(
+        &truth,
+        &crate::aria::TOOL_SEED_Q,
+        &cfg,
+        &mut rng.fork(1),
+        train,
+        groups,
+    )?;
+    let vcfg = SessionConfig {
+        poses: REAL_ARIA_VALIDATION_POSES,
+        repeated: 0,
+        ..cfg
+    };
+    let mut vgroups = [0u32; REAL_ARIA_VALIDATION_POSES];
+    simulate_session(
+        &truth,
+        &crate::aria::TOOL_SEED_Q,
+        &vcfg,
+        &mut rng.fork(2),
+        validation,
+        &mut vgroups,
+    )?;
+    Ok((truth, n))
+}
