@@ -4,9 +4,11 @@ mod args;
 mod calibration;
 mod cmd_calibrate;
 mod cmd_demo;
+mod cmd_diagnose;
 mod cmd_predict;
 mod cmd_validate;
 mod data;
+mod diagnosis_plot;
 mod error;
 // Tested modules whose API is wider than the commands use so far.
 #[allow(dead_code)]
@@ -63,6 +65,10 @@ enum Command {
     /// Per-pose and summary errors of MODEL against measured poses
     #[command(long_about = cmd_validate::LONG_ABOUT, after_help = cmd_validate::EXAMPLE)]
     Validate(cmd_validate::Args),
+    /// The sim-to-real diagnosis: where the residual lies, which effect causes it, how far
+    /// it shrinks
+    #[command(long_about = cmd_diagnose::LONG_ABOUT, after_help = cmd_diagnose::EXAMPLE)]
+    Diagnose(cmd_diagnose::Args),
 }
 
 fn main() -> ExitCode {
@@ -72,6 +78,7 @@ fn main() -> ExitCode {
         Command::Calibrate(a) => cmd_calibrate::run(a),
         Command::Predict(a) => cmd_predict::run(a),
         Command::Validate(a) => cmd_validate::run(a),
+        Command::Diagnose(a) => cmd_diagnose::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

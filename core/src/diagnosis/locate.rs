@@ -1,7 +1,7 @@
 //! Where the geometric calibration's residual lies: by axis, by region of the workspace,
 //! and how it correlates with the quantities the effects depend on.
 
-use super::PoseDiagnosis;
+use super::{NoiseFloor, PoseDiagnosis};
 use crate::any::MAX_JOINTS;
 use crate::identify::Measurement;
 use crate::math::sqrt;
@@ -53,6 +53,9 @@ pub struct Correlate {
     pub explained_pos: f64,
     /// The same for the rotation components.
     pub explained_rot: f64,
+    /// The same over all six components whitened by the noise floor (rows count by their
+    /// noise, as everywhere in the diagnosis): what [`Location::most_correlated`] ranks by.
+    pub explained: f64,
 }
 
 /// Residual statistics of one region.
@@ -96,8 +99,8 @@ pub struct Location {
     pub correlates: [Correlate; MAX_QUANTITIES],
     /// Number of correlates.
     pub n_correlates: usize,
-    /// Index of the correlate that explains the largest share of the position residual
-    /// (rotation when no position is measured); `None` when nothing varies.
+    /// Index of the correlate that explains the largest share of the whitened residual
+    /// ([`Correlate::explained`]); `None` when nothing varies.
     pub most_correlated: Option<usize>,
 }
 
@@ -129,6 +132,7 @@ pub(crate) fn locate<const N: usize>(
     robot: &Robot<N>,
     data: &[Measurement<N>],
     poses: &[PoseDiagnosis],
+    noise: &NoiseFloor,
 ) -> Location {
     let empty_corr = Correlate {
         quantity: QuantityKind::Temperature,
@@ -136,6 +140,15 @@ pub(crate) fn locate<const N: usize>(
         corr_norm_pos: 0.0,
         explained_pos: 0.0,
         explained_rot: 0.0,
+        explained: 0.0,
+    };
+    let w = |k: usize| {
+        let s = if k < 3 {
+            noise.sigma_pos_m
+        } else {
+            noise.sigma_rot_rad
+        };
+        if s > 0.0 { 1.0 / (s * s) } else { 0.0 }
     };
     let mut loc = Location {
         poses: data.len(),
@@ -277,7 +290,6 @@ pub(crate) fn locate<const N: usize>(
     }
     let tiny = |v: f64, scale: f64| v <= 1e-24 * scale.max(1e-300);
     let mut best: Option<(usize, f64)> = None;
-    let pos_measured = var_r[0] + var_r[1] + var_r[2] > 0.0;
     for qi in 0..nq {
         let c = &mut loc.correlates[qi];
         if tiny(var_v[qi], mean_v[qi] * mean_v[qi] * nf + 1.0) {
@@ -301,13 +313,13 @@ pub(crate) fn locate<const N: usize>(
         };
         c.explained_pos = share(0..3);
         c.explained_rot = share(3..6);
-        let key = if pos_measured {
-            c.explained_pos
-        } else {
-            c.explained_rot
-        };
-        if best.is_none_or(|b| key > b.1) {
-            best = Some((qi, key));
+        let tot: f64 = (0..6).map(|k| w(k) * var_r[k]).sum();
+        if tot > 0.0 {
+            c.explained =
+                (0..6).map(|k| w(k) * cov[qi][k] * cov[qi][k]).sum::<f64>() / (var_v[qi] * tot);
+        }
+        if best.is_none_or(|b| c.explained > b.1) {
+            best = Some((qi, c.explained));
         }
     }
     loc.most_correlated = best.map(|b| b.0);

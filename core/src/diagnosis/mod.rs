@@ -83,8 +83,8 @@ pub use locate::{Correlate, Location, QuantityKind, RegionStats};
 use crate::effects::{Effect, EffectSet};
 use crate::error::{Error, ParamIndex, Quantity, Result};
 use crate::identify::{
-    Algorithm, Identifiability, IdentifyOptions, MAX_MODEL_PARAMS, Measurement, Partner, Workspace,
-    identify, identify_with_analysis,
+    Algorithm, Identifiability, Identification, IdentifyOptions, MAX_MODEL_PARAMS, Measurement,
+    Partner, Workspace, identify, identify_with_analysis,
 };
 use crate::linalg::gram::GramAccumulator;
 use crate::math::{ln, sqrt};
@@ -481,6 +481,11 @@ pub struct Diagnosis<const N: usize> {
     /// The verdict's model (geometric + effects) fitted on all rows; equals `geometric`
     /// without effects. This is what runs on the controller.
     pub model: Robot<N>,
+    /// The identification that produced `model` (its identifiability analysis, standard
+    /// errors, residuals): the verdict's fit, or the geometric calibration without effects.
+    pub fit: Identification<N>,
+    /// In-sample residuals of the geometric calibration on all rows.
+    pub geometric_residuals: crate::identify::ResidualStats,
     /// Number of groups (distinct `pose_id`s).
     pub groups: usize,
     /// Number of folds.
@@ -1109,7 +1114,7 @@ pub fn diagnose<const N: usize, const P: usize>(
         verdict.status = status_class(closed, cfg);
         if verdict.status != Status::Unexplained {
             refined = Some((
-                fit.robot,
+                fit,
                 gap_test(&acc, &noise),
                 cand.heldout_rms_pos_m,
                 cand.heldout_rms_rot_rad,
@@ -1121,14 +1126,14 @@ pub fn diagnose<const N: usize, const P: usize>(
             verdict.gap_closed_fraction = 0.0;
         }
     }
-    let (model, remaining, final_pos, final_rot) = match refined {
+    let (fit, remaining, final_pos, final_rot) = match refined {
         Some(r) => r,
         None => {
             for p in poses.iter_mut() {
                 p.heldout_final = p.heldout_baseline;
             }
             (
-                lin,
+                geo,
                 gap,
                 scores[0].heldout_rms_pos_m,
                 scores[0].heldout_rms_rot_rad,
@@ -1137,12 +1142,14 @@ pub fn diagnose<const N: usize, const P: usize>(
     };
 
     // 7. Where.
-    let location = locate::locate(robot, data, poses);
+    let location = locate::locate(robot, data, poses, &noise);
 
     Ok(Diagnosis {
         noise,
         geometric: lin,
-        model,
+        model: fit.robot,
+        fit,
+        geometric_residuals: geo.fitted,
         groups: n_groups,
         folds: cfg.folds,
         baseline: scores[0],
