@@ -105,6 +105,40 @@ pub struct Location {
 }
 
 impl Location {
+    /// Nothing located yet.
+    #[must_use]
+    pub const fn empty() -> Self {
+        let c = Correlate {
+            quantity: QuantityKind::Temperature,
+            corr: [0.0; 6],
+            corr_norm_pos: 0.0,
+            explained_pos: 0.0,
+            explained_rot: 0.0,
+            explained: 0.0,
+        };
+        let r = RegionStats {
+            min_m: [0.0; 3],
+            max_m: [0.0; 3],
+            count: 0,
+            rms_pos_m: 0.0,
+            rms_rot_rad: 0.0,
+            mean_pos_m: [0.0; 3],
+        };
+        Location {
+            poses: 0,
+            rms_axis: [0.0; 6],
+            mean_axis: [0.0; 6],
+            rms_pos_m: 0.0,
+            rms_rot_rad: 0.0,
+            bbox_min_m: [f64::INFINITY; 3],
+            bbox_max_m: [f64::NEG_INFINITY; 3],
+            regions: [r; REGIONS],
+            correlates: [c; MAX_QUANTITIES],
+            n_correlates: 0,
+            most_correlated: None,
+        }
+    }
+
     /// The correlates.
     #[must_use]
     pub fn correlates(&self) -> &[Correlate] {
@@ -134,14 +168,6 @@ pub(crate) fn locate<const N: usize>(
     poses: &[PoseDiagnosis],
     noise: &NoiseFloor,
 ) -> Location {
-    let empty_corr = Correlate {
-        quantity: QuantityKind::Temperature,
-        corr: [0.0; 6],
-        corr_norm_pos: 0.0,
-        explained_pos: 0.0,
-        explained_rot: 0.0,
-        explained: 0.0,
-    };
     let w = |k: usize| {
         let s = if k < 3 {
             noise.sigma_pos_m
@@ -150,19 +176,8 @@ pub(crate) fn locate<const N: usize>(
         };
         if s > 0.0 { 1.0 / (s * s) } else { 0.0 }
     };
-    let mut loc = Location {
-        poses: data.len(),
-        rms_axis: [0.0; 6],
-        mean_axis: [0.0; 6],
-        rms_pos_m: 0.0,
-        rms_rot_rad: 0.0,
-        bbox_min_m: [f64::INFINITY; 3],
-        bbox_max_m: [f64::NEG_INFINITY; 3],
-        regions: [RegionStats::default(); REGIONS],
-        correlates: [empty_corr; MAX_QUANTITIES],
-        n_correlates: 0,
-        most_correlated: None,
-    };
+    let mut loc = Location::empty();
+    loc.poses = data.len();
     let n = data.len().min(poses.len());
     if n == 0 {
         return loc;

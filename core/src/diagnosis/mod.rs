@@ -511,6 +511,44 @@ pub struct Diagnosis<const N: usize> {
 }
 
 impl<const N: usize> Diagnosis<N> {
+    /// An empty result for [`diagnose_into`]: `robot` as every model, nothing evaluated.
+    #[must_use]
+    pub fn new(robot: &Robot<N>) -> Self {
+        Diagnosis {
+            noise: NoiseFloor {
+                sigma_pos_m: 0.0,
+                sigma_rot_rad: 0.0,
+                dof_pos: 0.0,
+                dof_rot: 0.0,
+                repeat_subgroups: 0,
+                stated_pos: false,
+                stated_rot: false,
+            },
+            geometric: *robot,
+            model: *robot,
+            fit: Identification::start(robot, Algorithm::Ols, None),
+            geometric_residuals: crate::identify::ResidualStats::default(),
+            groups: 0,
+            folds: 0,
+            baseline: ModelScore::empty(EffectSet::NONE),
+            gap: GapTest::default(),
+            candidates: [ModelScore::empty(EffectSet::NONE); MAX_CANDIDATES],
+            n_candidates: 0,
+            verdict: Verdict {
+                effects: EffectSet::NONE,
+                status: Status::Unexplained,
+                confounded_with: [EffectSet::NONE; MAX_CANDIDATES],
+                n_confounded: 0,
+                gap_closed_fraction: 0.0,
+                candidate: None,
+            },
+            remaining: GapTest::default(),
+            final_heldout_rms_pos_m: 0.0,
+            final_heldout_rms_rot_rad: 0.0,
+            location: Location::empty(),
+        }
+    }
+
     /// The candidates.
     #[must_use]
     pub fn candidates(&self) -> &[ModelScore] {
@@ -830,6 +868,32 @@ pub fn diagnose<const N: usize, const P: usize>(
     poses: &mut [PoseDiagnosis],
     ws: &mut DiagWorkspace<P>,
 ) -> Result<Diagnosis<N>> {
+    let mut out = Diagnosis::new(robot);
+    diagnose_into(robot, data, groups, cfg, poses, ws, &mut out)?;
+    Ok(out)
+}
+
+/// The model score of model `mdl` (0 = baseline, c + 1 = candidate c) inside `out`.
+fn score<const N: usize>(out: &mut Diagnosis<N>, mdl: usize) -> &mut ModelScore {
+    if mdl == 0 {
+        &mut out.baseline
+    } else {
+        &mut out.candidates[mdl - 1]
+    }
+}
+
+/// [`diagnose`] into the caller's `out` (e.g. a `static` on a controller): the result
+/// (about 28 KiB for six joints) is not held on the stack, which then stays near that of
+/// identification. `out` is overwritten; on error its content is unspecified.
+pub fn diagnose_into<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    groups: &[u32],
+    cfg: &Config,
+    poses: &mut [PoseDiagnosis],
+    ws: &mut DiagWorkspace<P>,
+    out: &mut Diagnosis<N>,
+) -> Result<()> {
     check_config(cfg)?;
     let n = data.len();
     if groups.len() != n || poses.len() != n {
@@ -868,8 +932,14 @@ pub fn diagnose<const N: usize, const P: usize>(
     opts.weight_rot = wr;
     opts.rank_tol = cfg.rank_tol;
     opts.allow_data_deficiency = true;
-    let geo = identify(robot, data, &opts, &mut ws.id)?;
-    let lin = geo.robot;
+    out.fit = identify(robot, data, &opts, &mut ws.id)?;
+    let lin = out.fit.robot;
+    out.geometric = lin;
+    out.model = lin;
+    out.geometric_residuals = out.fit.fitted;
+    out.noise = noise;
+    out.groups = n_groups;
+    out.folds = cfg.folds;
 
     // 4. Candidates and their columns.
     let effects = match cfg.candidates {
@@ -934,7 +1004,7 @@ pub fn diagnose<const N: usize, const P: usize>(
     }
     let position = |ws: &DiagWorkspace<P>, i: usize| (0..ws.n_u).find(|&k| ws.u[k] == i);
     // Model columns: 0 = baseline, c + 1 = candidate c.
-    let mut scores = [ModelScore::empty(EffectSet::NONE); MAX_MODELS];
+    out.n_candidates = n_cand;
     for mdl in 0..=n_cand {
         let set = if mdl == 0 {
             EffectSet::NONE
@@ -959,9 +1029,10 @@ pub fn diagnose<const N: usize, const P: usize>(
             }
         }
         ws.model_n[mdl] = k;
-        scores[mdl] = ModelScore::empty(set);
-        scores[mdl].requested = requested;
-        scores[mdl].structural = structural_set;
+        let sc = score(out, mdl);
+        *sc = ModelScore::empty(set);
+        sc.requested = requested;
+        sc.structural = structural_set;
     }
 
     // 5a. Whitened Gram of all rows at the geometric calibration; in-sample residuals.
@@ -980,7 +1051,7 @@ pub fn diagnose<const N: usize, const P: usize>(
             partner: None,
         }; P];
         let n_kept = cv::factor(ws, mdl, false, cfg.rank_tol, Some(&mut fate[..n_cols]));
-        let s = &mut scores[mdl];
+        let s = score(out, mdl);
         let mut k = 0;
         let mut n_dropped = 0;
         let mut any_effect = false;
@@ -1024,7 +1095,7 @@ pub fn diagnose<const N: usize, const P: usize>(
     let mut list = [0usize; MAX_MODELS];
     let mut n_list = 0;
     for mdl in 1..=n_cand {
-        if scores[mdl].evaluated {
+        if score(out, mdl).evaluated {
             list[n_list] = mdl;
             n_list += 1;
         }
@@ -1051,25 +1122,29 @@ pub fn diagnose<const N: usize, const P: usize>(
     }
     let rms = |s: f64, k: usize| if k == 0 { 0.0 } else { sqrt(s / k as f64) };
     for mdl in 0..=n_cand {
-        if !scores[mdl].evaluated {
+        if !score(out, mdl).evaluated {
             continue;
         }
         let acc = ws.acc[mdl];
-        let s = &mut scores[mdl];
+        let improvement = if mdl > 0 {
+            paired_z(poses, 0, mdl)
+        } else {
+            0.0
+        };
+        let s = score(out, mdl);
         s.heldout_rms_pos_m = rms(acc.pos2, acc.n_pos);
         s.heldout_rms_rot_rad = rms(acc.rot2, acc.n_rot);
         s.heldout_chi2 = acc.chi2;
         if mdl > 0 {
-            s.improvement_z = paired_z(poses, 0, mdl);
+            s.improvement_z = improvement;
             s.significant = s.improvement_z > cfg.z_significance;
             s.gap_closed_fraction = gap_closed(&ws.acc[0], &acc, &noise);
         }
     }
     let gap = gap_test(&ws.acc[0], &noise);
-    let mut candidates = [ModelScore::empty(EffectSet::NONE); MAX_CANDIDATES];
-    candidates[..n_cand].copy_from_slice(&scores[1..=n_cand]);
+    out.gap = gap;
     let verdict = decide(
-        &mut candidates[..n_cand],
+        &mut out.candidates[..n_cand],
         |a, b| paired_z(&mut *poses, a + 1, b + 1),
         &gap,
         cfg,
@@ -1080,12 +1155,12 @@ pub fn diagnose<const N: usize, const P: usize>(
     // leaves second-order terms of the effect's size, tens of micrometres for large frame
     // errors; from the fitted model, only those of the fold-to-fold changes remain).
     let mut verdict = verdict;
-    let mut refined = None;
+    let mut refined = false;
     if let Some(c) = verdict.candidate {
         let mdl = c + 1;
         let mut o = opts;
-        o.requested = scores[mdl].requested;
-        let analysis = model_analysis(ws, mdl, &scores[mdl], cfg.rank_tol)?;
+        o.requested = score(out, mdl).requested;
+        let analysis = model_analysis(ws, mdl, score(out, mdl), cfg.rank_tol)?;
         let fit = identify_with_analysis(&lin, data, &o, &analysis, &mut ws.id)?;
         ws.g_all.reset(n_u)?;
         for m in data {
@@ -1105,7 +1180,7 @@ pub fn diagnose<const N: usize, const P: usize>(
         )?;
         let acc = ws.acc[mdl];
         let closed = gap_closed(&ws.acc[0], &acc, &noise);
-        let cand = &mut candidates[c];
+        let cand = &mut out.candidates[c];
         cand.heldout_rms_pos_m = rms(acc.pos2, acc.n_pos);
         cand.heldout_rms_rot_rad = rms(acc.rot2, acc.n_rot);
         cand.heldout_chi2 = acc.chi2;
@@ -1113,12 +1188,12 @@ pub fn diagnose<const N: usize, const P: usize>(
         verdict.gap_closed_fraction = closed;
         verdict.status = status_class(closed, cfg);
         if verdict.status != Status::Unexplained {
-            refined = Some((
-                fit,
-                gap_test(&acc, &noise),
-                cand.heldout_rms_pos_m,
-                cand.heldout_rms_rot_rad,
-            ));
+            out.remaining = gap_test(&acc, &noise);
+            out.final_heldout_rms_pos_m = cand.heldout_rms_pos_m;
+            out.final_heldout_rms_rot_rad = cand.heldout_rms_rot_rad;
+            out.fit = fit;
+            out.model = fit.robot;
+            refined = true;
         } else {
             verdict.effects = EffectSet::NONE;
             verdict.candidate = None;
@@ -1126,42 +1201,20 @@ pub fn diagnose<const N: usize, const P: usize>(
             verdict.gap_closed_fraction = 0.0;
         }
     }
-    let (fit, remaining, final_pos, final_rot) = match refined {
-        Some(r) => r,
-        None => {
-            for p in poses.iter_mut() {
-                p.heldout_final = p.heldout_baseline;
-            }
-            (
-                geo,
-                gap,
-                scores[0].heldout_rms_pos_m,
-                scores[0].heldout_rms_rot_rad,
-            )
+    if !refined {
+        // The geometric calibration (still in `out.fit`) is the model.
+        for p in poses.iter_mut() {
+            p.heldout_final = p.heldout_baseline;
         }
-    };
+        out.remaining = gap;
+        out.final_heldout_rms_pos_m = out.baseline.heldout_rms_pos_m;
+        out.final_heldout_rms_rot_rad = out.baseline.heldout_rms_rot_rad;
+    }
+    out.verdict = verdict;
 
     // 7. Where.
-    let location = locate::locate(robot, data, poses, &noise);
-
-    Ok(Diagnosis {
-        noise,
-        geometric: lin,
-        model: fit.robot,
-        fit,
-        geometric_residuals: geo.fitted,
-        groups: n_groups,
-        folds: cfg.folds,
-        baseline: scores[0],
-        gap,
-        candidates,
-        n_candidates: n_cand,
-        verdict,
-        remaining,
-        final_heldout_rms_pos_m: final_pos,
-        final_heldout_rms_rot_rad: final_rot,
-        location,
-    })
+    out.location = locate::locate(robot, data, poses, &noise);
+    Ok(())
 }
 
 /// Label of a parameter (`compliance_2`, …) for reports.
