@@ -1253,7 +1253,7 @@ const char *kincal_version(void);
  Formats `error` as one line of text into the caller's buffer, like `snprintf`: writes at most
  `buf_len` bytes including the terminating NUL and returns the length of the whole message
  (excluding the NUL), so a return value `>= buf_len` means the text was truncated. 512 bytes
- always suffice.
+ always suffice. The no_std (firmware) build leaves the floating-point fields out of the text.
 
  `error` NULL: returns 0 and writes nothing. `buf` may be NULL only when `buf_len` is 0 (to
  ask for the length). Nothing is allocated.

@@ -192,6 +192,21 @@ impl core::fmt::Write for Label {
     }
 }
 
+/// The label of parameter `index` of an `N`-joint robot. Generic over `N` so the layout
+/// arithmetic is constant and the build stays panic-free.
+fn label_of<const N: usize>(_: &kincal::Robot<N>, index: usize) -> FfiResult<Label> {
+    if index >= num_params(N) {
+        return Err(index_error(index, num_params(N)));
+    }
+    let id = ParamId::from_index(ParamIndex(index), N)?;
+    let mut label = Label {
+        buf: [0; KINCAL_LABEL_CAPACITY],
+        len: 0,
+    };
+    write!(label, "{id}").map_err(|_| kincal_error::new(kincal_status::Internal))?;
+    Ok(label)
+}
+
 /// Writes the label of parameter `index` (e.g. `"theta0_3"`) as a NUL-terminated string into
 /// `label_out`, which holds `label_len` bytes; `KINCAL_LABEL_CAPACITY` bytes always suffice.
 /// If the buffer is too small, returns BAD_LENGTH with `expected` = the bytes needed (NUL
@@ -212,17 +227,12 @@ pub unsafe extern "C" fn kincal_robot_param_label(
     err: *mut kincal_error,
 ) -> kincal_status {
     ffi_boundary!(err = err; {
-        // SAFETY: forwarded contract.
-        let n = unsafe { n_joints_of(robot) }?;
-        if index >= num_params(n) {
-            return Err(index_error(index, num_params(n)));
-        }
+        let r = arg_ref!(robot);
         if label_out.is_null() {
             return Err(crate::args::null(c"label_out"));
         }
-        let id = ParamId::from_index(ParamIndex(index), n)?;
-        let mut label = Label { buf: [0; KINCAL_LABEL_CAPACITY], len: 0 };
-        write!(label, "{id}").map_err(|_| kincal_error::new(kincal_status::Internal))?;
+        let any = to_any(r)?;
+        let label = with_any_robot!(&any, r => label_of(r, index))?;
         let needed = label.len + 1;
         if label_len < needed {
             return Err(crate::args::bad_length(c"label_out", needed, label_len));

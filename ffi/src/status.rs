@@ -486,18 +486,23 @@ fn describe(e: &kincal_error, w: &mut impl fmt::Write) -> fmt::Result {
     if e.found != KINCAL_NO_INDEX {
         write!(w, "; found {}", e.found)?;
     }
-    if !e.value.is_nan() {
-        write!(w, "; value {:?}", e.value)?;
-    }
-    if !e.lower.is_nan() || !e.upper.is_nan() {
-        write!(w, "; limits [{:?}, {:?}]", e.lower, e.upper)?;
-    }
-    if !e.residual_pos_m.is_nan() || !e.residual_rot_rad.is_nan() {
-        write!(
-            w,
-            "; best residual {:?} m, {:?} rad",
-            e.residual_pos_m, e.residual_rot_rad
-        )?;
+    // Floating-point formatting keeps panic paths in core::fmt: the firmware (no_std) build
+    // leaves the numbers out of the text (they are in the struct).
+    #[cfg(feature = "std")]
+    {
+        if !e.value.is_nan() {
+            write!(w, "; value {:?}", e.value)?;
+        }
+        if !e.lower.is_nan() || !e.upper.is_nan() {
+            write!(w, "; limits [{:?}, {:?}]", e.lower, e.upper)?;
+        }
+        if !e.residual_pos_m.is_nan() || !e.residual_rot_rad.is_nan() {
+            write!(
+                w,
+                "; best residual {:?} m, {:?} rad",
+                e.residual_pos_m, e.residual_rot_rad
+            )?;
+        }
     }
     if e.iterations != 0 {
         write!(w, "; iterations {}", e.iterations)?;
@@ -508,7 +513,7 @@ fn describe(e: &kincal_error, w: &mut impl fmt::Write) -> fmt::Result {
 /// Formats `error` as one line of text into the caller's buffer, like `snprintf`: writes at most
 /// `buf_len` bytes including the terminating NUL and returns the length of the whole message
 /// (excluding the NUL), so a return value `>= buf_len` means the text was truncated. 512 bytes
-/// always suffice.
+/// always suffice. The no_std (firmware) build leaves the floating-point fields out of the text.
 ///
 /// `error` NULL: returns 0 and writes nothing. `buf` may be NULL only when `buf_len` is 0 (to
 /// ask for the length). Nothing is allocated.
