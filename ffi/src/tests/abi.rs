@@ -1495,3 +1495,88 @@ fn counts_and_effect_names() {
         kincal_status::UnknownLabel
     );
 }
+
+/// Literal results shared with tests/cpp/consumer.cpp (keep the two tables identical): the
+/// C++ consumer checks that the C ABI gives these numbers, this test that they are what the
+/// library computes; a change of either side shows up as a failure, not as a silent copy.
+mod shared_with_cpp {
+    /// Nominal ARIA at `Q`: `[px, py, pz, qw, qx, qy, qz]`.
+    pub const FK_PQ_NOMINAL: [f64; 7] = [
+        0.7141755095975209,
+        0.35561149467273084,
+        0.6386459078672299,
+        0.6930479765324871,
+        -0.604655159428662,
+        0.3671248824646843,
+        -0.13890990272769088,
+    ];
+    /// Table 3 virtual truth at `Q`.
+    pub const FK_PQ_TRUTH: [f64; 7] = [
+        0.744165633329287,
+        0.34655010957859805,
+        0.5634775604690159,
+        0.48366787176089576,
+        -0.7423793201311939,
+        0.2777715990346434,
+        -0.37118899988761694,
+    ];
+    /// Gravity torques of the nominal ARIA at `Q` [N·m].
+    pub const TAU_NOMINAL: [f64; 6] = [
+        0.0,
+        -22.42315448575973,
+        -6.734168502227332,
+        -0.6950360241046818,
+        -0.5196913966683572,
+        0.0,
+    ];
+    /// IK of Table 2 pose 1 on the virtual truth from the ARIA tool seed.
+    pub const IK_Q_TRUTH_POSE1: [f64; 6] = [
+        0.43454034295052607,
+        0.7930473894128408,
+        -1.0650469975285652,
+        4.382635158022495,
+        1.079216589289747,
+        -2.813354506099495,
+    ];
+}
+
+#[test]
+fn values_shared_with_cpp() {
+    use shared_with_cpp::*;
+    for (model, expected) in [
+        (kincal_aria_model::Nominal, FK_PQ_NOMINAL),
+        (kincal_aria_model::VirtualTruth, FK_PQ_TRUTH),
+    ] {
+        let r = aria_robot(model);
+        let mut pq = [0.0; 7];
+        let s = unsafe { kincal_fk_pq(&r, Q.as_ptr(), 6, null(), pq.as_mut_ptr(), 7, null_mut()) };
+        assert_eq!(s, kincal_status::Ok);
+        assert!(max_abs_diff(&pq, &expected) < TOL, "{model:?}: {pq:?}");
+    }
+    let r = aria_robot(kincal_aria_model::Nominal);
+    let mut tau = [0.0; 6];
+    let s = unsafe { kincal_gravity_torques(&r, Q.as_ptr(), 6, tau.as_mut_ptr(), 6, null_mut()) };
+    assert_eq!(s, kincal_status::Ok);
+    assert!(max_abs_diff(&tau, &TAU_NOMINAL) < 1e-10, "{tau:?}");
+    let t = aria_robot(kincal_aria_model::VirtualTruth);
+    let mut target = [0.0; 16];
+    let mut q = [0.0; 6];
+    let s = unsafe {
+        kincal_aria_tool_pose(0, target.as_mut_ptr(), 16, null_mut());
+        kincal_ik(
+            &t,
+            target.as_ptr(),
+            16,
+            aria::TOOL_SEED_Q.as_ptr(),
+            6,
+            null(),
+            null(),
+            q.as_mut_ptr(),
+            6,
+            null_mut(),
+            null_mut(),
+        )
+    };
+    assert_eq!(s, kincal_status::Ok);
+    assert!(max_abs_diff(&q, &IK_Q_TRUTH_POSE1) < 1e-9, "{q:?}");
+}
