@@ -131,9 +131,9 @@ pub const TOOL_SEED_Q: [f64; N] = [0.4813, 0.7750, -1.0383, 3.6605, 1.1053, -2.8
 /// Table 2 pose `l` (zero-based) as a transform.
 #[must_use]
 pub fn tool_pose(l: usize) -> Option<Transform> {
-    TOOL_POSES.get(l).map(|(xyz, rpy_deg)| {
-        pose_from_xyz_rpy(*xyz, rpy_deg.map(|d| d.to_radians()))
-    })
+    TOOL_POSES
+        .get(l)
+        .map(|(xyz, rpy_deg)| pose_from_xyz_rpy(*xyz, rpy_deg.map(|d| d.to_radians())))
 }
 
 /// The nominal ARIA (Table 1) with limits and mass model.
@@ -160,10 +160,52 @@ pub fn real_identified() -> Robot<N> {
 pub fn with_links(links: [Link; N]) -> Robot<N> {
     let mut r = nominal();
     for (i, l) in links.iter().enumerate() {
-        for (k, v) in [l.theta0, l.d, l.a, l.alpha, l.beta].into_iter().enumerate() {
+        for (k, v) in [l.theta0, l.d, l.a, l.alpha, l.beta]
+            .into_iter()
+            .enumerate()
+        {
             let _ = r.set_param(crate::error::ParamIndex(5 * i + k), v);
         }
     }
     r
 }
 
+/// **Assumed** biopsy working region (the paper gives no numbers): the box above the
+/// calibration tool's plate that the Table 2 circle spans, x ∈ [0.066, 0.566] m,
+/// y ∈ [0.116, 0.592] m, z ∈ [0.235, 0.335] m, with the tool tilted 150°–160° about x
+/// (needle pointing down and outwards) as on the calibration tool.
+pub const WORKING_REGION_MIN_M: [f64; 3] = [0.066, 0.116, 0.235];
+/// Upper corner of the working region [m] (see [`WORKING_REGION_MIN_M`]).
+pub const WORKING_REGION_MAX_M: [f64; 3] = [0.566, 0.592, 0.335];
+
+/// The validation grid over the working region: `nx × ny × nz` positions (corners
+/// included) times two orientations (roll −150° and −160°, as Table 2), returned in
+/// `out` in x-major order; returns how many were written (`out` may be shorter).
+pub fn working_region_grid(nx: usize, ny: usize, nz: usize, out: &mut [Transform]) -> usize {
+    let lin = |k: usize, n: usize, lo: f64, hi: f64| {
+        if n <= 1 {
+            0.5 * (lo + hi)
+        } else {
+            lo + (hi - lo) * k as f64 / (n - 1) as f64
+        }
+    };
+    let mut w = 0;
+    for ix in 0..nx {
+        for iy in 0..ny {
+            for iz in 0..nz {
+                for roll_deg in [-150.0f64, -160.0] {
+                    let xyz = [
+                        lin(ix, nx, WORKING_REGION_MIN_M[0], WORKING_REGION_MAX_M[0]),
+                        lin(iy, ny, WORKING_REGION_MIN_M[1], WORKING_REGION_MAX_M[1]),
+                        lin(iz, nz, WORKING_REGION_MIN_M[2], WORKING_REGION_MAX_M[2]),
+                    ];
+                    if let Some(slot) = out.get_mut(w) {
+                        *slot = pose_from_xyz_rpy(xyz, [roll_deg.to_radians(), 0.0, 0.0]);
+                        w += 1;
+                    }
+                }
+            }
+        }
+    }
+    w
+}

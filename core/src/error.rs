@@ -133,6 +133,11 @@ pub enum Error {
         /// Its value.
         value: f64,
     },
+    /// A joint axis given with a zero (or non-normalisable) direction.
+    DegenerateAxis {
+        /// The joint.
+        joint: JointIndex,
+    },
 }
 
 impl fmt::Display for Error {
@@ -176,7 +181,10 @@ impl fmt::Display for Error {
                 "rank deficient: numerical rank {rank}, {required} required"
             ),
             Error::CapacityExceeded { needed, capacity } => {
-                write!(f, "capacity exceeded: {needed} needed, {capacity} available")
+                write!(
+                    f,
+                    "capacity exceeded: {needed} needed, {capacity} available"
+                )
             }
             Error::TooFewData { found, needed } => {
                 write!(f, "too few data: {found} given, at least {needed} needed")
@@ -184,6 +192,9 @@ impl fmt::Display for Error {
             Error::BadPose { pose } => write!(f, "pose {} cannot be used", pose.0 + 1),
             Error::BoundViolated { param, value } => {
                 write!(f, "parameter {} = {value} violates its bound", param.0)
+            }
+            Error::DegenerateAxis { joint } => {
+                write!(f, "joint {} axis has a zero direction", joint.0 + 1)
             }
         }
     }

@@ -96,10 +96,7 @@ pub fn solve_ik<const N: usize>(
     let t = target.translation.vector;
     check_finite(t.as_slice(), Quantity::Position)?;
     check_finite(target.rotation.matrix().as_slice(), Quantity::Orientation)?;
-    check_finite(
-        &[opts.tol_pos_m, opts.tol_rot_rad],
-        Quantity::Setting,
-    )?;
+    check_finite(&[opts.tol_pos_m, opts.tol_rot_rad], Quantity::Setting)?;
     let limits = robot.limits();
     let mut best: Option<IkSolution<N>> = None;
     let mut best_dist = f64::INFINITY;
@@ -111,7 +108,11 @@ pub fn solve_ik<const N: usize>(
                 let lo = limits[j].lower.max(-PI);
                 let hi = limits[j].upper.min(PI);
                 let u = halton(s as u32, PRIMES[j % PRIMES.len()]);
-                *v = if hi > lo { lo + u * (hi - lo) } else { limits[j].lower };
+                *v = if hi > lo {
+                    lo + u * (hi - lo)
+                } else {
+                    limits[j].lower
+                };
             }
         }
         let mut st = *seed;
@@ -165,7 +166,8 @@ fn residual<const N: usize>(
 ) -> Result<Vector6<f64>> {
     robot.fk_frames(state, frames)?;
     let dp = target.translation.vector - frames.t_base_ee.translation.vector;
-    let dr = rotation_log(&(target.rotation.matrix() * frames.t_base_ee.rotation.matrix().transpose()));
+    let dr =
+        rotation_log(&(target.rotation.matrix() * frames.t_base_ee.rotation.matrix().transpose()));
     Ok(Vector6::new(dp.x, dp.y, dp.z, dr.x, dr.y, dr.z))
 }
 
@@ -259,15 +261,17 @@ fn joint_jacobian<const N: usize>(
         } else {
             (
                 f.t_base_link[i - 1].translation.vector,
-                f.t_base_link[i - 1].rotation.matrix().column(2).into_owned(),
+                f.t_base_link[i - 1]
+                    .rotation
+                    .matrix()
+                    .column(2)
+                    .into_owned(),
             )
         };
         let q = state.q[i];
         let (s1, c1) = crate::math::sin_cos(q);
         let c = &e.cyclic[i];
-        let dtheta = 1.0
-            + e.scale[i]
-            + c[CyclicTerm::Sin1 as usize] * c1
+        let dtheta = 1.0 + e.scale[i] + c[CyclicTerm::Sin1 as usize] * c1
             - c[CyclicTerm::Cos1 as usize] * s1
             + 2.0 * c[CyclicTerm::Sin2 as usize] * (c1 * c1 - s1 * s1)
             - 4.0 * c[CyclicTerm::Cos2 as usize] * s1 * c1;

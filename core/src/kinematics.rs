@@ -178,14 +178,22 @@ impl<const N: usize> Robot<N> {
             } else {
                 (
                     f.t_base_link[i - 1].translation.vector,
-                    f.t_base_link[i - 1].rotation.matrix().column(2).into_owned(),
+                    f.t_base_link[i - 1]
+                        .rotation
+                        .matrix()
+                        .column(2)
+                        .into_owned(),
                 )
             };
             let pi = f.t_base_link[i].translation.vector;
             let yi = f.t_base_link[i].rotation.matrix().column(1).into_owned();
             let xm = f.x_mid[i];
             let idx = |k: LinkParam| ParamId::Link { link: i, kind: k }.index(N).0;
-            put(jac, idx(LinkParam::Theta0), col(z_prev.cross(&(pe - p_prev)), z_prev));
+            put(
+                jac,
+                idx(LinkParam::Theta0),
+                col(z_prev.cross(&(pe - p_prev)), z_prev),
+            );
             put(jac, idx(LinkParam::D), col(z_prev * scale, zero));
             put(jac, idx(LinkParam::A), col(xm * scale, zero));
             put(jac, idx(LinkParam::Alpha), col(xm.cross(&(pe - pi)), xm));
@@ -240,20 +248,52 @@ impl<const N: usize> Robot<N> {
         let scaled = |c: JacobianColumn, f: f64| c.map(|v| v * f);
         let mut thermal = [0.0; 6];
         for j in 0..N {
-            let th = col_at(jac, ParamId::Link { link: j, kind: LinkParam::Theta0 }.index(N).0);
+            let th = col_at(
+                jac,
+                ParamId::Link {
+                    link: j,
+                    kind: LinkParam::Theta0,
+                }
+                .index(N)
+                .0,
+            );
             let q = state.q[j];
             let (s1, c1) = crate::math::sin_cos(q);
             let terms = [s1, c1, 2.0 * s1 * c1, c1 * c1 - s1 * s1];
             put(jac, ParamId::Compliance(j).index(N).0, scaled(th, tau[j]));
             put(jac, ParamId::Scale(j).index(N).0, scaled(th, q));
             for t in CyclicTerm::ALL {
-                put(jac, ParamId::Cyclic(j, t).index(N).0, scaled(th, terms[t as usize]));
+                put(
+                    jac,
+                    ParamId::Cyclic(j, t).index(N).0,
+                    scaled(th, terms[t as usize]),
+                );
             }
-            put(jac, ParamId::Backlash(j).index(N).0, scaled(th, approach[j]));
+            put(
+                jac,
+                ParamId::Backlash(j).index(N).0,
+                scaled(th, approach[j]),
+            );
             // The d and a columns carry the factor `scale`; ∂/∂(scaled length) = col/scale.
             let l = &self.geom.links[j];
-            let dcol = col_at(jac, ParamId::Link { link: j, kind: LinkParam::D }.index(N).0);
-            let acol = col_at(jac, ParamId::Link { link: j, kind: LinkParam::A }.index(N).0);
+            let dcol = col_at(
+                jac,
+                ParamId::Link {
+                    link: j,
+                    kind: LinkParam::D,
+                }
+                .index(N)
+                .0,
+            );
+            let acol = col_at(
+                jac,
+                ParamId::Link {
+                    link: j,
+                    kind: LinkParam::A,
+                }
+                .index(N)
+                .0,
+            );
             for r in 0..6 {
                 thermal[r] += (l.d * dcol[r] + l.a * acol[r]) / scale;
             }

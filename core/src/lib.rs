@@ -1,21 +1,33 @@
 #![doc = include_str!("../README.md")]
 #![no_std]
 #![deny(missing_docs)]
-#![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used, clippy::panic))]
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+// Numerical kernels index several same-length arrays by one loop counter; iterator chains
+// would hide that structure.
+#![allow(clippy::needless_range_loop)]
 
 #[cfg(test)]
 extern crate std;
 
 pub mod any;
 pub mod aria;
+pub mod axis_chain;
 pub mod effects;
 pub mod error;
+pub mod identify;
 pub mod ik;
 pub mod kinematics;
+pub mod linalg;
 mod math;
 pub mod model;
 pub mod params;
 pub mod pose;
+pub mod registration;
+pub mod rng;
+pub mod validation;
 
 pub use effects::{Effect, EffectSet};
 pub use error::{Error, JointIndex, ParamIndex, PoseIndex, Quantity, Result};

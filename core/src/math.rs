@@ -25,3 +25,11 @@ pub(crate) fn atan2(y: f64, x: f64) -> f64 {
 pub(crate) fn hypot(x: f64, y: f64) -> f64 {
     libm::hypot(x, y)
 }
+#[inline(always)]
+pub(crate) fn asin(x: f64) -> f64 {
+    libm::asin(x)
+}
+#[inline(always)]
+pub(crate) fn ln(x: f64) -> f64 {
+    libm::log(x)
+}

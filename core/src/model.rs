@@ -10,9 +10,7 @@ use nalgebra::{Matrix3, Vector3};
 
 use crate::effects::{Effect, EffectSet};
 use crate::error::{Error, JointIndex, ParamIndex, Quantity, Result, check_finite};
-use crate::params::{
-    CyclicTerm, LinkParam, ParamId, ParamSet, num_geometric_params, num_params,
-};
+use crate::params::{CyclicTerm, LinkParam, ParamId, ParamSet, num_geometric_params, num_params};
 use crate::pose::{Transform, pose_from_vector6, rot_x, rot_y};
 
 /// Two consecutive joint axes count as parallel when the angle between them is below this
@@ -147,13 +145,15 @@ impl<const N: usize> JointState<N> {
     /// Checks that every number is finite and approach directions are −1, 0 or +1.
     pub fn validate(&self) -> Result<()> {
         check_finite(&self.q, Quantity::JointReading)?;
-        if let Some(s) = &self.approach {
-            if let Some(index) = s.iter().position(|&v| v != -1.0 && v != 0.0 && v != 1.0) {
-                return Err(Error::NonFinite {
-                    what: Quantity::ApproachDirection,
-                    index,
-                });
-            }
+        if let Some(index) = self
+            .approach
+            .as_ref()
+            .and_then(|s| s.iter().position(|&v| v != -1.0 && v != 0.0 && v != 1.0))
+        {
+            return Err(Error::NonFinite {
+                what: Quantity::ApproachDirection,
+                index,
+            });
         }
         if let Some(t) = self.temp_c {
             check_finite(&[t], Quantity::Temperature)?;
@@ -258,11 +258,12 @@ impl<const N: usize> Robot<N> {
             });
         }
         for (i, l) in links.iter().enumerate() {
-            check_finite(&[l.theta0, l.d, l.a, l.alpha, l.beta], Quantity::Parameter)
-                .map_err(|_| Error::NonFinite {
+            check_finite(&[l.theta0, l.d, l.a, l.alpha, l.beta], Quantity::Parameter).map_err(
+                |_| Error::NonFinite {
                     what: Quantity::Parameter,
                     index: 5 * i,
-                })?;
+                },
+            )?;
         }
         for (j, lim) in limits.iter().enumerate() {
             if !lim.lower.is_finite() || !lim.upper.is_finite() || lim.lower > lim.upper {
@@ -339,7 +340,8 @@ impl<const N: usize> Robot<N> {
             let r = self.geom.link_rot[i];
             // Angle between z_{i-1} and z_i: z_i = Rx(α)Ry(β)·e_z in frame i−1 (after Rz).
             let cos_angle = r[(2, 2)].abs().min(1.0);
-            let angle = crate::math::atan2(crate::math::sqrt(1.0 - cos_angle * cos_angle), cos_angle);
+            let angle =
+                crate::math::atan2(crate::math::sqrt(1.0 - cos_angle * cos_angle), cos_angle);
             if angle < PARALLEL_AXES_TOL_RAD {
                 *lp = LengthParam::Beta;
             }
@@ -444,20 +446,12 @@ impl<const N: usize> Robot<N> {
     /// The value of parameter `i` (layout in [`crate::params`]).
     pub fn param(&self, i: ParamIndex) -> Result<f64> {
         Ok(match ParamId::from_index(i, N)? {
-            ParamId::Link { link, kind } => self
-                .geom
-                .links
-                .get(link)
-                .map_or(0.0, |l| l.get(kind)),
+            ParamId::Link { link, kind } => self.geom.links.get(link).map_or(0.0, |l| l.get(kind)),
             ParamId::Base(k) => self.geom.base[k as usize],
             ParamId::Tool(k) => self.geom.tool[k as usize],
             ParamId::Compliance(j) => self.effects.compliance.get(j).copied().unwrap_or(0.0),
             ParamId::Scale(j) => self.effects.scale.get(j).copied().unwrap_or(0.0),
-            ParamId::Cyclic(j, t) => self
-                .effects
-                .cyclic
-                .get(j)
-                .map_or(0.0, |c| c[t as usize]),
+            ParamId::Cyclic(j, t) => self.effects.cyclic.get(j).map_or(0.0, |c| c[t as usize]),
             ParamId::Backlash(j) => self.effects.backlash.get(j).copied().unwrap_or(0.0),
             ParamId::Thermal => self.effects.thermal_kappa,
         })

@@ -248,7 +248,10 @@ impl ParamId {
         }
         let j = j - 1;
         if let Some(kind) = LinkParam::ALL.iter().find(|k| k.name() == stem) {
-            return Some(ParamId::Link { link: j, kind: *kind });
+            return Some(ParamId::Link {
+                link: j,
+                kind: *kind,
+            });
         }
         match stem {
             "compliance" => Some(ParamId::Compliance(j)),

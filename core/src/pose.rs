@@ -71,18 +71,30 @@ pub fn rpy_to_matrix(roll: f64, pitch: f64, yaw: f64) -> Matrix3<f64> {
 
 /// Inverse of [`rpy_to_matrix`]: `[roll, pitch, yaw]` with pitch in [−π/2, π/2].
 ///
-/// At gimbal lock (|pitch| = π/2, detected when `cos(pitch) < 1e-12`) roll and yaw are
-/// not separable; roll is set to 0 and the whole rotation about z goes into yaw, so the
-/// returned angles still reproduce the matrix.
+/// At gimbal lock (|pitch| = π/2, detected when `cos(pitch) < 1e-15`) roll and yaw are
+/// not separable; roll is set to ~0 and the whole rotation about z goes into yaw, so the
+/// returned angles still reproduce the matrix (to ~cos(pitch) < 1e-15).
+///
+/// Yaw is taken first and roll and pitch are read from `Rz(−yaw)·R = Ry(pitch)·Rx(roll)`,
+/// so the angles reproduce the matrix to rounding (a few 1e-16) also *near* gimbal lock,
+/// where reading roll from `r21, r22` (both ~cos(pitch)) would lose digits.
 #[must_use]
 pub fn matrix_to_rpy(r: &Matrix3<f64>) -> [f64; 3] {
     let cp = hypot(r[(0, 0)], r[(1, 0)]);
-    let pitch = atan2(-r[(2, 0)], cp);
-    if cp < 1e-12 {
-        [0.0, pitch, atan2(-r[(0, 1)], r[(1, 1)])]
+    let lock = cp < 1e-15;
+    let yaw = if lock {
+        atan2(-r[(0, 1)], r[(1, 1)])
     } else {
-        [atan2(r[(2, 1)], r[(2, 2)]), pitch, atan2(r[(1, 0)], r[(0, 0)])]
-    }
+        atan2(r[(1, 0)], r[(0, 0)])
+    };
+    let (sy, cy) = sin_cos(yaw);
+    // Rz(−yaw)·R: its rows 0 and 1 are cy·r0 + sy·r1 and −sy·r0 + cy·r1.
+    let r00 = cy * r[(0, 0)] + sy * r[(1, 0)];
+    let r11 = -sy * r[(0, 1)] + cy * r[(1, 1)];
+    let r12 = -sy * r[(0, 2)] + cy * r[(1, 2)];
+    let roll = atan2(-r12, r11);
+    let pitch = atan2(-r[(2, 0)], if lock { cp } else { r00 });
+    [roll, pitch, yaw]
 }
 
 /// Rotation matrix of the quaternion `[w, x, y, z]`, normalised first.
@@ -93,10 +105,7 @@ pub fn quaternion_to_matrix(q: &[f64; 4]) -> Result<Matrix3<f64>> {
     crate::error::check_finite(q, Quantity::Orientation)?;
     let n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
     if n < 1e-300 {
-        return Err(Error::InvalidParameter {
-            index: 0,
-            value: n,
-        });
+        return Err(Error::InvalidParameter { index: 0, value: n });
     }
     let (w, x, y, z) = (q[0] / n, q[1] / n, q[2] / n, q[3] / n);
     Ok(Matrix3::new(
@@ -153,7 +162,12 @@ pub fn matrix_to_quaternion(r: &Matrix3<f64>) -> [f64; 4] {
     };
     let n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
     let sign = if q[0] < 0.0 { -1.0 } else { 1.0 };
-    [sign * q[0] / n, sign * q[1] / n, sign * q[2] / n, sign * q[3] / n]
+    [
+        sign * q[0] / n,
+        sign * q[1] / n,
+        sign * q[2] / n,
+        sign * q[3] / n,
+    ]
 }
 
 /// Rotation matrix of the rotation vector `v` (axis times angle [rad]): Rodrigues' formula
@@ -163,7 +177,10 @@ pub fn rotation_exp(v: &Vector3<f64>) -> Matrix3<f64> {
     let t2 = v.norm_squared();
     let t = sqrt(t2);
     let (a, b) = if t < 1e-4 {
-        (1.0 - t2 / 6.0 + t2 * t2 / 120.0, 0.5 - t2 / 24.0 + t2 * t2 / 720.0)
+        (
+            1.0 - t2 / 6.0 + t2 * t2 / 120.0,
+            0.5 - t2 / 24.0 + t2 * t2 / 720.0,
+        )
     } else {
         (sin(t) / t, (1.0 - cos(t)) / t2)
     };
@@ -190,7 +207,11 @@ pub fn rotation_log(r: &Matrix3<f64>) -> Vector3<f64> {
     }
     if cos_t > -0.7 {
         // angle < ~134°: sin is a good measure, θ/sinθ well conditioned.
-        let f = if angle < 1e-6 { 1.0 + angle * angle / 6.0 } else { angle / sin_t };
+        let f = if angle < 1e-6 {
+            1.0 + angle * angle / 6.0
+        } else {
+            angle / sin_t
+        };
         return s * f;
     }
     // Near π: R + Rᵀ = 2cosθ·I + 2(1 − cosθ)·a·aᵀ; take the largest diagonal entry.
@@ -239,7 +260,11 @@ pub fn pose_error(measured: &Transform, model: &Transform, form: OrientationErro
         OrientationError::Exact => rotation_log(&(rm * r0.transpose())),
         OrientationError::SmallAngle => {
             let s = (rm - r0) * r0.transpose();
-            Vector3::new(s[(2, 1)] - s[(1, 2)], s[(0, 2)] - s[(2, 0)], s[(1, 0)] - s[(0, 1)]) * 0.5
+            Vector3::new(
+                s[(2, 1)] - s[(1, 2)],
+                s[(0, 2)] - s[(2, 0)],
+                s[(1, 0)] - s[(0, 1)],
+            ) * 0.5
         }
     };
     [dp.x, dp.y, dp.z, dphi.x, dphi.y, dphi.z]

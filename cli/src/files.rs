@@ -1,0 +1,344 @@
+//! Output files: atomic replacement (temporary file in the same directory, fsync, rename)
+//! that never overwrites an input, and SHA-256 of a file.
+
+use std::fmt;
+use std::fs::{self, File};
+use std::io::{self, BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+
+use sha2::{Digest, Sha256};
+
+/// Why an output could not be written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OutputErrorKind {
+    /// The output path is (or resolves to) one of the input files.
+    SameAsInput,
+    /// The file system refused, or the writer failed.
+    Io,
+}
+
+/// An output that was not written. The target is left as it was and no temporary file
+/// remains.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct OutputError {
+    pub path: String,
+    pub kind: OutputErrorKind,
+    pub reason: String,
+}
+
+impl fmt::Display for OutputError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.path, self.reason)
+    }
+}
+
+impl std::error::Error for OutputError {}
+
+/// Canonical form of `p`, also when `p` itself does not exist yet (then its directory is
+/// canonicalised and the file name appended). `None` if neither can be resolved.
+fn resolve(p: &Path) -> Option<PathBuf> {
+    if let Ok(c) = fs::canonicalize(p) {
+        return Some(c);
+    }
+    let name = p.file_name()?;
+    let dir = match p.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    fs::canonicalize(dir).ok().map(|d| d.join(name))
+}
+
+#[cfg(unix)]
+fn same_inode(a: &Path, b: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (fs::metadata(a), fs::metadata(b)) {
+        (Ok(ma), Ok(mb)) => ma.dev() == mb.dev() && ma.ino() == mb.ino(),
+        _ => false,
+    }
+}
+
+#[cfg(not(unix))]
+fn same_inode(_a: &Path, _b: &Path) -> bool {
+    false
+}
+
+/// True if writing `output` would replace `input`. A symlink at `output` is resolved, so a
+/// link pointing at an input counts as that input.
+fn is_same_file(output: &Path, input: &Path) -> bool {
+    if let (Some(o), Some(i)) = (resolve(output), resolve(input))
+        && o == i
+    {
+        return true;
+    }
+    // Also catches hard links and paths the canonical forms do not unify.
+    same_inode(output, input)
+}
+
+/// Writes `path` atomically: `write` fills a temporary file in the same directory, which is
+/// flushed, fsynced and then renamed over `path`. Refuses (kind `SameAsInput`) if `path`
+/// is one of `inputs` (same canonical path, or same device and inode). On any error the
+/// target is untouched and the temporary file is removed.
+pub fn write_atomic(
+    path: &Path,
+    inputs: &[&Path],
+    write: impl FnOnce(&mut dyn Write) -> io::Result<()>,
+) -> Result<(), OutputError> {
+    let shown = path.display().to_string();
+    let io_err = |what: &str, e: io::Error| OutputError {
+        path: shown.clone(),
+        kind: OutputErrorKind::Io,
+        reason: format!("{what}: {e}"),
+    };
+
+    for input in inputs {
+        if is_same_file(path, input) {
+            return Err(OutputError {
+                path: shown.clone(),
+                kind: OutputErrorKind::SameAsInput,
+                reason: format!(
+                    "refusing to write: this is the input file '{}' (an input is never \
+                     overwritten; choose another output path)",
+                    input.display()
+                ),
+            });
+        }
+    }
+    if path.file_name().is_none() {
+        return Err(io_err(
+            "cannot write",
+            io::Error::new(io::ErrorKind::InvalidInput, "the path names no file"),
+        ));
+    }
+    if path.is_dir() {
+        return Err(io_err(
+            "cannot write",
+            io::Error::new(io::ErrorKind::IsADirectory, "the path is a directory"),
+        ));
+    }
+
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".kincal-").suffix(".tmp");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        // Like any newly created file: 0666 less the umask (tempfile's default is 0600).
+        builder.permissions(fs::Permissions::from_mode(0o666));
+    }
+    let tmp = builder
+        .tempfile_in(dir)
+        .map_err(|e| io_err("cannot create a temporary file in the output directory", e))?;
+
+    {
+        let mut out = BufWriter::new(tmp.as_file());
+        write(&mut out).map_err(|e| io_err("write failed", e))?;
+        out.flush().map_err(|e| io_err("write failed", e))?;
+    }
+    tmp.as_file()
+        .sync_all()
+        .map_err(|e| io_err("fsync failed", e))?;
+    // On failure the returned PersistError owns the temporary file and deletes it on drop.
+    tmp.persist(path)
+        .map_err(|e| io_err("cannot rename the temporary file into place", e.error))?;
+    #[cfg(unix)]
+    {
+        // Make the rename itself durable; failure here does not undo a completed write.
+        if let Ok(d) = File::open(dir) {
+            let _ = d.sync_all();
+        }
+    }
+    Ok(())
+}
+
+/// Lower-case hex SHA-256 of a file's bytes (streamed).
+pub fn sha256_file(path: &Path) -> io::Result<String> {
+    let mut f = File::open(path)?;
+    let mut hasher = Sha256::new();
+    let mut buf = vec![0u8; 64 * 1024];
+    loop {
+        let n = match f.read(&mut buf) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        hasher.update(&buf[..n]);
+    }
+    let digest = hasher.finalize();
+    let mut s = String::with_capacity(64);
+    for b in digest.iter() {
+        use fmt::Write as _;
+        let _ = write!(s, "{b:02x}");
+    }
+    Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn entries(dir: &Path) -> Vec<String> {
+        let mut v: Vec<String> = fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    fn put(w: &mut dyn Write, s: &str) -> io::Result<()> {
+        w.write_all(s.as_bytes())
+    }
+
+    #[test]
+    fn creates_and_replaces_content() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("in.csv");
+        fs::write(&input, "input").unwrap();
+        let out = dir.path().join("out.csv");
+        write_atomic(&out, &[&input], |w| put(w, "first version, long")).unwrap();
+        assert_eq!(fs::read_to_string(&out).unwrap(), "first version, long");
+        write_atomic(&out, &[&input], |w| put(w, "second")).unwrap();
+        assert_eq!(fs::read_to_string(&out).unwrap(), "second");
+        assert_eq!(fs::read_to_string(&input).unwrap(), "input");
+        assert_eq!(entries(dir.path()), vec!["in.csv", "out.csv"]);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn new_file_gets_ordinary_permissions() {
+        use std::os::unix::fs::PermissionsExt;
+        let umask = fs::read_to_string("/proc/self/status").ok().and_then(|s| {
+            s.lines()
+                .find_map(|l| l.strip_prefix("Umask:"))
+                .and_then(|m| u32::from_str_radix(m.trim(), 8).ok())
+        });
+        let Some(umask) = umask else { return };
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out.csv");
+        write_atomic(&out, &[], |w| put(w, "x")).unwrap();
+        let mode = fs::metadata(&out).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode, 0o666 & !umask);
+    }
+
+    #[track_caller]
+    fn assert_refused(out: &Path, input: &Path, dir: &Path) {
+        let before = entries(dir);
+        let content = fs::read(input).unwrap();
+        let e = write_atomic(out, &[Path::new("/elsewhere/other.csv"), input], |w| {
+            put(w, "clobbered")
+        })
+        .unwrap_err();
+        assert_eq!(e.kind, OutputErrorKind::SameAsInput, "{e}");
+        assert!(e.to_string().contains("input"), "{e}");
+        assert_eq!(fs::read(input).unwrap(), content);
+        assert_eq!(entries(dir), before);
+    }
+
+    #[test]
+    fn refuses_to_overwrite_an_input() {
+        let dir = tempfile::tempdir().unwrap();
+        fs::create_dir(dir.path().join("sub")).unwrap();
+        let input = dir.path().join("in.csv");
+        fs::write(&input, "precious").unwrap();
+        assert_refused(&input, &input, dir.path());
+        // The same file through another spelling.
+        let other = dir.path().join("sub").join("..").join(".").join("in.csv");
+        assert_refused(&other, &input, dir.path());
+        assert_refused(&input, &other, dir.path());
+    }
+
+    #[test]
+    fn refuses_a_relative_spelling_of_an_input() {
+        // A relative path (against the current directory) naming an absolute input.
+        let cwd = std::env::current_dir().unwrap();
+        let dir = tempfile::tempdir_in(&cwd).unwrap();
+        let input = dir.path().join("in.csv");
+        fs::write(&input, "precious").unwrap();
+        let name = dir.path().file_name().unwrap();
+        let relative = Path::new(".").join(name).join("in.csv");
+        assert!(relative.is_relative());
+        assert_refused(&relative, &input, dir.path());
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn refuses_symlinks_and_hard_links_to_an_input() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("in.csv");
+        fs::write(&input, "precious").unwrap();
+        let link = dir.path().join("link.csv");
+        std::os::unix::fs::symlink("in.csv", &link).unwrap();
+        assert_refused(&link, &input, dir.path());
+        let hard = dir.path().join("hard.csv");
+        fs::hard_link(&input, &hard).unwrap();
+        assert_refused(&hard, &input, dir.path());
+        // A symlinked directory.
+        let dlink = dir.path().join("dlink");
+        std::os::unix::fs::symlink(dir.path(), &dlink).unwrap();
+        assert_refused(&dlink.join("in.csv"), &input, dir.path());
+    }
+
+    #[test]
+    fn failed_write_leaves_target_and_no_temporary_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out.csv");
+        fs::write(&out, "old").unwrap();
+        let e = write_atomic(&out, &[], |w| {
+            put(w, "partial")?;
+            Err(io::Error::other("model diverged"))
+        })
+        .unwrap_err();
+        assert_eq!(e.kind, OutputErrorKind::Io);
+        assert!(e.to_string().contains("model diverged"), "{e}");
+        assert_eq!(fs::read_to_string(&out).unwrap(), "old");
+        assert_eq!(entries(dir.path()), vec!["out.csv"]);
+
+        // A new target that fails is not created at all.
+        let new = dir.path().join("new.csv");
+        write_atomic(&new, &[], |_| Err(io::Error::other("no"))).unwrap_err();
+        assert!(!new.exists());
+        assert_eq!(entries(dir.path()), vec!["out.csv"]);
+    }
+
+    #[test]
+    fn rename_failure_leaves_no_temporary_file() {
+        let dir = tempfile::tempdir().unwrap();
+        // The target is a non-empty directory: rename fails after the data were written.
+        let target = dir.path().join("taken");
+        fs::create_dir(&target).unwrap();
+        fs::write(target.join("x"), "x").unwrap();
+        let e = write_atomic(&target, &[], |w| put(w, "data")).unwrap_err();
+        assert_eq!(e.kind, OutputErrorKind::Io);
+        assert_eq!(entries(dir.path()), vec!["taken"]);
+    }
+
+    #[test]
+    fn missing_directory_is_an_io_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("no").join("such").join("out.csv");
+        let e = write_atomic(&out, &[], |w| put(w, "x")).unwrap_err();
+        assert_eq!(e.kind, OutputErrorKind::Io);
+        assert!(e.to_string().starts_with(&out.display().to_string()), "{e}");
+    }
+
+    #[test]
+    fn sha256_of_a_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("abc");
+        fs::write(&p, "abc").unwrap();
+        assert_eq!(
+            sha256_file(&p).unwrap(),
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+        );
+        fs::write(&p, "").unwrap();
+        assert_eq!(
+            sha256_file(&p).unwrap(),
+            "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855"
+        );
+        assert!(sha256_file(&dir.path().join("missing")).is_err());
+    }
+}

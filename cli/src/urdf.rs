@@ -1,0 +1,619 @@
+//! URDF import and export (parsed and written with the `urdf-rs` crate).
+//!
+//! **Import** picks the serial chain between a base link and a tip link (default: the
+//! unique chain from the single root link down to the single leaf; an error names the
+//! branches otherwise), composes the joint origins at `q = 0` into joint axes in the base
+//! link's frame, and converts them with the core's [`AxisChain`] (see `kincal::axis_chain`
+//! for the mDH construction). Fixed joints are folded into the neighbouring transforms;
+//! revolute joints keep their limits; continuous joints get ±[`CONTINUOUS_LIMIT_RAD`];
+//! prismatic, floating, planar and mimic joints on the chain are errors naming the joint.
+//! The robot's base frame is the base link's frame and its tool frame the tip link's, so
+//! `fk(q)` is the tip link in the base link for the URDF's own joint values `q`.
+//!
+//! Masses (optional in URDF) become the core's point-mass model: link `i` carries the
+//! masses of the URDF links rigidly moved by joint `i` up to the next joint (with every
+//! subtree hanging off them), the tool the tip link's subtree. Gravity is −9.81 m/s² along
+//! the root link's z axis, expressed in the base link when only fixed joints lie between
+//! them (otherwise along the base link's −z, with a note).
+//!
+//! **Export** writes a calibrated model as a URDF a ROS user can load: link `i`'s frame is
+//! mDH frame `i−1` turned by `q_i`, so joint `i` rotates about its z axis and the joint
+//! origins carry the identified geometry: joint 1's origin is the base transform, joint
+//! `i+1`'s is `A_i(0) = Rz(θ0_i)·Tz(d_i)·Tx(a_i)·Rx(α_i)·Ry(β_i)`, and a fixed joint to
+//! the tip link carries `A_N(0)·T_tool`. Joint limits and the point masses are written;
+//! effort and velocity limits are unknown to the model and written as 0. Non-geometric
+//! effects (compliance, backlash, …) have no URDF form: exporting a model that has them is
+//! refused unless explicitly allowed (they are then dropped).
+
+use std::collections::{HashMap, HashSet};
+use std::fmt;
+use std::path::Path;
+
+use kincal::any::{AnyRobot, MAX_JOINTS};
+use kincal::axis_chain::{AxisChain, JointAxis, link_transform_at_zero};
+use kincal::model::{JointLimits, MassModel, Robot};
+use kincal::pose::{Transform, matrix_to_rpy, pose_from_xyz_rpy};
+use kincal::{EffectSet, with_any_robot};
+use nalgebra::Vector3;
+use urdf_rs::JointType;
+
+use crate::robot_file::DescriptionError;
+
+/// Limits given to a continuous joint [rad]: one turn either way.
+pub const CONTINUOUS_LIMIT_RAD: f64 = 2.0 * std::f64::consts::PI;
+
+/// Which chain of the URDF tree to import.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ChainSelection<'a> {
+    /// Base link (default: the single root link).
+    pub base_link: Option<&'a str>,
+    /// Tip link (default: the single leaf below the base).
+    pub tip_link: Option<&'a str>,
+}
+
+/// A URDF chain converted to a kincal model.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImportedUrdf {
+    /// `<robot name>`.
+    pub robot_name: String,
+    /// The base link used (the model's base frame).
+    pub base_link: String,
+    /// The tip link used (the model's tool frame).
+    pub tip_link: String,
+    /// Names of the revolute/continuous joints, in chain order (the model's joints).
+    pub joint_names: Vec<String>,
+    /// Names of the fixed joints folded into the geometry.
+    pub fixed_joints: Vec<String>,
+    /// The model (geometry, limits, masses).
+    pub robot: AnyRobot,
+    /// Assumptions made (continuous joints' limits, gravity direction).
+    pub notes: Vec<String>,
+}
+
+/// A model that cannot be written as URDF.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct UrdfExportError(pub String);
+
+impl fmt::Display for UrdfExportError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "URDF export: {}", self.0)
+    }
+}
+
+impl std::error::Error for UrdfExportError {}
+
+/// Names and options of [`export_urdf`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct UrdfExport<'a> {
+    /// `<robot name>`.
+    pub robot_name: &'a str,
+    /// Name of the base link.
+    pub base_link: &'a str,
+    /// Name of the tip (tool) link.
+    pub tip_link: &'a str,
+    /// Joint names (one per joint; `None`: `joint1`, …).
+    pub joint_names: Option<&'a [String]>,
+    /// Drop non-geometric effects instead of refusing the export.
+    pub allow_dropping_effects: bool,
+}
+
+/// `Trans(xyz)·Rz(y)·Ry(p)·Rx(r)` of a URDF `<origin>`.
+pub fn origin_transform(o: &urdf_rs::Pose) -> Transform {
+    pose_from_xyz_rpy(o.xyz.0, o.rpy.0)
+}
+
+/// The joints from `base` down to `tip`, in order (the URDF tree walked by link names).
+pub fn select_chain<'u>(
+    urdf: &'u urdf_rs::Robot,
+    file: &str,
+    sel: &ChainSelection<'_>,
+) -> Result<(String, String, Vec<&'u urdf_rs::Joint>), DescriptionError> {
+    let err = |key: Option<String>, reason: String| DescriptionError::new(file, key, reason);
+    let links: HashSet<&str> = urdf.links.iter().map(|l| l.name.as_str()).collect();
+    let mut parent_joint: HashMap<&str, &urdf_rs::Joint> = HashMap::new();
+    let mut children: HashMap<&str, Vec<&urdf_rs::Joint>> = HashMap::new();
+    for j in &urdf.joints {
+        for l in [&j.parent.link, &j.child.link] {
+            if !links.contains(l.as_str()) {
+                return Err(err(
+                    Some(format!("joint {}", j.name)),
+                    format!("refers to link `{l}`, which the URDF does not define"),
+                ));
+            }
+        }
+        if let Some(other) = parent_joint.insert(j.child.link.as_str(), j) {
+            return Err(err(
+                Some(format!("link {}", j.child.link)),
+                format!(
+                    "is the child of two joints (`{}` and `{}`): not a tree",
+                    other.name, j.name
+                ),
+            ));
+        }
+        children.entry(j.parent.link.as_str()).or_default().push(j);
+    }
+    let base = match sel.base_link {
+        Some(b) if links.contains(b) => b,
+        Some(b) => {
+            return Err(err(
+                Some(format!("link {b}")),
+                "base link not found in the URDF".into(),
+            ));
+        }
+        None => {
+            let roots: Vec<&str> = urdf
+                .links
+                .iter()
+                .map(|l| l.name.as_str())
+                .filter(|l| !parent_joint.contains_key(l))
+                .collect();
+            match roots.as_slice() {
+                [r] => *r,
+                _ => {
+                    return Err(err(
+                        None,
+                        format!(
+                            "{} root links ({}); choose a base link",
+                            roots.len(),
+                            roots.join(", ")
+                        ),
+                    ));
+                }
+            }
+        }
+    };
+    let mut path = Vec::new();
+    let tip = match sel.tip_link {
+        Some(t) => {
+            if !links.contains(t) {
+                return Err(err(
+                    Some(format!("link {t}")),
+                    "tip link not found in the URDF".into(),
+                ));
+            }
+            let mut cur = t;
+            while cur != base {
+                match parent_joint.get(cur) {
+                    Some(j) => {
+                        path.push(*j);
+                        cur = j.parent.link.as_str();
+                    }
+                    None => {
+                        return Err(err(
+                            Some(format!("link {t}")),
+                            format!("tip link is not below the base link `{base}`"),
+                        ));
+                    }
+                }
+            }
+            path.reverse();
+            t
+        }
+        None => {
+            let mut cur = base;
+            loop {
+                match children.get(cur).map(Vec::as_slice) {
+                    None | Some([]) => break cur,
+                    Some([j]) => {
+                        path.push(*j);
+                        cur = j.child.link.as_str();
+                    }
+                    Some(js) => {
+                        let leaves = leaves_below(cur, &children);
+                        return Err(err(
+                            Some(format!("link {cur}")),
+                            format!(
+                                "branches into {} ({}); no unique serial chain: choose a tip link among the leaves {}",
+                                js.len(),
+                                js.iter()
+                                    .map(|j| j.child.link.as_str())
+                                    .collect::<Vec<_>>()
+                                    .join(", "),
+                                leaves.join(", ")
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+    };
+    Ok((base.to_string(), tip.to_string(), path))
+}
+
+fn leaves_below<'u>(
+    link: &'u str,
+    children: &HashMap<&str, Vec<&'u urdf_rs::Joint>>,
+) -> Vec<&'u str> {
+    let mut out = Vec::new();
+    let mut stack = vec![link];
+    while let Some(l) = stack.pop() {
+        match children.get(l) {
+            Some(js) if !js.is_empty() => {
+                stack.extend(js.iter().rev().map(|j| j.child.link.as_str()))
+            }
+            _ => out.push(l),
+        }
+    }
+    out
+}
+
+/// Parses and imports a URDF file.
+pub fn import_urdf_file(
+    path: &Path,
+    sel: &ChainSelection<'_>,
+) -> Result<ImportedUrdf, DescriptionError> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| DescriptionError::new(&file, None, format!("cannot read: {e}")))?;
+    import_urdf_str(&text, &file, sel)
+}
+
+/// Parses and imports URDF text; `file` names it in errors.
+pub fn import_urdf_str(
+    text: &str,
+    file: &str,
+    sel: &ChainSelection<'_>,
+) -> Result<ImportedUrdf, DescriptionError> {
+    let urdf = urdf_rs::read_from_string(text)
+        .map_err(|e| DescriptionError::new(file, None, format!("not a readable URDF: {e}")))?;
+    import_urdf(&urdf, file, sel)
+}
+
+/// Imports the selected chain of a parsed URDF.
+pub fn import_urdf(
+    urdf: &urdf_rs::Robot,
+    file: &str,
+    sel: &ChainSelection<'_>,
+) -> Result<ImportedUrdf, DescriptionError> {
+    let (base, tip, path) = select_chain(urdf, file, sel)?;
+    let jerr = |j: &urdf_rs::Joint, reason: String| {
+        DescriptionError::new(file, Some(format!("joint {}", j.name)), reason)
+    };
+    let mut t = Transform::identity();
+    let mut axes = Vec::new();
+    let mut limits = Vec::new();
+    let mut joint_names = Vec::new();
+    let mut fixed_joints = Vec::new();
+    let mut notes = Vec::new();
+    // Segment of each path link: 0 before joint 1, k after joint k.
+    let mut segment_of: Vec<(&str, usize)> = vec![(base.as_str(), 0)];
+    for j in &path {
+        let o = &j.origin;
+        if o.xyz.iter().chain(o.rpy.iter()).any(|v| !v.is_finite()) {
+            return Err(jerr(j, "origin has a non-finite number".into()));
+        }
+        t *= origin_transform(o);
+        match j.joint_type {
+            JointType::Fixed => fixed_joints.push(j.name.clone()),
+            JointType::Revolute | JointType::Continuous => {
+                if j.mimic.is_some() {
+                    return Err(jerr(
+                        j,
+                        "mimics another joint; kincal models independent joints only".into(),
+                    ));
+                }
+                let a = Vector3::from(j.axis.xyz.0);
+                let n = a.norm();
+                if !(n.is_finite() && n > 1e-9) {
+                    return Err(jerr(j, format!("axis {:?} has no direction", j.axis.xyz.0)));
+                }
+                axes.push(JointAxis {
+                    point: t.translation.vector,
+                    direction: t.rotation * (a / n),
+                });
+                limits.push(if j.joint_type == JointType::Continuous {
+                    notes.push(format!(
+                        "joint {}: continuous, limits set to ±{CONTINUOUS_LIMIT_RAD} rad",
+                        j.name
+                    ));
+                    JointLimits::new(-CONTINUOUS_LIMIT_RAD, CONTINUOUS_LIMIT_RAD)
+                } else {
+                    let (lo, hi) = (j.limit.lower, j.limit.upper);
+                    if !(lo.is_finite() && hi.is_finite()) || lo >= hi {
+                        return Err(jerr(
+                            j,
+                            format!("revolute joint without usable limits (lower {lo}, upper {hi}); expected finite lower < upper"),
+                        ));
+                    }
+                    JointLimits::new(lo, hi)
+                });
+                joint_names.push(j.name.clone());
+            }
+            ref other => {
+                return Err(jerr(
+                    j,
+                    format!(
+                        "is {} on the chain `{base}` -> `{tip}`; kincal models revolute joints only (choose a base link after it)",
+                        format!("{other:?}").to_lowercase()
+                    ),
+                ));
+            }
+        }
+        segment_of.push((j.child.link.as_str(), axes.len()));
+    }
+    let n = axes.len();
+    if n == 0 || n > MAX_JOINTS {
+        return Err(DescriptionError::new(
+            file,
+            None,
+            format!(
+                "{n} revolute joints between `{base}` and `{tip}`; 1 to {MAX_JOINTS} supported"
+            ),
+        ));
+    }
+    // Masses.
+    let mass_of: HashMap<&str, f64> = urdf
+        .links
+        .iter()
+        .map(|l| (l.name.as_str(), l.inertial.mass.value))
+        .collect();
+    let mut children: HashMap<&str, Vec<&str>> = HashMap::new();
+    for j in &urdf.joints {
+        children
+            .entry(j.parent.link.as_str())
+            .or_default()
+            .push(j.child.link.as_str());
+    }
+    let subtree = |root: &str, skip: Option<&str>| -> f64 {
+        let mut sum = 0.0;
+        let mut stack = vec![root];
+        while let Some(l) = stack.pop() {
+            sum += mass_of
+                .get(l)
+                .copied()
+                .filter(|m| m.is_finite() && *m > 0.0)
+                .unwrap_or(0.0);
+            for c in children.get(l).into_iter().flatten() {
+                if Some(*c) != skip || l != root {
+                    stack.push(c);
+                }
+            }
+        }
+        sum
+    };
+    let mut link_masses = vec![0.0; n];
+    let mut tool_kg = 0.0;
+    for (k, (l, seg)) in segment_of.iter().enumerate() {
+        if k + 1 == segment_of.len() {
+            tool_kg = subtree(l, None);
+        } else if *seg > 0 {
+            let next = segment_of.get(k + 1).map(|x| x.0);
+            if let Some(m) = link_masses.get_mut(seg - 1) {
+                *m += subtree(l, next);
+            }
+        }
+    }
+    let gravity = gravity_in(urdf, &base, &mut notes);
+    let core_err = |e: kincal::Error| {
+        DescriptionError::new(file, None, format!("chain `{base}` -> `{tip}`: {e}"))
+    };
+    let robot = build_any(&axes, t, &limits, &link_masses, tool_kg, gravity).map_err(core_err)?;
+    Ok(ImportedUrdf {
+        robot_name: urdf.name.clone(),
+        base_link: base,
+        tip_link: tip,
+        joint_names,
+        fixed_joints,
+        robot,
+        notes,
+    })
+}
+
+/// Gravity (−9.81 m/s² along the root's z) in the base link's frame.
+fn gravity_in(urdf: &urdf_rs::Robot, base: &str, notes: &mut Vec<String>) -> [f64; 3] {
+    let mut t = Transform::identity();
+    let mut cur = base;
+    while let Some(j) = urdf.joints.iter().find(|j| j.child.link == cur) {
+        if j.joint_type != JointType::Fixed {
+            notes.push(format!(
+                "gravity assumed along -z of `{base}` (joint {} moves it relative to the root)",
+                j.name
+            ));
+            return [0.0, 0.0, -9.81];
+        }
+        t = origin_transform(&j.origin) * t;
+        cur = j.parent.link.as_str();
+    }
+    let g = t.rotation.inverse() * Vector3::new(0.0, 0.0, -9.81);
+    [g.x, g.y, g.z]
+}
+
+fn build_any(
+    axes: &[JointAxis],
+    t_base_tip: Transform,
+    limits: &[JointLimits],
+    masses: &[f64],
+    tool_kg: f64,
+    gravity: [f64; 3],
+) -> kincal::Result<AnyRobot> {
+    macro_rules! arm {
+        ($n:literal) => {
+            build::<$n>(axes, t_base_tip, limits, masses, tool_kg, gravity).map(AnyRobot::from)
+        };
+    }
+    match axes.len() {
+        1 => arm!(1),
+        2 => arm!(2),
+        3 => arm!(3),
+        4 => arm!(4),
+        5 => arm!(5),
+        6 => arm!(6),
+        7 => arm!(7),
+        8 => arm!(8),
+        n => Err(kincal::Error::CapacityExceeded {
+            needed: n,
+            capacity: MAX_JOINTS,
+        }),
+    }
+}
+
+fn build<const N: usize>(
+    axes: &[JointAxis],
+    t_base_tip: Transform,
+    limits: &[JointLimits],
+    masses: &[f64],
+    tool_kg: f64,
+    gravity: [f64; 3],
+) -> kincal::Result<Robot<N>> {
+    let dim = |found: usize| kincal::Error::DimensionMismatch { expected: N, found };
+    let axes: [JointAxis; N] = axes.try_into().map_err(|_| dim(axes.len()))?;
+    let limits: [JointLimits; N] = limits.try_into().map_err(|_| dim(limits.len()))?;
+    let chain = AxisChain {
+        t_ref_base: Transform::identity(),
+        axes,
+        t_ref_tool: t_base_tip,
+    };
+    let mut mass = MassModel::<N>::massless();
+    for (m, v) in mass.link_masses_kg.iter_mut().zip(masses) {
+        *m = *v;
+    }
+    mass.tool_mass_kg = tool_kg;
+    mass.gravity = gravity;
+    chain.to_robot(limits)?.with_mass(mass)
+}
+
+fn pose_of(t: &Transform) -> urdf_rs::Pose {
+    let p = t.translation.vector;
+    urdf_rs::Pose {
+        xyz: urdf_rs::Vec3([p.x, p.y, p.z]),
+        rpy: urdf_rs::Vec3(matrix_to_rpy(t.rotation.matrix())),
+    }
+}
+
+fn urdf_link(name: &str, mass: f64, com: [f64; 3]) -> urdf_rs::Link {
+    urdf_rs::Link {
+        name: name.to_string(),
+        inertial: urdf_rs::Inertial {
+            origin: urdf_rs::Pose {
+                xyz: urdf_rs::Vec3(com),
+                rpy: urdf_rs::Vec3([0.0; 3]),
+            },
+            mass: urdf_rs::Mass { value: mass },
+            inertia: urdf_rs::Inertia::default(),
+        },
+        visual: Vec::new(),
+        collision: Vec::new(),
+    }
+}
+
+fn urdf_joint(
+    name: &str,
+    kind: JointType,
+    parent: &str,
+    child: &str,
+    origin: &Transform,
+    limits: Option<JointLimits>,
+) -> urdf_rs::Joint {
+    urdf_rs::Joint {
+        name: name.to_string(),
+        joint_type: kind,
+        origin: pose_of(origin),
+        parent: urdf_rs::LinkName {
+            link: parent.to_string(),
+        },
+        child: urdf_rs::LinkName {
+            link: child.to_string(),
+        },
+        axis: urdf_rs::Axis {
+            xyz: urdf_rs::Vec3([0.0, 0.0, 1.0]),
+        },
+        limit: urdf_rs::JointLimit {
+            lower: limits.map_or(0.0, |l| l.lower),
+            upper: limits.map_or(0.0, |l| l.upper),
+            ..urdf_rs::JointLimit::default()
+        },
+        calibration: None,
+        dynamics: None,
+        mimic: None,
+        safety_controller: None,
+    }
+}
+
+/// Writes `robot` (its current, e.g. calibrated, geometry) as URDF text (module docs).
+pub fn export_urdf(robot: &AnyRobot, spec: &UrdfExport<'_>) -> Result<String, UrdfExportError> {
+    let urdf = with_any_robot!(robot, r => export_generic(r, spec))?;
+    let body = urdf_rs::write_to_string(&urdf).map_err(|e| UrdfExportError(e.to_string()))?;
+    Ok(format!(
+        "<?xml version=\"1.0\"?>\n<!-- Written by kincal {}: link i is mDH frame i-1 turned by q_i; joint origins carry the model's geometry. -->\n{body}\n",
+        env!("CARGO_PKG_VERSION")
+    ))
+}
+
+fn export_generic<const N: usize>(
+    r: &Robot<N>,
+    spec: &UrdfExport<'_>,
+) -> Result<urdf_rs::Robot, UrdfExportError> {
+    let active = r.active_effects();
+    if active != EffectSet::NONE && !spec.allow_dropping_effects {
+        let names: Vec<String> = active.iter().map(|e| e.to_string()).collect();
+        return Err(UrdfExportError(format!(
+            "the model has non-geometric effects ({}) that URDF cannot express; allow dropping them to export the geometry alone",
+            names.join(", ")
+        )));
+    }
+    let joint_names: Vec<String> = match spec.joint_names {
+        Some(n) if n.len() == N => n.to_vec(),
+        Some(n) => {
+            return Err(UrdfExportError(format!(
+                "{} joint names given for {N} joints",
+                n.len()
+            )));
+        }
+        None => (1..=N).map(|i| format!("joint{i}")).collect(),
+    };
+    let link_names: Vec<String> = (1..=N).map(|i| format!("link{i}")).collect();
+    let mut all_names: Vec<&str> = vec![spec.base_link, spec.tip_link];
+    all_names.extend(link_names.iter().map(String::as_str));
+    let unique: HashSet<&str> = all_names.iter().copied().collect();
+    if unique.len() != all_names.len() {
+        return Err(UrdfExportError(format!(
+            "link names must differ: base `{}`, tip `{}`, and link1..link{N}",
+            spec.base_link, spec.tip_link
+        )));
+    }
+    let mass = r.mass();
+    let mut links = vec![urdf_link(spec.base_link, 0.0, [0.0; 3])];
+    let mut joints = Vec::new();
+    let mut parent = spec.base_link.to_string();
+    let mut origin = *r.t_base_0();
+    for (i, l) in r.links().iter().enumerate() {
+        let a = link_transform_at_zero(l);
+        let com = a.translation.vector * 0.5;
+        links.push(urdf_link(
+            &link_names[i],
+            mass.link_masses_kg[i],
+            [com.x, com.y, com.z],
+        ));
+        joints.push(urdf_joint(
+            &joint_names[i],
+            JointType::Revolute,
+            &parent,
+            &link_names[i],
+            &origin,
+            Some(r.limits()[i]),
+        ));
+        parent = link_names[i].clone();
+        origin = a;
+    }
+    links.push(urdf_link(spec.tip_link, mass.tool_mass_kg, [0.0; 3]));
+    let tool_origin = origin * r.t_n_tool();
+    joints.push(urdf_joint(
+        &format!("{}_fixed", spec.tip_link),
+        JointType::Fixed,
+        &parent,
+        spec.tip_link,
+        &tool_origin,
+        None,
+    ));
+    Ok(urdf_rs::Robot {
+        name: spec.robot_name.to_string(),
+        version: None,
+        links,
+        joints,
+        materials: Vec::new(),
+    })
+}
+
+#[cfg(test)]
+#[path = "urdf_tests.rs"]
+mod tests;

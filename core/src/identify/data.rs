@@ -1,0 +1,272 @@
+//! Measurements and the residual/Jacobian rows they contribute.
+
+use super::{IdentifyOptions, Workspace};
+use crate::error::{Error, Quantity, Result, check_finite};
+use crate::model::{JointState, Robot};
+use crate::pose::{OrientationError, PoseError, Transform, pose_error};
+
+/// Which of the six pose components `[x, y, z, φx, φy, φz]` a measurement carries (bit k =
+/// component k). Position-only data (mocap points, laser-tracker reflectors) use
+/// [`ComponentMask::POSITION`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct ComponentMask(pub u8);
+
+impl ComponentMask {
+    /// Full pose.
+    pub const ALL: ComponentMask = ComponentMask(0x3f);
+    /// Position only.
+    pub const POSITION: ComponentMask = ComponentMask(0x07);
+    /// Whether component `k` (0..6) is measured.
+    #[must_use]
+    pub const fn has(self, k: usize) -> bool {
+        k < 6 && self.0 & (1 << k) != 0
+    }
+    /// Whether all three position components are measured.
+    #[must_use]
+    pub const fn has_position(self) -> bool {
+        self.0 & 0x07 == 0x07
+    }
+    /// Whether all three orientation components are measured.
+    #[must_use]
+    pub const fn has_orientation(self) -> bool {
+        self.0 & 0x38 == 0x38
+    }
+}
+
+/// One measured pose: joint state (readings and auxiliary data) and the measured
+/// end-effector pose `T_e^b` in the base frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Measurement<const N: usize> {
+    /// Joint readings and auxiliary data.
+    pub state: JointState<N>,
+    /// Measured `T_e^b` (components outside `mask` are ignored).
+    pub pose: Transform,
+    /// Measured components.
+    pub mask: ComponentMask,
+}
+
+impl<const N: usize> Measurement<N> {
+    /// A full-pose measurement at readings `q`.
+    #[must_use]
+    pub const fn new(q: [f64; N], pose: Transform) -> Self {
+        Measurement {
+            state: JointState::new(q),
+            pose,
+            mask: ComponentMask::ALL,
+        }
+    }
+}
+
+/// Checks every measurement: finite numbers, valid masks. Errors carry the pose index.
+pub(crate) fn validate<const N: usize>(data: &[Measurement<N>]) -> Result<()> {
+    for (l, m) in data.iter().enumerate() {
+        m.state.validate().map_err(|e| match e {
+            Error::NonFinite { what, .. } => Error::NonFinite { what, index: l },
+            other => other,
+        })?;
+        if check_finite(m.pose.translation.vector.as_slice(), Quantity::Position).is_err() {
+            return Err(Error::NonFinite {
+                what: Quantity::Position,
+                index: l,
+            });
+        }
+        if check_finite(m.pose.rotation.matrix().as_slice(), Quantity::Orientation).is_err() {
+            return Err(Error::NonFinite {
+                what: Quantity::Orientation,
+                index: l,
+            });
+        }
+        if m.mask.0 == 0 || m.mask.0 & !0x3f != 0 {
+            return Err(Error::BadPose {
+                pose: crate::error::PoseIndex(l),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Measured minus modelled pose of one measurement.
+pub(crate) fn residual<const N: usize>(
+    robot: &Robot<N>,
+    m: &Measurement<N>,
+    form: OrientationError,
+) -> Result<PoseError> {
+    let t = robot.fk(&m.state)?;
+    Ok(pose_error(&m.pose, &t, form))
+}
+
+/// Row weight of component `k`.
+fn weight(opts: &IdentifyOptions<'_>, k: usize) -> f64 {
+    if k < 3 {
+        opts.weight_pos
+    } else {
+        opts.weight_rot
+    }
+}
+
+/// The weighted cost `Σ w·e²` of `robot` on `data`.
+pub(crate) fn cost<const N: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    opts: &IdentifyOptions<'_>,
+) -> Result<f64> {
+    let mut c = 0.0;
+    for m in data {
+        let e = residual(robot, m, opts.orientation)?;
+        for (k, v) in e.iter().enumerate() {
+            if m.mask.has(k) {
+                c += weight(opts, k) * v * v;
+            }
+        }
+    }
+    Ok(c)
+}
+
+/// Folds every measured row `(J[:, cols]·colscale, e)` of `data` into `ws.lsq` (reset to
+/// `n_cols` columns `ws.cols[..n_cols]`) and returns the weighted cost.
+pub(crate) fn accumulate<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    opts: &IdentifyOptions<'_>,
+    n_cols: usize,
+    ws: &mut Workspace<P>,
+) -> Result<f64> {
+    ws.lsq.reset(n_cols)?;
+    ws.to_gram = false;
+    let mut c = 0.0;
+    for m in data {
+        c += add_rows(robot, &m.state, Some(&m.pose), m.mask, opts, n_cols, ws)?;
+    }
+    Ok(c)
+}
+
+/// As [`accumulate`], into the normal equations `ws.gram` (the fast path of the iterations).
+pub(crate) fn accumulate_gram<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    opts: &IdentifyOptions<'_>,
+    n_cols: usize,
+    ws: &mut Workspace<P>,
+) -> Result<f64> {
+    ws.gram.reset(n_cols)?;
+    ws.to_gram = true;
+    let mut c = 0.0;
+    for m in data {
+        c += add_rows(robot, &m.state, Some(&m.pose), m.mask, opts, n_cols, ws)?;
+    }
+    ws.to_gram = false;
+    Ok(c)
+}
+
+/// Folds the rows of one pose into `ws.lsq`; with `pose = None` the right-hand side is zero
+/// (only the Jacobian matters, as in the identifiability analysis). Returns the cost.
+pub(crate) fn add_rows<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    state: &JointState<N>,
+    pose: Option<&Transform>,
+    mask: ComponentMask,
+    opts: &IdentifyOptions<'_>,
+    n_cols: usize,
+    ws: &mut Workspace<P>,
+) -> Result<f64> {
+    let cols = ws.cols.get(..n_cols).ok_or(Error::CapacityExceeded {
+        needed: n_cols,
+        capacity: P,
+    })?;
+    let full = cols.iter().any(|&c| c >= Robot::<N>::NUM_GEOMETRIC_PARAMS);
+    let n_jac = if full {
+        Robot::<N>::NUM_PARAMS
+    } else {
+        Robot::<N>::NUM_GEOMETRIC_PARAMS
+    };
+    let jac = ws.jac.get_mut(..n_jac).ok_or(Error::CapacityExceeded {
+        needed: n_jac,
+        capacity: super::MAX_MODEL_PARAMS,
+    })?;
+    let t = robot.jacobian(state, jac)?;
+    let e = match pose {
+        Some(p) => pose_error(p, &t, opts.orientation),
+        None => [0.0; 6],
+    };
+    let mut c = 0.0;
+    for k in 0..6 {
+        if !mask.has(k) {
+            continue;
+        }
+        let w = weight(opts, k);
+        for (j, &col) in cols.iter().enumerate() {
+            let v = jac.get(col).map_or(0.0, |jc| jc[k]);
+            ws.row[j] = v * ws.colscale[j];
+        }
+        if ws.to_gram {
+            ws.gram.add_row_weighted(&ws.row[..n_cols], e[k], w)?;
+        } else {
+            ws.lsq.add_row_weighted(&ws.row[..n_cols], e[k], w)?;
+        }
+        c += w * e[k] * e[k];
+    }
+    Ok(c)
+}
+
+/// Residual statistics of a model on a data set.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ResidualStats {
+    /// Number of poses.
+    pub poses: usize,
+    /// Number of measured rows (components).
+    pub rows: usize,
+    /// Weighted sum of squares (the identification cost).
+    pub cost: f64,
+    /// RMS of |e_p| over poses with a measured position [m].
+    pub rms_pos_m: f64,
+    /// Largest |e_p| [m].
+    pub max_pos_m: f64,
+    /// RMS of the rotation angle over poses with a measured orientation [rad].
+    pub rms_rot_rad: f64,
+    /// Largest rotation angle [rad].
+    pub max_rot_rad: f64,
+}
+
+/// Residual statistics of `robot` on `data` (exact orientation error for the angle
+/// statistics; `opts` decides the cost).
+pub fn residual_stats<const N: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    opts: &IdentifyOptions<'_>,
+) -> Result<ResidualStats> {
+    let mut s = ResidualStats {
+        poses: data.len(),
+        ..ResidualStats::default()
+    };
+    let (mut np, mut nr, mut sp, mut sr) = (0usize, 0usize, 0.0, 0.0);
+    for m in data {
+        let t = robot.fk(&m.state)?;
+        let e = pose_error(&m.pose, &t, opts.orientation);
+        let ex = pose_error(&m.pose, &t, OrientationError::Exact);
+        for k in 0..6 {
+            if m.mask.has(k) {
+                s.rows += 1;
+                s.cost += weight(opts, k) * e[k] * e[k];
+            }
+        }
+        if m.mask.has_position() {
+            let p2 = ex[0] * ex[0] + ex[1] * ex[1] + ex[2] * ex[2];
+            sp += p2;
+            np += 1;
+            s.max_pos_m = s.max_pos_m.max(crate::math::sqrt(p2));
+        }
+        if m.mask.has_orientation() {
+            let r2 = ex[3] * ex[3] + ex[4] * ex[4] + ex[5] * ex[5];
+            sr += r2;
+            nr += 1;
+            s.max_rot_rad = s.max_rot_rad.max(crate::math::sqrt(r2));
+        }
+    }
+    if np > 0 {
+        s.rms_pos_m = crate::math::sqrt(sp / np as f64);
+    }
+    if nr > 0 {
+        s.rms_rot_rad = crate::math::sqrt(sr / nr as f64);
+    }
+    Ok(s)
+}

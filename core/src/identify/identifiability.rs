@@ -1,0 +1,307 @@
+//! Which requested parameters the data can determine.
+//!
+//! Two questions, answered with the same greedy test on unit-scaled Jacobian columns taken
+//! in a fixed priority order (links before base and tool frames before effects, each in
+//! flat-index order): a column is kept when the part of it outside the span of the columns
+//! already kept is at least a tolerance long.
+//! 1. *Structural*: on many generic configurations (a Halton sequence over the joint
+//!    limits, with the data's measured components), which parameters are redundant in the
+//!    model itself (e.g. base-frame parameters that duplicate link 1, compliance of a joint
+//!    that carries no gravity torque). These are removed and reported.
+//! 2. *Data*: of the structurally identifiable parameters, which the given poses determine.
+//!    The rest are data-deficient: reported, and an error unless the caller allows fitting
+//!    the identifiable subset.
+//!
+//! Because the test runs in priority order, a redundant group keeps its highest-priority
+//! member; the dropped ones name the kept parameter their column is most aligned with.
+
+use super::data::{ComponentMask, Measurement, add_rows};
+use super::{IdentifyOptions, MAX_MODEL_PARAMS, Workspace};
+use crate::error::{Error, ParamIndex, Result};
+use crate::linalg::svd::jacobi_svd;
+use crate::math::sqrt;
+use crate::model::{JointState, Robot};
+use crate::params::ParamSet;
+
+/// Tolerance of the structural test (generic configurations): redundant columns leave
+/// residuals at rounding level (~1e-14), identifiable ones far above this.
+pub const STRUCTURAL_TOL: f64 = 1e-9;
+
+/// A column shorter than this times the longest requested column counts as zero: e.g. the
+/// compliance column of a joint whose gravity torque vanishes except for rounding.
+pub const ZERO_COLUMN_REL: f64 = 1e-10;
+
+/// A parameter that was not kept and the kept parameter its column aligns with most.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Partner {
+    /// The kept parameter.
+    pub param: ParamIndex,
+    /// |cos| of the angle between the two Jacobian columns.
+    pub cosine: f64,
+}
+
+/// The outcome of the identifiability analysis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Identifiability {
+    /// What was asked for.
+    pub requested: ParamSet,
+    /// What the data determine (and will be fitted).
+    pub identifiable: ParamSet,
+    /// Redundant in the model for the measured components, whatever the poses.
+    pub structural: ParamSet,
+    /// Identifiable in general but not from these poses.
+    pub data_deficient: ParamSet,
+    /// Number of identifiable parameters.
+    pub rank: usize,
+    /// σ_max/σ_min of the unit-column-scaled Jacobian of the identifiable parameters.
+    pub condition_number: f64,
+    /// For each parameter not kept (flat index), its most aligned kept parameter.
+    pub partner: [Option<Partner>; MAX_MODEL_PARAMS],
+}
+
+const PRIMES: [u32; 12] = [2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37];
+
+fn halton(index: u32, base: u32) -> f64 {
+    let (mut f, mut r, mut i) = (1.0, 0.0, index);
+    while i > 0 {
+        f /= f64::from(base);
+        r += f * f64::from(i % base);
+        i /= base;
+    }
+    r
+}
+
+/// Runs the analysis for `opts.requested` on `data` at `robot`'s current parameters. The
+/// singular values of the identifiable set are left in the workspace.
+pub fn analyze<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    opts: &IdentifyOptions<'_>,
+    ws: &mut Workspace<P>,
+) -> Result<Identifiability> {
+    super::data::validate(data)?;
+    let requested = opts.requested;
+    let p = requested.len();
+    if p == 0 {
+        return Err(Error::TooFewData {
+            found: 0,
+            needed: 1,
+        });
+    }
+    if p > P {
+        return Err(Error::CapacityExceeded {
+            needed: p,
+            capacity: P,
+        });
+    }
+    if let Some(bad) = requested.iter().find(|&i| i >= Robot::<N>::NUM_PARAMS) {
+        return Err(Error::DimensionMismatch {
+            expected: Robot::<N>::NUM_PARAMS,
+            found: bad + 1,
+        });
+    }
+    let mut union = 0u8;
+    let (mut any_approach, mut any_temp) = (false, false);
+    for m in data {
+        union |= m.mask.0;
+        any_approach |= m.state.approach.is_some();
+        any_temp |= m.state.temp_c.is_some();
+    }
+    let mask = ComponentMask(union);
+    let mut out = Identifiability {
+        requested,
+        identifiable: ParamSet::new(),
+        structural: ParamSet::new(),
+        data_deficient: ParamSet::new(),
+        rank: 0,
+        condition_number: f64::INFINITY,
+        partner: [None; MAX_MODEL_PARAMS],
+    };
+
+    // 1. Structural: generic configurations.
+    load_cols(ws, requested.iter());
+    ws.lsq.reset(p)?;
+    // Rows (6 per sample) outnumber the parameters about twice over: generic enough.
+    let samples = 8 + p as u32 / 3;
+    let limits = robot.limits();
+    for s in 1..=samples {
+        let mut st = JointState::new([0.0; N]);
+        for j in 0..N {
+            let lo = limits[j].lower.max(-core::f64::consts::PI);
+            let hi = limits[j].upper.min(core::f64::consts::PI);
+            st.q[j] = lo + halton(s, PRIMES[j % PRIMES.len()]) * (hi - lo);
+        }
+        if any_approach {
+            let mut a = [0.0; N];
+            for (j, v) in a.iter_mut().enumerate() {
+                *v = if halton(s, PRIMES[(j + N) % PRIMES.len()]) < 0.5 {
+                    -1.0
+                } else {
+                    1.0
+                };
+            }
+            st.approach = Some(a);
+        }
+        if any_temp {
+            st.temp_c = Some(40.0 * halton(s, 41));
+        }
+        add_rows(robot, &st, None, mask, opts, p, ws)?;
+    }
+    let kept = greedy(ws, p, STRUCTURAL_TOL, &mut out.partner)?;
+    let mut n_struct = 0;
+    for (k, &col) in ws.cols.iter().take(p).enumerate() {
+        if kept.contains(k) {
+            ws.free[n_struct] = col;
+            n_struct += 1;
+        } else {
+            out.structural.insert(col)?;
+        }
+    }
+
+    // 2. Data: the structurally identifiable columns on the given poses.
+    for k in 0..n_struct {
+        ws.cols[k] = ws.free[k];
+        ws.colscale[k] = 1.0;
+    }
+    super::data::accumulate(robot, data, opts, n_struct, ws)?;
+    let kept = greedy(ws, n_struct, opts.rank_tol, &mut out.partner)?;
+    let mut n_id = 0;
+    for k in 0..n_struct {
+        let col = ws.cols[k];
+        if kept.contains(k) {
+            ws.free[n_id] = col;
+            n_id += 1;
+            out.identifiable.insert(col)?;
+        } else {
+            out.data_deficient.insert(col)?;
+        }
+    }
+    out.rank = n_id;
+
+    // 3. Conditioning of the identifiable set (unit-scaled columns).
+    for k in 0..n_id {
+        ws.cols[k] = ws.free[k];
+        ws.colscale[k] = 1.0;
+    }
+    super::data::accumulate(robot, data, opts, n_id, ws)?;
+    for k in 0..n_id {
+        let norm = column_norm(ws, k);
+        ws.colscale[k] = if norm > 0.0 { 1.0 / norm } else { 1.0 };
+    }
+    super::data::accumulate(robot, data, opts, n_id, ws)?;
+    copy_r(ws, n_id);
+    let Workspace { mat, sv, v, .. } = ws;
+    jacobi_svd(mat, n_id, sv, v)?;
+    ws.n_sv = n_id;
+    if n_id > 0 {
+        let (smax, smin) = (ws.sv[0], ws.sv[n_id - 1]);
+        out.condition_number = if smin > 0.0 {
+            smax / smin
+        } else {
+            f64::INFINITY
+        };
+    }
+    Ok(out)
+}
+
+fn load_cols<const P: usize>(ws: &mut Workspace<P>, cols: impl Iterator<Item = usize>) {
+    for (k, c) in cols.take(P).enumerate() {
+        ws.cols[k] = c;
+        ws.colscale[k] = 1.0;
+    }
+}
+
+/// |R e_k|: the norm of Jacobian column k.
+fn column_norm<const P: usize>(ws: &Workspace<P>, k: usize) -> f64 {
+    let r = ws.lsq.r();
+    sqrt((0..=k).map(|i| r[i][k] * r[i][k]).sum::<f64>())
+}
+
+/// Copies R (upper triangle, zero below) into `ws.mat`.
+fn copy_r<const P: usize>(ws: &mut Workspace<P>, n: usize) {
+    let r = ws.lsq.r();
+    for i in 0..n {
+        for j in 0..n {
+            ws.mat[i][j] = if j >= i { r[i][j] } else { 0.0 };
+        }
+    }
+}
+
+/// Greedy selection over the columns of `ws.lsq`'s R (same inner products as the Jacobian's
+/// columns) in order; returns the kept column positions. Dropped columns get a partner.
+fn greedy<const P: usize>(
+    ws: &mut Workspace<P>,
+    n: usize,
+    tol: f64,
+    partner: &mut [Option<Partner>; MAX_MODEL_PARAMS],
+) -> Result<ParamSet> {
+    let mut kept = ParamSet::new();
+    let mut n_basis = 0;
+    let longest = (0..n).map(|k| column_norm(ws, k)).fold(0.0, f64::max);
+    for k in 0..n {
+        let norm = column_norm(ws, k);
+        let norm = if norm > ZERO_COLUMN_REL * longest {
+            norm
+        } else {
+            0.0
+        };
+        let r = ws.lsq.r();
+        for i in 0..n {
+            ws.tmp[i] = if i <= k && norm > 0.0 {
+                r[i][k] / norm
+            } else {
+                0.0
+            };
+        }
+        if norm > 0.0 {
+            // Two passes of modified Gram–Schmidt for a stable residual.
+            for _ in 0..2 {
+                for b in 0..n_basis {
+                    let d: f64 = (0..n).map(|i| ws.mat[b][i] * ws.tmp[i]).sum();
+                    for i in 0..n {
+                        ws.tmp[i] -= d * ws.mat[b][i];
+                    }
+                }
+            }
+        }
+        let res = sqrt((0..n).map(|i| ws.tmp[i] * ws.tmp[i]).sum::<f64>());
+        if norm > 0.0 && res >= tol {
+            for i in 0..n {
+                ws.mat[n_basis][i] = ws.tmp[i] / res;
+            }
+            n_basis += 1;
+            kept.insert(k)?;
+        } else if let Some(slot) = partner.get_mut(ws.cols[k]) {
+            *slot = best_partner(ws, k, norm, &kept);
+        }
+    }
+    Ok(kept)
+}
+
+fn best_partner<const P: usize>(
+    ws: &Workspace<P>,
+    k: usize,
+    norm_k: f64,
+    kept: &ParamSet,
+) -> Option<Partner> {
+    if norm_k == 0.0 {
+        return None;
+    }
+    let r = ws.lsq.r();
+    let mut best: Option<Partner> = None;
+    for j in kept.iter() {
+        let norm_j = column_norm(ws, j);
+        if norm_j == 0.0 {
+            continue;
+        }
+        let dot: f64 = (0..=j.min(k)).map(|i| r[i][k] * r[i][j]).sum();
+        let c = (dot / (norm_k * norm_j)).abs();
+        if best.is_none_or(|b| c > b.cosine) {
+            best = Some(Partner {
+                param: ParamIndex(ws.cols[j]),
+                cosine: c,
+            });
+        }
+    }
+    best
+}

@@ -1,0 +1,80 @@
+//! Caller-provided working memory of identification: every p×p array lives here, so the
+//! stack stays small and the caller decides where the memory is (a `static` on firmware,
+//! a `Box` on a host).
+
+use super::MAX_MODEL_PARAMS;
+use crate::linalg::gram::GramAccumulator;
+use crate::linalg::lm::DampedScratch;
+use crate::linalg::lsq::LsqAccumulator;
+use crate::linalg::minnorm::SvdScratch;
+
+/// Working memory for identifying up to `P` parameters at once. All-zero is a valid
+/// state, so `Box::<Workspace<P>>::new_zeroed()` or a zero-initialised `static` work;
+/// [`Workspace::new`] returns it by value (large for big `P`).
+#[derive(Debug, Clone)]
+pub struct Workspace<const P: usize> {
+    pub(crate) lsq: LsqAccumulator<P>,
+    pub(crate) gram: GramAccumulator<P>,
+    /// Whether rows go to `gram` (iterations) or `lsq` (analysis, covariance).
+    pub(crate) to_gram: bool,
+    pub(crate) damped: DampedScratch<P>,
+    pub(crate) svd: SvdScratch<P>,
+    /// Scratch matrix (orthonormal basis, covariance).
+    pub(crate) mat: [[f64; P]; P],
+    /// Right singular vectors of the last analysis.
+    pub(crate) v: [[f64; P]; P],
+    /// Singular values of the last analysis (scaled Jacobian of the identifiable set).
+    pub(crate) sv: [f64; P],
+    pub(crate) jac: [[f64; 6]; MAX_MODEL_PARAMS],
+    /// Flat parameter index of each column.
+    pub(crate) cols: [usize; P],
+    /// Factor applied to each column when accumulating.
+    pub(crate) colscale: [f64; P],
+    pub(crate) row: [f64; P],
+    pub(crate) diag: [f64; P],
+    pub(crate) x: [f64; P],
+    pub(crate) step: [f64; P],
+    pub(crate) tmp: [f64; P],
+    pub(crate) free: [usize; P],
+    pub(crate) n_sv: usize,
+}
+
+impl<const P: usize> Workspace<P> {
+    /// A zeroed workspace (by value; prefer zeroed caller memory for large `P`).
+    #[must_use]
+    pub const fn new() -> Self {
+        Workspace {
+            lsq: LsqAccumulator::new(),
+            gram: GramAccumulator::new(),
+            to_gram: false,
+            damped: DampedScratch::new(),
+            svd: SvdScratch::new(),
+            mat: [[0.0; P]; P],
+            v: [[0.0; P]; P],
+            sv: [0.0; P],
+            jac: [[0.0; 6]; MAX_MODEL_PARAMS],
+            cols: [0; P],
+            colscale: [0.0; P],
+            row: [0.0; P],
+            diag: [0.0; P],
+            x: [0.0; P],
+            step: [0.0; P],
+            tmp: [0.0; P],
+            free: [0; P],
+            n_sv: 0,
+        }
+    }
+
+    /// Singular values (descending) of the unit-column-scaled identification Jacobian of the
+    /// identifiable parameters, from the last [`super::analyze`] or [`super::identify`].
+    #[must_use]
+    pub fn singular_values(&self) -> &[f64] {
+        self.sv.get(..self.n_sv).unwrap_or(&[])
+    }
+}
+
+impl<const P: usize> Default for Workspace<P> {
+    fn default() -> Self {
+        Self::new()
+    }
+}

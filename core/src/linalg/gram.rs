@@ -1,0 +1,200 @@
+//! Streaming normal equations: `G = AᵀWA`, `g = AᵀWb`, `s = bᵀWb`, folded row by row.
+//!
+//! Why: the iterations of Gauss–Newton and Levenberg–Marquardt need a descent step, not a
+//! backward-stable factor; the fixed point they reach is set by the gradient `Aᵀb`, which
+//! is accumulated exactly here. Folding a row costs n²/2 multiply-adds (Givens needs about
+//! six times that plus a square root per entry), so the hot loop of identification uses
+//! this, while the identifiability analysis and the covariance keep the Givens factor of
+//! [`super::lsq`]. Memory is O(n²) whatever the number of rows.
+
+use super::util::{check_capacity, check_finite, check_len};
+use crate::error::{Error, Result};
+
+/// Upper triangle of `AᵀWA`, `AᵀWb` and `bᵀWb`. All-zero is the valid empty state.
+#[derive(Debug, Clone)]
+pub struct GramAccumulator<const P: usize> {
+    g: [[f64; P]; P],
+    atb: [f64; P],
+    btb: f64,
+    n: usize,
+}
+
+impl<const P: usize> GramAccumulator<P> {
+    /// Empty, with `n = 0`.
+    #[must_use]
+    pub const fn new() -> Self {
+        GramAccumulator {
+            g: [[0.0; P]; P],
+            atb: [0.0; P],
+            btb: 0.0,
+            n: 0,
+        }
+    }
+    /// Clears for `n` unknowns.
+    pub fn reset(&mut self, n: usize) -> Result<()> {
+        check_capacity::<P>(n)?;
+        for row in self.g.iter_mut().take(n) {
+            for v in row.iter_mut().take(n) {
+                *v = 0.0;
+            }
+        }
+        for v in self.atb.iter_mut().take(n) {
+            *v = 0.0;
+        }
+        self.btb = 0.0;
+        self.n = n;
+        Ok(())
+    }
+    /// Folds `a·x ≈ b` with weight `w >= 0`.
+    pub fn add_row_weighted(&mut self, a: &[f64], b: f64, w: f64) -> Result<()> {
+        let n = self.n;
+        check_len(a.len(), n)?;
+        check_finite(a)?;
+        if !b.is_finite() || !w.is_finite() || w < 0.0 {
+            return Err(Error::NonFinite {
+                what: crate::error::Quantity::Parameter,
+                index: n,
+            });
+        }
+        for (i, &ai) in a.iter().enumerate() {
+            let wai = w * ai;
+            if wai == 0.0 {
+                continue;
+            }
+            if let Some(row) = self.g.get_mut(i) {
+                for (gij, &aj) in row[i..n].iter_mut().zip(a[i..].iter()) {
+                    *gij += wai * aj;
+                }
+            }
+            self.atb[i] += wai * b;
+        }
+        self.btb += w * b * b;
+        Ok(())
+    }
+    /// Number of unknowns.
+    #[must_use]
+    pub fn n(&self) -> usize {
+        self.n
+    }
+    /// Upper triangle of `AᵀWA` (row-major, `g[i][j]` for `j >= i`).
+    #[must_use]
+    pub fn gram(&self) -> &[[f64; P]; P] {
+        &self.g
+    }
+    /// `AᵀWb`.
+    #[must_use]
+    pub fn atb(&self) -> &[f64; P] {
+        &self.atb
+    }
+    /// `bᵀWb`.
+    #[must_use]
+    pub fn btb(&self) -> f64 {
+        self.btb
+    }
+}
+
+impl<const P: usize> Default for GramAccumulator<P> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Cholesky factor of the symmetric positive definite matrix whose upper triangle is the
+/// leading `n`×`n` block of `a`, written into `r` (upper, `RᵀR = A`, zero below the
+/// diagonal). `RankDeficient { rank: k }` at the first pivot `<= rel_tol·max diag`.
+pub fn cholesky_upper<const P: usize>(
+    a: &[[f64; P]; P],
+    n: usize,
+    rel_tol: f64,
+    r: &mut [[f64; P]; P],
+) -> Result<()> {
+    check_capacity::<P>(n)?;
+    let dmax = (0..n).map(|i| a[i][i]).fold(0.0, f64::max);
+    for i in 0..n {
+        for j in 0..n {
+            r[i][j] = if j >= i { a[i][j] } else { 0.0 };
+        }
+    }
+    for k in 0..n {
+        let mut d = r[k][k];
+        for i in 0..k {
+            d -= r[i][k] * r[i][k];
+        }
+        if !(d > rel_tol * dmax) || !d.is_finite() {
+            return Err(Error::RankDeficient {
+                rank: k,
+                required: n,
+            });
+        }
+        let dk = libm::sqrt(d);
+        r[k][k] = dk;
+        for j in (k + 1)..n {
+            let mut s = r[k][j];
+            for i in 0..k {
+                s -= r[i][k] * r[i][j];
+            }
+            r[k][j] = s / dk;
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::linalg::lsq::LsqAccumulator;
+
+    #[test]
+    #[allow(clippy::unwrap_used)]
+    fn gram_and_cholesky_match_the_givens_factor() {
+        const P: usize = 8;
+        let mut g = GramAccumulator::<P>::new();
+        let mut l = LsqAccumulator::<P>::new();
+        g.reset(5).unwrap();
+        l.reset(5).unwrap();
+        let mut s = 0x1234_5678_u64;
+        let mut next = || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        };
+        for _ in 0..40 {
+            let a = [next(), next(), next(), next(), next()];
+            let b = next();
+            let w = 0.5 + next();
+            g.add_row_weighted(&a, b, w).unwrap();
+            l.add_row_weighted(&a, b, w).unwrap();
+        }
+        let mut r = [[0.0; P]; P];
+        cholesky_upper(g.gram(), 5, 1e-14, &mut r).unwrap();
+        // RᵀR from both routes agree (Givens R may differ in row signs only).
+        for i in 0..5 {
+            for j in i..5 {
+                let a: f64 = (0..5).map(|k| r[k][i] * r[k][j]).sum();
+                let b: f64 = (0..5).map(|k| l.r()[k][i] * l.r()[k][j]).sum();
+                assert!(
+                    (a - b).abs() < 1e-12 * (1.0 + b.abs()),
+                    "{i},{j}: {a} vs {b}"
+                );
+            }
+            let atb: f64 = (0..5).map(|k| l.r()[k][i] * l.qtb()[k]).sum();
+            assert!((g.atb()[i] - atb).abs() < 1e-12);
+        }
+        // A rank-deficient Gram matrix is refused at the right pivot.
+        let mut d = GramAccumulator::<P>::new();
+        d.reset(3).unwrap();
+        for k in 0..10 {
+            let x = k as f64;
+            d.add_row_weighted(&[x, 2.0 * x, 1.0], 1.0, 1.0).unwrap();
+        }
+        assert!(matches!(
+            cholesky_upper(d.gram(), 3, 1e-12, &mut r),
+            Err(Error::RankDeficient {
+                rank: 1,
+                required: 3
+            })
+        ));
+    }
+}

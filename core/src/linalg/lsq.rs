@@ -1,0 +1,352 @@
+//! Streaming linear least squares by Givens QR updating.
+//!
+//! Why: the identification Jacobian can have many more rows than fit in memory; folding
+//! rows into a fixed `n`×`n` triangle gives the same normal equations in O(n²) memory.
+
+use super::util::{bad_setting, check_capacity, check_finite, check_len, fold_row};
+use crate::error::{Error, Quantity, Result};
+
+/// Upper-triangular factor `R`, `Qᵀb` and residual of all rows folded in so far.
+///
+/// Invariants after any sequence of rows `(aᵢ, bᵢ)`: `RᵀR = AᵀA`, `Rᵀ·qtb = Aᵀb`,
+/// `rss + |qtb|² = |b|²` (to rounding), and `R` has a non-negative diagonal. The least
+/// squares solution solves `R x = qtb` and its residual sum of squares is `rss`.
+///
+/// The all-zero bit pattern is a valid empty accumulator with `n = 0`; call
+/// [`reset`](Self::reset) to choose `n`.
+#[derive(Debug, Clone)]
+pub struct LsqAccumulator<const P: usize> {
+    r: [[f64; P]; P],
+    qtb: [f64; P],
+    rss: f64,
+    rows: usize,
+    n: usize,
+}
+
+impl<const P: usize> LsqAccumulator<P> {
+    /// An empty accumulator with `n = 0`; prefer [`reset`](Self::reset) on caller memory
+    /// for large `P` (this returns `P`×`P` floats by value).
+    pub const fn new() -> Self {
+        Self {
+            r: [[0.0; P]; P],
+            qtb: [0.0; P],
+            rss: 0.0,
+            rows: 0,
+            n: 0,
+        }
+    }
+
+    /// Empties the accumulator for `n` unknowns (zeroes the whole `P`×`P` storage).
+    ///
+    /// Errors: `CapacityExceeded` if `n > P` (the accumulator is then left unchanged).
+    pub fn reset(&mut self, n: usize) -> Result<()> {
+        check_capacity::<P>(n)?;
+        for row in self.r.iter_mut() {
+            row.fill(0.0);
+        }
+        self.qtb.fill(0.0);
+        self.rss = 0.0;
+        self.rows = 0;
+        self.n = n;
+        Ok(())
+    }
+
+    /// Folds the equation `a·x ≈ b` in, so the data need not be stored.
+    ///
+    /// Errors (accumulator unchanged): `DimensionMismatch` if `a.len() != n`;
+    /// `NonFinite { Parameter, index }` for `a[index]`, or `index = n` for `b`.
+    pub fn add_row(&mut self, a: &[f64], b: f64) -> Result<()> {
+        self.add_scaled(a, b, 1.0)
+    }
+
+    /// Folds the equation `a·x ≈ b` in with weight `w >= 0` (row and `b` scaled by
+    /// `sqrt(w)`), so measurements of different precision can be mixed.
+    ///
+    /// Errors (accumulator unchanged): as [`add_row`](Self::add_row), plus
+    /// `NonFinite { Setting, 0 }` if `w` is negative or not finite. A zero weight only
+    /// counts the row.
+    pub fn add_row_weighted(&mut self, a: &[f64], b: f64, w: f64) -> Result<()> {
+        if !(w.is_finite() && w >= 0.0) {
+            return Err(bad_setting());
+        }
+        self.add_scaled(a, b, libm::sqrt(w))
+    }
+
+    fn add_scaled(&mut self, a: &[f64], b: f64, scale: f64) -> Result<()> {
+        let n = self.n;
+        check_capacity::<P>(n)?;
+        check_len(a.len(), n)?;
+        check_finite(a)?;
+        if !b.is_finite() {
+            return Err(Error::NonFinite {
+                what: Quantity::Parameter,
+                index: n,
+            });
+        }
+        let mut row = [0.0_f64; P];
+        for (dst, src) in row.iter_mut().zip(a.iter()) {
+            *dst = scale * *src;
+        }
+        let beta = fold_row(&mut self.r, &mut self.qtb, n, &mut row, scale * b, 0);
+        self.rss += beta * beta;
+        self.rows = self.rows.saturating_add(1);
+        Ok(())
+    }
+
+    /// Number of unknowns `n`.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// Number of rows folded in since the last reset (saturating).
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// The factor `R`: upper triangle of the leading `n`×`n` block; the rest is zero.
+    pub fn r(&self) -> &[[f64; P]; P] {
+        &self.r
+    }
+
+    /// `Qᵀb`: entries `0..n` are meaningful, the rest are zero.
+    pub fn qtb(&self) -> &[f64; P] {
+        &self.qtb
+    }
+
+    /// Residual sum of squares outside the column span (the least-squares cost at optimum).
+    pub fn rss(&self) -> f64 {
+        self.rss
+    }
+}
+
+impl<const P: usize> Default for LsqAccumulator<P> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+#[cfg(test)]
+#[allow(
+    clippy::needless_range_loop,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic
+)]
+mod tests {
+    extern crate std;
+
+    use super::*;
+    use crate::linalg::testutil::{Rng, assert_close, upper_d};
+    use crate::linalg::tri::solve_upper;
+    use nalgebra::{DMatrix, DVector};
+    use std::boxed::Box;
+    use std::vec::Vec;
+
+    const P: usize = 10;
+
+    fn fill(
+        acc: &mut LsqAccumulator<P>,
+        a: &DMatrix<f64>,
+        b: &DVector<f64>,
+        w: &[f64],
+        order: &[usize],
+    ) {
+        let n = a.ncols();
+        for &i in order {
+            let row: Vec<f64> = (0..n).map(|j| a[(i, j)]).collect();
+            acc.add_row_weighted(&row, b[i], w[i]).unwrap();
+        }
+    }
+
+    #[test]
+    fn weighted_rows_match_normal_equations_qr_and_rss() {
+        let mut rng = Rng(1);
+        let (m, n) = (40, 7);
+        let a = rng.dmat(m, n);
+        let b = rng.dvec(m);
+        let w: Vec<f64> = (0..m).map(|_| rng.range(0.1, 2.0)).collect();
+        let mut acc = LsqAccumulator::<P>::new();
+        acc.reset(n).unwrap();
+        let order: Vec<usize> = (0..m).collect();
+        fill(&mut acc, &a, &b, &w, &order);
+        assert_eq!(acc.rows(), m);
+        assert_eq!(acc.n(), n);
+
+        let sw = DMatrix::from_diagonal(&DVector::from_iterator(m, w.iter().map(|x| x.sqrt())));
+        let aw = &sw * &a;
+        let bw = &sw * &b;
+        let r = upper_d(acc.r(), n);
+        let qtb = DVector::from_iterator(n, acc.qtb()[..n].iter().copied());
+        assert_close(
+            &(r.transpose() * &r),
+            &(aw.transpose() * &aw),
+            1e-12,
+            "RᵀR = AᵀWA",
+        );
+        let rtq = r.transpose() * &qtb;
+        let atb = aw.transpose() * &bw;
+        assert_close(
+            &DMatrix::from_column_slice(n, 1, rtq.as_slice()),
+            &DMatrix::from_column_slice(n, 1, atb.as_slice()),
+            1e-12,
+            "Rᵀqtb = AᵀWb",
+        );
+
+        // R equals nalgebra's QR factor up to row signs.
+        let qr = aw.clone().qr();
+        let mut rn = qr.r();
+        for i in 0..n {
+            assert!(acc.r()[i][i] >= 0.0);
+            if rn[(i, i)] < 0.0 {
+                rn.row_mut(i).neg_mut();
+            }
+        }
+        assert_close(&r, &rn, 1e-12, "R vs nalgebra QR");
+
+        // Solution and residual.
+        let mut x = [0.0; 7];
+        x.copy_from_slice(&acc.qtb()[..n]);
+        solve_upper(acc.r(), n, &mut x).unwrap();
+        let qtb_n = qr.q().transpose() * &bw;
+        let xn = qr.r().solve_upper_triangular(&qtb_n).unwrap();
+        for j in 0..n {
+            assert!((x[j] - xn[j]).abs() <= 1e-12 * xn.amax(), "x[{j}]");
+        }
+        let res = &bw - &aw * DVector::from_column_slice(&x);
+        let rss = res.norm_squared();
+        assert!(
+            (acc.rss() - rss).abs() <= 1e-12 * rss,
+            "rss {} vs {}",
+            acc.rss(),
+            rss
+        );
+        let total = bw.norm_squared();
+        assert!((acc.rss() + qtb.norm_squared() - total).abs() <= 1e-12 * total);
+    }
+
+    #[test]
+    fn row_order_does_not_change_gram() {
+        let mut rng = Rng(2);
+        let (m, n) = (30, P);
+        let a = rng.dmat(m, n);
+        let b = rng.dvec(m);
+        let w: Vec<f64> = (0..m).map(|_| rng.range(0.5, 1.5)).collect();
+        let forward: Vec<usize> = (0..m).collect();
+        let reverse: Vec<usize> = (0..m).rev().collect();
+        let stride: Vec<usize> = (0..m).map(|i| (i * 7) % m).collect();
+        let mut grams = Vec::new();
+        for order in [&forward, &reverse, &stride] {
+            let mut acc = Box::new(LsqAccumulator::<P>::new());
+            acc.reset(n).unwrap();
+            fill(&mut acc, &a, &b, &w, order);
+            let r = upper_d(acc.r(), n);
+            grams.push((r.transpose() * &r, acc.rss(), r));
+        }
+        for g in &grams[1..] {
+            assert_close(&g.0, &grams[0].0, 1e-12, "RᵀR order");
+            assert_close(&g.2, &grams[0].2, 1e-12, "R order");
+            assert!((g.1 - grams[0].1).abs() <= 1e-12 * grams[0].1);
+        }
+    }
+
+    #[test]
+    fn weight_equals_scaled_row_and_zero_weight_only_counts() {
+        let mut acc1 = LsqAccumulator::<4>::new();
+        let mut acc2 = LsqAccumulator::<4>::new();
+        acc1.reset(3).unwrap();
+        acc2.reset(3).unwrap();
+        let rows = [
+            ([1.0, 2.0, -1.0], 0.5),
+            ([0.5, -1.0, 3.0], -2.0),
+            ([2.0, 0.0, 1.0], 1.0),
+            ([0.0, 1.0, 1.0], 4.0),
+        ];
+        for (a, b) in rows {
+            acc1.add_row_weighted(&a, b, 4.0).unwrap();
+            acc2.add_row(&[2.0 * a[0], 2.0 * a[1], 2.0 * a[2]], 2.0 * b)
+                .unwrap();
+        }
+        acc1.add_row_weighted(&[9.0, 9.0, 9.0], 9.0, 0.0).unwrap();
+        assert_eq!(acc1.rows(), 5);
+        for i in 0..4 {
+            for j in 0..4 {
+                assert!((acc1.r()[i][j] - acc2.r()[i][j]).abs() < 1e-14);
+            }
+            assert!((acc1.qtb()[i] - acc2.qtb()[i]).abs() < 1e-14);
+        }
+        assert!((acc1.rss() - acc2.rss()).abs() < 1e-13);
+        assert!(acc1.rss() > 0.0);
+        // Column 3 (outside n) stays zero.
+        assert!(acc1.r().iter().all(|row| row[3] == 0.0) && acc1.qtb()[3] == 0.0);
+    }
+
+    #[test]
+    fn zeroed_memory_is_empty_and_n_zero_accumulates_rss() {
+        // `new()` is the all-zero bit pattern (0.0 and 0 are all-zero bits), i.e. what
+        // `Box::new_zeroed` or a zero-initialised `static` gives.
+        let mut acc: Box<LsqAccumulator<64>> = Box::default();
+        assert_eq!((acc.n(), acc.rows(), acc.rss()), (0, 0, 0.0));
+        acc.add_row(&[], 3.0).unwrap();
+        acc.add_row_weighted(&[], 1.0, 2.0).unwrap();
+        assert_eq!(acc.rows(), 2);
+        assert!((acc.rss() - 11.0).abs() < 1e-15);
+        acc.reset(64).unwrap();
+        assert_eq!((acc.n(), acc.rows(), acc.rss()), (64, 0, 0.0));
+    }
+
+    #[test]
+    fn errors_are_returned_and_leave_state_unchanged() {
+        let mut acc = LsqAccumulator::<3>::new();
+        assert_eq!(
+            acc.reset(4),
+            Err(Error::CapacityExceeded {
+                needed: 4,
+                capacity: 3
+            })
+        );
+        acc.reset(2).unwrap();
+        acc.add_row(&[1.0, 2.0], 3.0).unwrap();
+        let before = acc.clone();
+        assert_eq!(
+            acc.add_row(&[1.0], 3.0),
+            Err(Error::DimensionMismatch {
+                expected: 2,
+                found: 1
+            })
+        );
+        assert_eq!(
+            acc.add_row(&[1.0, 2.0, 3.0], 3.0),
+            Err(Error::DimensionMismatch {
+                expected: 2,
+                found: 3
+            })
+        );
+        assert_eq!(
+            acc.add_row(&[1.0, f64::NAN], 3.0),
+            Err(Error::NonFinite {
+                what: Quantity::Parameter,
+                index: 1
+            })
+        );
+        assert_eq!(
+            acc.add_row(&[1.0, 2.0], f64::INFINITY),
+            Err(Error::NonFinite {
+                what: Quantity::Parameter,
+                index: 2
+            })
+        );
+        for w in [-1.0, f64::NAN, f64::INFINITY] {
+            assert_eq!(
+                acc.add_row_weighted(&[1.0, 2.0], 1.0, w),
+                Err(Error::NonFinite {
+                    what: Quantity::Setting,
+                    index: 0
+                })
+            );
+        }
+        assert_eq!(acc.rows(), before.rows());
+        assert_eq!(acc.r(), before.r());
+        assert_eq!(acc.qtb(), before.qtb());
+        assert_eq!(acc.rss(), before.rss());
+    }
+}

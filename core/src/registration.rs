@@ -1,0 +1,629 @@
+//! Marker registration: the rigid transform that carries a body's markers from their design
+//! positions (body frame) onto their measured positions (motion-capture frame), with
+//! per-marker residuals and outlier identification, and the end-effector pose in the robot
+//! base frame from base and probe markers (spec/aria.md, Section 5.1):
+//! `t_base_ee = t_mocap_base⁻¹ · t_mocap_ee`.
+//!
+//! # The fit
+//! Weighted least squares over the used markers `j` (visible, not excluded as outliers):
+//! minimise `Σ w_j |R·d_j + t − m_j|²` over rotations `R` (det = +1) and translations `t`.
+//! The translation follows from the weighted centroids; the rotation by **Horn's
+//! quaternion method** (J. Opt. Soc. Am. A 4(4), 1987): the unit quaternion of `R` is the
+//! eigenvector of the largest eigenvalue of a symmetric 4×4 matrix built from the weighted
+//! cross-covariance. A quaternion always gives a proper rotation, so this *is* the weighted
+//! Kabsch solution with the reflection guard (`det(U·Vᵀ) = −1` → flip the last singular
+//! direction) built in: for coplanar markers, or data closer to a mirror image of the
+//! design, the best proper rotation is returned, never a reflection. The eigenvector comes
+//! from cyclic Jacobi rotations written here (no panic paths, deterministic; nalgebra's SVD
+//! and symmetric eigen keep internal unwraps, TOOLCHAIN.md).
+//!
+//! # Degenerate marker sets
+//! At least 3 used markers are needed ([`Error::TooFewData`]). The design positions must
+//! span a plane: when the RMS extent of the used design markers across their best-fit line
+//! is not above the stated noise σ, the rotation about that line is not determined and the
+//! fit fails with [`Error::RankDeficient`] (`rank` = number of principal directions with an
+//! RMS extent above σ, `required` = 2). The same error comes when the measured positions
+//! leave the best rotation ambiguous (top two eigenvalues of Horn's matrix equal).
+//!
+//! # Outliers
+//! Each marker has a stated noise `σ_j = σ/√w_j` per axis (σ of
+//! [`RegistrationOptions::sigma_m`] at weight 1). A marker is consistent when its 3-D
+//! residual distance is at most `k·σ_j` with `k` = [`RegistrationOptions::k_sigma`]
+//! (default [`DEFAULT_K_SIGMA`] = 4: for a correctly fitted marker `|r|²/σ_j²` is at most
+//! χ²(3)-distributed, so a false alarm has probability below 1.1e-3 per marker). When the
+//! fit of all visible markers leaves any marker inconsistent, every subset of 1, then 2, …
+//! up to [`RegistrationOptions::max_outliers`] markers is excluded in turn (keeping at least
+//! 3) and the smallest exclusion after which all remaining markers are consistent is taken
+//! (ties: smallest Σ(|r_j|/σ_j)²). Excluded markers are then named: two whose measured
+//! positions each match the other's predicted position within their thresholds are
+//! [`MarkerStatus::Swapped`]; any other is [`MarkerStatus::Moved`]. Masked markers are
+//! [`MarkerStatus::Missing`] (their measured values are ignored, NaN allowed). When no
+//! exclusion explains the data, the all-visible fit is returned with
+//! [`Registration::consistent`] false and the inconsistent markers marked
+//! [`MarkerStatus::Suspect`].
+//!
+//! A marker design with a symmetry (e.g. a cross with equal arms) cannot reveal a swap that
+//! the symmetry maps onto itself: such a swap is explained by another rotation. Use
+//! asymmetric designs.
+
+use nalgebra::{Matrix3, Vector3};
+
+use crate::error::{Error, Quantity, Result};
+use crate::math::sqrt;
+use crate::pose::{Transform, quaternion_to_matrix, transform};
+
+/// Most markers on one body.
+pub const MAX_MARKERS: usize = 32;
+/// Most markers [`register`] may exclude as outliers.
+pub const MAX_OUTLIERS: usize = 3;
+/// Default outlier threshold in units of the stated per-axis noise σ (see module docs).
+pub const DEFAULT_K_SIGMA: f64 = 4.0;
+/// Jacobi sweeps before [`Error::NotConverged`] (4×4 converges in fewer than 10).
+const MAX_SWEEPS: u32 = 50;
+
+/// The markers of one rigid body in one frame of motion-capture data.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Markers<'a> {
+    /// Design positions in the body frame [m].
+    pub design: &'a [[f64; 3]],
+    /// Measured positions in the motion-capture frame [m], same order and length.
+    pub measured: &'a [[f64; 3]],
+    /// Which markers were seen (`None`: all). Values of unseen markers are ignored.
+    pub visible: Option<&'a [bool]>,
+    /// Relative weights, finite and > 0 (`None`: all 1); marker `j` has noise `σ/√w_j`.
+    pub weights: Option<&'a [f64]>,
+}
+
+impl<'a> Markers<'a> {
+    /// All markers visible, equal weights.
+    #[must_use]
+    pub fn new(design: &'a [[f64; 3]], measured: &'a [[f64; 3]]) -> Self {
+        Markers {
+            design,
+            measured,
+            visible: None,
+            weights: None,
+        }
+    }
+}
+
+/// Options of [`register`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RegistrationOptions {
+    /// Stated measurement noise, 1σ per axis at weight 1 [m].
+    pub sigma_m: f64,
+    /// Outlier threshold in units of σ_j on the 3-D residual distance.
+    pub k_sigma: f64,
+    /// Most markers to exclude as outliers (at most [`MAX_OUTLIERS`]; 0 disables the search).
+    pub max_outliers: usize,
+}
+
+impl RegistrationOptions {
+    /// Noise `sigma_m` [m], `k` = [`DEFAULT_K_SIGMA`], up to 2 outliers.
+    #[must_use]
+    pub const fn new(sigma_m: f64) -> Self {
+        RegistrationOptions {
+            sigma_m,
+            k_sigma: DEFAULT_K_SIGMA,
+            max_outliers: 2,
+        }
+    }
+}
+
+/// What the registration concluded about one marker.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MarkerStatus {
+    /// Used in the fit and consistent with it.
+    Inlier,
+    /// Masked as not seen.
+    Missing,
+    /// Excluded: its measured position is off by more than its threshold and not explained
+    /// by a swap (marker moved, knocked, or a ghost).
+    Moved,
+    /// Excluded: its label is swapped with marker `with` (zero-based).
+    Swapped {
+        /// The other marker of the pair.
+        with: usize,
+    },
+    /// Used, but above its threshold in a fit that no exclusion could make consistent.
+    Suspect,
+}
+
+/// The fit of one marker.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MarkerFit {
+    /// Predicted position `t_mocap_body · design` in the motion-capture frame [m].
+    pub predicted_m: [f64; 3],
+    /// Residual measured − predicted in the motion-capture frame [m] (zero if missing).
+    pub residual_m: [f64; 3],
+    /// Length of the residual [m] (zero if missing).
+    pub distance_m: f64,
+    /// Outlier threshold `k·σ/√w` of this marker [m].
+    pub threshold_m: f64,
+    /// The verdict.
+    pub status: MarkerStatus,
+}
+
+const EMPTY_FIT: MarkerFit = MarkerFit {
+    predicted_m: [0.0; 3],
+    residual_m: [0.0; 3],
+    distance_m: 0.0,
+    threshold_m: 0.0,
+    status: MarkerStatus::Missing,
+};
+
+/// The result of [`register`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Registration {
+    /// The body frame in the motion-capture frame: `measured ≈ t_mocap_body · design`.
+    pub t_mocap_body: Transform,
+    /// Markers used in the fit.
+    pub n_used: usize,
+    /// Weighted RMS residual distance of the used markers, `sqrt(Σ w |r|² / Σ w)` [m].
+    pub rms_m: f64,
+    /// Whether every used marker is within its threshold.
+    pub consistent: bool,
+    fits: [MarkerFit; MAX_MARKERS],
+    n: usize,
+}
+
+impl Registration {
+    /// Per-marker fits, in input order.
+    #[must_use]
+    pub fn markers(&self) -> &[MarkerFit] {
+        self.fits.get(..self.n).unwrap_or(&[])
+    }
+    /// Whether any marker was excluded or found suspect.
+    #[must_use]
+    pub fn has_outliers(&self) -> bool {
+        self.markers().iter().any(|m| {
+            matches!(
+                m.status,
+                MarkerStatus::Moved | MarkerStatus::Swapped { .. } | MarkerStatus::Suspect
+            )
+        })
+    }
+}
+
+/// Eigen-decomposition of a symmetric `D×D` matrix by cyclic Jacobi rotations:
+/// `(eigenvalues, eigenvectors as columns v[.][k])`, unsorted. Deterministic, no panics.
+pub(crate) fn symmetric_eigen<const D: usize>(
+    mut a: [[f64; D]; D],
+) -> Result<([f64; D], [[f64; D]; D])> {
+    let mut v = [[0.0; D]; D];
+    for (i, row) in v.iter_mut().enumerate() {
+        if let Some(x) = row.get_mut(i) {
+            *x = 1.0;
+        }
+    }
+    let diag = |a: &[[f64; D]; D]| {
+        let mut e = [0.0; D];
+        for (i, x) in e.iter_mut().enumerate() {
+            *x = a[i][i];
+        }
+        e
+    };
+    for sweep in 0..=MAX_SWEEPS {
+        let mut off = 0.0;
+        let mut total = 0.0;
+        for (i, row) in a.iter().enumerate() {
+            for (j, &x) in row.iter().enumerate() {
+                total += x * x;
+                if i != j {
+                    off += x * x;
+                }
+            }
+        }
+        if off <= 1e-30 * total || off == 0.0 {
+            return Ok((diag(&a), v));
+        }
+        if sweep == MAX_SWEEPS {
+            break;
+        }
+        for p in 0..D {
+            for q in (p + 1)..D {
+                let apq = a[p][q];
+                if apq == 0.0 {
+                    continue;
+                }
+                let theta = (a[q][q] - a[p][p]) / (2.0 * apq);
+                let t = if theta.abs() > 1e150 {
+                    0.5 / theta
+                } else {
+                    let s = if theta >= 0.0 { 1.0 } else { -1.0 };
+                    s / (theta.abs() + sqrt(theta * theta + 1.0))
+                };
+                let c = 1.0 / sqrt(t * t + 1.0);
+                let s = t * c;
+                // A ← Jᵀ·A·J with J the rotation in the (p, q) plane.
+                for row in a.iter_mut() {
+                    let akp = row[p];
+                    let akq = row[q];
+                    row[p] = c * akp - s * akq;
+                    row[q] = s * akp + c * akq;
+                }
+                let (rp, rq) = (a[p], a[q]);
+                for (k, (&apk, &aqk)) in rp.iter().zip(rq.iter()).enumerate() {
+                    a[p][k] = c * apk - s * aqk;
+                    a[q][k] = s * apk + c * aqk;
+                }
+                for row in v.iter_mut() {
+                    let vp = row[p];
+                    let vq = row[q];
+                    row[p] = c * vp - s * vq;
+                    row[q] = s * vp + c * vq;
+                }
+            }
+        }
+    }
+    Err(Error::NotConverged {
+        iterations: MAX_SWEEPS,
+    })
+}
+
+fn v3(p: &[f64; 3]) -> Vector3<f64> {
+    Vector3::new(p[0], p[1], p[2])
+}
+
+/// The weighted rigid transform `T` (proper rotation) minimising `Σ w_j |T·design_j −
+/// measured_j|²` over the markers with `w_j > 0` (markers with `w_j = 0` are ignored, and
+/// so are their values). Horn's quaternion method with the checks of the module docs;
+/// `sigma_m` is the noise used by the collinearity test.
+///
+/// ```
+/// use kincal::registration::weighted_rigid_fit;
+/// let design = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.0, 0.2, 0.0], [0.0, 0.0, 0.05]];
+/// // Shifted by (1, 2, 3), no rotation.
+/// let measured = design.map(|p| [p[0] + 1.0, p[1] + 2.0, p[2] + 3.0]);
+/// let t = weighted_rigid_fit(&design, &measured, &[1.0; 4], 1e-4).unwrap();
+/// assert!((t.translation.vector - nalgebra::Vector3::new(1.0, 2.0, 3.0)).norm() < 1e-12);
+/// ```
+pub fn weighted_rigid_fit(
+    design: &[[f64; 3]],
+    measured: &[[f64; 3]],
+    weights: &[f64],
+    sigma_m: f64,
+) -> Result<Transform> {
+    if design.len() != measured.len() || design.len() != weights.len() {
+        return Err(Error::DimensionMismatch {
+            expected: design.len(),
+            found: if design.len() != measured.len() {
+                measured.len()
+            } else {
+                weights.len()
+            },
+        });
+    }
+    let mut wsum = 0.0;
+    let mut used = 0;
+    let mut ca = Vector3::zeros();
+    let mut cb = Vector3::zeros();
+    for (j, ((d, m), &w)) in design.iter().zip(measured).zip(weights).enumerate() {
+        if !(w.is_finite() && w >= 0.0) {
+            return Err(Error::InvalidParameter { index: j, value: w });
+        }
+        if w == 0.0 {
+            continue;
+        }
+        crate::error::check_finite(d, Quantity::Position)
+            .and(crate::error::check_finite(m, Quantity::Position))
+            .map_err(|_| Error::NonFinite {
+                what: Quantity::Position,
+                index: j,
+            })?;
+        used += 1;
+        wsum += w;
+        ca += v3(d) * w;
+        cb += v3(m) * w;
+    }
+    if used < 3 {
+        return Err(Error::TooFewData {
+            found: used,
+            needed: 3,
+        });
+    }
+    ca /= wsum;
+    cb /= wsum;
+    // Design scatter and cross-covariance S[r][c] = Σ w a_r b_c (centred).
+    let mut scatter = [[0.0; 3]; 3];
+    let mut s = Matrix3::<f64>::zeros();
+    for ((d, m), &w) in design.iter().zip(measured).zip(weights) {
+        if w == 0.0 {
+            continue;
+        }
+        let a = v3(d) - ca;
+        let b = v3(m) - cb;
+        s += a * b.transpose() * w;
+        for (r, row) in scatter.iter_mut().enumerate() {
+            for (c, x) in row.iter_mut().enumerate() {
+                *x += w * a[r] * a[c];
+            }
+        }
+    }
+    // Collinearity: principal RMS extents of the design markers against the noise.
+    let (ev, _) = symmetric_eigen(scatter)?;
+    let rank = ev
+        .iter()
+        .filter(|&&l| sqrt(l.max(0.0) / wsum) > sigma_m)
+        .count();
+    if rank < 2 {
+        return Err(Error::RankDeficient { rank, required: 2 });
+    }
+    let (sxx, sxy, sxz) = (s[(0, 0)], s[(0, 1)], s[(0, 2)]);
+    let (syx, syy, syz) = (s[(1, 0)], s[(1, 1)], s[(1, 2)]);
+    let (szx, szy, szz) = (s[(2, 0)], s[(2, 1)], s[(2, 2)]);
+    let n = [
+        [sxx + syy + szz, syz - szy, szx - sxz, sxy - syx],
+        [syz - szy, sxx - syy - szz, sxy + syx, szx + sxz],
+        [szx - sxz, sxy + syx, -sxx + syy - szz, syz + szy],
+        [sxy - syx, szx + sxz, syz + szy, -sxx - syy + szz],
+    ];
+    let (lambda, vecs) = symmetric_eigen(n)?;
+    let mut order = [0usize, 1, 2, 3];
+    order.sort_unstable_by(|&i, &j| lambda[j].total_cmp(&lambda[i]));
+    let (top, second) = (lambda[order[0]], lambda[order[1]]);
+    let scale = lambda.iter().fold(0.0_f64, |m, l| m.max(l.abs()));
+    if scale <= 0.0 || !scale.is_finite() || top - second <= 1e-12 * scale {
+        return Err(Error::RankDeficient {
+            rank: 1,
+            required: 2,
+        });
+    }
+    let k = order[0];
+    let q = [vecs[0][k], vecs[1][k], vecs[2][k], vecs[3][k]];
+    let r = quaternion_to_matrix(&q)?;
+    Ok(transform(r, cb - r * ca))
+}
+
+fn check_inputs(markers: &Markers<'_>, opts: &RegistrationOptions) -> Result<usize> {
+    let n = markers.design.len();
+    if markers.measured.len() != n {
+        return Err(Error::DimensionMismatch {
+            expected: n,
+            found: markers.measured.len(),
+        });
+    }
+    if n > MAX_MARKERS {
+        return Err(Error::CapacityExceeded {
+            needed: n,
+            capacity: MAX_MARKERS,
+        });
+    }
+    for s in [
+        markers.visible.map(<[bool]>::len),
+        markers.weights.map(<[f64]>::len),
+    ]
+    .into_iter()
+    .flatten()
+    {
+        if s != n {
+            return Err(Error::DimensionMismatch {
+                expected: n,
+                found: s,
+            });
+        }
+    }
+    for (i, v) in [opts.sigma_m, opts.k_sigma].into_iter().enumerate() {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(Error::InvalidParameter { index: i, value: v });
+        }
+    }
+    if opts.max_outliers > MAX_OUTLIERS {
+        return Err(Error::CapacityExceeded {
+            needed: opts.max_outliers,
+            capacity: MAX_OUTLIERS,
+        });
+    }
+    if let Some((index, &value)) = markers
+        .weights
+        .unwrap_or(&[])
+        .iter()
+        .enumerate()
+        .find(|(_, w)| !(w.is_finite() && **w > 0.0))
+    {
+        return Err(Error::InvalidParameter { index, value });
+    }
+    Ok(n)
+}
+
+/// Residual distance of marker `j` under `t`, and the residual vector.
+fn residual(t: &Transform, d: &[f64; 3], m: &[f64; 3]) -> (Vector3<f64>, Vector3<f64>) {
+    let p = t.transform_point(&nalgebra::Point3::from(v3(d))).coords;
+    (p, v3(m) - p)
+}
+
+/// Weighted rigid registration of one body's markers with outlier identification (module
+/// docs).
+pub fn register(markers: &Markers<'_>, opts: &RegistrationOptions) -> Result<Registration> {
+    let n = check_inputs(markers, opts)?;
+    let design = markers.design;
+    let measured = markers.measured;
+    let weight = |j: usize| {
+        markers
+            .weights
+            .and_then(|w| w.get(j).copied())
+            .unwrap_or(1.0)
+    };
+    let visible = |j: usize| {
+        markers
+            .visible
+            .and_then(|v| v.get(j).copied())
+            .unwrap_or(true)
+    };
+    let mut w_all = [0.0; MAX_MARKERS];
+    let mut thr = [0.0; MAX_MARKERS];
+    let mut vis_idx = [0usize; MAX_MARKERS];
+    let mut n_vis = 0;
+    for j in 0..n {
+        thr[j] = opts.k_sigma * opts.sigma_m / sqrt(weight(j));
+        if visible(j) {
+            w_all[j] = weight(j);
+            vis_idx[n_vis] = j;
+            n_vis += 1;
+        }
+    }
+    let d = design.get(..n).unwrap_or(&[]);
+    let m = measured.get(..n).unwrap_or(&[]);
+    // Score of a fit: (all used consistent, Σ (|r|/σ_j)²).
+    let score = |t: &Transform, w: &[f64; MAX_MARKERS]| {
+        let mut ok = true;
+        let mut chi = 0.0;
+        for j in 0..n {
+            if w[j] > 0.0 {
+                let (_, r) = residual(t, &design[j], &measured[j]);
+                let dist = r.norm();
+                ok &= dist <= thr[j];
+                let z = dist / thr[j] * opts.k_sigma;
+                chi += z * z;
+            }
+        }
+        (ok, chi)
+    };
+    let t_all = weighted_rigid_fit(d, m, w_all.get(..n).unwrap_or(&[]), opts.sigma_m)?;
+    let (ok_all, _) = score(&t_all, &w_all);
+    let mut best: Option<(Transform, [f64; MAX_MARKERS], f64)> = None;
+    if !ok_all {
+        let mut size = 1;
+        while size <= opts.max_outliers && n_vis >= size + 3 && best.is_none() {
+            // Combinations of `size` positions among the visible markers.
+            let mut comb = [0usize; MAX_OUTLIERS];
+            for (i, c) in comb.iter_mut().enumerate().take(size) {
+                *c = i;
+            }
+            loop {
+                let mut w = w_all;
+                for &c in comb.iter().take(size) {
+                    w[vis_idx[c]] = 0.0;
+                }
+                if let Ok(t) = weighted_rigid_fit(d, m, w.get(..n).unwrap_or(&[]), opts.sigma_m) {
+                    let (ok, chi) = score(&t, &w);
+                    if ok && best.as_ref().is_none_or(|b| chi < b.2) {
+                        best = Some((t, w, chi));
+                    }
+                }
+                // Next combination (lexicographic).
+                let mut i = size;
+                let mut advanced = false;
+                while i > 0 {
+                    i -= 1;
+                    if comb[i] < n_vis - size + i {
+                        comb[i] += 1;
+                        for k in (i + 1)..size {
+                            comb[k] = comb[k - 1] + 1;
+                        }
+                        advanced = true;
+                        break;
+                    }
+                }
+                if !advanced {
+                    break;
+                }
+            }
+            size += 1;
+        }
+    }
+    let (t, w_used, consistent) = match best {
+        Some((t, w, _)) => (t, w, true),
+        None => (t_all, w_all, ok_all),
+    };
+    let mut fits = [EMPTY_FIT; MAX_MARKERS];
+    let mut wsum = 0.0;
+    let mut ssq = 0.0;
+    let mut n_used = 0;
+    for j in 0..n {
+        let (p, r) = residual(&t, &design[j], &measured[j]);
+        let f = &mut fits[j];
+        f.predicted_m = [p.x, p.y, p.z];
+        f.threshold_m = thr[j];
+        if !visible(j) {
+            f.status = MarkerStatus::Missing;
+            continue;
+        }
+        f.residual_m = [r.x, r.y, r.z];
+        f.distance_m = r.norm();
+        f.status = if w_used[j] > 0.0 {
+            n_used += 1;
+            wsum += w_used[j];
+            ssq += w_used[j] * f.distance_m * f.distance_m;
+            if f.distance_m <= thr[j] {
+                MarkerStatus::Inlier
+            } else {
+                MarkerStatus::Suspect
+            }
+        } else {
+            MarkerStatus::Moved
+        };
+    }
+    // Name swaps among the excluded markers.
+    for j in 0..n {
+        if fits[j].status != MarkerStatus::Moved {
+            continue;
+        }
+        for k in (j + 1)..n {
+            if fits[k].status != MarkerStatus::Moved {
+                continue;
+            }
+            let mj = v3(&measured[j]);
+            let mk = v3(&measured[k]);
+            if (mj - v3(&fits[k].predicted_m)).norm() <= thr[j]
+                && (mk - v3(&fits[j].predicted_m)).norm() <= thr[k]
+            {
+                fits[j].status = MarkerStatus::Swapped { with: k };
+                fits[k].status = MarkerStatus::Swapped { with: j };
+                break;
+            }
+        }
+    }
+    Ok(Registration {
+        t_mocap_body: t,
+        n_used,
+        rms_m: if wsum > 0.0 { sqrt(ssq / wsum) } else { 0.0 },
+        consistent,
+        fits,
+        n,
+    })
+}
+
+/// The end-effector pose in the robot base frame from the two registrations' poses:
+/// `t_base_ee = t_mocap_base⁻¹ · t_mocap_ee`.
+#[must_use]
+pub fn t_base_ee(t_mocap_base: &Transform, t_mocap_ee: &Transform) -> Transform {
+    t_mocap_base.inverse() * t_mocap_ee
+}
+
+/// Which body a registration error belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MarkerBody {
+    /// The markers fixed to the robot base.
+    Base,
+    /// The markers on the end-effector probe.
+    Probe,
+}
+
+/// Both registrations and the end-effector pose of one measurement.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EndEffectorRegistration {
+    /// End effector (probe frame) in the robot base frame.
+    pub t_base_ee: Transform,
+    /// The base markers' registration (`t_mocap_body` = base frame in the mocap frame).
+    pub base: Registration,
+    /// The probe markers' registration (`t_mocap_body` = end-effector frame in mocap).
+    pub probe: Registration,
+}
+
+/// Registers the base markers (design positions in the robot base frame) and the probe
+/// markers (design positions in the end-effector frame) and composes
+/// `t_base_ee = t_mocap_base⁻¹ · t_mocap_ee`. An error names the body it came from.
+pub fn register_end_effector(
+    base: &Markers<'_>,
+    probe: &Markers<'_>,
+    opts: &RegistrationOptions,
+) -> core::result::Result<EndEffectorRegistration, (MarkerBody, Error)> {
+    let b = register(base, opts).map_err(|e| (MarkerBody::Base, e))?;
+    let p = register(probe, opts).map_err(|e| (MarkerBody::Probe, e))?;
+    Ok(EndEffectorRegistration {
+        t_base_ee: t_base_ee(&b.t_mocap_body, &p.t_mocap_body),
+        base: b,
+        probe: p,
+    })
+}
