@@ -739,6 +739,16 @@ typedef struct kincal_measurements {
      Length of `aux` (ignored when NULL).
      */
     size_t aux_len;
+    /*
+     Weight of each pose in the fit (finite, ≥ 0; it multiplies the row weights): 1
+     normally, 0 to hold a pose out (cross-validation), other values for robust
+     reweighting; or NULL for all 1. `weights_len` = L. Validation ignores the weights.
+     */
+    const double *weights;
+    /*
+     Length of `weights` (ignored when NULL).
+     */
+    size_t weights_len;
 } kincal_measurements;
 
 /*

@@ -95,7 +95,7 @@ int main(void) {
         kincal_registration_options ropts;
         double pose[16], t_base_ee[16];
         const double q0[6] = {0.4813, 0.7750, -1.0383, 3.6605, 1.1053, -2.8499};
-        kincal_measurements data = {1, q0, 6, pose, 16, NULL, 0, NULL, 0};
+        kincal_measurements data = {1, q0, 6, pose, 16, NULL, 0, NULL, 0, NULL, 0};
         CHECK(kincal_robot_aria(&robot, KINCAL_ARIA_MODEL_NOMINAL, &err) == KINCAL_STATUS_OK);
         CHECK(kincal_fk(&robot, q0, 6, NULL, pose, 16, &err) == KINCAL_STATUS_OK);
         CHECK(kincal_validate(&robot, &data, KINCAL_TARGET_POS_M, KINCAL_TARGET_ROT_RAD, NULL, 0,
