@@ -547,11 +547,15 @@ pub unsafe extern "C" fn kincal_error_describe(
         // SAFETY: checked non-NULL and aligned above; the caller guarantees validity.
         let e = unsafe { error.read() };
         let mut empty = [0u8; 0];
+        // Messages are shorter than this, so a longer buffer is never written beyond it (and
+        // the slice stays far below `from_raw_parts_mut`'s size limit).
+        const MAX_TEXT: usize = 4096;
         let out: &mut [u8] = if buf_len == 0 {
             &mut empty
         } else {
-            // SAFETY: `buf` is non-NULL (checked) and writable for `buf_len` bytes (contract).
-            unsafe { core::slice::from_raw_parts_mut(buf.cast::<u8>(), buf_len) }
+            // SAFETY: `buf` is non-NULL (checked) and writable for `buf_len >= len` bytes
+            // (contract).
+            unsafe { core::slice::from_raw_parts_mut(buf.cast::<u8>(), buf_len.min(MAX_TEXT)) }
         };
         let mut w = Truncating { buf: out, written: 0, total: 0 };
         let _ = describe(&e, &mut w);

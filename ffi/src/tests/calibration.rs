@@ -605,3 +605,40 @@ fn held_out_pose_weight_zero() {
     };
     assert_eq!((s, e.index), (kincal_status::InvalidArgument, 4));
 }
+
+/// A pose count whose arrays could not exist is refused before any slice is formed.
+#[test]
+fn absurd_pose_counts_are_refused() {
+    let nominal = aria_robot(kincal_aria_model::Nominal);
+    let q = [0.0; 6];
+    let poses = [0.0; 16];
+    let n = usize::MAX / 8;
+    let data = kincal_measurements {
+        n_poses: n,
+        q: q.as_ptr(),
+        q_len: n.wrapping_mul(6),
+        poses: poses.as_ptr(),
+        poses_len: n.wrapping_mul(16),
+        masks: null(),
+        masks_len: 0,
+        aux: null(),
+        aux_len: 0,
+        weights: null(),
+        weights_len: 0,
+    };
+    let mut summary = kincal_validation_summary::default();
+    let mut e = kincal_error::CLEAR;
+    let s = unsafe {
+        kincal_validate(
+            &nominal,
+            &data,
+            1e-3,
+            1e-2,
+            null_mut(),
+            0,
+            &mut summary,
+            &mut e,
+        )
+    };
+    assert_eq!(s, kincal_status::BadLength);
+}
