@@ -367,3 +367,23 @@ fn bad_inputs_are_refused_with_the_culprit() {
         Err(Error::BadPose { .. })
     ));
 }
+
+#[test]
+fn zero_weight_poses_are_held_out_exactly() {
+    let truth = aria::virtual_truth();
+    let nominal = aria::nominal();
+    let clean = tool_data(&truth);
+    let data = noisy(&clean, &mut SplitMix64::new(7), 1e-4, 1e-4);
+    let mut extra = noisy(&clean, &mut SplitMix64::new(8), 5e-3, 5e-3);
+    for m in &mut extra {
+        m.weight = 0.0;
+    }
+    let with_held_out: Vec<_> = data.iter().chain(extra.iter()).copied().collect();
+    let opts = IdentifyOptions::new(Algorithm::Ols, nominal.geometric_param_set());
+    let mut ws = Box::<Ws>::default();
+    let a = identify(&nominal, &data, &opts, &mut ws).unwrap();
+    let b = identify(&nominal, &with_held_out, &opts, &mut ws).unwrap();
+    assert_eq!(a.robot, b.robot, "held-out poses changed the fit");
+    assert_eq!(a.fitted.poses, b.fitted.poses);
+    assert_eq!(a.sigma2, b.sigma2);
+}

@@ -43,6 +43,9 @@ pub struct Measurement<const N: usize> {
     pub pose: Transform,
     /// Measured components.
     pub mask: ComponentMask,
+    /// Weight of the pose in the fit (>= 0): 1 normally, 0 to hold it out (cross-validation),
+    /// other values for robust reweighting. Multiplies the row weights.
+    pub weight: f64,
 }
 
 impl<const N: usize> Measurement<N> {
@@ -53,6 +56,7 @@ impl<const N: usize> Measurement<N> {
             state: JointState::new(q),
             pose,
             mask: ComponentMask::ALL,
+            weight: 1.0,
         }
     }
 }
@@ -73,6 +77,12 @@ pub(crate) fn validate<const N: usize>(data: &[Measurement<N>]) -> Result<()> {
         if check_finite(m.pose.rotation.matrix().as_slice(), Quantity::Orientation).is_err() {
             return Err(Error::NonFinite {
                 what: Quantity::Orientation,
+                index: l,
+            });
+        }
+        if !(m.weight.is_finite() && m.weight >= 0.0) {
+            return Err(Error::NonFinite {
+                what: Quantity::Setting,
                 index: l,
             });
         }
@@ -111,11 +121,11 @@ pub(crate) fn cost<const N: usize>(
     opts: &IdentifyOptions<'_>,
 ) -> Result<f64> {
     let mut c = 0.0;
-    for m in data {
+    for m in data.iter().filter(|m| m.weight > 0.0) {
         let e = residual(robot, m, opts.orientation)?;
         for (k, v) in e.iter().enumerate() {
             if m.mask.has(k) {
-                c += weight(opts, k) * v * v;
+                c += m.weight * weight(opts, k) * v * v;
             }
         }
     }
@@ -134,8 +144,8 @@ pub(crate) fn accumulate<const N: usize, const P: usize>(
     ws.lsq.reset(n_cols)?;
     ws.to_gram = false;
     let mut c = 0.0;
-    for m in data {
-        c += add_rows(robot, &m.state, Some(&m.pose), m.mask, opts, n_cols, ws)?;
+    for m in data.iter().filter(|m| m.weight > 0.0) {
+        c += add_rows(robot, m, true, opts, n_cols, ws)?;
     }
     Ok(c)
 }
@@ -151,20 +161,20 @@ pub(crate) fn accumulate_gram<const N: usize, const P: usize>(
     ws.gram.reset(n_cols)?;
     ws.to_gram = true;
     let mut c = 0.0;
-    for m in data {
-        c += add_rows(robot, &m.state, Some(&m.pose), m.mask, opts, n_cols, ws)?;
+    for m in data.iter().filter(|m| m.weight > 0.0) {
+        c += add_rows(robot, m, true, opts, n_cols, ws)?;
     }
     ws.to_gram = false;
     Ok(c)
 }
 
-/// Folds the rows of one pose into `ws.lsq`; with `pose = None` the right-hand side is zero
-/// (only the Jacobian matters, as in the identifiability analysis). Returns the cost.
+/// Folds the rows of one pose (weighted by its weight) into `ws.lsq` or `ws.gram`; with
+/// `with_rhs = false` the right-hand side is zero (only the Jacobian matters, as in the
+/// identifiability analysis). Returns the cost.
 pub(crate) fn add_rows<const N: usize, const P: usize>(
     robot: &Robot<N>,
-    state: &JointState<N>,
-    pose: Option<&Transform>,
-    mask: ComponentMask,
+    m: &Measurement<N>,
+    with_rhs: bool,
     opts: &IdentifyOptions<'_>,
     n_cols: usize,
     ws: &mut Workspace<P>,
@@ -183,17 +193,18 @@ pub(crate) fn add_rows<const N: usize, const P: usize>(
         needed: n_jac,
         capacity: super::MAX_MODEL_PARAMS,
     })?;
-    let t = robot.jacobian(state, jac)?;
-    let e = match pose {
-        Some(p) => pose_error(p, &t, opts.orientation),
-        None => [0.0; 6],
+    let t = robot.jacobian(&m.state, jac)?;
+    let e = if with_rhs {
+        pose_error(&m.pose, &t, opts.orientation)
+    } else {
+        [0.0; 6]
     };
     let mut c = 0.0;
     for k in 0..6 {
-        if !mask.has(k) {
+        if !m.mask.has(k) {
             continue;
         }
-        let w = weight(opts, k);
+        let w = m.weight * weight(opts, k);
         for (j, &col) in cols.iter().enumerate() {
             let v = jac.get(col).map_or(0.0, |jc| jc[k]);
             ws.row[j] = v * ws.colscale[j];
@@ -227,26 +238,27 @@ pub struct ResidualStats {
     pub max_rot_rad: f64,
 }
 
-/// Residual statistics of `robot` on `data` (exact orientation error for the angle
-/// statistics; `opts` decides the cost).
+/// Residual statistics of `robot` on the poses of `data` with a positive weight (exact
+/// orientation error for the angle statistics, unweighted; `opts` and the pose weights
+/// decide the cost).
 pub fn residual_stats<const N: usize>(
     robot: &Robot<N>,
     data: &[Measurement<N>],
     opts: &IdentifyOptions<'_>,
 ) -> Result<ResidualStats> {
     let mut s = ResidualStats {
-        poses: data.len(),
+        poses: data.iter().filter(|m| m.weight > 0.0).count(),
         ..ResidualStats::default()
     };
     let (mut np, mut nr, mut sp, mut sr) = (0usize, 0usize, 0.0, 0.0);
-    for m in data {
+    for m in data.iter().filter(|m| m.weight > 0.0) {
         let t = robot.fk(&m.state)?;
         let e = pose_error(&m.pose, &t, opts.orientation);
         let ex = pose_error(&m.pose, &t, OrientationError::Exact);
         for k in 0..6 {
             if m.mask.has(k) {
                 s.rows += 1;
-                s.cost += weight(opts, k) * e[k] * e[k];
+                s.cost += m.weight * weight(opts, k) * e[k] * e[k];
             }
         }
         if m.mask.has_position() {

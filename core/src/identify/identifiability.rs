@@ -102,7 +102,7 @@ pub fn analyze<const N: usize, const P: usize>(
     }
     let mut union = 0u8;
     let (mut any_approach, mut any_temp) = (false, false);
-    for m in data {
+    for m in data.iter().filter(|m| m.weight > 0.0) {
         union |= m.mask.0;
         any_approach |= m.state.approach.is_some();
         any_temp |= m.state.temp_c.is_some();
@@ -145,7 +145,13 @@ pub fn analyze<const N: usize, const P: usize>(
         if any_temp {
             st.temp_c = Some(40.0 * halton(s, 41));
         }
-        add_rows(robot, &st, None, mask, opts, p, ws)?;
+        let m = Measurement {
+            state: st,
+            pose: crate::pose::Transform::identity(),
+            mask,
+            weight: 1.0,
+        };
+        add_rows(robot, &m, false, opts, p, ws)?;
     }
     let kept = greedy(ws, p, STRUCTURAL_TOL, &mut out.partner)?;
     let mut n_struct = 0;

@@ -73,6 +73,7 @@ pub fn identify_with_analysis<const N: usize, const P: usize>(
     }
     let rows: usize = data
         .iter()
+        .filter(|m| m.weight > 0.0)
         .map(|m| (0..6).filter(|&k| m.mask.has(k)).count())
         .sum();
     if n == 0 || (!analysis.data_deficient.is_empty() && !opts.allow_data_deficiency) {
@@ -218,10 +219,8 @@ fn factor_gram<const P: usize>(
             if let Some(s) = inv_scale {
                 v *= s[a] * s[b];
             }
-            if a == b {
-                if let Some((lambda, d)) = damping {
-                    v += lambda * d[a] * d[a];
-                }
+            if let (true, Some((lambda, d))) = (a == b, damping) {
+                v += lambda * d[a] * d[a];
             }
             ws.v[a][b] = v;
         }

@@ -120,7 +120,7 @@ pub fn cholesky_upper<const P: usize>(
         for i in 0..k {
             d -= r[i][k] * r[i][k];
         }
-        if !(d > rel_tol * dmax) || !d.is_finite() {
+        if d.is_nan() || d <= rel_tol * dmax || !d.is_finite() {
             return Err(Error::RankDeficient {
                 rank: k,
                 required: n,
