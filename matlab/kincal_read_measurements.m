@@ -109,7 +109,14 @@ if ~isempty(opts.robot) && ~opts.allow_out_of_limits
         try
             kincal_check_limits(opts.robot, data.q(:, j));
         catch err
-            fail(file, row_lines(j), '', [strrep(err.message, 'kincal_check_limits: ', '') ...
+            % The library's message names the joint (1-based): point at its column.
+            what = regexprep(err.message, '^(kincal_mex: )?(kincal_check_limits: )?', '');
+            joint = regexp(what, 'joint (\d+)', 'tokens', 'once');
+            column = '';
+            if ~isempty(joint)
+                column = header{layout.q(str2double(joint{1}))};
+            end
+            fail(file, row_lines(j), column, [what ...
                 ' (pass ''allow_out_of_limits'', true to accept it)']);
         end
     end

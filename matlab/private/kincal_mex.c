@@ -199,10 +199,10 @@ static int fail_status(kc_ctx *c, kincal_status st, const kincal_error *e, const
         fail_append(c, "; found %.0f", (double)e->found);
     }
     if (e->value == e->value) {
-        fail_append(c, "; value %.17g", e->value);
+        fail_append(c, "; value %.15g", e->value);
     }
     if (e->lower == e->lower || e->upper == e->upper) {
-        fail_append(c, "; limits [%.17g, %.17g]", e->lower, e->upper);
+        fail_append(c, "; limits [%.15g, %.15g]", e->lower, e->upper);
     }
     if (e->residual_pos_m == e->residual_pos_m || e->residual_rot_rad == e->residual_rot_rad) {
         fail_append(c, "; best residual %.3g m, %.3g rad", e->residual_pos_m, e->residual_rot_rad);
@@ -543,7 +543,7 @@ static int get_robot(kc_ctx *c, const mxArray *s, kincal_robot *r)
     }
     st = kincal_robot_validate(r, &err);
     if (st != KINCAL_STATUS_OK) {
-        return fail_status(c, st, &err, "argument 'robot'");
+        return fail_status(c, st, &err, NULL);
     }
     return 0;
 }

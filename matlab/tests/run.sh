@@ -1,0 +1,51 @@
+#!/usr/bin/env bash
+# Octave tests of the Matlab/Octave toolbox; the project's test command (scripts/test.sh)
+# runs this script.
+#
+#  1. builds the C ABI staticlib (cargo build --release -p kincal-ffi) and the CLI used by
+#     the cross-checks (cargo build --release -p kincal-cli);
+#  2. builds the MEX gateway with make_kincal.m (mkoctfile --mex);
+#  3. runs matlab/tests/run_tests.m in octave-cli (gateway errors, kinematics against
+#     independent code, CSV rules, cross-checks against the CLI, the three workflow scripts
+#     headless); a failing test makes this script fail.
+#
+# Installs nothing: scripts/test.sh installs Octave (apt-get install octave liboctave-dev).
+# Without octave-cli or mkoctfile this script fails when CI=true and skips otherwise.
+# Environment: CARGO_TARGET_DIR (default ./target); KINCAL_TEST_FILTER runs only the tests
+# whose "file/name" contains it; KINCAL_OUT is where the workflow scripts write (default: a
+# temporary folder).
+set -euo pipefail
+
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+root=$(cd "$here/../.." && pwd)
+cd "$root"
+
+for tool in octave-cli mkoctfile; do
+    if ! command -v "$tool" >/dev/null 2>&1; then
+        if [[ ${CI:-} == true ]]; then
+            echo "matlab/tests/run.sh: FAILED: $tool is required (CI=true); install it with" \
+                "apt-get install octave liboctave-dev (scripts/test.sh does)" >&2
+            exit 1
+        fi
+        echo "matlab/tests/run.sh: SKIP: $tool not available (apt-get install octave liboctave-dev)"
+        exit 0
+    fi
+done
+
+printf '\n=== cargo build --release -p kincal-ffi -p kincal-cli\n'
+cargo build --release -p kincal-ffi -p kincal-cli
+
+out=${KINCAL_OUT:-}
+cleanup=
+if [[ -z $out ]]; then
+    out=$(mktemp -d "${TMPDIR:-/tmp}/kincal-matlab-test.XXXXXX")
+    cleanup=$out
+fi
+trap '[[ -n $cleanup ]] && rm -rf "$cleanup"' EXIT
+export KINCAL_OUT=$out
+
+printf '\n=== octave-cli: make_kincal, run_tests (outputs in %s)\n' "$out"
+cd "$root/matlab"
+# The filter is passed through the environment, never spliced into the Octave code.
+octave-cli -q --norc --no-history --eval \
+    "make_kincal('all'); addpath('tests'); run_tests('filter', getenv('KINCAL_TEST_FILTER'), 'exit', true);"
