@@ -65,10 +65,9 @@ for kind = kinds
             h = stem(1:m, v, 'filled');
             set(h, 'MarkerSize', 3);
             hold on
-            lim = max(abs(v));
-            if lim == 0
-                lim = 1;
-            end
+            % Axes no finer than 1e-6 (mm or deg): gnuplot cannot draw smaller ranges, and
+            % the subplot title gives the exact largest value anyway.
+            lim = max(max(abs(v)), 1e-6);
             if row == 4
                 ylim([0, 1.15 * max(lim, 0)]);
                 % The target line where it is visible: errors within 50 times the target.
@@ -81,11 +80,18 @@ for kind = kinds
             end
             xlim([0.5, max(m, 1) + 0.5]);
             set(ax, 'FontSize', 8);
+
             grid on
             set(ax, 'GridLineStyle', ':');
             hold off
+            peak = sprintf('max |%s| = %.3g %s', strtok(labels{row}, '|'), max(abs(v)), ...
+                kind.unit);
             if row == 1
-                title(sprintf('%s', names{col}), 'FontWeight', 'bold');
+                % The model's name heads its column (a two-line title loses a line in
+                % gnuplot).
+                title(sprintf('%s:  %s', names{col}, peak), 'FontSize', 9);
+            else
+                title(peak, 'FontSize', 8);
             end
             if col == 1
                 ylabel(sprintf('%s [%s]', labels{row}, kind.unit));

@@ -56,10 +56,17 @@ typedef struct kc_fail {
     char msg[1024];
 } kc_fail;
 
-/* The name of the operation being run, for messages ("kincal_fk: ..."). */
+/* Largest number of scratch buffers one operation allocates. */
+#define KC_MAX_BUFFERS 8
+
+/* The state of one gateway call: the operation's name (for messages, "kincal_fk: ..."), the
+ * failure record, and the scratch buffers the handler allocated (kc_alloc), which mexFunction
+ * frees after the handler returns, before it raises any error. */
 typedef struct kc_ctx {
     const char *op;
     kc_fail fail;
+    void *buffers[KC_MAX_BUFFERS];
+    int n_buffers;
 } kc_ctx;
 
 /* Records a failure with identifier `id` (without the "kincal:" prefix); returns -1. */
@@ -76,6 +83,27 @@ static int fail(kc_ctx *c, const char *id, const char *fmt, ...)
     vsnprintf(c->fail.msg + n, sizeof c->fail.msg - (size_t)n, fmt, ap);
     va_end(ap);
     return -1;
+}
+
+/* Scratch memory for one call, freed by mexFunction when the handler returns (success or
+ * failure). NULL (with a failure recorded) when the table of buffers is full. */
+static void *kc_alloc(kc_ctx *c, size_t bytes)
+{
+    void *p;
+    if (c->n_buffers >= KC_MAX_BUFFERS) {
+        fail(c, "internal", "too many scratch buffers (a bug in kincal_mex.c)");
+        return NULL;
+    }
+    p = mxCalloc(bytes > 0 ? bytes : 1, 1);
+    c->buffers[c->n_buffers++] = p;
+    return p;
+}
+
+static void kc_free_all(kc_ctx *c)
+{
+    while (c->n_buffers > 0) {
+        mxFree(c->buffers[--c->n_buffers]);
+    }
 }
 
 /* Appends to the message of a recorded failure. */
@@ -1530,6 +1558,486 @@ static int op_check_limits(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *
 }
 
 /* ------------------------------------------------------------------------------------------ */
+/* Identification, identifiability, validation (with the C ABI's identification exports)      */
+/* ------------------------------------------------------------------------------------------ */
+
+#if defined(KINCAL_WORKSPACE_ALIGN)
+#define KC_HAS_IDENTIFY 1
+
+static const kc_name ALGORITHMS[] = {
+    {"ols", 0}, {"opt1", 1}, {"opt2", 2}, {NULL, 0},
+};
+
+static const char *algorithm_name(uint32_t a)
+{
+    const kc_name *t;
+    for (t = ALGORITHMS; t->name != NULL; ++t) {
+        if (t->value == a) {
+            return t->name;
+        }
+    }
+    return "?";
+}
+
+/* The measurements of a call: views of the Matlab arrays (q N x M is the row-major M x N
+ * table the C ABI wants; T 4x4xM is M column-major poses), plus scratch copies of the masks
+ * and the per-pose auxiliary inputs. */
+static int get_measurements(kc_ctx *c, const kincal_robot *r, const mxArray *q_arg,
+                            const mxArray *t_arg, const mxArray *components,
+                            const mxArray *aux_arg, kincal_measurements *m)
+{
+    size_t n = r->n_joints, l, mt, j;
+    const double *q, *t, *comp;
+    kc_aux aux;
+    memset(m, 0, sizeof *m);
+    if (get_real_matrix(c, q_arg, "q", n, KC_ANY, &q) != 0 ||
+        get_poses(c, t_arg, "T", &mt, &t) != 0) {
+        return -1;
+    }
+    l = mxGetN(q_arg);
+    if (mt != l) {
+        return fail(c, "badSize", "argument 'T' must be 4x4x%lu (one pose per column of q), "
+                    "got 4x4x%lu", (unsigned long)l, (unsigned long)mt);
+    }
+    m->n_poses = l;
+    m->q = q;
+    m->q_len = n * l;
+    m->poses = t;
+    m->poses_len = 16 * l;
+    if (!is_default(components)) {
+        uint8_t *masks;
+        if (get_real_matrix(c, components, "components", 1, l, &comp) != 0) {
+            return -1;
+        }
+        masks = (uint8_t *)kc_alloc(c, l);
+        if (masks == NULL) {
+            return -1;
+        }
+        for (j = 0; j < l; ++j) {
+            if (comp[j] < 0 || comp[j] > 255 || comp[j] != (double)(uint8_t)comp[j]) {
+                return fail(c, "badValue", "argument 'components': pose %.0f must be a bit "
+                            "mask 1..63, got %.17g", one_based(j), comp[j]);
+            }
+            masks[j] = (uint8_t)comp[j];
+        }
+        m->masks = masks;
+        m->masks_len = l;
+    }
+    if (get_aux(c, aux_arg, n, l, &aux) != 0) {
+        return -1;
+    }
+    if (aux.approach != NULL || aux.temp_c != NULL) {
+        kincal_joint_aux *a = (kincal_joint_aux *)kc_alloc(c, l * sizeof *a);
+        if (a == NULL) {
+            return -1;
+        }
+        for (j = 0; j < l; ++j) {
+            aux_at(&aux, n, j, &a[j]);
+        }
+        m->aux = a;
+        m->aux_len = l;
+    }
+    return 0;
+}
+
+static const char *const IDENTIFY_FIELDS[] = {
+    "algorithm", "effects", "requested", "lower", "upper", "max_iterations",
+    "allow_data_deficiency", "orientation", "xtol", "ftol", "abs_cost_tol", "rank_tol",
+    "weight_pos", "weight_rot", NULL,
+};
+
+/* Identification options: the library's defaults for the robot, algorithm and effects, then
+ * the fields the caller set. `requested` is a logical or 0/1 P x 1 mask over robot.params;
+ * `lower`/`upper` are P x 1 absolute OPT1 intervals (+-Inf allowed). */
+static int get_identify_options(kc_ctx *c, const kincal_robot *r, const mxArray *a,
+                                kincal_identify_options *o)
+{
+    uint32_t alg = 0, effects = 0;
+    const mxArray *f;
+    size_t np = kincal_num_params(r->n_joints), i, v;
+    kincal_error err;
+    kincal_status st;
+    if (!is_default(a) && check_struct(c, a, "options", IDENTIFY_FIELDS) != 0) {
+        return -1;
+    }
+    f = is_default(a) ? NULL : mxGetField(a, 0, "algorithm");
+    if (f != NULL && get_choice(c, f, "algorithm", ALGORITHMS, &alg) != 0) {
+        return -1;
+    }
+    f = is_default(a) ? NULL : mxGetField(a, 0, "effects");
+    if (f != NULL && get_effects(c, f, "effects", &effects) != 0) {
+        return -1;
+    }
+    st = kincal_identify_options_default(r, alg, effects, o, &err);
+    if (st != KINCAL_STATUS_OK) {
+        return fail_status(c, st, &err, NULL);
+    }
+    if (is_default(a)) {
+        return 0;
+    }
+    if ((f = mxGetField(a, 0, "requested")) != NULL && !is_default(f)) {
+        if (mxIsLogical(f) && mxGetNumberOfElements(f) == np) {
+            const mxLogical *lg = mxGetLogicals(f);
+            for (i = 0; i < np; ++i) {
+                o->requested[i] = lg[i] ? 1 : 0;
+            }
+        } else {
+            const double *p;
+            if (get_vector(c, f, "options.requested", np, &p) != 0) {
+                return -1;
+            }
+            for (i = 0; i < np; ++i) {
+                if (p[i] != 0.0 && p[i] != 1.0) {
+                    return fail(c, "badValue", "argument 'options.requested': element %.0f "
+                                "must be 0 or 1", one_based(i));
+                }
+                o->requested[i] = p[i] != 0.0;
+            }
+        }
+    }
+    for (i = 0; i < 2; ++i) {
+        const char *name = i == 0 ? "lower" : "upper";
+        double *dst = i == 0 ? o->lower : o->upper;
+        if ((f = mxGetField(a, 0, name)) != NULL && !is_default(f)) {
+            char full[32];
+            snprintf(full, sizeof full, "options.%s", name);
+            /* +-Inf is an open end; NaN is refused by the library. */
+            if (check_double(c, f, full, 0) != 0) {
+                return -1;
+            }
+            if (mxGetNumberOfElements(f) != np || (mxGetM(f) != 1 && mxGetN(f) != 1)) {
+                return fail(c, "badSize", "argument '%s' must be a vector of %lu elements",
+                            full, (unsigned long)np);
+            }
+            memcpy(dst, KC_DOUBLES(f), np * sizeof *dst);
+        }
+    }
+    if ((f = mxGetField(a, 0, "max_iterations")) != NULL) {
+        if (get_count(c, f, "options.max_iterations", 4294967295.0, &v) != 0) {
+            return -1;
+        }
+        o->max_iterations = (uint32_t)v;
+    }
+    if ((f = mxGetField(a, 0, "allow_data_deficiency")) != NULL) {
+        if (mxIsLogicalScalar(f)) {
+            o->allow_data_deficiency = mxIsLogicalScalarTrue(f) ? 1u : 0u;
+        } else if (get_count(c, f, "options.allow_data_deficiency", 1, &v) != 0) {
+            return -1;
+        } else {
+            o->allow_data_deficiency = (uint32_t)v;
+        }
+    }
+    if ((f = mxGetField(a, 0, "orientation")) != NULL &&
+        get_choice(c, f, "options.orientation", ORIENTATION_ERRORS, &o->orientation) != 0) {
+        return -1;
+    }
+    {
+        static const char *const names[] = {"xtol", "ftol", "abs_cost_tol", "rank_tol",
+                                            "weight_pos", "weight_rot"};
+        double *dsts[6];
+        dsts[0] = &o->xtol;
+        dsts[1] = &o->ftol;
+        dsts[2] = &o->abs_cost_tol;
+        dsts[3] = &o->rank_tol;
+        dsts[4] = &o->weight_pos;
+        dsts[5] = &o->weight_rot;
+        for (i = 0; i < 6; ++i) {
+            char full[32];
+            snprintf(full, sizeof full, "options.%s", names[i]);
+            if ((f = mxGetField(a, 0, names[i])) != NULL && get_scalar(c, f, full, dsts[i]) != 0) {
+                return -1;
+            }
+        }
+    }
+    return 0;
+}
+
+/* Scratch workspace of the identification calls, aligned to KINCAL_WORKSPACE_ALIGN. */
+static int get_workspace(kc_ctx *c, const kincal_robot *r, const kincal_measurements *m,
+                         const kincal_identify_options *o, void **ws, size_t *ws_len)
+{
+    size_t np = kincal_num_params(r->n_joints), n_req = 0, i, bytes;
+    char *raw;
+    for (i = 0; i < np; ++i) {
+        n_req += o->requested[i] != 0;
+    }
+    bytes = kincal_identify_workspace_size(r->n_joints, m->n_poses, n_req);
+    if (bytes == 0) {
+        return fail(c, "capacityExceeded", "no workspace size for %lu poses and %lu requested "
+                    "parameters", (unsigned long)m->n_poses, (unsigned long)n_req);
+    }
+    raw = (char *)kc_alloc(c, bytes + KINCAL_WORKSPACE_ALIGN);
+    if (raw == NULL) {
+        return -1;
+    }
+    *ws = raw + (KINCAL_WORKSPACE_ALIGN - (size_t)((uintptr_t)raw % KINCAL_WORKSPACE_ALIGN)) %
+                    KINCAL_WORKSPACE_ALIGN;
+    *ws_len = bytes;
+    return 0;
+}
+
+/* A P x 1 logical of a byte mask. */
+static mxArray *mask_array(const uint8_t *mask, size_t np)
+{
+    mxArray *a = mxCreateLogicalMatrix((mwSize)np, 1);
+    mxLogical *l = mxGetLogicals(a);
+    size_t i;
+    for (i = 0; i < np; ++i) {
+        l[i] = mask[i] != 0;
+    }
+    return a;
+}
+
+/* The labels of the parameters in a mask (1 x K cell). */
+static mxArray *mask_labels(const kincal_robot *r, const uint8_t *mask, size_t np)
+{
+    size_t i, k = 0, count = 0;
+    mxArray *a;
+    for (i = 0; i < np; ++i) {
+        count += mask[i] != 0;
+    }
+    a = mxCreateCellMatrix(1, (mwSize)count);
+    for (i = 0; i < np; ++i) {
+        char label[KINCAL_LABEL_CAPACITY];
+        if (mask[i] == 0) {
+            continue;
+        }
+        if (kincal_robot_param_label(r, i, label, sizeof label, NULL) != KINCAL_STATUS_OK) {
+            snprintf(label, sizeof label, "#%.0f", one_based(i));
+        }
+        mxSetCell(a, (mwIndex)k++, mxCreateString(label));
+    }
+    return a;
+}
+
+static mxArray *label_of(const kincal_robot *r, size_t index)
+{
+    char label[KINCAL_LABEL_CAPACITY];
+    if (index == KINCAL_NO_INDEX) {
+        return mxCreateString("");
+    }
+    if (kincal_robot_param_label(r, index, label, sizeof label, NULL) != KINCAL_STATUS_OK) {
+        snprintf(label, sizeof label, "#%.0f", one_based(index));
+    }
+    return mxCreateString(label);
+}
+
+static const char *const ANALYSIS_FIELDS[] = {
+    "rank", "condition_number", "singular_values", "requested", "identifiable",
+    "structural", "data_deficient", "requested_labels", "identifiable_labels",
+    "structural_labels", "data_deficient_labels", "partner", "partner_cosine", NULL,
+};
+
+static mxArray *analysis_struct(const kincal_robot *r, const kincal_identifiability *a)
+{
+    size_t np = kincal_num_params(r->n_joints), i;
+    mxArray *s = mxCreateStructMatrix(1, 1, 13, (const char **)ANALYSIS_FIELDS);
+    mxArray *partner = mxCreateCellMatrix((mwSize)np, 1);
+    mxArray *cosine = mxCreateDoubleMatrix((mwSize)np, 1, mxREAL);
+    size_t nsv = a->n_singular_values < KINCAL_MAX_PARAMS ? a->n_singular_values
+                                                          : KINCAL_MAX_PARAMS;
+    for (i = 0; i < np; ++i) {
+        mxSetCell(partner, (mwIndex)i, label_of(r, a->partner[i]));
+        KC_DOUBLES(cosine)[i] = a->partner_cosine[i];
+    }
+    mxSetField(s, 0, "rank", mxCreateDoubleScalar((double)a->rank));
+    mxSetField(s, 0, "condition_number", mxCreateDoubleScalar(a->condition_number));
+    mxSetField(s, 0, "singular_values", column(a->singular_values, nsv));
+    mxSetField(s, 0, "requested", mask_array(a->requested, np));
+    mxSetField(s, 0, "identifiable", mask_array(a->identifiable, np));
+    mxSetField(s, 0, "structural", mask_array(a->structural, np));
+    mxSetField(s, 0, "data_deficient", mask_array(a->data_deficient, np));
+    mxSetField(s, 0, "requested_labels", mask_labels(r, a->requested, np));
+    mxSetField(s, 0, "identifiable_labels", mask_labels(r, a->identifiable, np));
+    mxSetField(s, 0, "structural_labels", mask_labels(r, a->structural, np));
+    mxSetField(s, 0, "data_deficient_labels", mask_labels(r, a->data_deficient, np));
+    mxSetField(s, 0, "partner", partner);
+    mxSetField(s, 0, "partner_cosine", cosine);
+    return s;
+}
+
+static const char *const STATS_FIELDS[] = {
+    "poses", "rows", "cost", "rms_pos_m", "max_pos_m", "rms_rot_rad", "max_rot_rad", NULL,
+};
+
+static mxArray *stats_struct(const kincal_residual_stats *t)
+{
+    mxArray *s = mxCreateStructMatrix(1, 1, 7, (const char **)STATS_FIELDS);
+    mxSetField(s, 0, "poses", mxCreateDoubleScalar((double)t->poses));
+    mxSetField(s, 0, "rows", mxCreateDoubleScalar((double)t->rows));
+    mxSetField(s, 0, "cost", mxCreateDoubleScalar(t->cost));
+    mxSetField(s, 0, "rms_pos_m", mxCreateDoubleScalar(t->rms_pos_m));
+    mxSetField(s, 0, "max_pos_m", mxCreateDoubleScalar(t->max_pos_m));
+    mxSetField(s, 0, "rms_rot_rad", mxCreateDoubleScalar(t->rms_rot_rad));
+    mxSetField(s, 0, "max_rot_rad", mxCreateDoubleScalar(t->max_rot_rad));
+    return s;
+}
+
+static const char *const REPORT_FIELDS[] = {
+    "algorithm", "iterations", "analysis", "initial", "fitted", "sigma2", "std_errors",
+    "at_bound", "at_bound_labels", "correlations", "n_correlated", NULL,
+};
+static const char *const CORRELATION_FIELDS[] = {"a", "b", "rho", NULL};
+
+static mxArray *report_struct(const kincal_robot *r, const kincal_identify_report *p)
+{
+    size_t np = kincal_num_params(r->n_joints), i;
+    size_t nc = p->n_correlated < KINCAL_MAX_CORRELATED_PAIRS ? p->n_correlated
+                                                              : KINCAL_MAX_CORRELATED_PAIRS;
+    mxArray *s = mxCreateStructMatrix(1, 1, 11, (const char **)REPORT_FIELDS);
+    mxArray *corr = mxCreateStructMatrix(1, (mwSize)nc, 3, (const char **)CORRELATION_FIELDS);
+    for (i = 0; i < nc; ++i) {
+        mxSetField(corr, (mwIndex)i, "a", label_of(r, p->correlated[i].a));
+        mxSetField(corr, (mwIndex)i, "b", label_of(r, p->correlated[i].b));
+        mxSetField(corr, (mwIndex)i, "rho", mxCreateDoubleScalar(p->correlated[i].rho));
+    }
+    mxSetField(s, 0, "algorithm", mxCreateString(algorithm_name(p->algorithm)));
+    mxSetField(s, 0, "iterations", mxCreateDoubleScalar((double)p->iterations));
+    mxSetField(s, 0, "analysis", analysis_struct(r, &p->analysis));
+    mxSetField(s, 0, "initial", stats_struct(&p->initial));
+    mxSetField(s, 0, "fitted", stats_struct(&p->fitted));
+    mxSetField(s, 0, "sigma2", mxCreateDoubleScalar(p->sigma2));
+    mxSetField(s, 0, "std_errors", column(p->std_errors, np));
+    mxSetField(s, 0, "at_bound", mask_array(p->at_bound, np));
+    mxSetField(s, 0, "at_bound_labels", mask_labels(r, p->at_bound, np));
+    mxSetField(s, 0, "correlations", corr);
+    mxSetField(s, 0, "n_correlated", mxCreateDoubleScalar((double)p->n_correlated));
+    return s;
+}
+
+/* identify(robot, q N x M, T 4x4xM, components 1 x M or [], aux, options) -> robot, report */
+static int op_identify(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prhs[])
+{
+    kincal_robot r, out;
+    kincal_measurements m;
+    kincal_identify_options o;
+    kincal_identify_report *report;
+    kincal_error err;
+    kincal_status st;
+    void *ws;
+    size_t ws_len;
+    char name[64];
+    if (get_robot(c, prhs[0], &r) != 0 ||
+        get_measurements(c, &r, prhs[1], prhs[2], prhs[3], prhs[4], &m) != 0 ||
+        get_identify_options(c, &r, prhs[5], &o) != 0 ||
+        get_workspace(c, &r, &m, &o, &ws, &ws_len) != 0) {
+        return -1;
+    }
+    report = (kincal_identify_report *)kc_alloc(c, sizeof *report);
+    if (report == NULL) {
+        return -1;
+    }
+    st = kincal_identify(&r, &m, &o, ws, ws_len, &out, report, &err);
+    if (st != KINCAL_STATUS_OK) {
+        return fail_status(c, st, &err, NULL);
+    }
+    robot_name(prhs[0], name, sizeof name);
+    if (put_robot(c, &out, name, &plhs[0]) != 0) {
+        return -1;
+    }
+    if (nlhs > 1) {
+        plhs[1] = report_struct(&r, report);
+    }
+    return 0;
+}
+
+/* identifiability(robot, q, T, components, aux, options) -> analysis struct */
+static int op_identifiability(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prhs[])
+{
+    kincal_robot r;
+    kincal_measurements m;
+    kincal_identify_options o;
+    kincal_identifiability *a;
+    kincal_error err;
+    kincal_status st;
+    void *ws;
+    size_t ws_len;
+    (void)nlhs;
+    if (get_robot(c, prhs[0], &r) != 0 ||
+        get_measurements(c, &r, prhs[1], prhs[2], prhs[3], prhs[4], &m) != 0 ||
+        get_identify_options(c, &r, prhs[5], &o) != 0 ||
+        get_workspace(c, &r, &m, &o, &ws, &ws_len) != 0) {
+        return -1;
+    }
+    a = (kincal_identifiability *)kc_alloc(c, sizeof *a);
+    if (a == NULL) {
+        return -1;
+    }
+    st = kincal_analyze_identifiability(&r, &m, &o, ws, ws_len, a, &err);
+    if (st != KINCAL_STATUS_OK) {
+        return fail_status(c, st, &err, NULL);
+    }
+    plhs[0] = analysis_struct(&r, a);
+    return 0;
+}
+
+static const char *const SUMMARY_FIELDS[] = {
+    "count", "rms_pos_m", "max_pos_m", "rms_rot_rad", "max_rot_rad", "pos_ok", "rot_ok", NULL,
+};
+
+/* validate(robot, q, T, aux, targets [pos_m, rot_rad] or []) -> errors 8 x M, summary */
+static int op_validate(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prhs[])
+{
+    kincal_robot r;
+    kincal_measurements m;
+    kincal_validation_summary sum;
+    kincal_error err;
+    kincal_status st;
+    double target_pos = KINCAL_TARGET_POS_M, target_rot = KINCAL_TARGET_ROT_RAD;
+    mxArray *s;
+    if (get_robot(c, prhs[0], &r) != 0 ||
+        get_measurements(c, &r, prhs[1], prhs[2], NULL, prhs[3], &m) != 0) {
+        return -1;
+    }
+    if (!is_default(prhs[4])) {
+        const double *t;
+        if (get_vector(c, prhs[4], "targets", 2, &t) != 0) {
+            return -1;
+        }
+        target_pos = t[0];
+        target_rot = t[1];
+    }
+    plhs[0] = mxCreateDoubleMatrix(KINCAL_POSE_ERRORS_LEN, (mwSize)m.n_poses, mxREAL);
+    st = kincal_validate(&r, &m, target_pos, target_rot, KC_DOUBLES(plhs[0]),
+                         KINCAL_POSE_ERRORS_LEN * m.n_poses, &sum, &err);
+    if (st != KINCAL_STATUS_OK) {
+        return fail_status(c, st, &err, NULL);
+    }
+    if (nlhs > 1) {
+        s = mxCreateStructMatrix(1, 1, 7, (const char **)SUMMARY_FIELDS);
+        mxSetField(s, 0, "count", mxCreateDoubleScalar((double)sum.count));
+        mxSetField(s, 0, "rms_pos_m", mxCreateDoubleScalar(sum.rms_pos_m));
+        mxSetField(s, 0, "max_pos_m", mxCreateDoubleScalar(sum.max_pos_m));
+        mxSetField(s, 0, "rms_rot_rad", mxCreateDoubleScalar(sum.rms_rot_rad));
+        mxSetField(s, 0, "max_rot_rad", mxCreateDoubleScalar(sum.max_rot_rad));
+        mxSetField(s, 0, "pos_ok", mxCreateLogicalScalar(sum.pos_ok != 0));
+        mxSetField(s, 0, "rot_ok", mxCreateLogicalScalar(sum.rot_ok != 0));
+        plhs[1] = s;
+    }
+    return 0;
+}
+
+/* biopsy_rotation(r_t_m, d_m, l_max_m) -> allowed orientation error [rad] (eq. 3) */
+static int op_biopsy_rotation(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prhs[])
+{
+    double rt, d, l, v;
+    kincal_error err;
+    kincal_status st;
+    (void)nlhs;
+    if (get_scalar(c, prhs[0], "r_t_m", &rt) != 0 || get_scalar(c, prhs[1], "d_m", &d) != 0 ||
+        get_scalar(c, prhs[2], "l_max_m", &l) != 0) {
+        return -1;
+    }
+    st = kincal_biopsy_allowed_rotation(rt, d, l, &v, &err);
+    if (st != KINCAL_STATUS_OK) {
+        return fail_status(c, st, &err, NULL);
+    }
+    plhs[0] = mxCreateDoubleScalar(v);
+    return 0;
+}
+#endif /* KINCAL_WORKSPACE_ALIGN */
+
+/* ------------------------------------------------------------------------------------------ */
 /* Dispatch                                                                                   */
 /* ------------------------------------------------------------------------------------------ */
 
@@ -1539,6 +2047,8 @@ typedef struct kc_operation {
     int nrhs; /* exact number of arguments after the operation name */
     int nlhs; /* largest number of outputs */
 } kc_operation;
+
+static int op_operations(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prhs[]);
 
 static const kc_operation OPERATIONS[] = {
     {"version", op_version, 0, 1},
@@ -1566,8 +2076,34 @@ static const kc_operation OPERATIONS[] = {
     {"gravity_torques", op_gravity_torques, 2, 1},
     {"joint_angles", op_joint_angles, 3, 1},
     {"check_limits", op_check_limits, 2, 0},
+    {"operations", op_operations, 0, 1},
+#if defined(KC_HAS_IDENTIFY)
+    {"identify", op_identify, 6, 2},
+    {"identifiability", op_identifiability, 6, 1},
+    {"validate", op_validate, 5, 2},
+    {"biopsy_rotation", op_biopsy_rotation, 3, 1},
+#endif
     {NULL, NULL, 0, 0},
 };
+
+/* operations() -> 1 x K cell of the operation names this build dispatches (the set depends
+ * on the exports of the linked C ABI). */
+static int op_operations(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prhs[])
+{
+    const kc_operation *o;
+    mwIndex k = 0;
+    (void)c;
+    (void)nlhs;
+    (void)prhs;
+    for (o = OPERATIONS; o->name != NULL; ++o) {
+        ++k;
+    }
+    plhs[0] = mxCreateCellMatrix(1, (mwSize)k);
+    for (k = 0, o = OPERATIONS; o->name != NULL; ++o, ++k) {
+        mxSetCell(plhs[0], k, mxCreateString(o->name));
+    }
+    return 0;
+}
 
 void mexFunction(int nlhs, mxArray *plhs[], int nrhs, const mxArray *prhs[])
 {
@@ -1598,7 +2134,10 @@ void mexFunction(int nlhs, mxArray *plhs[], int nrhs, const mxArray *prhs[])
         }
     }
     if (o->name == NULL) {
-        mexErrMsgIdAndTxt("kincal:unknownOperation", "kincal_mex: unknown operation '%s'", op);
+        mexErrMsgIdAndTxt("kincal:unknownOperation",
+                          "kincal_mex: unknown operation '%s' (the C ABI this gateway was built "
+                          "against may predate it; rebuild with make_kincal)",
+                          op);
         return;
     }
     c.op = o->name;
@@ -1613,6 +2152,7 @@ void mexFunction(int nlhs, mxArray *plhs[], int nrhs, const mxArray *prhs[])
         plhs[i] = NULL;
     }
     rc = o->handler(&c, nlhs, plhs, prhs + 1);
+    kc_free_all(&c);
     if (rc != 0) {
         /* Rust has returned and every buffer is an mxArray or on the stack: drop the partial
          * outputs, then raise (mexErrMsgIdAndTxt does not return). */
