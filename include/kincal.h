@@ -46,6 +46,16 @@
 #define KINCAL_EFFECTS_ALL 127
 
 /*
+ Most strongly correlated parameter pairs a report lists (`kincal_identify_report`).
+ */
+#define KINCAL_MAX_CORRELATED_PAIRS 32
+
+/*
+ Alignment `kincal_identify` needs of its workspace pointer (`malloc` provides it).
+ */
+#define KINCAL_WORKSPACE_ALIGN 16
+
+/*
  Largest `frames_len` of `kincal_fk_frames`: 16·(`KINCAL_MAX_JOINTS` + 2).
  */
 #define KINCAL_MAX_FRAMES_LEN 160
@@ -62,6 +72,16 @@
 #define KINCAL_ROTATION_TOLERANCE 1e-6
 
 /*
+ Most markers on one body.
+ */
+#define KINCAL_MAX_MARKERS 32
+
+/*
+ Most markers `kincal_register` may exclude as outliers.
+ */
+#define KINCAL_MAX_OUTLIERS 3
+
+/*
  Largest joint count of a `kincal_robot`.
  */
 #define KINCAL_MAX_JOINTS 8
@@ -76,6 +96,22 @@
  5·8 + 12.
  */
 #define KINCAL_MAX_GEOMETRIC_PARAMS 52
+
+/*
+ The paper's position target of Section 4.4: every pose error below 1 mm [m].
+ */
+#define KINCAL_TARGET_POS_M 0.001
+
+/*
+ The paper's orientation target: every pose error below 0.66° [rad].
+ */
+#define KINCAL_TARGET_ROT_RAD 0.011519173063162576
+
+/*
+ Doubles per pose in `kincal_validate`'s `errors_out`: `[e_x, e_y, e_z] (m)`,
+ `[e_φx, e_φy, e_φz] (rad, exact rotation vector)`, `|e_p| (m)`, `|e_φ| (rad)`.
+ */
+#define KINCAL_POSE_ERRORS_LEN 8
 
 /*
  Result of every fallible export. `KINCAL_STATUS_OK` (0) is success.
@@ -381,6 +417,73 @@ typedef uint32_t kincal_aria_model;
 #endif // __cplusplus
 
 /*
+ The identification algorithms of the paper (Section 4.1.3).
+ */
+enum kincal_algorithm
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     Gauss–Newton with the minimum-norm least-squares step (Matlab `lsqminnorm`).
+     */
+    KINCAL_ALGORITHM_OLS = 0,
+    /*
+     Bounded fit inside the prior intervals `lower`/`upper` of the options (`fmincon` in
+     the paper): projected Levenberg–Marquardt; parameters ending on a bound are reported.
+     */
+    KINCAL_ALGORITHM_OPT1 = 1,
+    /*
+     Levenberg–Marquardt with MINPACK's trust region (`lsqnonlin`).
+     */
+    KINCAL_ALGORITHM_OPT2 = 2,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_algorithm kincal_algorithm;
+#else
+typedef uint32_t kincal_algorithm;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ What the registration concluded about one marker (`kincal_marker_fit.status`).
+ */
+enum kincal_marker_status
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     Used in the fit and consistent with it.
+     */
+    KINCAL_MARKER_STATUS_INLIER = 0,
+    /*
+     Masked as not seen.
+     */
+    KINCAL_MARKER_STATUS_MISSING = 1,
+    /*
+     Excluded: off by more than its threshold and not explained by a swap.
+     */
+    KINCAL_MARKER_STATUS_MOVED = 2,
+    /*
+     Excluded: its label is swapped with marker `swapped_with`.
+     */
+    KINCAL_MARKER_STATUS_SWAPPED = 3,
+    /*
+     Used, but above its threshold in a fit no exclusion could make consistent.
+     */
+    KINCAL_MARKER_STATUS_SUSPECT = 4,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_marker_status kincal_marker_status;
+#else
+typedef uint32_t kincal_marker_status;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
  Where and why a call failed: a caller-owned plain struct (pass NULL when the detail is not
  wanted; it need not be initialised). Every export that takes one overwrites all of it before
  returning: `status` = the returned code, the fields that code documents set, the others
@@ -506,6 +609,283 @@ typedef struct kincal_robot {
 } kincal_robot;
 
 /*
+ Options of `kincal_identify` and `kincal_analyze_identifiability`; fill them with
+ `kincal_identify_options_default`, then edit. Plain data, no pointers.
+ */
+typedef struct kincal_identify_options {
+    /*
+     A `kincal_algorithm`.
+     */
+    uint32_t algorithm;
+    /*
+     Iteration limit (default 200); reaching it is `KINCAL_STATUS_NOT_CONVERGED`.
+     */
+    uint32_t max_iterations;
+    /*
+     Non-zero: fit the identifiable subset even when the data leave some generically
+     identifiable parameters undetermined (otherwise `KINCAL_STATUS_RANK_DEFICIENT`).
+     */
+    uint32_t allow_data_deficiency;
+    /*
+     Orientation error of the cost, a `kincal_orientation_error` (default exact).
+     */
+    uint32_t orientation;
+    /*
+     Relative step tolerance (default 1e-12).
+     */
+    double xtol;
+    /*
+     Relative cost-reduction tolerance (default 1e-14).
+     */
+    double ftol;
+    /*
+     Absolute cost below which the fit is exact (default 1e-28).
+     */
+    double abs_cost_tol;
+    /*
+     Identifiability tolerance on unit-scaled Jacobian columns (default 1e-6).
+     */
+    double rank_tol;
+    /*
+     Weight of each position row [1/m²] (default 1).
+     */
+    double weight_pos;
+    /*
+     Weight of each rotation row [1/rad²] (default 1).
+     */
+    double weight_rot;
+    /*
+     Parameters to identify: `requested[i]` non-zero for flat index i (first
+     `kincal_num_params(N)` used); only their identifiable subset is fitted.
+     */
+    uint8_t requested[KINCAL_MAX_PARAMS];
+    /*
+     OPT1 prior intervals, absolute values per flat index (±infinity allowed, NaN not).
+     */
+    double lower[KINCAL_MAX_PARAMS];
+    /*
+     Upper ends of the OPT1 intervals.
+     */
+    double upper[KINCAL_MAX_PARAMS];
+} kincal_identify_options;
+
+/*
+ Auxiliary inputs of a joint state that some effects need. Pass NULL where a function takes
+ `const kincal_joint_aux *aux` when the model has neither backlash nor thermal expansion.
+ */
+typedef struct kincal_joint_aux {
+    /*
+     Non-zero: `approach` holds the approach directions (needed with backlash).
+     */
+    uint32_t has_approach;
+    /*
+     Non-zero: `temp_c` holds the arm temperature (needed with thermal expansion).
+     */
+    uint32_t has_temp;
+    /*
+     Direction from which each joint approached the pose: −1, 0 or +1 (first N used).
+     */
+    double approach[KINCAL_MAX_JOINTS];
+    /*
+     Arm temperature [°C].
+     */
+    double temp_c;
+} kincal_joint_aux;
+
+/*
+ A set of measurements: caller-owned arrays, viewed (not copied into the library) for the
+ duration of one call. L = `n_poses`, N = the robot's joint count.
+ */
+typedef struct kincal_measurements {
+    /*
+     Number of poses L (≥ 1).
+     */
+    size_t n_poses;
+    /*
+     Joint readings [rad], L × N row-major (pose l at `q[l*N]`); `q_len` = L·N.
+     */
+    const double *q;
+    /*
+     Length of `q`.
+     */
+    size_t q_len;
+    /*
+     Measured tool poses `T_e^b` in the base frame: L 4×4 column-major rigid transforms;
+     `poses_len` = 16·L.
+     */
+    const double *poses;
+    /*
+     Length of `poses`.
+     */
+    size_t poses_len;
+    /*
+     Measured components per pose (bit k = component k of `[x, y, z, φx, φy, φz]`: 0x3f a
+     full pose, 0x07 position only), or NULL for full poses; `masks_len` = L.
+     */
+    const uint8_t *masks;
+    /*
+     Length of `masks` (ignored when NULL).
+     */
+    size_t masks_len;
+    /*
+     Approach directions / temperature per pose, or NULL; `aux_len` = L.
+     */
+    const struct kincal_joint_aux *aux;
+    /*
+     Length of `aux` (ignored when NULL).
+     */
+    size_t aux_len;
+} kincal_measurements;
+
+/*
+ What the data can determine. Masks are indexed by flat parameter index (1 = member).
+ */
+typedef struct kincal_identifiability {
+    /*
+     Number of identifiable parameters.
+     */
+    size_t rank;
+    /*
+     σ_max/σ_min of the unit-column-scaled Jacobian of the identifiable parameters
+     (infinity when singular).
+     */
+    double condition_number;
+    /*
+     What was asked for.
+     */
+    uint8_t requested[KINCAL_MAX_PARAMS];
+    /*
+     What the data determine (and is fitted).
+     */
+    uint8_t identifiable[KINCAL_MAX_PARAMS];
+    /*
+     Redundant in the model for the measured components, whatever the poses.
+     */
+    uint8_t structural[KINCAL_MAX_PARAMS];
+    /*
+     Identifiable in general but not from these poses.
+     */
+    uint8_t data_deficient[KINCAL_MAX_PARAMS];
+    /*
+     For each parameter not kept: the kept parameter its column aligns with most
+     (`KINCAL_NO_INDEX` if none).
+     */
+    size_t partner[KINCAL_MAX_PARAMS];
+    /*
+     |cos| of the angle between the two columns (NaN if no partner).
+     */
+    double partner_cosine[KINCAL_MAX_PARAMS];
+    /*
+     Number of valid entries of `singular_values` (= `rank`).
+     */
+    size_t n_singular_values;
+    /*
+     Singular values (descending) of the unit-column-scaled Jacobian of the identifiable
+     parameters.
+     */
+    double singular_values[KINCAL_MAX_PARAMS];
+} kincal_identifiability;
+
+/*
+ Residual statistics of a model on a set of measurements.
+ */
+typedef struct kincal_residual_stats {
+    /*
+     Number of poses.
+     */
+    size_t poses;
+    /*
+     Number of measured rows (components).
+     */
+    size_t rows;
+    /*
+     Weighted sum of squares (the identification cost).
+     */
+    double cost;
+    /*
+     RMS of |e_p| over poses with a measured position [m].
+     */
+    double rms_pos_m;
+    /*
+     Largest |e_p| [m].
+     */
+    double max_pos_m;
+    /*
+     RMS of the rotation angle over poses with a measured orientation [rad].
+     */
+    double rms_rot_rad;
+    /*
+     Largest rotation angle [rad].
+     */
+    double max_rot_rad;
+} kincal_residual_stats;
+
+/*
+ A pair of strongly correlated parameter estimates.
+ */
+typedef struct kincal_correlation {
+    /*
+     First parameter (flat index).
+     */
+    size_t a;
+    /*
+     Second parameter (flat index).
+     */
+    size_t b;
+    /*
+     Correlation coefficient.
+     */
+    double rho;
+} kincal_correlation;
+
+/*
+ Everything `kincal_identify` reports besides the identified model.
+ */
+typedef struct kincal_identify_report {
+    /*
+     The `kincal_algorithm` used.
+     */
+    uint32_t algorithm;
+    /*
+     Iterations used.
+     */
+    uint32_t iterations;
+    /*
+     The identifiability analysis.
+     */
+    struct kincal_identifiability analysis;
+    /*
+     Residuals of the initial model.
+     */
+    struct kincal_residual_stats initial;
+    /*
+     Residuals of the identified model.
+     */
+    struct kincal_residual_stats fitted;
+    /*
+     Residual variance σ² = cost/(rows − fitted parameters) (0 without redundancy).
+     */
+    double sigma2;
+    /*
+     Standard error of each fitted parameter (flat index; 0 for parameters not fitted).
+     */
+    double std_errors[KINCAL_MAX_PARAMS];
+    /*
+     OPT1: fitted parameters that ended on a bound (mask by flat index).
+     */
+    uint8_t at_bound[KINCAL_MAX_PARAMS];
+    /*
+     Number of pairs with |ρ| above 0.95 (only the first `KINCAL_MAX_CORRELATED_PAIRS`
+     are listed).
+     */
+    size_t n_correlated;
+    /*
+     The listed pairs.
+     */
+    struct kincal_correlation correlated[KINCAL_MAX_CORRELATED_PAIRS];
+} kincal_identify_report;
+
+/*
  Options of `kincal_ik`; get the defaults from `kincal_ik_options_default`.
  */
 typedef struct kincal_ik_options {
@@ -535,29 +915,6 @@ typedef struct kincal_ik_options {
 } kincal_ik_options;
 
 /*
- Auxiliary inputs of a joint state that some effects need. Pass NULL where a function takes
- `const kincal_joint_aux *aux` when the model has neither backlash nor thermal expansion.
- */
-typedef struct kincal_joint_aux {
-    /*
-     Non-zero: `approach` holds the approach directions (needed with backlash).
-     */
-    uint32_t has_approach;
-    /*
-     Non-zero: `temp_c` holds the arm temperature (needed with thermal expansion).
-     */
-    uint32_t has_temp;
-    /*
-     Direction from which each joint approached the pose: −1, 0 or +1 (first N used).
-     */
-    double approach[KINCAL_MAX_JOINTS];
-    /*
-     Arm temperature [°C].
-     */
-    double temp_c;
-} kincal_joint_aux;
-
-/*
  What `kincal_ik` found besides the readings.
  */
 typedef struct kincal_ik_info {
@@ -578,6 +935,122 @@ typedef struct kincal_ik_info {
      */
     size_t seed_index;
 } kincal_ik_info;
+
+/*
+ Options of `kincal_register`; `kincal_registration_options_default` fills them.
+ */
+typedef struct kincal_registration_options {
+    /*
+     Stated measurement noise, 1σ per axis at weight 1 [m] (finite, > 0).
+     */
+    double sigma_m;
+    /*
+     Outlier threshold in units of σ_j on the 3-D residual distance (default 4).
+     */
+    double k_sigma;
+    /*
+     Most markers to exclude as outliers (≤ `KINCAL_MAX_OUTLIERS`; 0 disables the search;
+     default 2).
+     */
+    size_t max_outliers;
+} kincal_registration_options;
+
+/*
+ The fit of one marker.
+ */
+typedef struct kincal_marker_fit {
+    /*
+     Predicted position `t_mocap_body · design` in the motion-capture frame [m].
+     */
+    double predicted_m[3];
+    /*
+     Residual measured − predicted [m] (zero if missing).
+     */
+    double residual_m[3];
+    /*
+     Length of the residual [m] (zero if missing).
+     */
+    double distance_m;
+    /*
+     Outlier threshold k·σ/√w of this marker [m].
+     */
+    double threshold_m;
+    /*
+     A `kincal_marker_status`.
+     */
+    uint32_t status;
+    /*
+     For `KINCAL_MARKER_STATUS_SWAPPED`: the other marker (zero-based); else
+     `KINCAL_NO_INDEX`.
+     */
+    size_t swapped_with;
+} kincal_marker_fit;
+
+/*
+ The result of `kincal_register`.
+ */
+typedef struct kincal_registration {
+    /*
+     The body frame in the motion-capture frame, 4×4 column-major:
+     measured ≈ t_mocap_body · design.
+     */
+    double t_mocap_body[16];
+    /*
+     Markers used in the fit.
+     */
+    size_t n_used;
+    /*
+     Weighted RMS residual distance of the used markers [m].
+     */
+    double rms_m;
+    /*
+     1 when every used marker is within its threshold.
+     */
+    uint32_t consistent;
+    /*
+     Number of markers (entries of `markers` that are valid).
+     */
+    size_t n_markers;
+    /*
+     Per-marker fits, in input order.
+     */
+    struct kincal_marker_fit markers[KINCAL_MAX_MARKERS];
+} kincal_registration;
+
+/*
+ Summary of a validation: RMS (sqrt(mean |e|²)) and maximum of the error norms, and whether
+ the worst pose meets the targets.
+ */
+typedef struct kincal_validation_summary {
+    /*
+     Number of poses.
+     */
+    size_t count;
+    /*
+     RMS of |e_p| [m].
+     */
+    double rms_pos_m;
+    /*
+     Largest |e_p| [m].
+     */
+    double max_pos_m;
+    /*
+     RMS of |e_φ| [rad].
+     */
+    double rms_rot_rad;
+    /*
+     Largest |e_φ| [rad].
+     */
+    double max_rot_rad;
+    /*
+     1 when every |e_p| is below the position target.
+     */
+    uint32_t pos_ok;
+    /*
+     1 when every |e_φ| is below the orientation target.
+     */
+    uint32_t rot_ok;
+} kincal_validation_summary;
 
 #ifdef __cplusplus
 extern "C" {
@@ -678,6 +1151,88 @@ kincal_status kincal_robot_active_effects(const struct kincal_robot *robot,
 kincal_status kincal_robot_clear_effects(struct kincal_robot *robot,
                                          uint32_t effects,
                                          struct kincal_error *err);
+
+/*
+ Bytes of caller memory `kincal_identify` and `kincal_analyze_identifiability` need for
+ `n_poses` measurements of an `n_joints` robot when `n_requested` parameters are
+ requested (the count of non-zero `requested` entries; the size is that of the smallest
+ capacity, 32 or `KINCAL_MAX_PARAMS`, that holds them: about 66 KB or 680 KB,
+ plus about 0.25 KB per pose). Returns 0 for an invalid joint count, more than
+ `KINCAL_MAX_PARAMS` parameters, or an overflowing size.
+ */
+size_t kincal_identify_workspace_size(size_t n_joints,
+                                      size_t n_poses,
+                                      size_t n_requested);
+
+/*
+ Default identification options for `robot`: `algorithm` (a `kincal_algorithm`), the
+ geometric parameters θ0, a, α and d-or-β of every link plus every parameter of the effects in
+ the mask `effects` requested, OPT1 intervals of the paper (±5 mm on lengths, ±5° on angles
+ around the current parameters; compliance in [0, 1e-2] rad/(N·m)), and the tolerances listed
+ in `kincal_identify_options`. Returns OK, NULL_POINTER, MISALIGNED_POINTER,
+ INVALID_ARGUMENT (`algorithm`, `effects`) or any status of `kincal_robot_validate`.
+
+ # Safety
+ `robot` must be NULL or point to a readable `kincal_robot`; `opts_out` NULL or writable;
+ `err` NULL or writable.
+ */
+kincal_status kincal_identify_options_default(const struct kincal_robot *robot,
+                                              uint32_t algorithm,
+                                              uint32_t effects,
+                                              struct kincal_identify_options *opts_out,
+                                              struct kincal_error *err);
+
+/*
+ Identification: fits the identifiable subset of `opts->requested` to the measurements,
+ starting from `robot`, with `opts->algorithm` (OLS, OPT1 or OPT2), and writes the identified
+ model to `robot_out` and the report (identifiability analysis, residuals before and after,
+ standard errors, correlations, parameters on a bound) to `report_out` (NULL if not wanted).
+
+ - `robot`: initial model (read only). `robot_out` may point to the same struct.
+ - `data`: the measurements (see `kincal_measurements`); their poses in metres.
+ - `opts`: from `kincal_identify_options_default`, possibly edited.
+ - `workspace`, `workspace_len`: caller memory of at least `kincal_identify_workspace_size(N,
+   L, requested count)` bytes, aligned to `KINCAL_WORKSPACE_ALIGN`; its contents are scratch.
+
+ Returns OK; argument errors (NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH with `expected` =
+ the bytes needed for a short workspace, NON_FINITE, INVALID_TRANSFORM or INVALID_ARGUMENT
+ with `pose` set for a bad measurement, INVALID_ARGUMENT for an option, MISSING_INPUT when a
+ requested effect's input is missing, TOO_FEW_DATA, CAPACITY_EXCEEDED, any status of
+ `kincal_robot_validate`); RANK_DEFICIENT (the data leave requested parameters undetermined;
+ see `kincal_analyze_identifiability`, or set `allow_data_deficiency`), NOT_CONVERGED (`iterations`),
+ INVALID_PARAMETER (OPT1 with an initial value outside its interval). Outputs are written on
+ success only.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths (`workspace` writable for
+ `workspace_len` bytes and not overlapping the other arguments); `err` NULL or writable.
+ */
+kincal_status kincal_identify(const struct kincal_robot *robot,
+                              const struct kincal_measurements *data,
+                              const struct kincal_identify_options *opts,
+                              void *workspace,
+                              size_t workspace_len,
+                              struct kincal_robot *robot_out,
+                              struct kincal_identify_report *report_out,
+                              struct kincal_error *err);
+
+/*
+ The identifiability analysis alone: which of `opts->requested` the measurements determine
+ (rank, structural and data-deficient parameters with their aligned partners, condition
+ number and singular values of the unit-scaled Jacobian), written to `analysis_out`.
+ Arguments, memory and statuses as `kincal_identify` (no iterations, so never
+ NOT_CONVERGED or RANK_DEFICIENT: a deficiency is reported in `analysis_out`).
+
+ # Safety
+ As `kincal_identify`.
+ */
+kincal_status kincal_analyze_identifiability(const struct kincal_robot *robot,
+                                             const struct kincal_measurements *data,
+                                             const struct kincal_identify_options *opts,
+                                             void *workspace,
+                                             size_t workspace_len,
+                                             struct kincal_identifiability *analysis_out,
+                                             struct kincal_error *err);
 
 /*
  Writes the default IK options into `opts_out`. Returns OK, NULL_POINTER or
@@ -1086,6 +1641,66 @@ kincal_status kincal_pose_to_xyz_rpy(const double *t,
                                      struct kincal_error *err);
 
 /*
+ Default registration options for noise `sigma_m` [m]: k = 4, up to 2 outliers. Returns OK,
+ NULL_POINTER or MISALIGNED_POINTER (`sigma_m` is checked by `kincal_register`).
+
+ # Safety
+ `opts_out` must be NULL or writable; `err` NULL or writable.
+ */
+kincal_status kincal_registration_options_default(double sigma_m,
+                                                  struct kincal_registration_options *opts_out,
+                                                  struct kincal_error *err);
+
+/*
+ Weighted rigid registration of one body's M markers (3 ≤ M ≤ `KINCAL_MAX_MARKERS`) with
+ outlier identification (Horn's method; see the core's `registration` docs).
+
+ - `design`, `design_len`: design positions in the body frame, M × 3 doubles [m].
+ - `measured`, `measured_len`: measured positions in the motion-capture frame, M × 3 [m];
+   entries of markers not visible are ignored (NaN allowed).
+ - `visible`, `visible_len`: M bytes (non-zero = seen), or NULL for all seen.
+ - `weights`, `weights_len`: M relative weights (finite, > 0), or NULL for all 1.
+ - `opts`: from `kincal_registration_options_default`.
+ - `registration_out`: written on success only.
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH (lengths not M × 3 / M),
+ CAPACITY_EXCEEDED (M or `max_outliers` too large), NON_FINITE, INVALID_PARAMETER (σ, k or a
+ weight not positive: `index`), TOO_FEW_DATA (fewer than 3 markers used) or RANK_DEFICIENT
+ (collinear design or ambiguous rotation).
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_register(const double *design,
+                              size_t design_len,
+                              const double *measured,
+                              size_t measured_len,
+                              const uint8_t *visible,
+                              size_t visible_len,
+                              const double *weights,
+                              size_t weights_len,
+                              const struct kincal_registration_options *opts,
+                              struct kincal_registration *registration_out,
+                              struct kincal_error *err);
+
+/*
+ The end-effector pose in the robot base frame from the two registrations' poses,
+ `t_base_ee = t_mocap_base⁻¹ · t_mocap_ee` (all 4×4 column-major rigid transforms, 16
+ doubles each). Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE or
+ INVALID_TRANSFORM.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_t_base_ee(const double *t_mocap_base,
+                               size_t t_mocap_base_len,
+                               const double *t_mocap_ee,
+                               size_t t_mocap_ee_len,
+                               double *t_base_ee_out,
+                               size_t t_base_ee_len,
+                               struct kincal_error *err);
+
+/*
  Number of parameters (`kincal_robot.params` entries used) of an `n_joints` model: 12N + 13.
  Returns 0 when `n_joints` is not in 1..=`KINCAL_MAX_JOINTS`.
  */
@@ -1265,6 +1880,48 @@ const char *kincal_version(void);
 size_t kincal_error_describe(const struct kincal_error *error,
                              char *buf,
                              size_t buf_len);
+
+/*
+ Validates `robot` on measurements with full poses (every mask 0x3f): the error of each
+ pose, measured minus model in the base frame with the exact rotation-vector orientation
+ error, and their summary judged against `target_pos_m` [m] and `target_rot_rad` [rad]
+ (the paper's: `KINCAL_TARGET_POS_M`, `KINCAL_TARGET_ROT_RAD`).
+
+ - `errors_out`, `errors_len`: `KINCAL_POSE_ERRORS_LEN`·L doubles (see there), or NULL.
+ - `summary_out`: required.
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE, INVALID_TRANSFORM,
+ INVALID_ARGUMENT (`pose` set for a partial mask or bad approach direction; a target not
+ positive), MISSING_INPUT, TOO_FEW_DATA or any status of `kincal_robot_validate`. Outputs
+ are written on success only; `errors_out` must not overlap the inputs.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_validate(const struct kincal_robot *robot,
+                              const struct kincal_measurements *data,
+                              double target_pos_m,
+                              double target_rot_rad,
+                              double *errors_out,
+                              size_t errors_len,
+                              struct kincal_validation_summary *summary_out,
+                              struct kincal_error *err);
+
+/*
+ Eq. (3): the largest orientation error [rad] that keeps the needle tip inside a tumour of
+ radius `r_t_m` [m] when the puncture point is off by `d_m` [m] and the insertion is at most
+ `l_max_m` [m] long, `2·asin((r_t − d)/(2·√2·l_max))`, written to `rotation_out` (0.66° for
+ 5 mm, √3 mm, 0.2 m). Returns OK, NULL_POINTER, MISALIGNED_POINTER, NON_FINITE or
+ INVALID_PARAMETER (`index` 0: r_t ≤ 0; 1: d outside [0, r_t); 2: l_max ≤ 0).
+
+ # Safety
+ `rotation_out` must be NULL or writable; `err` NULL or writable.
+ */
+kincal_status kincal_biopsy_allowed_rotation(double r_t_m,
+                                             double d_m,
+                                             double l_max_m,
+                                             double *rotation_out,
+                                             struct kincal_error *err);
 
 #ifdef __cplusplus
 }  // extern "C"

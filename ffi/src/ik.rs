@@ -4,7 +4,7 @@ use kincal::ik::{IkOptions, IkSolution, solve_ik};
 use kincal::pose::Transform;
 use kincal::{Robot, with_any_robot};
 
-use crate::kinematics::{joint_state, kincal_joint_aux, robot_and_q};
+use crate::kinematics::{CALL_AUX, joint_state, kincal_joint_aux, robot_and_q};
 use crate::robot::{KINCAL_MAX_JOINTS, kincal_robot};
 use crate::status::{FfiResult, kincal_error, kincal_status};
 
@@ -104,7 +104,7 @@ fn ik_of<const N: usize>(
     let s = seed
         .get(..N)
         .ok_or(kincal_error::new(kincal_status::Internal))?;
-    let state = joint_state::<N>(s, aux)?;
+    let state = joint_state::<N>(s, aux, CALL_AUX)?;
     let sol = solve_ik(r, target, &state, opts)?;
     let mut q = [0.0; KINCAL_MAX_JOINTS];
     for (d, s) in q.iter_mut().zip(sol.q.iter()) {

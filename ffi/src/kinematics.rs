@@ -28,10 +28,30 @@ pub struct kincal_joint_aux {
     pub temp_c: f64,
 }
 
+/// The argument names reported for bad `kincal_joint_aux` fields.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct AuxNames {
+    approach: &'static CStr,
+    temp_c: &'static CStr,
+}
+
+/// Names of an `aux` argument of a call.
+pub(crate) const CALL_AUX: AuxNames = AuxNames {
+    approach: c"aux->approach",
+    temp_c: c"aux->temp_c",
+};
+
+/// Names of the per-pose `aux` of a `kincal_measurements`.
+pub(crate) const DATA_AUX: AuxNames = AuxNames {
+    approach: c"data->aux->approach",
+    temp_c: c"data->aux->temp_c",
+};
+
 /// The core joint state of checked readings `q` (length N) and optional aux data.
 pub(crate) fn joint_state<const N: usize>(
     q: &[f64],
     aux: Option<&kincal_joint_aux>,
+    names: AuxNames,
 ) -> FfiResult<JointState<N>> {
     let q: [f64; N] = q
         .try_into()
@@ -51,15 +71,12 @@ pub(crate) fn joint_state<const N: usize>(
                 } else {
                     kincal_status::NonFinite
                 };
-                return Err(kincal_error::new(status)
-                    .arg(c"aux->approach")
-                    .at(j)
-                    .value(v));
+                return Err(kincal_error::new(status).arg(names.approach).at(j).value(v));
             }
             s.approach = Some(ap);
         }
         if a.has_temp != 0 {
-            crate::args::finite(&[a.temp_c], c"aux->temp_c")?;
+            crate::args::finite(&[a.temp_c], names.temp_c)?;
             s.temp_c = Some(a.temp_c);
         }
     }
@@ -101,7 +118,7 @@ fn fk_of<const N: usize>(
     q: &[f64; KINCAL_MAX_JOINTS],
     aux: Option<&kincal_joint_aux>,
 ) -> FfiResult<Transform> {
-    Ok(r.fk(&joint_state::<N>(q_n(q, N)?, aux)?)?)
+    Ok(r.fk(&joint_state::<N>(q_n(q, N)?, aux, CALL_AUX)?)?)
 }
 
 /// Forward kinematics: the tool pose `T_e^b` (end effector in the base frame, effects
@@ -178,7 +195,7 @@ fn frames_of<const N: usize>(
     out: &mut [f64; KINCAL_MAX_FRAMES_LEN],
 ) -> FfiResult {
     let mut f = Frames::<N>::default();
-    r.fk_frames(&joint_state::<N>(q_n(q, N)?, aux)?, &mut f)?;
+    r.fk_frames(&joint_state::<N>(q_n(q, N)?, aux, CALL_AUX)?, &mut f)?;
     let all = core::iter::once(&f.t_base_0)
         .chain(f.t_base_link.iter())
         .chain(core::iter::once(&f.t_base_ee));
@@ -273,7 +290,7 @@ fn jacobian_of<const N: usize>(
     aux: Option<&kincal_joint_aux>,
     columns: &mut [[f64; 6]],
 ) -> FfiResult<Transform> {
-    Ok(r.jacobian(&joint_state::<N>(q_n(q, N)?, aux)?, columns)?)
+    Ok(r.jacobian(&joint_state::<N>(q_n(q, N)?, aux, CALL_AUX)?, columns)?)
 }
 
 fn per_joint<const N: usize>(v: &[f64; N]) -> [f64; KINCAL_MAX_JOINTS] {
@@ -342,7 +359,7 @@ fn gravity_of<const N: usize>(
     r: &Robot<N>,
     q: &[f64; KINCAL_MAX_JOINTS],
 ) -> FfiResult<[f64; KINCAL_MAX_JOINTS]> {
-    let s = joint_state::<N>(q_n(q, N)?, None)?;
+    let s = joint_state::<N>(q_n(q, N)?, None, CALL_AUX)?;
     Ok(per_joint(&r.gravity_torques(&s.q)))
 }
 
@@ -351,9 +368,11 @@ fn angles_of<const N: usize>(
     q: &[f64; KINCAL_MAX_JOINTS],
     aux: Option<&kincal_joint_aux>,
 ) -> FfiResult<[f64; KINCAL_MAX_JOINTS]> {
-    Ok(per_joint(
-        &r.joint_angles(&joint_state::<N>(q_n(q, N)?, aux)?)?,
-    ))
+    Ok(per_joint(&r.joint_angles(&joint_state::<N>(
+        q_n(q, N)?,
+        aux,
+        CALL_AUX,
+    )?)?))
 }
 
 /// Checks that every reading of `q` (N doubles [rad]) lies within the joint limits
@@ -377,6 +396,6 @@ pub unsafe extern "C" fn kincal_robot_check_limits(
 }
 
 fn limits_of<const N: usize>(r: &Robot<N>, q: &[f64; KINCAL_MAX_JOINTS]) -> FfiResult {
-    let s = joint_state::<N>(q_n(q, N)?, None)?;
+    let s = joint_state::<N>(q_n(q, N)?, None, CALL_AUX)?;
     Ok(r.check_limits(&s.q)?)
 }

@@ -10,7 +10,9 @@
 //! Module per capability, each a thin shell over the core: [`status`] (codes, detail, text),
 //! [`robot`] (the `kincal_robot` model and its editors), [`params`] (parameters by index and
 //! label), [`effects`], [`kinematics`] (FK, frames, Jacobian, gravity torques), [`ik`],
-//! [`pose`] (pose error, conversions), [`aria`] (built-in arm).
+//! [`pose`] (pose error, conversions), [`identify`] (identifiability, OLS/OPT1/OPT2),
+//! [`validation`] (metrics, biopsy requirement), [`registration`] (markers), [`aria`]
+//! (built-in arm).
 #![cfg_attr(not(feature = "std"), no_std)]
 #![deny(missing_docs)]
 #![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
@@ -28,12 +30,15 @@ mod args;
 
 pub mod aria;
 pub mod effects;
+pub mod identify;
 pub mod ik;
 pub mod kinematics;
 pub mod params;
 pub mod pose;
+pub mod registration;
 pub mod robot;
 pub mod status;
+pub mod validation;
 
 #[cfg(test)]
 mod tests;

@@ -173,7 +173,7 @@ fn to_robot<const N: usize>(r: &kincal_robot) -> FfiResult<Robot<N>> {
 }
 
 /// The plain struct of a core model.
-fn from_robot<const N: usize>(r: &Robot<N>) -> FfiResult<kincal_robot> {
+pub(crate) fn from_robot<const N: usize>(r: &Robot<N>) -> FfiResult<kincal_robot> {
     let mut out = kincal_robot::ZERO;
     out.n_joints = u32::try_from(N).map_err(|_| internal())?;
     r.read_params(out.params.get_mut(..num_params(N)).ok_or_else(internal)?)?;

@@ -3,4 +3,5 @@
 #![allow(clippy::indexing_slicing, clippy::unwrap_used, clippy::expect_used)]
 
 mod abi;
+mod calibration;
 mod header;

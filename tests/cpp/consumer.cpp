@@ -10,14 +10,18 @@
 // - effects on the model, pose error in both forms;
 // - the documented status codes for bad arguments (NULL, short buffers, NaN, wrong joint
 //   count, corrupt robot struct, unknown labels), and with KINCAL_TEST_PANIC the panic boundary.
-// Identification and the full calibration will be added here when they land in the core.
+// - a full calibration of the paper's simulation study: Table 3 truth measured at the Table 2
+//   tool poses, identified from Table 1 with OLS, OPT1 and OPT2, validated before and after;
+// - marker registration with a hidden and a moved marker.
 
 #include <kincal.h>
 
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstddef>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -443,6 +447,133 @@ void test_robot_from_table() {
                  err, "links");
 }
 
+void test_full_calibration() {
+    const kincal_robot nominal = aria(KINCAL_ARIA_MODEL_NOMINAL);
+    const kincal_robot truth = aria(KINCAL_ARIA_MODEL_VIRTUAL_TRUTH);
+    kincal_error err;
+    // Simulated measurements: the truth reaching each tool pose.
+    const size_t L = KINCAL_ARIA_NUM_TOOL_POSES;
+    std::vector<double> q(6 * L), poses(16 * L);
+    double seed[6];
+    CHECK_STATUS(kincal_aria_tool_seed(seed, 6, &err), KINCAL_STATUS_OK, err, nullptr);
+    for (size_t l = 0; l < L; ++l) {
+        double target[16];
+        CHECK_STATUS(kincal_aria_tool_pose(l, target, 16, &err), KINCAL_STATUS_OK, err, nullptr);
+        CHECK_STATUS(kincal_ik(&truth, target, 16, seed, 6, nullptr, nullptr, &q[6 * l], 6,
+                               nullptr, &err),
+                     KINCAL_STATUS_OK, err, nullptr);
+        CHECK_STATUS(kincal_fk(&truth, &q[6 * l], 6, nullptr, &poses[16 * l], 16, &err),
+                     KINCAL_STATUS_OK, err, nullptr);
+    }
+    kincal_measurements data{};
+    data.n_poses = L;
+    data.q = q.data();
+    data.q_len = q.size();
+    data.poses = poses.data();
+    data.poses_len = poses.size();
+
+    kincal_validation_summary before, after;
+    CHECK_STATUS(kincal_validate(&nominal, &data, KINCAL_TARGET_POS_M, KINCAL_TARGET_ROT_RAD,
+                                 nullptr, 0, &before, &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    CHECK(before.count == L && before.pos_ok == 0 && before.rms_pos_m > 1e-2);
+
+    for (auto algorithm : {KINCAL_ALGORITHM_OLS, KINCAL_ALGORITHM_OPT1, KINCAL_ALGORITHM_OPT2}) {
+        kincal_identify_options opts;
+        CHECK_STATUS(kincal_identify_options_default(&nominal, algorithm, 0, &opts, &err),
+                     KINCAL_STATUS_OK, err, nullptr);
+        // Table 3 moves θ0_4 by 0.8 rad, far outside the paper's ±5°: widen OPT1's intervals.
+        for (size_t i = 0; i < kincal_num_params(6); ++i) {
+            if (std::isfinite(opts.lower[i])) {
+                opts.lower[i] = nominal.params[i] - 1.0;
+                opts.upper[i] = nominal.params[i] + 1.0;
+            }
+        }
+        size_t n_requested = 0;
+        for (unsigned char m : opts.requested) n_requested += m != 0;
+        CHECK(n_requested == 24);
+        const size_t size = kincal_identify_workspace_size(6, L, n_requested);
+        CHECK(size > 0);
+        std::vector<std::max_align_t> workspace(size / sizeof(std::max_align_t) + 1);
+        kincal_robot fitted;
+        auto report = std::make_unique<kincal_identify_report>();
+        // A workspace one byte short is refused with the size it needs.
+        CHECK_STATUS(kincal_identify(&nominal, &data, &opts, workspace.data(), size - 1, &fitted,
+                                     report.get(), &err),
+                     KINCAL_STATUS_BAD_LENGTH, err, "workspace");
+        CHECK(err.expected == size);
+        CHECK_STATUS(kincal_identify(&nominal, &data, &opts, workspace.data(), size, &fitted,
+                                     report.get(), &err),
+                     KINCAL_STATUS_OK, err, nullptr);
+        CHECK(report->algorithm == static_cast<uint32_t>(algorithm));
+        CHECK(report->analysis.rank == 24 && report->analysis.n_singular_values == 24);
+        CHECK(report->fitted.rms_pos_m < 1e-9 && report->fitted.rms_rot_rad < 1e-9);
+        double worst = 0.0;
+        for (size_t i = 0; i < kincal_num_params(6); ++i)
+            if (report->analysis.identifiable[i] != 0)
+                worst = std::fmax(worst, std::fabs(fitted.params[i] - truth.params[i]));
+        CHECK(worst < 1e-8);
+        std::vector<double> errors(KINCAL_POSE_ERRORS_LEN * L);
+        CHECK_STATUS(kincal_validate(&fitted, &data, KINCAL_TARGET_POS_M, KINCAL_TARGET_ROT_RAD,
+                                     errors.data(), errors.size(), &after, &err),
+                     KINCAL_STATUS_OK, err, nullptr);
+        CHECK(after.pos_ok == 1 && after.rot_ok == 1 && after.max_pos_m < 1e-9);
+    }
+    std::printf("full calibration: Table 3 recovered from %zu tool poses (rms before %.2f mm)\n",
+                L, before.rms_pos_m * 1e3);
+
+    // Bad measurements name the pose.
+    poses[16 * 3 + 15] = 2.0;
+    kincal_identify_options opts;
+    CHECK_STATUS(kincal_identify_options_default(&nominal, KINCAL_ALGORITHM_OLS, 0, &opts, &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    const size_t size = kincal_identify_workspace_size(6, L, 24);
+    std::vector<std::max_align_t> workspace(size / sizeof(std::max_align_t) + 1);
+    auto analysis = std::make_unique<kincal_identifiability>();
+    CHECK_STATUS(kincal_analyze_identifiability(&nominal, &data, &opts, workspace.data(), size,
+                                                analysis.get(), &err),
+                 KINCAL_STATUS_INVALID_TRANSFORM, err, "data->poses");
+    CHECK(err.pose == 3);
+    poses[16 * 3 + 15] = 1.0;
+    CHECK_STATUS(kincal_analyze_identifiability(&nominal, &data, &opts, workspace.data(), size,
+                                                analysis.get(), &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    CHECK(analysis->rank == 24 && std::isfinite(analysis->condition_number));
+}
+
+void test_registration() {
+    // An asymmetric probe of five markers, rotated about z and shifted.
+    const double design[15] = {0, 0, 0, 0.1, 0, 0, 0, 0.15, 0, 0, 0, 0.07, 0.05, 0.05, 0.02};
+    const double c = std::cos(0.4), s = std::sin(0.4);
+    double measured[15];
+    for (int j = 0; j < 5; ++j) {
+        const double *p = &design[3 * j];
+        measured[3 * j] = c * p[0] - s * p[1] + 1.0;
+        measured[3 * j + 1] = s * p[0] + c * p[1] + 2.0;
+        measured[3 * j + 2] = p[2] + 0.5;
+    }
+    measured[6] = NAN;     // marker 2 not seen ...
+    measured[12] += 5e-3;  // ... and marker 4 knocked by 5 mm
+    const unsigned char visible[5] = {1, 1, 0, 1, 1};
+    kincal_registration_options opts;
+    kincal_error err;
+    CHECK_STATUS(kincal_registration_options_default(1e-4, &opts, &err), KINCAL_STATUS_OK, err,
+                 nullptr);
+    auto reg = std::make_unique<kincal_registration>();
+    CHECK_STATUS(kincal_register(design, 15, measured, 15, visible, 5, nullptr, 0, &opts,
+                                 reg.get(), &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    CHECK(reg->n_markers == 5 && reg->n_used == 3);
+    CHECK(reg->markers[2].status == KINCAL_MARKER_STATUS_MISSING);
+    CHECK(reg->markers[4].status == KINCAL_MARKER_STATUS_MOVED);
+    const double expected[16] = {c, s, 0, 0, -s, c, 0, 0, 0, 0, 1, 0, 1, 2, 0.5, 1};
+    CHECK(max_abs_diff(reg->t_mocap_body, expected, 16) < 1e-12);
+    CHECK_STATUS(kincal_register(design, 15, measured, 15, nullptr, 0, nullptr, 0, &opts,
+                                 reg.get(), &err),
+                 KINCAL_STATUS_NON_FINITE, err, "measured");
+    CHECK(err.index == 6);
+}
+
 void test_panic_boundary() {
 #if defined(KINCAL_TEST_PANIC)
     kincal_error err;
@@ -463,6 +594,8 @@ int main() {
     test_effects_and_pose_error();
     test_bad_arguments();
     test_robot_from_table();
+    test_full_calibration();
+    test_registration();
     test_panic_boundary();
     std::printf("kincal %s C++ consumer: %d checks, %d failed\n", kincal_version(), g_checks,
                 g_failures);
