@@ -30,6 +30,9 @@ end
 opts = parse_options(varargin, struct('file', '', 'format', 'png', 'visible', [], ...
     'title', '', 'target_pos_mm', 1, 'target_rot_deg', 0.66));
 check_string(opts.format, 'format', {'png', 'svg'});
+% gnuplot (Octave's toolkit without a display) cannot draw a double quote in a text.
+opts.title = strrep(opts.title, '"', '''');
+names = strrep(names, '"', '''');
 if isempty(opts.visible)
     opts.visible = isempty(opts.file);
 end

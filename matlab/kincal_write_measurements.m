@@ -10,6 +10,8 @@ function kincal_write_measurements(file, q, T, varargin)
 %       'approach'     N x M approach directions (-1, 0, +1) as s1..sN
 %       'temp_c'       1 x M arm temperatures (deg C)
 %       'comments'     cell of comment lines written before the header ('# ' added)
+%       'extra_names'  1 x K cell of user column names (each starting with extra_) and
+%       'extra'        M x K cell of their text cells (no commas, quotes or line breaks)
 %   Numbers are written in the shortest decimal form that reads back to the same double,
 %   so KINCAL_READ_MEASUREMENTS gives back Q exactly (T up to the rotation conversion).
 %
@@ -26,7 +28,8 @@ check_string(file, 'file');
 q = check_matrix(q, 'q', NaN, NaN);
 [n, m] = size(q);
 opts = parse_options(varargin, struct('orientation', 'rpy', 'position_only', false, ...
-    'pose_id', [], 'approach', [], 'temp_c', [], 'comments', {{}}));
+    'pose_id', [], 'approach', [], 'temp_c', [], 'comments', {{}}, 'extra_names', {{}}, ...
+    'extra', {{}}));
 check_string(opts.orientation, 'orientation', {'rpy', 'quaternion'});
 
 header = {};
@@ -70,6 +73,24 @@ if ~isempty(opts.temp_c)
     header{end + 1} = 'temp_c';
 end
 
+extra = opts.extra;
+if ~isempty(opts.extra_names)
+    names = opts.extra_names;
+    if ~iscell(names) || ~iscell(extra) || size(extra, 1) ~= m || size(extra, 2) ~= numel(names)
+        error('kincal:badSize', 'options ''extra_names''/''extra'': %d names need an %dx%d cell', ...
+            numel(names), m, numel(names));
+    end
+    if ~all(strncmp(names, 'extra_', 6))
+        error('kincal:badValue', 'user columns must be named extra_*');
+    end
+    if any(~cellfun(@ischar, extra(:))) || any(~cellfun('isempty', regexp(extra(:), '[,"\r\n]')))
+        error('kincal:badValue', 'extra cells must be text without commas, quotes or line breaks');
+    end
+    header = [header, names(:)'];
+else
+    extra = cell(m, 0);
+end
+
 [fid, msg] = fopen(file, 'w');
 if fid < 0
     error('kincal:csv', '%s: cannot write: %s', file, msg);
@@ -84,6 +105,7 @@ for j = 1:m
     if ~isempty(text_cols)
         cells = [text_cols(j), cells]; %#ok<AGROW>
     end
+    cells = [cells, extra(j, :)]; %#ok<AGROW>
     fprintf(fid, '%s\n', strjoin(cells, ','));
 end
 end

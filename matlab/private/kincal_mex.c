@@ -185,6 +185,41 @@ static const char *quantity_name(uint32_t q)
     }
 }
 
+/* The name a Matlab user knows for an argument or field the C ABI names in kincal_error:
+ * the measurement arrays by their wrapper names, "opts->x" as "options.x" and any other
+ * "s->f" as "s.f" (written into a static buffer: one message at a time). */
+static const char *matlab_argument_name(const char *a)
+{
+    static const struct {
+        const char *c_name, *m_name;
+    } names[] = {
+        {"data->q", "q"},
+        {"data->poses", "T"},
+        {"data->masks", "components"},
+        {"data->aux", "approach/temp_c"},
+        {"data->n_poses", "q"},
+        {"t_base_tool_out", "T"},
+    };
+    static char buf[96];
+    const char *arrow;
+    size_t i;
+    for (i = 0; i < sizeof names / sizeof names[0]; ++i) {
+        if (strcmp(a, names[i].c_name) == 0) {
+            return names[i].m_name;
+        }
+    }
+    arrow = strstr(a, "->");
+    if (arrow == NULL) {
+        return a;
+    }
+    if (strncmp(a, "opts->", 6) == 0) {
+        snprintf(buf, sizeof buf, "options.%s", arrow + 2);
+    } else {
+        snprintf(buf, sizeof buf, "%.*s.%s", (int)(arrow - a), a, arrow + 2);
+    }
+    return buf;
+}
+
 /* Records a failed library call: identifier kincal:<statusName>, message with the detail of
  * `e` in Matlab terms (1-based joints, poses and indices; "robot->params" -> "robot.params").
  * `what` names the item of a vectorised call (e.g. "column 3 of q"), or NULL. */
@@ -200,13 +235,7 @@ static int fail_status(kc_ctx *c, kincal_status st, const kincal_error *e, const
         return -1;
     }
     if (e->argument != NULL) {
-        const char *a = e->argument;
-        const char *arrow = strstr(a, "->");
-        if (arrow != NULL) {
-            fail_append(c, "; argument '%.*s.%s'", (int)(arrow - a), a, arrow + 2);
-        } else {
-            fail_append(c, "; argument '%s'", a);
-        }
+        fail_append(c, "; argument '%s'", matlab_argument_name(e->argument));
     }
     if (quantity_name(e->quantity) != NULL) {
         fail_append(c, "; %s", quantity_name(e->quantity));
