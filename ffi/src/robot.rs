@@ -12,7 +12,7 @@
 
 use kincal::any::{AnyRobot, MAX_JOINTS};
 use kincal::params::{num_geometric_params, num_params};
-use kincal::{JointLimits, LengthParam, Link, MassModel, Robot, with_any_robot};
+use kincal::{JointLimits, LengthParam, Link, MassModel, ParamIndex, Robot, with_any_robot};
 
 use crate::status::{FfiResult, kincal_error, kincal_status};
 
@@ -145,12 +145,22 @@ fn to_robot<const N: usize>(r: &kincal_robot) -> FfiResult<Robot<N>> {
         tool_mass_kg: r.tool_mass_kg,
         gravity: r.gravity,
     };
-    let mut robot = Robot::new(links, limits)
-        .map_err(|e| field_error(e, c"robot->nominal"))?
-        .with_base(frame(0)?)
-        .map_err(|e| field_error(e, c"robot->nominal"))?
-        .with_tool(frame(1)?)
-        .map_err(|e| field_error(e, c"robot->nominal"))?
+    // Conversion cost matters (it runs on every call): frames and parameters already equal to
+    // what the constructor set (identity frames, nominal links, zero effects) are not set
+    // again, since every setter rebuilds precomputed link constants.
+    let mut robot = Robot::new(links, limits).map_err(|e| field_error(e, c"robot->nominal"))?;
+    let (base, tool) = (frame(0)?, frame(1)?);
+    if base != [0.0; 6] {
+        robot = robot
+            .with_base(base)
+            .map_err(|e| field_error(e, c"robot->nominal"))?;
+    }
+    if tool != [0.0; 6] {
+        robot = robot
+            .with_tool(tool)
+            .map_err(|e| field_error(e, c"robot->nominal"))?;
+    }
+    let mut robot = robot
         .with_mass(mass)
         .map_err(|e| field_error(e, c"robot->link_masses_kg"))?;
     for (i, &choice) in r.length_param.iter().take(N).enumerate() {
@@ -166,9 +176,13 @@ fn to_robot<const N: usize>(r: &kincal_robot) -> FfiResult<Robot<N>> {
         };
         robot.set_length_param(i, lp)?;
     }
-    robot
-        .write_params(params)
-        .map_err(|e| field_error(e, c"robot->params"))?;
+    for (i, &v) in params.iter().enumerate() {
+        if robot.param(ParamIndex(i))? != v {
+            robot
+                .set_param(ParamIndex(i), v)
+                .map_err(|e| field_error(e, c"robot->params"))?;
+        }
+    }
     Ok(robot)
 }
 
