@@ -110,7 +110,7 @@ lib = fullfile(target_dir, 'release', name);
 if exist(lib, 'file')
     return
 end
-[status, ~] = system('cargo --version');
+[status, ~] = system('cargo --version 2>&1');
 if status ~= 0
     error('kincal:make:noCargo', ['make_kincal: %s is missing and cargo is not on the PATH; ' ...
         'install Rust (https://rustup.rs) or set KINCAL_LIB to a prebuilt library'], lib);

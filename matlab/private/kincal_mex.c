@@ -2066,6 +2066,25 @@ static int op_biopsy_rotation(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArra
 }
 #endif /* KINCAL_WORKSPACE_ALIGN */
 
+#if defined(KINCAL_TEST_PANIC)
+/* test_panic() -> raises kincal:panic: the library panics on purpose inside its panic
+ * boundary (cargo feature test-panic; tests/run.sh builds this variant), which proves that a
+ * Rust panic comes back as a status and Octave/Matlab survive it. */
+static int op_test_panic(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prhs[])
+{
+    kincal_error err;
+    kincal_status st;
+    (void)nlhs;
+    (void)plhs;
+    (void)prhs;
+    st = kincal_test_panic(&err);
+    if (st != KINCAL_STATUS_OK) {
+        return fail_status(c, st, &err, NULL);
+    }
+    return fail(c, "internal", "kincal_test_panic returned OK");
+}
+#endif
+
 /* ------------------------------------------------------------------------------------------ */
 /* Dispatch                                                                                   */
 /* ------------------------------------------------------------------------------------------ */
@@ -2111,6 +2130,9 @@ static const kc_operation OPERATIONS[] = {
     {"identifiability", op_identifiability, 6, 1},
     {"validate", op_validate, 5, 2},
     {"biopsy_rotation", op_biopsy_rotation, 3, 1},
+#endif
+#if defined(KINCAL_TEST_PANIC)
+    {"test_panic", op_test_panic, 0, 0},
 #endif
     {NULL, NULL, 0, 0},
 };

@@ -4,10 +4,13 @@
 #
 #  1. builds the C ABI staticlib (cargo build --release -p kincal-ffi) and the CLI used by
 #     the cross-checks (cargo build --release -p kincal-cli);
-#  2. builds the MEX gateway with make_kincal.m (mkoctfile --mex);
-#  3. runs matlab/tests/run_tests.m in octave-cli (gateway errors, kinematics against
-#     independent code, CSV rules, cross-checks against the CLI, the three workflow scripts
-#     headless); a failing test makes this script fail.
+#  2. builds a second gateway, with -DKINCAL_TEST_PANIC, against the debug staticlib with the
+#     test-panic export (the test that a Rust panic reaches Octave as kincal:panic);
+#  3. builds the MEX gateway with make_kincal.m (mkoctfile --mex);
+#  4. runs matlab/tests/run_tests.m in octave-cli (gateway errors, kinematics against
+#     independent code, CSV rules, identification, cross-checks against the CLI, the three
+#     workflow scripts headless); a failing test makes this script fail (with CI=true a
+#     skipped test too).
 #
 # Installs nothing: scripts/test.sh installs Octave (apt-get install octave liboctave-dev).
 # Without octave-cli or mkoctfile this script fails when CI=true and skips otherwise.
@@ -44,8 +47,21 @@ fi
 trap '[[ -n $cleanup ]] && rm -rf "$cleanup"' EXIT
 export KINCAL_OUT=$out
 
+target=${CARGO_TARGET_DIR:-$root/target}
+[[ $target = /* ]] || target=$root/$target
+printf '\n=== the test-panic gateway (cargo build -p kincal-ffi --features test-panic)\n'
+cargo build -p kincal-ffi --features test-panic
+mkdir -p "$out/panic_mex"
+cp "$target/debug/libkincal.a" "$out/panic_mex/libkincal-test-panic.a"
+mkoctfile --mex -DKINCAL_TEST_PANIC -I"$root/include" -o "$out/panic_mex/kincal_mex_panic.mex" \
+    "$root/matlab/private/kincal_mex.c" "$out/panic_mex/libkincal-test-panic.a"
+rm -f "$out/panic_mex/"*.o
+export KINCAL_PANIC_MEX=$out/panic_mex/kincal_mex_panic.mex
+
 printf '\n=== octave-cli: make_kincal, run_tests (outputs in %s)\n' "$out"
 cd "$root/matlab"
+# The test-panic test panics on purpose: its message is expected, a backtrace of it is noise.
+export RUST_BACKTRACE=0
 # The filter is passed through the environment, never spliced into the Octave code.
 octave-cli -q --norc --no-history --eval \
     "make_kincal('all'); addpath('tests'); run_tests('filter', getenv('KINCAL_TEST_FILTER'), 'exit', true);"

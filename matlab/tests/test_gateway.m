@@ -14,6 +14,7 @@ tests = {
     'status_table', @status_table
     'wrappers_raise_the_same_identifiers', @wrappers_same_ids
     'no_state_between_calls', @no_state
+    'rust_panic_becomes_an_error', @rust_panic
     };
 end
 
@@ -224,4 +225,21 @@ try
 catch
 end
 expect_true(isequal(gateway('fk', r, q, []), T1), 'an error leaves nothing behind');
+end
+
+function rust_panic()
+% A gateway built with -DKINCAL_TEST_PANIC against the test-panic library (tests/run.sh
+% builds it and names it in $KINCAL_PANIC_MEX): the library panics on purpose; the panic is
+% caught at the C ABI boundary and arrives as kincal:panic, and the session goes on.
+mex_file = getenv('KINCAL_PANIC_MEX');
+if isempty(mex_file)
+    skip_test('needs the test-panic gateway that tests/run.sh builds ($KINCAL_PANIC_MEX)');
+end
+[folder, name] = fileparts(mex_file);
+addpath(folder);
+restore = onCleanup(@() rmpath(folder));
+f = str2func(name);
+expect_error('kincal:panic', @() f('test_panic'), 'panic');
+expect_error('kincal:panic', @() f('test_panic'));
+expect_true(ischar(f('version')), 'the gateway still works after two panics');
 end
