@@ -199,6 +199,10 @@ enum kincal_status
      */
     KINCAL_STATUS_MISALIGNED_POINTER = 115,
     /*
+     A joint axis was given with a zero (or non-normalisable) direction (`joint`).
+     */
+    KINCAL_STATUS_DEGENERATE_AXIS = 116,
+    /*
      Inverse kinematics found no configuration within the limits that reaches the pose
      (`residual_pos_m`, `residual_rot_rad`: the best residual found).
      */
@@ -735,6 +739,16 @@ typedef struct kincal_measurements {
      Length of `aux` (ignored when NULL).
      */
     size_t aux_len;
+    /*
+     Weight of each pose in the fit (finite, ≥ 0; it multiplies the row weights): 1
+     normally, 0 to hold a pose out (cross-validation), other values for robust
+     reweighting; or NULL for all 1. `weights_len` = L. Validation ignores the weights.
+     */
+    const double *weights;
+    /*
+     Length of `weights` (ignored when NULL).
+     */
+    size_t weights_len;
 } kincal_measurements;
 
 /*
@@ -1105,6 +1119,44 @@ kincal_status kincal_aria_tool_pose(size_t index,
 kincal_status kincal_aria_tool_seed(double *q_out,
                                     size_t q_len,
                                     struct kincal_error *err);
+
+/*
+ Builds a robot from its N revolute joint axes at q = 0, all given in one reference frame:
+ the mDH links, d/β choices (β for parallel consecutive axes), base and tool frames are
+ computed so that the model's FK equals the chain's product of exponentials
+ `T_base_tool(q) = T_ref_base⁻¹ · Rot(p_1, u_1, q_1) ··· Rot(p_N, u_N, q_N) · T_ref_tool`
+ to rounding. No masses, no effects; this geometry is also the nominal one.
+
+ - `robot_out`: written on success only; need not be initialised.
+ - `n_joints`: 1..=`KINCAL_MAX_JOINTS`.
+ - `points`, `points_len`: a point on each axis [m], N × 3 doubles.
+ - `directions`, `directions_len`: each axis direction, N × 3 doubles (positive rotation is
+   right-handed about it; normalised, must not be zero).
+ - `t_ref_base`, `t_ref_base_len`: the robot's base frame in the reference frame (16 doubles,
+   4×4 column-major), or NULL for identity.
+ - `t_ref_tool`, `t_ref_tool_len`: the tool (flange) frame in the reference frame at q = 0,
+   or NULL for identity.
+ - `limits`, `limits_len`: `[lower, upper]` per joint [rad], 2N doubles.
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_JOINT_COUNT, BAD_LENGTH, NON_FINITE,
+ INVALID_TRANSFORM, DEGENERATE_AXIS (`joint`) or INVALID_LIMITS.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_robot_from_axes(struct kincal_robot *robot_out,
+                                     size_t n_joints,
+                                     const double *points,
+                                     size_t points_len,
+                                     const double *directions,
+                                     size_t directions_len,
+                                     const double *t_ref_base,
+                                     size_t t_ref_base_len,
+                                     const double *t_ref_tool,
+                                     size_t t_ref_tool_len,
+                                     const double *limits,
+                                     size_t limits_len,
+                                     struct kincal_error *err);
 
 /*
  The public name of effect `effect` (`"base_frame"`, `"joint_compliance"`, …): a static

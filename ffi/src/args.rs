@@ -138,8 +138,16 @@ pub(crate) unsafe fn slice<'a, T>(
     if len != expected {
         return Err(bad_length(name, expected, len));
     }
-    // SAFETY: non-NULL, aligned, `len` elements readable (contract); `len` equals a small
-    // count computed by the library, so `len * size_of::<T>()` cannot overflow `isize`.
+    // `expected` may derive from a caller's count (poses): keep within `from_raw_parts`' limit.
+    if len > isize::MAX as usize / core::mem::size_of::<T>().max(1) {
+        return Err(bad_length(
+            name,
+            isize::MAX as usize / core::mem::size_of::<T>().max(1),
+            len,
+        ));
+    }
+    // SAFETY: non-NULL, aligned, `len` elements readable (contract); `len * size_of::<T>()`
+    // fits `isize` (checked above).
     Ok(unsafe { core::slice::from_raw_parts(p, len) })
 }
 
@@ -193,6 +201,13 @@ impl<T: Copy> Out<T> {
         check_ptr(ptr.cast_const(), name)?;
         if len != expected {
             return Err(bad_length(name, expected, len));
+        }
+        if len > isize::MAX as usize / core::mem::size_of::<T>().max(1) {
+            return Err(bad_length(
+                name,
+                isize::MAX as usize / core::mem::size_of::<T>().max(1),
+                len,
+            ));
         }
         Ok(Out { ptr, len })
     }

@@ -68,6 +68,12 @@ pub struct kincal_measurements {
     pub aux: *const kincal_joint_aux,
     /// Length of `aux` (ignored when NULL).
     pub aux_len: usize,
+    /// Weight of each pose in the fit (finite, ≥ 0; it multiplies the row weights): 1
+    /// normally, 0 to hold a pose out (cross-validation), other values for robust
+    /// reweighting; or NULL for all 1. `weights_len` = L. Validation ignores the weights.
+    pub weights: *const f64,
+    /// Length of `weights` (ignored when NULL).
+    pub weights_len: usize,
 }
 
 /// Options of `kincal_identify` and `kincal_analyze_identifiability`; fill them with
@@ -420,6 +426,7 @@ pub(crate) struct Data<'a> {
     poses: &'a [f64],
     masks: Option<&'a [u8]>,
     aux: Option<&'a [kincal_joint_aux]>,
+    weights: Option<&'a [f64]>,
 }
 
 /// Checks `data` for an `n`-joint robot.
@@ -463,13 +470,28 @@ pub(crate) unsafe fn data_view<'a>(
     } else {
         Some(unsafe { crate::args::slice(d.aux, d.aux_len, l, c"data->aux") }?)
     };
+    let weights = if d.weights.is_null() {
+        None
+    } else {
+        Some(unsafe { crate::args::slice(d.weights, d.weights_len, l, c"data->weights") }?)
+    };
     crate::args::finite(q, c"data->q")?;
+    if let Some(w) = weights {
+        crate::args::finite(w, c"data->weights")?;
+        if let Some(l) = w.iter().position(|&v| v < 0.0) {
+            return Err(kincal_error::new(kincal_status::InvalidArgument)
+                .arg(c"data->weights")
+                .at(l)
+                .value(w.get(l).copied().unwrap_or(f64::NAN)));
+        }
+    }
     Ok(Data {
         n_poses: l,
         q,
         poses,
         masks,
         aux,
+        weights,
     })
 }
 
@@ -519,7 +541,16 @@ impl Data<'_> {
             }
             None => ComponentMask::ALL,
         };
-        Ok(Measurement { state, pose, mask })
+        let weight = match self.weights {
+            Some(w) => w.get(l).copied().unwrap_or(1.0),
+            None => 1.0,
+        };
+        Ok(Measurement {
+            state,
+            pose,
+            mask,
+            weight,
+        })
     }
 }
 

@@ -8,7 +8,7 @@
 //! metres and radians; 4×4 poses are column-major.
 //!
 //! Module per capability, each a thin shell over the core: [`status`] (codes, detail, text),
-//! [`robot`] (the `kincal_robot` model and its editors), [`params`] (parameters by index and
+//! [`robot`] (the `kincal_robot` model and its editors), [`axis_chain`] (a robot from joint axes), [`params`] (parameters by index and
 //! label), [`effects`], [`kinematics`] (FK, frames, Jacobian, gravity torques), [`ik`],
 //! [`pose`] (pose error, conversions), [`identify`] (identifiability, OLS/OPT1/OPT2),
 //! [`validation`] (metrics, biopsy requirement), [`registration`] (markers), [`aria`]
@@ -29,6 +29,7 @@ mod panic;
 mod args;
 
 pub mod aria;
+pub mod axis_chain;
 pub mod effects;
 pub mod identify;
 pub mod ik;

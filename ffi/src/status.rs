@@ -56,6 +56,8 @@ pub enum kincal_status {
     BadPose = 114,
     /// A pointer argument is not aligned for its type (`argument`).
     MisalignedPointer = 115,
+    /// A joint axis was given with a zero (or non-normalisable) direction (`joint`).
+    DegenerateAxis = 116,
     /// Inverse kinematics found no configuration within the limits that reaches the pose
     /// (`residual_pos_m`, `residual_rot_rad`: the best residual found).
     Unreachable = 200,
@@ -75,7 +77,7 @@ pub enum kincal_status {
 
 impl kincal_status {
     /// Every status, in numeric order (used by the tests and `kincal_status_str`).
-    pub(crate) const ALL: [kincal_status; 23] = [
+    pub(crate) const ALL: [kincal_status; 24] = [
         kincal_status::Ok,
         kincal_status::NullPointer,
         kincal_status::BadLength,
@@ -93,6 +95,7 @@ impl kincal_status {
         kincal_status::TooFewData,
         kincal_status::BadPose,
         kincal_status::MisalignedPointer,
+        kincal_status::DegenerateAxis,
         kincal_status::Unreachable,
         kincal_status::NotConverged,
         kincal_status::RankDeficient,
@@ -149,6 +152,9 @@ impl kincal_status {
             kincal_status::BadPose => c"KINCAL_STATUS_BAD_POSE: a pose could not be used",
             kincal_status::MisalignedPointer => {
                 c"KINCAL_STATUS_MISALIGNED_POINTER: a pointer is not aligned for its type"
+            }
+            kincal_status::DegenerateAxis => {
+                c"KINCAL_STATUS_DEGENERATE_AXIS: a joint axis has a zero direction"
             }
             kincal_status::Unreachable => {
                 c"KINCAL_STATUS_UNREACHABLE: no configuration within the limits reaches the pose"
@@ -382,6 +388,13 @@ impl From<Error> for kincal_error {
             Error::BoundViolated { param, value } => {
                 kincal_error::new(S::BoundViolated).at(param.0).value(value)
             }
+            Error::DegenerateAxis { joint } => {
+                let mut k = kincal_error::new(S::DegenerateAxis);
+                k.joint = joint.0;
+                k
+            }
+            // A variant added to the core after this mapping: the test
+            // `every_core_error_variant_has_a_status` names it.
             _ => kincal_error::new(S::Internal),
         }
     }
@@ -534,11 +547,15 @@ pub unsafe extern "C" fn kincal_error_describe(
         // SAFETY: checked non-NULL and aligned above; the caller guarantees validity.
         let e = unsafe { error.read() };
         let mut empty = [0u8; 0];
+        // Messages are shorter than this, so a longer buffer is never written beyond it (and
+        // the slice stays far below `from_raw_parts_mut`'s size limit).
+        const MAX_TEXT: usize = 4096;
         let out: &mut [u8] = if buf_len == 0 {
             &mut empty
         } else {
-            // SAFETY: `buf` is non-NULL (checked) and writable for `buf_len` bytes (contract).
-            unsafe { core::slice::from_raw_parts_mut(buf.cast::<u8>(), buf_len) }
+            // SAFETY: `buf` is non-NULL (checked) and writable for `buf_len >= len` bytes
+            // (contract).
+            unsafe { core::slice::from_raw_parts_mut(buf.cast::<u8>(), buf_len.min(MAX_TEXT)) }
         };
         let mut w = Truncating { buf: out, written: 0, total: 0 };
         let _ = describe(&e, &mut w);

@@ -95,7 +95,7 @@ int main(void) {
         kincal_registration_options ropts;
         double pose[16], t_base_ee[16];
         const double q0[6] = {0.4813, 0.7750, -1.0383, 3.6605, 1.1053, -2.8499};
-        kincal_measurements data = {1, q0, 6, pose, 16, NULL, 0, NULL, 0};
+        kincal_measurements data = {1, q0, 6, pose, 16, NULL, 0, NULL, 0, NULL, 0};
         CHECK(kincal_robot_aria(&robot, KINCAL_ARIA_MODEL_NOMINAL, &err) == KINCAL_STATUS_OK);
         CHECK(kincal_fk(&robot, q0, 6, NULL, pose, 16, &err) == KINCAL_STATUS_OK);
         CHECK(kincal_validate(&robot, &data, KINCAL_TARGET_POS_M, KINCAL_TARGET_ROT_RAD, NULL, 0,
@@ -107,6 +107,18 @@ int main(void) {
         CHECK(kincal_registration_options_default(1e-4, &ropts, &err) == KINCAL_STATUS_OK);
         CHECK(kincal_t_base_ee(pose, 16, pose, 16, t_base_ee, 16, &err) == KINCAL_STATUS_OK);
         CHECK(kincal_biopsy_allowed_rotation(5e-3, 1.7e-3, 0.2, &v, &err) == KINCAL_STATUS_OK);
+    }
+    {
+        /* A planar 2R arm from its axes: both along z, through (0,0,0) and (0.5,0,0). */
+        const double points[6] = {0, 0, 0, 0.5, 0, 0}, dirs[6] = {0, 0, 1, 0, 0, 1};
+        const double lims[4] = {-3, 3, -3, 3}, q2[2] = {0.0, 0.0};
+        double tool[16];
+        CHECK(kincal_pose_from_xyz_rpy((const double[6]){0.8, 0, 0, 0, 0, 0}, 6, tool, 16, &err) ==
+              KINCAL_STATUS_OK);
+        CHECK(kincal_robot_from_axes(&robot, 2, points, 6, dirs, 6, NULL, 0, tool, 16, lims, 4,
+                                     &err) == KINCAL_STATUS_OK);
+        CHECK(kincal_fk(&robot, q2, 2, NULL, t, 16, &err) == KINCAL_STATUS_OK);
+        CHECK(fabs(t[12] - 0.8) < 1e-12 && fabs(t[13]) < 1e-12);
     }
 #if defined(KINCAL_PANIC_CANARY)
     CHECK(kincal_test_panic(&err) == KINCAL_STATUS_PANIC);

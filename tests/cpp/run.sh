@@ -78,7 +78,9 @@ step "C++ consumer against the staticlib ${sanitize[*]:+(sanitizers on)}"
 step "C++ consumer against the cdylib ${sanitize[*]:+(sanitizers on)}"
 "$CXX" "${cxxflags[@]}" "${sanitize[@]}" "$here/consumer.cpp" -L"$target/release" -lkincal \
     -Wl,-rpath,"$target/release" -o "$work/consumer_shared"
-ldd "$work/consumer_shared" | grep -q "$target/release/libkincal.so" ||
+# (ldd output captured first: `ldd | grep -q` can fail under pipefail when grep exits early)
+deps=$(ldd "$work/consumer_shared")
+grep -qF "$target/release/libkincal.so" <<<"$deps" ||
     fail "consumer_shared does not load $target/release/libkincal.so"
 "$work/consumer_shared"
 
@@ -108,9 +110,11 @@ if have_tool pkg-config pkg-config; then
     # shellcheck disable=SC2046
     "$CC" -std=c99 -Wall -Wextra -Werror -pedantic "$work/example.c" \
         $(pkg-config --cflags --libs kincal-static) -o "$work/example_pc_static"
-    ldd "$work/example_pc_shared" | grep -q "$prefix/lib/libkincal.so" ||
+    deps=$(ldd "$work/example_pc_shared")
+    grep -qF "$prefix/lib/libkincal.so" <<<"$deps" ||
         fail "example_pc_shared does not load the installed libkincal.so"
-    ! ldd "$work/example_pc_static" | grep -q libkincal || fail "example_pc_static is not static"
+    deps=$(ldd "$work/example_pc_static")
+    ! grep -q libkincal <<<"$deps" || fail "example_pc_static is not static"
     "$work/example_pc_shared"
     "$work/example_pc_static" >/dev/null
 fi

@@ -10,6 +10,7 @@ use kincal::ik::{IkOptions, solve_ik};
 use kincal::{Error, JointIndex, JointState, ParamIndex, PoseIndex, Quantity};
 
 use crate::aria::*;
+use crate::axis_chain::*;
 use crate::effects::*;
 use crate::ik::*;
 use crate::kinematics::*;
@@ -136,6 +137,7 @@ fn status_numbers_are_fixed() {
         (S::TooFewData, 113),
         (S::BadPose, 114),
         (S::MisalignedPointer, 115),
+        (S::DegenerateAxis, 116),
         (S::Unreachable, 200),
         (S::NotConverged, 201),
         (S::RankDeficient, 202),
@@ -168,7 +170,7 @@ fn status_str_is_static_and_names_the_code() {
             s as u32
         );
     }
-    for unknown in [1, 99, 116, 204, 901, 1000, u32::MAX] {
+    for unknown in [1, 99, 117, 204, 901, 1000, u32::MAX] {
         let text = unsafe { CStr::from_ptr(kincal_status_str(unknown)) };
         assert_eq!(text.to_str().unwrap(), "unknown kincal status code");
     }
@@ -258,6 +260,16 @@ fn every_core_error_is_mapped() {
             S::BoundViolated,
         ),
     ];
+    let cases = {
+        let mut v = cases.to_vec();
+        v.push((
+            Error::DegenerateAxis {
+                joint: JointIndex(2),
+            },
+            S::DegenerateAxis,
+        ));
+        v
+    };
     for (e, s) in cases {
         let k = kincal_error::from(e);
         assert_eq!(k.status, s as u32, "{e:?}");
@@ -284,6 +296,34 @@ fn every_core_error_is_mapped() {
     assert_eq!(k.iterations, 50);
     let k = kincal_error::from(Error::BadPose { pose: PoseIndex(3) });
     assert_eq!(k.pose, 3);
+}
+
+/// `kincal::Error` is `#[non_exhaustive]`, so the mapping needs a catch-all arm and a new core
+/// variant would silently become KINCAL_STATUS_INTERNAL. This reads the variant names from the
+/// core's source and requires an explicit arm for each.
+#[test]
+fn every_core_error_variant_has_a_status() {
+    let core_src = include_str!("../../../core/src/error.rs");
+    let body = core_src
+        .split("pub enum Error {")
+        .nth(1)
+        .and_then(|rest| rest.split("\n}\n").next())
+        .expect("core/src/error.rs declares `pub enum Error {`");
+    let variants: Vec<&str> = body
+        .lines()
+        .filter_map(|l| l.strip_prefix("    "))
+        .filter(|l| l.starts_with(|c: char| c.is_ascii_uppercase()))
+        .map(|l| l.split(|c: char| !c.is_alphanumeric()).next().unwrap())
+        .collect();
+    assert!(variants.len() >= 14, "parsed {variants:?}");
+    let mapping = include_str!("../status.rs");
+    for v in variants {
+        assert!(
+            mapping.contains(&format!("Error::{v} {{"))
+                || mapping.contains(&format!("Error::{v} =>")),
+            "core Error::{v} has no explicit kincal_status mapping in ffi/src/status.rs"
+        );
+    }
 }
 
 #[test]
@@ -1579,4 +1619,86 @@ fn values_shared_with_cpp() {
     };
     assert_eq!(s, kincal_status::Ok);
     assert!(max_abs_diff(&q, &IK_Q_TRUTH_POSE1) < 1e-9, "{q:?}");
+}
+
+/// ARIA described by its joint axes at q = 0 (taken from the nominal model's frames) gives a
+/// model with the same FK.
+#[test]
+fn robot_from_axes_matches_the_chain() {
+    let nominal = aria_robot(kincal_aria_model::Nominal);
+    let zero = [0.0; 6];
+    let mut frames = [0.0; 16 * 8];
+    assert_eq!(
+        unsafe {
+            kincal_fk_frames(
+                &nominal,
+                zero.as_ptr(),
+                6,
+                null(),
+                frames.as_mut_ptr(),
+                128,
+                null_mut(),
+            )
+        },
+        kincal_status::Ok
+    );
+    // Joint i's axis is the z axis of frame i-1.
+    let (mut points, mut dirs) = (Vec::new(), Vec::new());
+    for i in 0..6 {
+        let f = &frames[16 * i..16 * i + 16];
+        points.extend_from_slice(&f[12..15]);
+        dirs.extend_from_slice(&f[8..11]);
+    }
+    let tool = &frames[16 * 7..];
+    let limits: Vec<f64> = aria::JOINT_LIMITS
+        .iter()
+        .flat_map(|l| [l.lower, l.upper])
+        .collect();
+    let mut r = kincal_robot::ZERO;
+    let mut e = kincal_error::CLEAR;
+    let s = unsafe {
+        kincal_robot_from_axes(
+            &mut r,
+            6,
+            points.as_ptr(),
+            18,
+            dirs.as_ptr(),
+            18,
+            null(),
+            0,
+            tool.as_ptr(),
+            16,
+            limits.as_ptr(),
+            12,
+            &mut e,
+        )
+    };
+    assert_eq!(s, kincal_status::Ok, "{e:?}");
+    assert_eq!(r.length_param[1], kincal_length_param::Beta as u32);
+    for k in 0..5 {
+        let q: Vec<f64> = (0..6).map(|j| ((k * 6 + j) as f64 * 0.9).sin()).collect();
+        assert!(max_abs_diff(&fk(&r, &q), &fk(&nominal, &q)) < 1e-12);
+    }
+    dirs[3..6].copy_from_slice(&[0.0, 0.0, 0.0]);
+    let s = unsafe {
+        kincal_robot_from_axes(
+            &mut r,
+            6,
+            points.as_ptr(),
+            18,
+            dirs.as_ptr(),
+            18,
+            null(),
+            0,
+            null(),
+            0,
+            limits.as_ptr(),
+            12,
+            &mut e,
+        )
+    };
+    assert_eq!(
+        (s, e.joint, arg_name(&e)),
+        (kincal_status::DegenerateAxis, 1, "directions")
+    );
 }

@@ -82,6 +82,8 @@ fn measurements(q: &[f64], poses: &[f64]) -> kincal_measurements {
         masks_len: 0,
         aux: null(),
         aux_len: 0,
+        weights: null(),
+        weights_len: 0,
     }
 }
 
@@ -543,4 +545,100 @@ fn effect_labels_in_the_mask() {
     );
     assert_eq!(o.requested[i], 1);
     assert_eq!(o.algorithm, 2);
+}
+
+/// A pose held out with weight 0 does not move the fit: a corrupted pose 4 with weight 0 gives
+/// the same model as the clean data.
+#[test]
+fn held_out_pose_weight_zero() {
+    let nominal = aria_robot(kincal_aria_model::Nominal);
+    let truth = aria_robot(kincal_aria_model::VirtualTruth);
+    let (q, mut poses) = tool_data(&truth);
+    poses[16 * 4 + 12] += 0.01;
+    let mut data = measurements(&q, &poses);
+    let mut weights = [1.0; 10];
+    weights[4] = 0.0;
+    data.weights = weights.as_ptr();
+    data.weights_len = 10;
+    let mut opts = core::mem::MaybeUninit::<kincal_identify_options>::uninit();
+    let mut e = kincal_error::CLEAR;
+    assert_eq!(
+        unsafe { kincal_identify_options_default(&nominal, 0, 0, opts.as_mut_ptr(), &mut e) },
+        kincal_status::Ok
+    );
+    let opts = unsafe { opts.assume_init() };
+    let size = kincal_identify_workspace_size(6, 10, 24);
+    let mut ws = workspace(size);
+    let mut fitted = kincal_robot::ZERO;
+    let s = unsafe {
+        kincal_identify(
+            &nominal,
+            &data,
+            &opts,
+            ws.as_mut_ptr().cast(),
+            size,
+            &mut fitted,
+            null_mut(),
+            &mut e,
+        )
+    };
+    assert_eq!(s, kincal_status::Ok, "{e:?}");
+    for i in 0..30 {
+        assert!(
+            (fitted.params[i] - truth.params[i]).abs() < 1e-8,
+            "param {i}"
+        );
+    }
+    weights[4] = -1.0;
+    data.weights = weights.as_ptr();
+    let s = unsafe {
+        kincal_identify(
+            &nominal,
+            &data,
+            &opts,
+            ws.as_mut_ptr().cast(),
+            size,
+            &mut fitted,
+            null_mut(),
+            &mut e,
+        )
+    };
+    assert_eq!((s, e.index), (kincal_status::InvalidArgument, 4));
+}
+
+/// A pose count whose arrays could not exist is refused before any slice is formed.
+#[test]
+fn absurd_pose_counts_are_refused() {
+    let nominal = aria_robot(kincal_aria_model::Nominal);
+    let q = [0.0; 6];
+    let poses = [0.0; 16];
+    let n = usize::MAX / 8;
+    let data = kincal_measurements {
+        n_poses: n,
+        q: q.as_ptr(),
+        q_len: n.wrapping_mul(6),
+        poses: poses.as_ptr(),
+        poses_len: n.wrapping_mul(16),
+        masks: null(),
+        masks_len: 0,
+        aux: null(),
+        aux_len: 0,
+        weights: null(),
+        weights_len: 0,
+    };
+    let mut summary = kincal_validation_summary::default();
+    let mut e = kincal_error::CLEAR;
+    let s = unsafe {
+        kincal_validate(
+            &nominal,
+            &data,
+            1e-3,
+            1e-2,
+            null_mut(),
+            0,
+            &mut summary,
+            &mut e,
+        )
+    };
+    assert_eq!(s, kincal_status::BadLength);
 }
