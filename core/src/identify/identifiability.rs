@@ -72,13 +72,58 @@ fn halton(index: u32, base: u32) -> f64 {
 }
 
 /// Runs the analysis for `opts.requested` on `data` at `robot`'s current parameters. The
-/// singular values of the identifiable set are left in the workspace.
+/// singular values of the identifiable set are left in the workspace. Data without a pose
+/// of positive weight is [`Error::TooFewData`] (0 rows found, one per requested parameter
+/// needed at least).
 pub fn analyze<const N: usize, const P: usize>(
     robot: &Robot<N>,
     data: &[Measurement<N>],
     opts: &IdentifyOptions<'_>,
     ws: &mut Workspace<P>,
 ) -> Result<Identifiability> {
+    let mut out = Identifiability::empty(opts.requested);
+    analyze_into(robot, data, opts, ws, &mut out)?;
+    Ok(out)
+}
+
+impl Identifiability {
+    /// Nothing identified yet of `requested`.
+    pub(crate) const fn empty(requested: ParamSet) -> Self {
+        Identifiability {
+            requested,
+            identifiable: ParamSet::new(),
+            structural: ParamSet::new(),
+            data_deficient: ParamSet::new(),
+            rank: 0,
+            condition_number: f64::INFINITY,
+            partner: [None; MAX_MODEL_PARAMS],
+        }
+    }
+}
+
+impl Identifiability {
+    /// [`Identifiability::empty`] in place (no temporary of this size on the stack).
+    fn reset(&mut self, requested: ParamSet) {
+        self.requested = requested;
+        self.identifiable = ParamSet::new();
+        self.structural = ParamSet::new();
+        self.data_deficient = ParamSet::new();
+        self.rank = 0;
+        self.condition_number = f64::INFINITY;
+        for p in self.partner.iter_mut() {
+            *p = None;
+        }
+    }
+}
+
+/// [`analyze`] into the caller's `out` (so that callers keep one copy on the stack).
+pub(crate) fn analyze_into<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    opts: &IdentifyOptions<'_>,
+    ws: &mut Workspace<P>,
+    out: &mut Identifiability,
+) -> Result<()> {
     super::data::validate(data)?;
     let requested = opts.requested;
     let p = requested.len();
@@ -107,16 +152,16 @@ pub fn analyze<const N: usize, const P: usize>(
         any_approach |= m.state.approach.is_some();
         any_temp |= m.state.temp_c.is_some();
     }
+    if union == 0 {
+        // No pose in the fit: nothing can be said, not even which parameters are
+        // structurally redundant (that depends on the measured components).
+        return Err(Error::TooFewData {
+            found: 0,
+            needed: p,
+        });
+    }
     let mask = ComponentMask(union);
-    let mut out = Identifiability {
-        requested,
-        identifiable: ParamSet::new(),
-        structural: ParamSet::new(),
-        data_deficient: ParamSet::new(),
-        rank: 0,
-        condition_number: f64::INFINITY,
-        partner: [None; MAX_MODEL_PARAMS],
-    };
+    out.reset(requested);
 
     // 1. Structural: generic configurations.
     load_cols(ws, requested.iter());
@@ -207,7 +252,7 @@ pub fn analyze<const N: usize, const P: usize>(
             f64::INFINITY
         };
     }
-    Ok(out)
+    Ok(())
 }
 
 fn load_cols<const P: usize>(ws: &mut Workspace<P>, cols: impl Iterator<Item = usize>) {
