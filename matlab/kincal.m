@@ -5,8 +5,8 @@ function kincal()
 %   arguments and raises identifiers kincal:<reason> (see "Errors" below).
 %
 %   Models (plain structs: the whole model is the argument, nothing is kept in the MEX file)
-%     kincal_robot            built-in ARIA models ('aria', 'aria_true', 'aria_real') or a
-%                             robot from a parameter table
+%     kincal_robot            built-in ARIA models ('aria', 'aria_true', 'aria_real'), a
+%                             robot from a parameter table or from its joint axes
 %     kincal_param            read or set a parameter by label ('theta0_4', 'beta_2', ...)
 %     kincal_param_mask       parameters identified by default (with effects)
 %     kincal_effects          names of the non-geometric effects; active effects of a robot
@@ -29,6 +29,9 @@ function kincal()
 %     kincal_identifiability  rank, conditioning, redundant and undetermined parameters
 %     kincal_validate         per-pose errors and summary against the 1 mm / 0.66 deg targets
 %     kincal_biopsy_rotation  eq. (3): the orientation error a biopsy allows
+%   Measurement set-up (Section 5.1)
+%     kincal_register         pose of a marker body from motion-capture data, outliers named
+%     kincal_t_base_ee        end-effector pose in the base frame from two registrations
 %   Data and results
 %     kincal_read_measurements, kincal_write_measurements   the measurement CSV
 %     kincal_print_params     parameter table of several models side by side

@@ -13,6 +13,13 @@ function robot = kincal_robot(spec)
 %       link_masses_kg (N x 1), tool_mass_kg (scalar), gravity (3 x 1, m/s^2)
 %       name    a label (informative)
 %     Links whose axis is parallel to the next one identify beta, the others d.
+%   ROBOT = KINCAL_ROBOT(AXES)         a robot from its joint axes at q = 0, a struct with
+%       points      N x 3, a point on each joint axis (m), all in one reference frame
+%       directions  N x 3, each axis direction (right-handed positive rotation)
+%       limits      N x 2 joint limits (rad)
+%     and optionally t_ref_base, t_ref_tool (4 x 4: the base frame and the tool frame at
+%     q = 0 in the reference frame) and name. The mDH links, d/beta choices, base and tool
+%     frames are computed so that the model's FK equals the axes' product of exponentials.
 %   ROBOT = KINCAL_ROBOT(ROBOT)        checks an edited robot struct and refreshes it.
 %
 %   The struct is the whole model: nothing is kept inside the MEX file between calls, so a
@@ -42,6 +49,8 @@ if ischar(spec)
     robot = kincal_mex('robot_aria', check_string(spec, 'name', {'aria', 'aria_true', 'aria_real'}));
 elseif isstruct(spec) && isscalar(spec) && isfield(spec, 'params')
     robot = kincal_mex('robot_check', spec);
+elseif isstruct(spec) && isscalar(spec) && isfield(spec, 'points')
+    robot = from_axes(spec);
 elseif isstruct(spec) && isscalar(spec)
     robot = from_table(spec);
 else
@@ -89,4 +98,37 @@ if any(given)
         'gravity', t.gravity);
     robot = kincal_mex('robot_set', robot, 'mass', mass);
 end
+end
+
+function robot = from_axes(a)
+known = {'points', 'directions', 'limits', 't_ref_base', 't_ref_tool', 'name'};
+names = fieldnames(a);
+for k = 1:numel(names)
+    if ~any(strcmp(names{k}, known))
+        error('kincal:unknownField', 'axes: unknown field ''%s''; known fields:%s', ...
+            names{k}, sprintf(' %s', known{:}));
+    end
+end
+for f = {'points', 'directions', 'limits'}
+    if ~isfield(a, f{1})
+        error('kincal:missingField', 'axes: field ''%s'' is required', f{1});
+    end
+end
+points = check_matrix(a.points, 'points', NaN, 3);
+n = size(points, 1);
+directions = check_matrix(a.directions, 'directions', n, 3);
+limits = check_matrix(a.limits, 'limits', n, 2);
+tb = [];
+tt = [];
+if isfield(a, 't_ref_base')
+    tb = check_matrix(a.t_ref_base, 't_ref_base', 4, 4);
+end
+if isfield(a, 't_ref_tool')
+    tt = check_matrix(a.t_ref_tool, 't_ref_tool', 4, 4);
+end
+name = 'axes';
+if isfield(a, 'name')
+    name = check_string(a.name, 'name');
+end
+robot = kincal_mex('robot_from_axes', points, directions, tb, tt, limits, name);
 end

@@ -2066,6 +2066,237 @@ static int op_biopsy_rotation(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArra
 }
 #endif /* KINCAL_WORKSPACE_ALIGN */
 
+/* ------------------------------------------------------------------------------------------ */
+/* Marker registration and robots from joint axes                                             */
+/* ------------------------------------------------------------------------------------------ */
+
+/* An M x 3 Matlab matrix (column-major) as the M x 3 row-major table of the C ABI, in scratch
+ * memory. `finite` 0 lets NaN through (invisible markers). */
+static int get_rows3(kc_ctx *c, const mxArray *a, const char *name, size_t m, int finite,
+                     double **out)
+{
+    const double *p;
+    double *t;
+    size_t i, k;
+    char got[64];
+    if (check_double(c, a, name, finite) != 0) {
+        return -1;
+    }
+    if (mxGetNumberOfDimensions(a) != 2 || mxGetN(a) != 3 || (m != KC_ANY && mxGetM(a) != m)) {
+        char r[24];
+        dim_str(m, r, sizeof r);
+        return fail(c, "badSize", "argument '%s' must be %sx3, got %s", name, r,
+                    size_str(a, got, sizeof got));
+    }
+    m = mxGetM(a);
+    p = KC_DOUBLES(a);
+    t = (double *)kc_alloc(c, 3 * m * sizeof *t);
+    if (t == NULL) {
+        return -1;
+    }
+    for (i = 0; i < m; ++i) {
+        for (k = 0; k < 3; ++k) {
+            t[3 * i + k] = p[k * m + i];
+        }
+    }
+    *out = t;
+    return 0;
+}
+
+#if defined(KINCAL_MAX_MARKERS)
+#define KC_HAS_REGISTRATION 1
+
+static const char *const REGISTRATION_OPTION_FIELDS[] = {"sigma_m", "k_sigma", "max_outliers",
+                                                         NULL};
+static const char *const REGISTRATION_FIELDS[] = {"n_used", "rms_m", "consistent", "markers",
+                                                  NULL};
+static const char *const MARKER_FIELDS[] = {
+    "predicted_m", "residual_m", "distance_m", "threshold_m", "status", "swapped_with", NULL,
+};
+
+static const char *marker_status_name(uint32_t s)
+{
+    switch (s) {
+    case KINCAL_MARKER_STATUS_INLIER: return "inlier";
+    case KINCAL_MARKER_STATUS_MISSING: return "missing";
+    case KINCAL_MARKER_STATUS_MOVED: return "moved";
+    case KINCAL_MARKER_STATUS_SWAPPED: return "swapped";
+    case KINCAL_MARKER_STATUS_SUSPECT: return "suspect";
+    default: return "unknown";
+    }
+}
+
+/* register(design M x 3, measured M x 3 (NaN rows: not seen), weights M x 1 or [], options
+ * struct with sigma_m (required), k_sigma, max_outliers) -> T 4x4 (body in the mocap frame),
+ * info struct */
+static int op_register(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prhs[])
+{
+    double *design, *measured;
+    const double *w = NULL;
+    uint8_t *visible;
+    size_t m, i, k;
+    double sigma;
+    const mxArray *f;
+    kincal_registration_options o;
+    kincal_registration *reg;
+    kincal_error err;
+    kincal_status st;
+    if (get_rows3(c, prhs[0], "design", KC_ANY, 1, &design) != 0) {
+        return -1;
+    }
+    m = mxGetM(prhs[0]);
+    if (get_rows3(c, prhs[1], "measured", m, 0, &measured) != 0) {
+        return -1;
+    }
+    if (!is_default(prhs[2]) && get_vector(c, prhs[2], "weights", m, &w) != 0) {
+        return -1;
+    }
+    if (check_struct(c, prhs[3], "options", REGISTRATION_OPTION_FIELDS) != 0 ||
+        (f = get_field(c, prhs[3], "options", "sigma_m")) == NULL ||
+        get_scalar(c, f, "options.sigma_m", &sigma) != 0) {
+        return -1;
+    }
+    st = kincal_registration_options_default(sigma, &o, &err);
+    if (st != KINCAL_STATUS_OK) {
+        return fail_status(c, st, &err, NULL);
+    }
+    if ((f = mxGetField(prhs[3], 0, "k_sigma")) != NULL &&
+        get_scalar(c, f, "options.k_sigma", &o.k_sigma) != 0) {
+        return -1;
+    }
+    if ((f = mxGetField(prhs[3], 0, "max_outliers")) != NULL &&
+        get_count(c, f, "options.max_outliers", 1e6, &o.max_outliers) != 0) {
+        return -1;
+    }
+    /* A marker is seen when its three coordinates are numbers: NaN marks a missing one. */
+    visible = (uint8_t *)kc_alloc(c, m > 0 ? m : 1);
+    reg = (kincal_registration *)kc_alloc(c, sizeof *reg);
+    if (visible == NULL || reg == NULL) {
+        return -1;
+    }
+    for (i = 0; i < m; ++i) {
+        visible[i] = 1;
+        for (k = 0; k < 3; ++k) {
+            if (measured[3 * i + k] != measured[3 * i + k]) {
+                visible[i] = 0;
+            } else if (!mxIsFinite(measured[3 * i + k])) {
+                return fail(c, "nonFinite", "argument 'measured': marker %.0f is infinite (NaN "
+                            "marks a marker that was not seen)", one_based(i));
+            }
+        }
+    }
+    st = kincal_register(design, 3 * m, measured, 3 * m, visible, m, w, w ? m : 0, &o, reg,
+                         &err);
+    if (st != KINCAL_STATUS_OK) {
+        return fail_status(c, st, &err, NULL);
+    }
+    plhs[0] = mxCreateDoubleMatrix(4, 4, mxREAL);
+    memcpy(KC_DOUBLES(plhs[0]), reg->t_mocap_body, sizeof reg->t_mocap_body);
+    if (nlhs > 1) {
+        size_t n = reg->n_markers < KINCAL_MAX_MARKERS ? reg->n_markers : KINCAL_MAX_MARKERS;
+        mxArray *s = mxCreateStructMatrix(1, 1, 4, (const char **)REGISTRATION_FIELDS);
+        mxArray *mk = mxCreateStructMatrix((mwSize)n, 1, 6, (const char **)MARKER_FIELDS);
+        for (i = 0; i < n; ++i) {
+            const kincal_marker_fit *mf = &reg->markers[i];
+            mxArray *pred = mxCreateDoubleMatrix(1, 3, mxREAL);
+            mxArray *res = mxCreateDoubleMatrix(1, 3, mxREAL);
+            memcpy(KC_DOUBLES(pred), mf->predicted_m, sizeof mf->predicted_m);
+            memcpy(KC_DOUBLES(res), mf->residual_m, sizeof mf->residual_m);
+            mxSetField(mk, (mwIndex)i, "predicted_m", pred);
+            mxSetField(mk, (mwIndex)i, "residual_m", res);
+            mxSetField(mk, (mwIndex)i, "distance_m", mxCreateDoubleScalar(mf->distance_m));
+            mxSetField(mk, (mwIndex)i, "threshold_m", mxCreateDoubleScalar(mf->threshold_m));
+            mxSetField(mk, (mwIndex)i, "status", mxCreateString(marker_status_name(mf->status)));
+            mxSetField(mk, (mwIndex)i, "swapped_with",
+                       mf->swapped_with == KINCAL_NO_INDEX
+                           ? mxCreateDoubleMatrix(0, 0, mxREAL)
+                           : mxCreateDoubleScalar(one_based(mf->swapped_with)));
+        }
+        mxSetField(s, 0, "n_used", mxCreateDoubleScalar((double)reg->n_used));
+        mxSetField(s, 0, "rms_m", mxCreateDoubleScalar(reg->rms_m));
+        mxSetField(s, 0, "consistent", mxCreateLogicalScalar(reg->consistent != 0));
+        mxSetField(s, 0, "markers", mk);
+        plhs[1] = s;
+    }
+    return 0;
+}
+
+/* t_base_ee(t_mocap_base 4x4xM or 4x4, t_mocap_ee 4x4xM) -> 4x4xM */
+static int op_t_base_ee(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prhs[])
+{
+    const double *tb, *te;
+    size_t mb, me, j;
+    double *out;
+    kincal_error err;
+    kincal_status st;
+    char what[64];
+    (void)nlhs;
+    if (get_poses(c, prhs[0], "t_mocap_base", &mb, &tb) != 0 ||
+        get_poses(c, prhs[1], "t_mocap_ee", &me, &te) != 0) {
+        return -1;
+    }
+    if (mb != me && mb != 1) {
+        return fail(c, "badSize", "argument 't_mocap_base' must be 4x4 or 4x4x%lu like "
+                    "'t_mocap_ee', got 4x4x%lu", (unsigned long)me, (unsigned long)mb);
+    }
+    plhs[0] = create_poses(me);
+    out = KC_DOUBLES(plhs[0]);
+    for (j = 0; j < me; ++j) {
+        st = kincal_t_base_ee(tb + (mb == 1 ? 0 : 16 * j), 16, te + 16 * j, 16, out + 16 * j, 16,
+                              &err);
+        if (st != KINCAL_STATUS_OK) {
+            return fail_status(c, st, &err, column_of(what, sizeof what, "the poses", j, me));
+        }
+    }
+    return 0;
+}
+#endif /* KINCAL_MAX_MARKERS */
+
+/* robot_from_axes(points N x 3, directions N x 3, t_ref_base 4x4 or [], t_ref_tool 4x4 or [],
+ * limits N x 2, name) -> robot */
+static int op_robot_from_axes(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prhs[])
+{
+    double *points, *dirs, lim[2 * KINCAL_MAX_JOINTS];
+    const double *tb = NULL, *tt = NULL, *l;
+    size_t n, i, m;
+    char name[64];
+    kincal_robot r;
+    kincal_error err;
+    kincal_status st;
+    (void)nlhs;
+    if (get_rows3(c, prhs[0], "points", KC_ANY, 1, &points) != 0) {
+        return -1;
+    }
+    n = mxGetM(prhs[0]);
+    if (n < 1 || n > KINCAL_MAX_JOINTS) {
+        return fail(c, "badJointCount", "argument 'points' must have 1..%d rows, got %lu",
+                    KINCAL_MAX_JOINTS, (unsigned long)n);
+    }
+    if (get_rows3(c, prhs[1], "directions", n, 1, &dirs) != 0) {
+        return -1;
+    }
+    if (!is_default(prhs[2]) && (get_poses(c, prhs[2], "t_ref_base", &m, &tb) != 0 || m != 1)) {
+        return m != 1 ? fail(c, "badSize", "argument 't_ref_base' must be 4x4") : -1;
+    }
+    if (!is_default(prhs[3]) && (get_poses(c, prhs[3], "t_ref_tool", &m, &tt) != 0 || m != 1)) {
+        return m != 1 ? fail(c, "badSize", "argument 't_ref_tool' must be 4x4") : -1;
+    }
+    if (get_real_matrix(c, prhs[4], "limits", n, 2, &l) != 0 ||
+        get_string(c, prhs[5], "name", name, sizeof name) != 0) {
+        return -1;
+    }
+    for (i = 0; i < n; ++i) {
+        lim[2 * i] = l[i];
+        lim[2 * i + 1] = l[n + i];
+    }
+    st = kincal_robot_from_axes(&r, n, points, 3 * n, dirs, 3 * n, tb, tb ? 16 : 0, tt,
+                                tt ? 16 : 0, lim, 2 * n, &err);
+    if (st != KINCAL_STATUS_OK) {
+        return fail_status(c, st, &err, NULL);
+    }
+    return put_robot(c, &r, name, &plhs[0]);
+}
+
 #if defined(KINCAL_TEST_PANIC)
 /* test_panic() -> raises kincal:panic: the library panics on purpose inside its panic
  * boundary (cargo feature test-panic; tests/run.sh builds this variant), which proves that a
@@ -2131,6 +2362,11 @@ static const kc_operation OPERATIONS[] = {
     {"validate", op_validate, 5, 2},
     {"biopsy_rotation", op_biopsy_rotation, 3, 1},
 #endif
+#if defined(KC_HAS_REGISTRATION)
+    {"register", op_register, 4, 2},
+    {"t_base_ee", op_t_base_ee, 2, 1},
+#endif
+    {"robot_from_axes", op_robot_from_axes, 6, 1},
 #if defined(KINCAL_TEST_PANIC)
     {"test_panic", op_test_panic, 0, 0},
 #endif

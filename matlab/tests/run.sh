@@ -12,8 +12,10 @@
 #     workflow scripts headless); a failing test makes this script fail (with CI=true a
 #     skipped test too).
 #
-# Installs nothing: scripts/test.sh installs Octave (apt-get install octave liboctave-dev).
-# Without octave-cli or mkoctfile this script fails when CI=true and skips otherwise.
+# Installs nothing: scripts/test.sh installs Octave (apt-get install octave liboctave-dev;
+# gnuplot, which octave-cli draws the figures with, comes as one of Octave's recommended
+# packages). Without octave-cli, mkoctfile or gnuplot this script fails when CI=true and
+# skips otherwise.
 # Environment: CARGO_TARGET_DIR (default ./target); KINCAL_TEST_FILTER runs only the tests
 # whose "file/name" contains it; KINCAL_OUT is where the workflow scripts write (default: a
 # temporary folder).
@@ -23,14 +25,16 @@ here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 root=$(cd "$here/../.." && pwd)
 cd "$root"
 
-for tool in octave-cli mkoctfile; do
-    if ! command -v "$tool" >/dev/null 2>&1; then
+for tool in octave-cli:"octave liboctave-dev" mkoctfile:liboctave-dev gnuplot:gnuplot-nox; do
+    name=${tool%%:*}
+    package=${tool#*:}
+    if ! command -v "$name" >/dev/null 2>&1; then
         if [[ ${CI:-} == true ]]; then
-            echo "matlab/tests/run.sh: FAILED: $tool is required (CI=true); install it with" \
-                "apt-get install octave liboctave-dev (scripts/test.sh does)" >&2
+            echo "matlab/tests/run.sh: FAILED: $name is required (CI=true); install it with" \
+                "apt-get install $package" >&2
             exit 1
         fi
-        echo "matlab/tests/run.sh: SKIP: $tool not available (apt-get install octave liboctave-dev)"
+        echo "matlab/tests/run.sh: SKIP: $name not available (apt-get install $package)"
         exit 0
     fi
 done
