@@ -17,7 +17,7 @@
  *   kincal:badClass, kincal:nonFinite, kincal:badValue, kincal:missingField,
  *   kincal:unknownField, kincal:badArgCount, kincal:unknownOperation, kincal:abiMismatch;
  * - one helper (one_based) that turns the library's zero-based joint/pose/index numbers
- *   into the 1-based numbers Matlab users see, one (get_index_one_based) for the other way.
+ *   into the 1-based numbers Matlab users see, one (zero_based_index) for the other way.
  *
  * Error flow (style anchors section 10): a handler never raises. It records the failure in a
  * kc_fail and returns; Rust has returned by then and every buffer is either on the C stack or
@@ -395,16 +395,12 @@ static int get_count(kc_ctx *c, const mxArray *a, const char *name, double max, 
     return 0;
 }
 
-/* A 1-based index from Matlab (1..count) as the zero-based index of the C ABI: the only place
- * where the index base changes on the way in. */
-static int get_index_one_based(kc_ctx *c, const mxArray *a, const char *name, size_t count,
-                               size_t *zero_based)
+/* A 1-based number from Matlab (1..count) as the zero-based index of the C ABI: the only
+ * place where the index base changes on the way in. */
+static int zero_based_index(kc_ctx *c, double v, const char *name, size_t count,
+                            size_t *zero_based)
 {
-    double v;
-    if (get_scalar(c, a, name, &v) != 0) {
-        return -1;
-    }
-    if (v < 1 || v > (double)count || v != (double)(size_t)v) {
+    if (!(v >= 1 && v <= (double)count) || v != (double)(size_t)v) {
         return fail(c, "indexOutOfRange", "argument '%s' must be an integer in 1..%lu, got %.17g",
                     name, (unsigned long)count, v);
     }
@@ -938,17 +934,11 @@ static int op_robot_set(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prh
         break;
     }
     case 4: {
-        mxArray *tmp;
         size_t link;
-        if (get_vector(c, prhs[2], "length_param", 2, &v) != 0) {
+        if (get_vector(c, prhs[2], "length_param", 2, &v) != 0 ||
+            zero_based_index(c, v[0], "link", n, &link) != 0) {
             return -1;
         }
-        tmp = mxCreateDoubleScalar(v[0]);
-        if (get_index_one_based(c, tmp, "link", n, &link) != 0) {
-            mxDestroyArray(tmp);
-            return -1;
-        }
-        mxDestroyArray(tmp);
         if (v[1] != 0.0 && v[1] != 1.0) {
             return fail(c, "badValue", "the length parameter must be 0 (d) or 1 (beta), got %.17g",
                         v[1]);
