@@ -17,6 +17,8 @@ function [fitted, report] = kincal_identify(robot, varargin)
 %       'lower', 'upper'  OPT1 intervals, P x 1 absolute values (+-Inf allowed); default
 %                    +-5 mm on lengths and +-5 deg on angles around ROBOT (paper, Sec. 2.4)
 %       'weights'    [w_pos, w_rot] row weights, 1/m^2 and 1/rad^2 (default [1 1])
+%       'pose_weights' 1 x M weight of each pose (>= 0; 0 holds a pose out, e.g. for
+%                    cross-validation; default all 1)
 %       'orientation' 'exact' (default) or 'small_angle' (eq. 16)
 %       'max_iterations' (200), 'allow_data_deficiency' (false), 'xtol' (1e-12),
 %       'ftol' (1e-14), 'abs_cost_tol' (1e-28), 'rank_tol' (1e-6)

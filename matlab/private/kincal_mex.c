@@ -1662,8 +1662,26 @@ static int get_measurements(kc_ctx *c, const kincal_robot *r, const mxArray *q_a
 static const char *const IDENTIFY_FIELDS[] = {
     "algorithm", "effects", "requested", "lower", "upper", "max_iterations",
     "allow_data_deficiency", "orientation", "xtol", "ftol", "abs_cost_tol", "rank_tol",
-    "weight_pos", "weight_rot", NULL,
+    "weight_pos", "weight_rot", "pose_weights", NULL,
 };
+
+/* options.pose_weights (1 x M, >= 0; 0 holds a pose out) into the measurements: the values
+ * are the caller's array, viewed (the library checks them). */
+static int get_pose_weights(kc_ctx *c, const mxArray *options, kincal_measurements *m)
+{
+    const mxArray *f;
+    const double *w;
+    if (is_default(options) || (f = mxGetField(options, 0, "pose_weights")) == NULL ||
+        is_default(f)) {
+        return 0;
+    }
+    if (get_vector(c, f, "options.pose_weights", m->n_poses, &w) != 0) {
+        return -1;
+    }
+    m->weights = w;
+    m->weights_len = m->n_poses;
+    return 0;
+}
 
 /* Identification options: the library's defaults for the robot, algorithm and effects, then
  * the fields the caller set. `requested` is a logical or 0/1 P x 1 mask over robot.params;
@@ -1939,6 +1957,7 @@ static int op_identify(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prhs
     if (get_robot(c, prhs[0], &r) != 0 ||
         get_measurements(c, &r, prhs[1], prhs[2], prhs[3], prhs[4], &m) != 0 ||
         get_identify_options(c, &r, prhs[5], &o) != 0 ||
+        get_pose_weights(c, prhs[5], &m) != 0 ||
         get_workspace(c, &r, &m, &o, &ws, &ws_len) != 0) {
         return -1;
     }
@@ -1975,6 +1994,7 @@ static int op_identifiability(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArra
     if (get_robot(c, prhs[0], &r) != 0 ||
         get_measurements(c, &r, prhs[1], prhs[2], prhs[3], prhs[4], &m) != 0 ||
         get_identify_options(c, &r, prhs[5], &o) != 0 ||
+        get_pose_weights(c, prhs[5], &m) != 0 ||
         get_workspace(c, &r, &m, &o, &ws, &ws_len) != 0) {
         return -1;
     }

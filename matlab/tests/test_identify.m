@@ -10,6 +10,7 @@ tests = {
     'identifiability_structural_redundancy', @structural
     'too_few_poses', @too_few_poses
     'effects', @effects
+    'pose_weights_hold_poses_out', @pose_weights
     'validate_metrics', @validate_metrics
     'biopsy_rotation', @biopsy
     'bad_inputs', @bad_inputs
@@ -164,6 +165,21 @@ expect_near(kincal_param(fit, 'compliance_2'), 2e-4, 1e-9, 'compliance_2 recover
 expect_near(kincal_param(fit, 'compliance_3'), 1e-4, 1e-9, 'compliance_3 recovered');
 expect_true(any(strcmp(rep.analysis.identifiable_labels, 'compliance_2')), 'reported');
 expect_true(isequal(kincal_effects(fit), {'joint_compliance'}), 'the fitted model has it');
+end
+
+function pose_weights()
+require_identify();
+nominal = kincal_robot('aria');
+[q, T] = tool_data(kincal_robot('aria_real'));
+T(1:3, 4, 3) = T(1:3, 4, 3) + [0.01; 0; 0];   % pose 3 is a 10 mm glitch
+w = ones(1, 10);
+w(3) = 0;
+held = kincal_identify(nominal, q, T, 'pose_weights', w);
+clean = kincal_identify(nominal, q(:, [1:2, 4:10]), T(:, :, [1:2, 4:10]));
+expect_near(held.params, clean.params, 1e-12, 'weight 0 = the pose left out');
+expect_error('kincal:badSize', @() kincal_identify(nominal, q, T, 'pose_weights', w(1:9)));
+w(5) = -1;
+expect_error('kincal:invalidArgument', @() kincal_identify(nominal, q, T, 'pose_weights', w));
 end
 
 function validate_metrics()
