@@ -1,6 +1,6 @@
 //! `kincal`: the command-line tool of the kincal calibration toolkit (spec/cli.md).
 
-use kincal_cli::{cmd_calibrate, cmd_demo, cmd_predict, cmd_validate};
+use kincal_cli::{cmd_calibrate, cmd_demo, cmd_diagnose, cmd_predict, cmd_validate};
 
 use std::process::ExitCode;
 
@@ -40,6 +40,10 @@ enum Command {
     /// Per-pose and summary errors of MODEL against measured poses
     #[command(long_about = cmd_validate::LONG_ABOUT, after_help = cmd_validate::EXAMPLE)]
     Validate(cmd_validate::Args),
+    /// The sim-to-real diagnosis: where the residual lies, which effect causes it, how far
+    /// it shrinks
+    #[command(long_about = cmd_diagnose::LONG_ABOUT, after_help = cmd_diagnose::EXAMPLE)]
+    Diagnose(cmd_diagnose::Args),
 }
 
 fn main() -> ExitCode {
@@ -49,6 +53,7 @@ fn main() -> ExitCode {
         Command::Calibrate(a) => cmd_calibrate::run(a),
         Command::Predict(a) => cmd_predict::run(a),
         Command::Validate(a) => cmd_validate::run(a),
+        Command::Diagnose(a) => cmd_diagnose::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -164,50 +164,16 @@ pub(crate) fn analyze_into<const N: usize, const P: usize>(
     out.reset(requested);
 
     // 1. Structural: generic configurations.
-    load_cols(ws, requested.iter());
-    ws.lsq.reset(p)?;
-    // Rows (6 per sample) outnumber the parameters about twice over: generic enough.
-    let samples = 8 + p as u32 / 3;
-    let limits = robot.limits();
-    for s in 1..=samples {
-        let mut st = JointState::new([0.0; N]);
-        for j in 0..N {
-            let lo = limits[j].lower.max(-core::f64::consts::PI);
-            let hi = limits[j].upper.min(core::f64::consts::PI);
-            st.q[j] = lo + halton(s, PRIMES[j % PRIMES.len()]) * (hi - lo);
-        }
-        if any_approach {
-            let mut a = [0.0; N];
-            for (j, v) in a.iter_mut().enumerate() {
-                *v = if halton(s, PRIMES[(j + N) % PRIMES.len()]) < 0.5 {
-                    -1.0
-                } else {
-                    1.0
-                };
-            }
-            st.approach = Some(a);
-        }
-        if any_temp {
-            st.temp_c = Some(40.0 * halton(s, 41));
-        }
-        let m = Measurement {
-            state: st,
-            pose: crate::pose::Transform::identity(),
-            mask,
-            weight: 1.0,
-        };
-        add_rows(robot, &m, false, opts, p, ws)?;
-    }
-    let kept = greedy(ws, p, STRUCTURAL_TOL, &mut out.partner)?;
-    let mut n_struct = 0;
-    for (k, &col) in ws.cols.iter().take(p).enumerate() {
-        if kept.contains(k) {
-            ws.free[n_struct] = col;
-            n_struct += 1;
-        } else {
-            out.structural.insert(col)?;
-        }
-    }
+    let n_struct = structural_step(
+        robot,
+        mask,
+        any_approach,
+        any_temp,
+        opts,
+        ws,
+        &mut out.structural,
+        &mut out.partner,
+    )?;
 
     // 2. Data: the structurally identifiable columns on the given poses.
     for k in 0..n_struct {
@@ -253,6 +219,77 @@ pub(crate) fn analyze_into<const N: usize, const P: usize>(
         };
     }
     Ok(())
+}
+
+/// Which of `opts.requested` are structurally redundant (step 1 of [`analyze`]): the
+/// greedy test on generic configurations with the measured components `mask` and, when
+/// `any_approach`/`any_temp`, random approach directions and temperatures. Redundant
+/// parameters go to `structural` with their partner; the kept ones are left in
+/// `ws.free[..k]` (flat indices, priority order) and `k` is returned.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn structural_step<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    mask: ComponentMask,
+    any_approach: bool,
+    any_temp: bool,
+    opts: &IdentifyOptions<'_>,
+    ws: &mut Workspace<P>,
+    structural: &mut ParamSet,
+    partner: &mut [Option<Partner>; MAX_MODEL_PARAMS],
+) -> Result<usize> {
+    let requested = opts.requested;
+    let p = requested.len();
+    if p > P {
+        return Err(Error::CapacityExceeded {
+            needed: p,
+            capacity: P,
+        });
+    }
+    load_cols(ws, requested.iter());
+    ws.lsq.reset(p)?;
+    // Rows (6 per sample) outnumber the parameters about twice over: generic enough.
+    let samples = 8 + p as u32 / 3;
+    let limits = robot.limits();
+    for s in 1..=samples {
+        let mut st = JointState::new([0.0; N]);
+        for j in 0..N {
+            let lo = limits[j].lower.max(-core::f64::consts::PI);
+            let hi = limits[j].upper.min(core::f64::consts::PI);
+            st.q[j] = lo + halton(s, PRIMES[j % PRIMES.len()]) * (hi - lo);
+        }
+        if any_approach {
+            let mut a = [0.0; N];
+            for (j, v) in a.iter_mut().enumerate() {
+                *v = if halton(s, PRIMES[(j + N) % PRIMES.len()]) < 0.5 {
+                    -1.0
+                } else {
+                    1.0
+                };
+            }
+            st.approach = Some(a);
+        }
+        if any_temp {
+            st.temp_c = Some(40.0 * halton(s, 41));
+        }
+        let m = Measurement {
+            state: st,
+            pose: crate::pose::Transform::identity(),
+            mask,
+            weight: 1.0,
+        };
+        add_rows(robot, &m, false, opts, p, ws)?;
+    }
+    let kept = greedy(ws, p, STRUCTURAL_TOL, partner)?;
+    let mut n_struct = 0;
+    for (k, &col) in ws.cols.iter().take(p).enumerate() {
+        if kept.contains(k) {
+            ws.free[n_struct] = col;
+            n_struct += 1;
+        } else {
+            structural.insert(col)?;
+        }
+    }
+    Ok(n_struct)
 }
 
 fn load_cols<const P: usize>(ws: &mut Workspace<P>, cols: impl Iterator<Item = usize>) {

@@ -18,8 +18,10 @@ pub mod robust;
 mod solvers;
 mod workspace;
 
+pub(crate) use data::validate as validate_data;
 pub use data::{ComponentMask, Measurement, ResidualStats, residual_stats};
-pub use identifiability::{Identifiability, analyze};
+pub(crate) use identifiability::structural_step;
+pub use identifiability::{Identifiability, Partner, analyze};
 pub use robust::{
     Loss, PoseResidual, RobustIdentification, RobustOptions, identify_robust, residual_test,
 };
