@@ -12,8 +12,9 @@ use kincal::rng::SplitMix64;
 use kincal::sim::{SessionConfig, add_effect, perturb_geometry, simulate_session};
 use kincal::{Effect, EffectSet, Transform, aria};
 
-/// The enforced bound [bytes].
-const STACK_BOUND: usize = 96 * 1024;
+/// The enforced bound [bytes]: the reliability issue requires < 64 KiB for identification
+/// and diagnosis (measured: 36.0 KiB release, see the test output).
+const STACK_BOUND: usize = 48 * 1024;
 const RESOLUTION: usize = 1024;
 const FLOOR: usize = 16 * 1024;
 const ENV: &str = "KINCAL_DIAG_STACK_PROBE";

@@ -84,7 +84,7 @@ use crate::effects::{Effect, EffectSet};
 use crate::error::{Error, ParamIndex, Quantity, Result};
 use crate::identify::{
     Algorithm, Identifiability, Identification, IdentifyOptions, MAX_MODEL_PARAMS, Measurement,
-    Partner, Workspace, identify, identify_with_analysis,
+    Partner, Workspace,
 };
 use crate::linalg::gram::GramAccumulator;
 use crate::math::{ln, sqrt};
@@ -773,16 +773,17 @@ fn model_analysis<const P: usize>(
     mdl: usize,
     score: &ModelScore,
     tol: f64,
-) -> Result<Identifiability> {
-    let mut out = Identifiability {
-        requested: score.requested,
-        identifiable: score.identifiable,
-        structural: score.structural,
-        data_deficient: score.data_deficient,
-        rank: score.identifiable.len(),
-        condition_number: f64::INFINITY,
-        partner: [None; MAX_MODEL_PARAMS],
-    };
+    out: &mut Identifiability,
+) -> Result<()> {
+    out.requested = score.requested;
+    out.identifiable = score.identifiable;
+    out.structural = score.structural;
+    out.data_deficient = score.data_deficient;
+    out.rank = score.identifiable.len();
+    out.condition_number = f64::INFINITY;
+    for p in out.partner.iter_mut() {
+        *p = None;
+    }
     for d in score.dropped.iter().flatten() {
         if let (Some(slot), Some(p)) = (out.partner.get_mut(d.param.0), d.partner) {
             *slot = Some(Partner {
@@ -809,7 +810,7 @@ fn model_analysis<const P: usize>(
             out.condition_number = smax / smin;
         }
     }
-    Ok(out)
+    Ok(())
 }
 
 /// The status a share `f` of the gap closed earns (module documentation).
@@ -932,7 +933,8 @@ pub fn diagnose_into<const N: usize, const P: usize>(
     opts.weight_rot = wr;
     opts.rank_tol = cfg.rank_tol;
     opts.allow_data_deficiency = true;
-    out.fit = identify(robot, data, &opts, &mut ws.id)?;
+    // In place: a returned Identification would be a second copy in this frame.
+    crate::identify::identify_in_place(robot, data, &opts, &mut ws.id, &mut out.fit)?;
     let lin = out.fit.robot;
     out.geometric = lin;
     out.model = lin;
@@ -1160,8 +1162,10 @@ pub fn diagnose_into<const N: usize, const P: usize>(
         let mdl = c + 1;
         let mut o = opts;
         o.requested = score(out, mdl).requested;
-        let analysis = model_analysis(ws, mdl, score(out, mdl), cfg.rank_tol)?;
-        let fit = identify_with_analysis(&lin, data, &o, &analysis, &mut ws.id)?;
+        // The fit and its analysis built in one place (no separate copies on the stack).
+        let mut fit = Identification::start(&lin, o.algorithm, None);
+        model_analysis(ws, mdl, score(out, mdl), cfg.rank_tol, &mut fit.analysis)?;
+        crate::identify::identify_into(data, &o, &mut ws.id, &mut fit)?;
         ws.g_all.reset(n_u)?;
         for m in data {
             cv::pose_rows(&fit.robot, m, &sw, ws)?;

@@ -26,6 +26,7 @@ pub use robust::{
     Loss, PoseResidual, RobustIdentification, RobustOptions, identify_robust, residual_test,
 };
 pub use solvers::{identify, identify_with_analysis};
+pub(crate) use solvers::{identify_in_place, identify_into};
 pub use workspace::Workspace;
 
 use crate::error::ParamIndex;

@@ -29,13 +29,26 @@ pub fn identify<const N: usize, const P: usize>(
     opts: &IdentifyOptions<'_>,
     ws: &mut Workspace<P>,
 ) -> Result<Identification<N>> {
+    let mut out = Identification::start(robot, opts.algorithm, None);
+    identify_in_place(robot, data, opts, ws, &mut out)?;
+    Ok(out)
+}
+
+/// [`identify`] into the caller's `out` (every field is overwritten), so that a caller
+/// holding its result in its own memory does not get a second copy on the stack.
+pub(crate) fn identify_in_place<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    opts: &IdentifyOptions<'_>,
+    ws: &mut Workspace<P>,
+    out: &mut Identification<N>,
+) -> Result<()> {
     validate(data)?;
     check_identify_options(opts)?;
     check_inputs(data, opts)?;
-    let mut out = Identification::start(robot, opts.algorithm, None);
+    out.robot = *robot;
     analyze_into(robot, data, opts, ws, &mut out.analysis)?;
-    identify_into(data, opts, ws, &mut out)?;
-    Ok(out)
+    identify_into(data, opts, ws, out)
 }
 
 /// Checks the numeric options of [`identify`].
