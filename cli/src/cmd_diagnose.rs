@@ -263,7 +263,7 @@ pub fn execute<const N: usize>(
     )
     .to_json();
     let plots = crate::diagnosis_plot::render_all::<N>(&d, &meas, &poses, &outputs)?;
-    let json = report_json::<N>(&d, &meas, &set, &poses, &args.data, &outputs, seconds);
+    let json = report_json::<N>(&d, &meas, &set, &poses, &args.data, &outputs);
     let json_text = serde_json::to_string_pretty(&json).unwrap_or_default() + "\n";
     let mut text = readable::<N>(name, &set.source, &d, &meas, seconds);
     let _ = writeln!(
@@ -384,7 +384,8 @@ struct Report {
     data: DataInfoJson,
     settings: SettingsJson,
     files: FilesJson,
-    seconds: f64,
+    // No run time here: it is shown on screen only, so that identical inputs give a
+    // bit-identical report whatever the machine load or thread count.
 }
 
 #[derive(Serialize)]
@@ -617,7 +618,6 @@ fn report_json<const N: usize>(
     poses: &[PoseDiagnosis],
     data_path: &Path,
     outputs: &Outputs,
-    seconds: f64,
 ) -> Report {
     let n = &d.noise;
     let loc = &d.location;
@@ -766,7 +766,6 @@ fn report_json<const N: usize>(
             .map(|p| p.display().to_string())
             .collect(),
         },
-        seconds,
     }
 }
 
