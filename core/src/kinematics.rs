@@ -40,6 +40,20 @@ impl<const N: usize> Default for Frames<N> {
     }
 }
 
+/// Refuses a pose that overflowed: finite but absurd parameters or readings (lengths of
+/// 1e200 m, say) can make FK non-finite, and a NaN pose must never pass as a result (found by
+/// fuzzing the C ABI). [`Error::NonFinite`] names the position or the orientation.
+fn check_pose(t: &Transform) -> Result<()> {
+    crate::error::check_finite(
+        t.translation.vector.as_slice(),
+        crate::error::Quantity::Position,
+    )?;
+    crate::error::check_finite(
+        t.rotation.matrix().as_slice(),
+        crate::error::Quantity::Orientation,
+    )
+}
+
 /// FK of a geometry at angles `angles` (q + Δθ, without θ0), lengths times `scale`.
 /// `on_link(i, x_mid, R_i, p_i)` sees each link's intermediate x axis (after `Rz·Tz·Tx`,
 /// before `Rx(α)·Ry(β)`) and its frame.
@@ -103,7 +117,9 @@ impl<const N: usize> Robot<N> {
     pub fn fk(&self, state: &JointState<N>) -> Result<Transform> {
         let angles = self.joint_angles(state)?;
         let scale = self.length_scale(state)?;
-        Ok(chain(&self.geom, &angles, scale, |_, _, _, _| {}))
+        let t = chain(&self.geom, &angles, scale, |_, _, _, _| {});
+        check_pose(&t)?;
+        Ok(t)
     }
 
     /// End-effector pose for readings `q` alone (models without backlash/thermal).
@@ -116,7 +132,7 @@ impl<const N: usize> Robot<N> {
         let angles = self.joint_angles(state)?;
         let scale = self.length_scale(state)?;
         self.frames_at(&angles, scale, frames);
-        Ok(())
+        check_pose(&frames.t_base_ee)
     }
 
     fn frames_at(&self, angles: &[f64; N], scale: f64, frames: &mut Frames<N>) {
@@ -260,6 +276,7 @@ impl<const N: usize> Robot<N> {
         if full {
             self.effect_columns(state, scale, jac);
         }
+        check_pose(&f.t_base_ee)?;
         Ok(f.t_base_ee)
     }
 

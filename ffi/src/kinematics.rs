@@ -360,7 +360,17 @@ fn gravity_of<const N: usize>(
     q: &[f64; KINCAL_MAX_JOINTS],
 ) -> FfiResult<[f64; KINCAL_MAX_JOINTS]> {
     let s = joint_state::<N>(q_n(q, N)?, None, CALL_AUX)?;
-    Ok(per_joint(&r.gravity_torques(&s.q)))
+    let tau = r.gravity_torques(&s.q);
+    // Finite but absurd lengths or masses can overflow to NaN: never return that as OK
+    // (found by fuzzing, fuzz/seeds/c_abi/regression-gravity-overflow-nan).
+    if let Some(index) = tau.iter().position(|t| !t.is_finite()) {
+        return Err(kincal::Error::NonFinite {
+            what: kincal::Quantity::Parameter,
+            index,
+        }
+        .into());
+    }
+    Ok(per_joint(&tau))
 }
 
 fn angles_of<const N: usize>(

@@ -4,4 +4,5 @@
 
 mod abi;
 mod calibration;
+mod fuzz_regressions;
 mod header;
