@@ -23,6 +23,7 @@ pub mod kinematics;
 pub mod linalg;
 mod math;
 pub mod model;
+pub mod observability;
 pub mod params;
 pub mod pose;
 pub mod registration;
