@@ -603,15 +603,22 @@ impl<const N: usize> Robot<N> {
         for j in 0..N {
             let q = state.q[j];
             let c = &e.cyclic[j];
-            let (s1, c1) = crate::math::sin_cos(q);
-            let (s2, c2) = (2.0 * s1 * c1, c1 * c1 - s1 * s1);
+            // The geometric model (no cyclic terms) needs no trigonometry here: FK is the
+            // hot path of identification and Monte-Carlo studies.
+            let cyclic = if c.iter().any(|&v| v != 0.0) {
+                let (s1, c1) = crate::math::sin_cos(q);
+                let (s2, c2) = (2.0 * s1 * c1, c1 * c1 - s1 * s1);
+                c[CyclicTerm::Sin1 as usize] * s1
+                    + c[CyclicTerm::Cos1 as usize] * c1
+                    + c[CyclicTerm::Sin2 as usize] * s2
+                    + c[CyclicTerm::Cos2 as usize] * c2
+            } else {
+                0.0
+            };
             out[j] = q
                 + e.compliance[j] * tau[j]
                 + e.scale[j] * q
-                + c[CyclicTerm::Sin1 as usize] * s1
-                + c[CyclicTerm::Cos1 as usize] * c1
-                + c[CyclicTerm::Sin2 as usize] * s2
-                + c[CyclicTerm::Cos2 as usize] * c2
+                + cyclic
                 + e.backlash[j] * approach[j];
         }
         Ok(out)

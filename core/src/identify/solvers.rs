@@ -125,7 +125,9 @@ pub fn identify_with_analysis<const N: usize, const P: usize>(
             }
         }
     }
-    covariance(&fit, data, opts, n, rows, ws, &mut out)?;
+    if opts.covariance {
+        covariance(&fit, data, opts, n, rows, ws, &mut out)?;
+    }
     Ok(out)
 }
 
@@ -239,6 +241,11 @@ fn solve_normal<const P: usize>(ws: &Workspace<P>, n: usize, x: &mut [f64]) -> R
 /// from the Cholesky factor of the scaled normal equations — for the full-rank identifiable
 /// set that is the unique, hence minimum-norm, solution — and from the SVD of the Givens
 /// factor when the normal equations are numerically singular at an iterate.
+///
+/// A trial point is evaluated by accumulating its normal equations (Jacobian and residual
+/// in one pass): an accepted trial's cost and normal equations are those the next
+/// iteration needs, so each iteration costs one Jacobian pass instead of a Jacobian pass
+/// plus a cost pass.
 fn gauss_newton<const N: usize, const P: usize>(
     robot: &mut Robot<N>,
     data: &[Measurement<N>],
@@ -246,10 +253,10 @@ fn gauss_newton<const N: usize, const P: usize>(
     n: usize,
     ws: &mut Workspace<P>,
 ) -> Result<u32> {
+    unit_scale(ws, n);
+    let mut c = accumulate_gram(robot, data, opts, n, ws)?;
     for it in 0..opts.max_iterations {
         get_x(robot, n, ws)?;
-        unit_scale(ws, n);
-        let c = accumulate_gram(robot, data, opts, n, ws)?;
         if c <= opts.abs_cost_tol {
             return Ok(it);
         }
@@ -277,10 +284,11 @@ fn gauss_newton<const N: usize, const P: usize>(
         }
         let dx = scaled_norm(ws, n, &ws.step);
         let xn = scaled_norm(ws, n, &ws.x);
+        unit_scale(ws, n);
         let mut accepted = None;
         for _ in 0..30 {
             let trial = apply(robot, n, ws, None)?;
-            let c2 = cost(&trial, data, opts)?;
+            let c2 = accumulate_gram(&trial, data, opts, n, ws)?;
             if c2 <= c {
                 accepted = Some((trial, c2));
                 break;
@@ -297,6 +305,7 @@ fn gauss_newton<const N: usize, const P: usize>(
         if dx <= opts.xtol * (xn + opts.xtol) || (c - c2) <= opts.ftol * c {
             return Ok(it + 1);
         }
+        c = c2;
     }
     Err(Error::NotConverged {
         iterations: opts.max_iterations,
