@@ -117,6 +117,8 @@ pub struct MeasurementSet {
     pub has_temperature: bool,
     /// Lower-case hex SHA-256 of the file's bytes.
     pub sha256: String,
+    /// 1-based line of the header row (for messages about missing columns).
+    pub header_line: u64,
 }
 
 impl MeasurementSet {
@@ -642,6 +644,7 @@ impl<'a> Parser<'a> {
             has_approach: layout.approach_cols.is_some(),
             has_temperature: layout.temp_col.is_some(),
             sha256,
+            header_line,
         })
     }
 
@@ -2083,6 +2086,7 @@ mod tests {
             has_approach: true,
             has_temperature: true,
             sha256: String::new(),
+            header_line: 4,
         };
         let text = write_to_string(&set);
         let back = parse(&text, n).unwrap();

@@ -1,1 +1,165 @@
-fn main() {}
+//! Kinematics benchmarks on the nominal ARIA: FK, FK + identification Jacobian (geometric
+//! columns and all columns), IK of a Table 2 pose.
+//!
+//! Run: `cargo bench -p kincal --bench kinematics -- --noplot --warm-up-time 1
+//! --measurement-time 3`. Targets on the 2-core build machine: FK < 100 ns, FK + Jacobian
+//! < 300 ns.
+//!
+//! The build machine is shared, so wall-clock figures grow with its load. FK and Jacobian
+//! are therefore measured twice: in wall time (criterion's default) and, under
+//! `cpu_time/…`, in the benchmark thread's own CPU time (Linux
+//! `CLOCK_THREAD_CPUTIME_ID`), which other processes do not inflate (much: caches and SMT
+//! siblings are still shared).
+
+use std::hint::black_box;
+
+use criterion::measurement::{Measurement, ValueFormatter};
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use kincal::ik::{IkOptions, solve_ik};
+use kincal::{JacobianColumn, JointState, Robot, aria};
+
+const Q: [f64; 6] = [0.3, 0.9, -0.7, 1.2, 0.8, -0.4];
+
+fn kinematics<M: Measurement + 'static>(c: &mut Criterion<M>, prefix: &str) {
+    let robot = aria::nominal();
+    let state = JointState::new(Q);
+    c.bench_function(&format!("{prefix}fk_aria"), |b| {
+        b.iter(|| black_box(&robot).fk(black_box(&state)))
+    });
+    let mut geo = [[0.0; 6]; Robot::<6>::NUM_GEOMETRIC_PARAMS];
+    c.bench_function(&format!("{prefix}fk_jacobian_geometric_aria"), |b| {
+        b.iter(|| black_box(&robot).jacobian(black_box(&state), black_box(&mut geo[..])))
+    });
+    // All effect columns, with approach directions and a temperature.
+    let state = JointState {
+        q: Q,
+        approach: Some([1.0, -1.0, 1.0, 0.0, 1.0, -1.0]),
+        temp_c: Some(25.0),
+    };
+    let mut full: [JacobianColumn; Robot::<6>::NUM_PARAMS] = [[0.0; 6]; Robot::<6>::NUM_PARAMS];
+    c.bench_function(&format!("{prefix}fk_jacobian_all_effects_aria"), |b| {
+        b.iter(|| black_box(&robot).jacobian(black_box(&state), black_box(&mut full[..])))
+    });
+}
+
+fn wall(c: &mut Criterion) {
+    kinematics(c, "");
+}
+
+fn ik(c: &mut Criterion) {
+    let robot = aria::nominal();
+    let target = aria::tool_pose(2).expect("Table 2 pose 3");
+    let seed = JointState::new(aria::TOOL_SEED_Q);
+    let mut g = c.benchmark_group("ik_table2_pose3");
+    g.sample_size(20);
+    g.bench_function("default", |b| {
+        b.iter(|| solve_ik(&robot, black_box(&target), &seed, &IkOptions::default()))
+    });
+    let first = IkOptions {
+        first_solution: true,
+        ..IkOptions::default()
+    };
+    g.bench_function("first_solution", |b| {
+        b.iter(|| solve_ik(&robot, black_box(&target), &seed, &first))
+    });
+    g.finish();
+}
+
+/// CPU time of the calling thread [ns] from `clock_gettime(CLOCK_THREAD_CPUTIME_ID)`, or
+/// `None` where it is unavailable. (`/proc/thread-self/schedstat` is no substitute: it is
+/// only brought up to date at scheduler ticks.)
+#[cfg(all(target_os = "linux", target_pointer_width = "64"))]
+fn thread_cpu_ns() -> Option<u64> {
+    #[repr(C)]
+    struct Timespec {
+        tv_sec: i64,
+        tv_nsec: i64,
+    }
+    unsafe extern "C" {
+        fn clock_gettime(clock: i32, tp: *mut Timespec) -> i32;
+    }
+    const CLOCK_THREAD_CPUTIME_ID: i32 = 3;
+    let mut ts = Timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: glibc's clock_gettime writes one timespec (two i64 on 64-bit Linux) to `ts`.
+    let rc = unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    (rc == 0).then(|| ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64)
+}
+
+#[cfg(not(all(target_os = "linux", target_pointer_width = "64")))]
+fn thread_cpu_ns() -> Option<u64> {
+    None
+}
+
+/// Criterion measurement: CPU time of the benchmark thread.
+struct ThreadCpuTime;
+
+impl Measurement for ThreadCpuTime {
+    type Intermediate = u64;
+    type Value = u64;
+    fn start(&self) -> u64 {
+        thread_cpu_ns().unwrap_or(0)
+    }
+    fn end(&self, start: u64) -> u64 {
+        thread_cpu_ns().unwrap_or(0).saturating_sub(start)
+    }
+    fn add(&self, a: &u64, b: &u64) -> u64 {
+        a + b
+    }
+    fn zero(&self) -> u64 {
+        0
+    }
+    fn to_f64(&self, v: &u64) -> f64 {
+        *v as f64
+    }
+    fn formatter(&self) -> &dyn ValueFormatter {
+        &NanosFormatter
+    }
+}
+
+/// Formats nanoseconds like criterion's wall time (ns / µs / ms).
+struct NanosFormatter;
+
+impl ValueFormatter for NanosFormatter {
+    fn scale_values(&self, typical: f64, values: &mut [f64]) -> &'static str {
+        let (factor, unit) = if typical < 1e3 {
+            (1.0, "ns")
+        } else if typical < 1e6 {
+            (1e-3, "µs")
+        } else {
+            (1e-6, "ms")
+        };
+        values.iter_mut().for_each(|v| *v *= factor);
+        unit
+    }
+    fn scale_throughputs(&self, typical: f64, t: &Throughput, values: &mut [f64]) -> &'static str {
+        let per_iter = match *t {
+            Throughput::Elements(n) | Throughput::ElementsAndBytes { elements: n, .. } => n,
+            Throughput::Bytes(n) | Throughput::BytesDecimal(n) | Throughput::Bits(n) => n,
+        } as f64;
+        let _ = typical;
+        values.iter_mut().for_each(|v| *v = per_iter * 1e9 / *v);
+        "elem/s"
+    }
+    fn scale_for_machines(&self, _values: &mut [f64]) -> &'static str {
+        "ns"
+    }
+}
+
+fn cpu_time(c: &mut Criterion<ThreadCpuTime>) {
+    if thread_cpu_ns().is_some() {
+        kinematics(c, "cpu_time/");
+    } else {
+        eprintln!("no thread CPU clock: CPU-time benchmarks skipped");
+    }
+}
+
+criterion_group!(benches, wall, ik);
+criterion_group! {
+    name = cpu_benches;
+    config = Criterion::default().with_measurement(ThreadCpuTime);
+    targets = cpu_time
+}
+criterion_main!(benches, cpu_benches);

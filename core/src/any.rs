@@ -75,7 +75,9 @@ fn build<const N: usize>(links: &[Link], limits: &[JointLimits]) -> Result<Robot
 }
 
 impl AnyRobot {
-    /// A robot from slices of links and limits of equal length 1..=[`MAX_JOINTS`].
+    /// A robot from slices of links and limits of equal length 1..=[`MAX_JOINTS`]: no
+    /// joints is a [`Error::DimensionMismatch`] (as for [`Robot::new`]), more than
+    /// [`MAX_JOINTS`] a [`Error::CapacityExceeded`].
     pub fn new(links: &[Link], limits: &[JointLimits]) -> Result<Self> {
         if links.len() != limits.len() {
             return Err(Error::DimensionMismatch {
@@ -92,6 +94,12 @@ impl AnyRobot {
             6 => build::<6>(links, limits)?.into(),
             7 => build::<7>(links, limits)?.into(),
             8 => build::<8>(links, limits)?.into(),
+            0 => {
+                return Err(Error::DimensionMismatch {
+                    expected: 1,
+                    found: 0,
+                });
+            }
             n => {
                 return Err(Error::CapacityExceeded {
                     needed: n,

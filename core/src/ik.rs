@@ -146,8 +146,13 @@ pub fn solve_ik<const N: usize>(
 }
 
 /// Moves joints by ±2π towards `seed` where the limits allow (same pose, nearer readings).
+/// Joints with a scale error are left alone: Δθ_j = k_j·q_j is not 2π-periodic, so the
+/// shifted reading would reach a different pose.
 fn shift_towards<const N: usize>(q: &mut [f64; N], seed: &[f64; N], robot: &Robot<N>) {
     for j in 0..N {
+        if robot.effect_params().scale[j] != 0.0 {
+            continue;
+        }
         let lim = robot.limits()[j];
         for k in [-2.0 * PI, 2.0 * PI] {
             let cand = q[j] + k;

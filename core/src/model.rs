@@ -6,12 +6,12 @@
 //! `T_e^b(q) = T_0^b·A_1(q_1)···A_N(q_N)·T_e^N`.
 //! Units: metres, radians, kilograms, seconds.
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 
 use crate::effects::{Effect, EffectSet};
 use crate::error::{Error, JointIndex, ParamIndex, Quantity, Result, check_finite};
 use crate::params::{CyclicTerm, LinkParam, ParamId, ParamSet, num_geometric_params, num_params};
-use crate::pose::{Transform, pose_from_vector6, rot_x, rot_y};
+use crate::pose::{Transform, pose_from_vector6};
 
 /// Two consecutive joint axes count as parallel when the angle between them is below this
 /// (1°). For such links Hayati's β replaces d, because d (the distance along the axis to
@@ -198,8 +198,9 @@ pub(crate) struct Geometry<const N: usize> {
     pub(crate) links: [Link; N],
     pub(crate) base: [f64; 6],
     pub(crate) tool: [f64; 6],
-    /// Rx(α_i)·Ry(β_i), the constant rotation of each link.
-    pub(crate) link_rot: [Matrix3<f64>; N],
+    /// `[cos α_i, sin α_i, cos β_i, sin β_i]`: the constant rotation `Rx(α_i)·Ry(β_i)` of
+    /// each link, applied in FK as two plane rotations of column pairs.
+    pub(crate) link_cs: [[f64; 4]; N],
     pub(crate) t_base: Transform,
     pub(crate) t_tool: Transform,
 }
@@ -210,7 +211,7 @@ impl<const N: usize> Geometry<N> {
             links,
             base,
             tool,
-            link_rot: [Matrix3::identity(); N],
+            link_cs: [[1.0, 0.0, 1.0, 0.0]; N],
             t_base: pose_from_vector6(&base),
             t_tool: pose_from_vector6(&tool),
         };
@@ -220,8 +221,10 @@ impl<const N: usize> Geometry<N> {
         g
     }
     fn refresh_link(&mut self, i: usize) {
-        if let (Some(r), Some(l)) = (self.link_rot.get_mut(i), self.links.get(i)) {
-            *r = rot_x(l.alpha) * rot_y(l.beta);
+        if let (Some(cs), Some(l)) = (self.link_cs.get_mut(i), self.links.get(i)) {
+            let (sa, ca) = crate::math::sin_cos(l.alpha);
+            let (sb, cb) = crate::math::sin_cos(l.beta);
+            *cs = [ca, sa, cb, sb];
         }
     }
 }
@@ -258,10 +261,14 @@ impl<const N: usize> Robot<N> {
             });
         }
         for (i, l) in links.iter().enumerate() {
+            // Flat parameter index 5·i + k (θ0, d, a, α, β), as in [`crate::params`].
             check_finite(&[l.theta0, l.d, l.a, l.alpha, l.beta], Quantity::Parameter).map_err(
-                |_| Error::NonFinite {
-                    what: Quantity::Parameter,
-                    index: 5 * i,
+                |e| match e {
+                    Error::NonFinite { what, index } => Error::NonFinite {
+                        what,
+                        index: 5 * i + index,
+                    },
+                    other => other,
                 },
             )?;
         }
@@ -337,9 +344,10 @@ impl<const N: usize> Robot<N> {
     pub fn auto_length_params(&self) -> [LengthParam; N] {
         let mut out = [LengthParam::D; N];
         for (i, lp) in out.iter_mut().enumerate().take(N.saturating_sub(1)) {
-            let r = self.geom.link_rot[i];
-            // Angle between z_{i-1} and z_i: z_i = Rx(α)Ry(β)·e_z in frame i−1 (after Rz).
-            let cos_angle = r[(2, 2)].abs().min(1.0);
+            let [ca, _, cb, _] = self.geom.link_cs[i];
+            // Angle between z_{i-1} and z_i: z_i = Rx(α)Ry(β)·e_z in frame i−1 (after Rz),
+            // whose z component is cos α·cos β.
+            let cos_angle = (ca * cb).abs().min(1.0);
             let angle =
                 crate::math::atan2(crate::math::sqrt(1.0 - cos_angle * cos_angle), cos_angle);
             if angle < PARALLEL_AXES_TOL_RAD {
@@ -600,26 +608,28 @@ impl<const N: usize> Robot<N> {
             }
             (_, s) => s.unwrap_or([0.0; N]),
         };
+        let has_scale = e.scale.iter().any(|&k| k != 0.0);
+        let has_cyclic = e.cyclic.iter().any(|c| c.iter().any(|&v| v != 0.0));
+        if !(has_compliance || has_backlash || has_scale || has_cyclic) {
+            // The geometric model: the readings are the angles.
+            return Ok(state.q);
+        }
         for j in 0..N {
             let q = state.q[j];
             let c = &e.cyclic[j];
-            // The geometric model (no cyclic terms) needs no trigonometry here: FK is the
-            // hot path of identification and Monte-Carlo studies.
-            let cyclic = if c.iter().any(|&v| v != 0.0) {
+            let mut dtheta =
+                e.compliance[j] * tau[j] + e.scale[j] * q + e.backlash[j] * approach[j];
+            // The cyclic terms cost a sine and cosine: only where they are in the model
+            // (FK without effects is dominated by its trigonometry).
+            if c.iter().any(|&v| v != 0.0) {
                 let (s1, c1) = crate::math::sin_cos(q);
                 let (s2, c2) = (2.0 * s1 * c1, c1 * c1 - s1 * s1);
-                c[CyclicTerm::Sin1 as usize] * s1
+                dtheta += c[CyclicTerm::Sin1 as usize] * s1
                     + c[CyclicTerm::Cos1 as usize] * c1
                     + c[CyclicTerm::Sin2 as usize] * s2
-                    + c[CyclicTerm::Cos2 as usize] * c2
-            } else {
-                0.0
-            };
-            out[j] = q
-                + e.compliance[j] * tau[j]
-                + e.scale[j] * q
-                + cyclic
-                + e.backlash[j] * approach[j];
+                    + c[CyclicTerm::Cos2 as usize] * c2;
+            }
+            out[j] = q + dtheta;
         }
         Ok(out)
     }

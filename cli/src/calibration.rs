@@ -1,0 +1,297 @@
+//! Runs the core's identification for the CLI: the identifiability analysis once, then the
+//! requested algorithms in parallel (rayon), and the consensus check between them.
+
+use std::time::Instant;
+
+use kincal::identify::{
+    Algorithm, Bounds, Identifiability, Identification, IdentifyOptions, MAX_MODEL_PARAMS,
+    Measurement, Workspace, analyze, identify,
+};
+use kincal::pose::OrientationError;
+use kincal::{EffectSet, ParamIndex, ParamSet, Robot};
+use rayon::prelude::*;
+
+/// Workspace capacity: every parameter of the largest supported model.
+pub const WS_PARAMS: usize = MAX_MODEL_PARAMS;
+
+/// A zeroed identification workspace on the heap (it is several hundred KiB: never on a
+/// thread's stack).
+pub fn new_workspace() -> Box<Workspace<WS_PARAMS>> {
+    let b = Box::<Workspace<WS_PARAMS>>::new_zeroed();
+    // SAFETY: the core documents all-zero as a valid `Workspace` (it holds only f64/usize
+    // arrays and counters), which is what `new_zeroed` provides.
+    unsafe { b.assume_init() }
+}
+
+/// How residual rows are weighted.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Weighting {
+    /// Both weights 1 (positions in m, rotations in rad), as in the paper.
+    Unit,
+    /// Explicit weights [1/m²], [1/rad²].
+    Explicit { pos: f64, rot: f64 },
+    /// Weights 1/σ² from the instrument's 1σ noise per axis.
+    Sigma { pos_m: f64, rot_rad: f64 },
+}
+
+impl Weighting {
+    /// (position weight [1/m²], rotation weight [1/rad²]).
+    pub fn weights(&self) -> (f64, f64) {
+        match *self {
+            Weighting::Unit => (1.0, 1.0),
+            Weighting::Explicit { pos, rot } => (pos, rot),
+            Weighting::Sigma { pos_m, rot_rad } => {
+                (1.0 / (pos_m * pos_m), 1.0 / (rot_rad * rot_rad))
+            }
+        }
+    }
+    /// Name written to model files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Weighting::Unit => "unit",
+            Weighting::Explicit { .. } => "explicit",
+            Weighting::Sigma { .. } => "sigma",
+        }
+    }
+}
+
+/// What to identify and how.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Settings {
+    pub effects: EffectSet,
+    pub algorithms: Vec<Algorithm>,
+    /// OPT1 interval half-width for lengths [m] …
+    pub bounds_length_m: f64,
+    /// … and for angles [rad].
+    pub bounds_angle_rad: f64,
+    pub weighting: Weighting,
+    pub orientation: OrientationError,
+    pub allow_data_deficiency: bool,
+    pub max_iterations: u32,
+}
+
+impl Settings {
+    /// The paper's set-up: geometric parameters, unit weights, exact orientation error,
+    /// OPT1 intervals 5 mm / 5°.
+    pub fn paper(algorithms: Vec<Algorithm>) -> Self {
+        Settings {
+            effects: EffectSet::NONE,
+            algorithms,
+            bounds_length_m: kincal::identify::DEFAULT_LENGTH_TOL_M,
+            bounds_angle_rad: kincal::identify::DEFAULT_ANGLE_TOL_RAD,
+            weighting: Weighting::Unit,
+            orientation: OrientationError::Exact,
+            allow_data_deficiency: false,
+            max_iterations: 200,
+        }
+    }
+
+    fn options<'a>(
+        &self,
+        algorithm: Algorithm,
+        requested: ParamSet,
+        bounds: Option<&'a Bounds>,
+    ) -> IdentifyOptions<'a> {
+        let mut o = IdentifyOptions::new(algorithm, requested);
+        let (wp, wr) = self.weighting.weights();
+        o.weight_pos = wp;
+        o.weight_rot = wr;
+        o.orientation = self.orientation;
+        o.allow_data_deficiency = self.allow_data_deficiency;
+        o.max_iterations = self.max_iterations;
+        o.bounds = bounds;
+        o
+    }
+}
+
+/// One algorithm's result.
+#[derive(Debug, Clone)]
+pub struct Run<const N: usize> {
+    pub ident: Identification<N>,
+    pub seconds: f64,
+}
+
+/// The outcome of a calibration.
+#[derive(Debug, Clone)]
+pub struct Calibration<const N: usize> {
+    /// The initial model (the ROBOT).
+    pub start: Robot<N>,
+    pub settings: Settings,
+    pub analysis: Identifiability,
+    /// Singular values of the unit-scaled Jacobian of the identifiable parameters.
+    pub singular_values: Vec<f64>,
+    /// One per requested algorithm, in the order asked.
+    pub runs: Vec<Run<N>>,
+    /// With two or more algorithms.
+    pub consensus: Option<Consensus>,
+}
+
+/// Why a calibration stopped.
+#[derive(Debug, Clone)]
+pub enum Failure {
+    /// The data determine too few parameters (the analysis says which).
+    Deficient {
+        analysis: Box<Identifiability>,
+        singular_values: Vec<f64>,
+    },
+    /// The core refused or failed (`algorithm` when one algorithm failed).
+    Core {
+        algorithm: Option<Algorithm>,
+        error: kincal::Error,
+    },
+}
+
+/// Analysis, then every algorithm of `settings` in parallel.
+pub fn calibrate<const N: usize>(
+    start: &Robot<N>,
+    data: &[Measurement<N>],
+    settings: &Settings,
+) -> Result<Calibration<N>, Failure> {
+    let requested = start.param_set(settings.effects);
+    let core = |algorithm| move |error| Failure::Core { algorithm, error };
+    let mut ws = new_workspace();
+    let opts = settings.options(Algorithm::Ols, requested, None);
+    let analysis = analyze(start, data, &opts, &mut ws).map_err(core(None))?;
+    let singular_values = ws.singular_values().to_vec();
+    if analysis.rank == 0
+        || (!analysis.data_deficient.is_empty() && !settings.allow_data_deficiency)
+    {
+        return Err(Failure::Deficient {
+            analysis: Box::new(analysis),
+            singular_values,
+        });
+    }
+    let results: Vec<Result<Run<N>, Failure>> = settings
+        .algorithms
+        .par_iter()
+        .map(|&algorithm| {
+            let t0 = Instant::now();
+            let bounds = Box::new(Bounds::around(
+                start,
+                settings.bounds_length_m,
+                settings.bounds_angle_rad,
+            ));
+            let opts = settings.options(algorithm, requested, Some(&bounds));
+            let mut ws = new_workspace();
+            let ident = identify(start, data, &opts, &mut ws).map_err(core(Some(algorithm)))?;
+            Ok(Run {
+                ident,
+                seconds: t0.elapsed().as_secs_f64(),
+            })
+        })
+        .collect();
+    let runs = results.into_iter().collect::<Result<Vec<_>, _>>()?;
+    let consensus = (runs.len() >= 2).then(|| Consensus::check(&runs, &analysis.identifiable));
+    Ok(Calibration {
+        start: *start,
+        settings: settings.clone(),
+        analysis,
+        singular_values,
+        runs,
+        consensus,
+    })
+}
+
+/// Two algorithms disagree on a parameter when the difference exceeds
+/// `CONSENSUS_K_SIGMA` combined standard errors plus `CONSENSUS_FLOOR_SI`. Each run's
+/// standard errors are first rescaled to the smallest residual variance σ² among the runs
+/// (se·sqrt(σ²_min/σ²_run)): a run that stopped far from the least-squares minimum (OPT1
+/// held on its bounds) has a σ² inflated by its own misfit, which must not widen the
+/// tolerance and hide the disagreement.
+pub const CONSENSUS_K_SIGMA: f64 = 3.0;
+/// Absolute floor of the consensus tolerance, in the parameter's SI unit (m, rad, …): on
+/// noise-free data the standard errors vanish and the algorithms' stopping rules alone
+/// leave differences of ~1e-11.
+pub const CONSENSUS_FLOOR_SI: f64 = 1e-8;
+
+/// A parameter on which two algorithms differ.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Disagreement {
+    pub param: ParamIndex,
+    pub a: Algorithm,
+    pub b: Algorithm,
+    /// |value_a − value_b| (SI unit).
+    pub difference: f64,
+    /// sqrt(se_a² + se_b²).
+    pub combined_std_error: f64,
+    /// k·combined + floor.
+    pub tolerance: f64,
+}
+
+/// The consensus check between the algorithms' results.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Consensus {
+    pub k_sigma: f64,
+    pub floor_si: f64,
+    /// The pair and parameter with the largest difference relative to its tolerance.
+    pub largest: Option<Disagreement>,
+    /// Every (pair, parameter) beyond its tolerance.
+    pub disagreeing: Vec<Disagreement>,
+}
+
+impl Consensus {
+    /// Compares every pair of runs on every identified parameter.
+    pub fn check<const N: usize>(runs: &[Run<N>], identified: &ParamSet) -> Self {
+        let mut largest: Option<Disagreement> = None;
+        let mut disagreeing = Vec::new();
+        let s2_min = runs
+            .iter()
+            .map(|r| r.ident.sigma2)
+            .filter(|&s| s > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        let scale = |r: &Run<N>| {
+            if r.ident.sigma2 > 0.0 && s2_min.is_finite() {
+                (s2_min / r.ident.sigma2).sqrt()
+            } else {
+                1.0
+            }
+        };
+        for (i, ra) in runs.iter().enumerate() {
+            for rb in &runs[i + 1..] {
+                for p in identified.iter() {
+                    let idx = ParamIndex(p);
+                    let (Ok(va), Ok(vb)) = (ra.ident.robot.param(idx), rb.ident.robot.param(idx))
+                    else {
+                        continue;
+                    };
+                    let (sa, sb) = (
+                        ra.ident.std_errors[p] * scale(ra),
+                        rb.ident.std_errors[p] * scale(rb),
+                    );
+                    let combined = (sa * sa + sb * sb).sqrt();
+                    let d = Disagreement {
+                        param: idx,
+                        a: ra.ident.algorithm,
+                        b: rb.ident.algorithm,
+                        difference: (va - vb).abs(),
+                        combined_std_error: combined,
+                        tolerance: CONSENSUS_K_SIGMA * combined + CONSENSUS_FLOOR_SI,
+                    };
+                    if largest.is_none_or(|l| d.ratio() > l.ratio()) {
+                        largest = Some(d);
+                    }
+                    if d.difference > d.tolerance {
+                        disagreeing.push(d);
+                    }
+                }
+            }
+        }
+        Consensus {
+            k_sigma: CONSENSUS_K_SIGMA,
+            floor_si: CONSENSUS_FLOOR_SI,
+            largest,
+            disagreeing,
+        }
+    }
+    /// No parameter disagrees.
+    pub fn agree(&self) -> bool {
+        self.disagreeing.is_empty()
+    }
+}
+
+impl Disagreement {
+    /// Difference over tolerance (> 1: disagreement).
+    pub fn ratio(&self) -> f64 {
+        self.difference / self.tolerance
+    }
+}

@@ -1,0 +1,473 @@
+//! `kincal validate MODEL DATA [--plot FILE.svg]`.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use kincal::Robot;
+use kincal::identify::Measurement;
+use kincal::validation::{
+    ErrorSummary, PoseErrors, TARGET_POS_M, TARGET_ROT_RAD, Verdict, biopsy_allowed_rotation_rad,
+};
+use serde::Serialize;
+
+use crate::args::{non_negative, positive};
+use crate::data::{self, DataOptions};
+use crate::error::{CliError, core_error};
+use crate::plot::{self, Series};
+use crate::report::Table;
+use crate::robot_arg;
+
+pub const LONG_ABOUT: &str = "\
+Compares the model's poses with the measured poses of DATA (measured minus model, in the base
+frame): per pose the position error e_p = (e_x, e_y, e_z) and its norm [mm], and the
+orientation error e_φ (rotation vector of R_meas·R_modelᵀ, exact) and its angle [deg]; then
+max and RMS (sqrt of the mean squared norm) over the poses, and the verdict against the
+targets: every pose below --target-pos-mm (default 1 mm) and --target-rot-deg (default 0.66°),
+the paper's Section 4.4. Also prints the paper's eq. (3): the orientation error a biopsy
+allows, 2·asin((r_t − d)/(2·√2·l_max)), with r_t = --tumour-radius-mm (5), l_max =
+--insertion-mm (200) and d = --biopsy-d-mm (default: the worst position error found).
+
+For a model file from `calibrate --algorithm all` the summary covers NOM (the initial model),
+OLS, OPT1 and OPT2; for a single-algorithm model NOM and that algorithm; for a ROBOT the
+nominal model only.
+
+--plot writes the paper's error figure (Fig. 7/11) as one SVG: two 4×4 panels, position
+errors [mm] above and orientation errors [deg] below; columns NOM, OLS, OPT1, OPT2 (those
+present), rows e_x, e_y, e_z and the norm, against the pose index. The dashed red line in the
+norm rows is the target (drawn when the errors reach 5% of it). --json writes every
+number (SI units, full precision).";
+
+pub const EXAMPLE: &str = "\
+Example:
+  kincal validate aria-model.json check.csv --plot errors.svg --json validation.json";
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    /// Model file, or ROBOT for the nominal model
+    #[arg(value_name = "MODEL")]
+    pub model: String,
+    /// Measurement CSV with measured poses
+    #[arg(value_name = "DATA")]
+    pub data: PathBuf,
+    /// Write the error figure (SVG)
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<PathBuf>,
+    /// Write per-pose errors and summaries as JSON
+    #[arg(long, value_name = "REPORT.json")]
+    pub json: Option<PathBuf>,
+    /// Position target per pose [mm]
+    #[arg(long, value_name = "MM", default_value = "1", value_parser = positive)]
+    pub target_pos_mm: f64,
+    /// Orientation target per pose [deg]
+    #[arg(long, value_name = "DEG", default_value = "0.66", value_parser = positive)]
+    pub target_rot_deg: f64,
+    /// Eq. (3): position error at the puncture point [mm] (default: worst e_p found)
+    #[arg(long, value_name = "MM", value_parser = non_negative)]
+    pub biopsy_d_mm: Option<f64>,
+    /// Eq. (3): tumour radius r_t [mm]
+    #[arg(long, value_name = "MM", default_value = "5", value_parser = positive)]
+    pub tumour_radius_mm: f64,
+    /// Eq. (3): maximum insertion length l_max [mm]
+    #[arg(long, value_name = "MM", default_value = "200", value_parser = positive)]
+    pub insertion_mm: f64,
+    /// Accept joint readings outside the robot's joint limits
+    #[arg(long)]
+    pub allow_out_of_limits: bool,
+    /// Print the summary only (no per-pose table)
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Errors of one model on a data set.
+#[derive(Debug, Clone)]
+pub struct Evaluation {
+    pub name: String,
+    pub errors: Vec<PoseErrors>,
+    pub summary: ErrorSummary,
+}
+
+/// Per-pose errors of `robot` on `meas` (orientation errors zero for position-only rows).
+pub fn evaluate<const N: usize>(
+    name: &str,
+    robot: &Robot<N>,
+    meas: &[Measurement<N>],
+) -> Result<Evaluation, (usize, kincal::Error)> {
+    let mut summary = ErrorSummary::default();
+    let errors = meas
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            let t = robot.fk(&m.state).map_err(|e| (i, e))?;
+            let mut e = PoseErrors::between(&m.pose, &t);
+            if !m.mask.has_orientation() {
+                e.rot_rad = [0.0; 3];
+                e.rot_norm_rad = 0.0;
+            }
+            summary.add(&e);
+            Ok(e)
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(Evaluation {
+        name: name.to_string(),
+        errors,
+        summary,
+    })
+}
+
+/// Targets of the verdict [m], [rad].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Targets {
+    pub pos_m: f64,
+    pub rot_rad: f64,
+}
+
+impl Default for Targets {
+    fn default() -> Self {
+        Targets {
+            pos_m: TARGET_POS_M,
+            rot_rad: TARGET_ROT_RAD,
+        }
+    }
+}
+
+/// An error in mm or degrees: 6 decimals, exponent form below 0.001.
+pub fn fmt_err(v: f64) -> String {
+    if v == 0.0 || v.abs() >= 1e-3 {
+        format!("{v:.6}")
+    } else {
+        format!("{v:.3e}")
+    }
+}
+
+fn verdict_text(v: &Verdict, has_rot: bool) -> String {
+    match (v.pos_ok, v.rot_ok || !has_rot) {
+        (true, true) => "PASS".into(),
+        (false, true) => "FAIL (e_p)".into(),
+        (true, false) => "FAIL (e_φ)".into(),
+        (false, false) => "FAIL (e_p, e_φ)".into(),
+    }
+}
+
+/// Summary table of several evaluations against the targets.
+pub fn summary_table(evals: &[Evaluation], targets: Targets, has_rot: bool) -> String {
+    let mut t = Table::new(&[
+        "model",
+        "max e_p [mm]",
+        "RMS e_p [mm]",
+        "max e_φ [deg]",
+        "RMS e_φ [deg]",
+        "verdict",
+    ]);
+    for e in evals {
+        let s = &e.summary;
+        let v = Verdict::judge(s, targets.pos_m, targets.rot_rad);
+        let rot = |x: f64| {
+            if has_rot {
+                fmt_err(x.to_degrees())
+            } else {
+                "n/a".to_string()
+            }
+        };
+        t.row(vec![
+            e.name.clone(),
+            fmt_err(s.max_pos_m * 1e3),
+            fmt_err(s.rms_pos_m() * 1e3),
+            rot(s.max_rot_rad),
+            rot(s.rms_rot_rad()),
+            verdict_text(&v, has_rot),
+        ]);
+    }
+    t.render("  ")
+}
+
+/// Per-pose table of one evaluation.
+pub fn pose_table(e: &Evaluation, ids: &[String], has_rot: bool) -> String {
+    let mut header = vec!["pose", "e_x [mm]", "e_y [mm]", "e_z [mm]", "|e_p| [mm]"];
+    if has_rot {
+        header.extend(["e_φx [deg]", "e_φy [deg]", "e_φz [deg]", "|e_φ| [deg]"]);
+    }
+    let mut t = Table::new(&header);
+    for (i, p) in e.errors.iter().enumerate() {
+        let mut row = vec![ids.get(i).cloned().unwrap_or_else(|| (i + 1).to_string())];
+        row.extend(p.pos_m.iter().map(|v| format!("{:+.6}", v * 1e3)));
+        row.push(format!("{:.6}", p.pos_norm_m * 1e3));
+        if has_rot {
+            row.extend(p.rot_rad.iter().map(|v| format!("{:+.6}", v.to_degrees())));
+            row.push(format!("{:.6}", p.rot_norm_rad.to_degrees()));
+        }
+        t.row(row);
+    }
+    t.render("  ")
+}
+
+#[derive(Serialize)]
+struct PoseJson<'a> {
+    index: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pose_id: Option<&'a str>,
+    line: u64,
+    e_pos_m: [f64; 3],
+    e_pos_norm_m: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    e_rot_rad: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    e_rot_norm_rad: Option<f64>,
+}
+
+#[derive(Serialize)]
+struct SummaryJson {
+    name: String,
+    poses: usize,
+    max_pos_m: f64,
+    rms_pos_m: f64,
+    max_rot_rad: Option<f64>,
+    rms_rot_rad: Option<f64>,
+    pos_ok: bool,
+    rot_ok: Option<bool>,
+    passed: bool,
+}
+
+#[derive(Serialize)]
+struct ReportJson<'a> {
+    model: &'a str,
+    data: DataRef<'a>,
+    targets: TargetsJson,
+    eq3: Option<Eq3Json>,
+    summary: SummaryJson,
+    variants: Vec<SummaryJson>,
+    poses: Vec<PoseJson<'a>>,
+}
+
+#[derive(Serialize)]
+struct DataRef<'a> {
+    path: String,
+    sha256: &'a str,
+}
+
+#[derive(Serialize)]
+struct TargetsJson {
+    pos_m: f64,
+    rot_rad: f64,
+}
+
+#[derive(Serialize)]
+struct Eq3Json {
+    tumour_radius_m: f64,
+    insertion_m: f64,
+    d_m: f64,
+    allowed_rot_rad: f64,
+    rot_ok: Option<bool>,
+}
+
+fn summary_json(e: &Evaluation, t: Targets, has_rot: bool) -> SummaryJson {
+    let v = Verdict::judge(&e.summary, t.pos_m, t.rot_rad);
+    SummaryJson {
+        name: e.name.clone(),
+        poses: e.summary.count,
+        max_pos_m: e.summary.max_pos_m,
+        rms_pos_m: e.summary.rms_pos_m(),
+        max_rot_rad: has_rot.then_some(e.summary.max_rot_rad),
+        rms_rot_rad: has_rot.then(|| e.summary.rms_rot_rad()),
+        pos_ok: v.pos_ok,
+        rot_ok: has_rot.then_some(v.rot_ok),
+        passed: v.pos_ok && (v.rot_ok || !has_rot),
+    }
+}
+
+pub fn run(args: &Args) -> Result<(), CliError> {
+    let model = robot_arg::resolve_model(&args.model)?;
+    let effects = model
+        .file
+        .effects()
+        .map_err(|m| CliError::input(format!("{}: {m}", args.model)))?;
+    let name = model
+        .file
+        .algorithm()
+        .map_or("NOM".to_string(), |a| a.name().to_uppercase());
+    kincal::with_any_robot!(&model.robot, r => validate(r, &name, &model.file, effects, args))
+}
+
+fn validate<const N: usize>(
+    robot: &Robot<N>,
+    name: &str,
+    file: &crate::model_file::ModelFile,
+    effects: kincal::EffectSet,
+    args: &Args,
+) -> Result<(), CliError> {
+    let needed = effects
+        .iter()
+        .chain(robot.active_effects().iter())
+        .fold(kincal::EffectSet::NONE, kincal::EffectSet::with);
+    let set = data::read(
+        &args.data,
+        robot,
+        needed,
+        DataOptions {
+            require_pose: true,
+            allow_out_of_limits: args.allow_out_of_limits,
+        },
+    )?;
+    let meas = data::measurements::<N>(&set)?;
+    let has_rot = meas.iter().any(|m| m.mask.has_orientation());
+    let fail =
+        |(i, e): (usize, kincal::Error)| core_error(e, &set.source, |_| data::line_of(&set, i));
+    let main = evaluate(name, robot, &meas).map_err(fail)?;
+    let variants: Vec<(String, Robot<N>)> = file
+        .variants::<N>()
+        .map_err(|m| CliError::input(format!("{}: {m}", args.model)))?;
+    let evals = variants
+        .iter()
+        .map(|(n, r)| evaluate(n, r, &meas))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(fail)?;
+    let targets = Targets {
+        pos_m: args.target_pos_mm * 1e-3,
+        rot_rad: args.target_rot_deg.to_radians(),
+    };
+    let ids: Vec<String> = set
+        .rows
+        .iter()
+        .enumerate()
+        .map(|(i, r)| r.pose_id.clone().unwrap_or_else(|| (i + 1).to_string()))
+        .collect();
+
+    let d_m = args
+        .biopsy_d_mm
+        .map_or(main.summary.max_pos_m, |d| d * 1e-3);
+    let r_t = args.tumour_radius_mm * 1e-3;
+    let l_max = args.insertion_mm * 1e-3;
+    let eq3 = biopsy_allowed_rotation_rad(r_t, d_m, l_max).ok();
+
+    // Outputs first, so a refused path fails before anything is printed.
+    let mut inputs: Vec<&Path> = vec![&args.data];
+    let model_path = Path::new(&args.model);
+    if model_path.is_file() {
+        inputs.push(model_path);
+    }
+    if let Some(p) = &args.json {
+        let report = ReportJson {
+            model: &args.model,
+            data: DataRef {
+                path: args.data.display().to_string(),
+                sha256: &set.sha256,
+            },
+            targets: TargetsJson {
+                pos_m: targets.pos_m,
+                rot_rad: targets.rot_rad,
+            },
+            eq3: eq3.map(|a| Eq3Json {
+                tumour_radius_m: r_t,
+                insertion_m: l_max,
+                d_m,
+                allowed_rot_rad: a,
+                rot_ok: has_rot.then_some(main.summary.max_rot_rad < a),
+            }),
+            summary: summary_json(&main, targets, has_rot),
+            variants: evals
+                .iter()
+                .map(|e| summary_json(e, targets, has_rot))
+                .collect(),
+            poses: main
+                .errors
+                .iter()
+                .enumerate()
+                .map(|(i, e)| PoseJson {
+                    index: i + 1,
+                    pose_id: set.rows[i].pose_id.as_deref(),
+                    line: set.rows[i].line,
+                    e_pos_m: e.pos_m,
+                    e_pos_norm_m: e.pos_norm_m,
+                    e_rot_rad: has_rot.then_some(e.rot_rad),
+                    e_rot_norm_rad: has_rot.then_some(e.rot_norm_rad),
+                })
+                .collect(),
+        };
+        let text = serde_json::to_string_pretty(&report)
+            .map_err(|e| CliError::io(format!("{}: {e}", p.display())))?;
+        crate::files::write_atomic(p, &inputs, |w| {
+            w.write_all(text.as_bytes())?;
+            w.write_all(b"\n")
+        })?;
+    }
+    if let Some(p) = &args.plot {
+        let series: Vec<Series> = evals
+            .iter()
+            .map(|e| Series {
+                name: e.name.clone(),
+                errors: e.errors.clone(),
+            })
+            .collect();
+        let title = format!("{} on {}", args.model, args.data.display());
+        plot::write_error_figure(p, &inputs, &title, &series, has_rot, targets)?;
+    }
+
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "Validation of {} ({name} model of '{}') on {}: {} poses{}",
+        args.model,
+        file.robot.name,
+        set.source,
+        meas.len(),
+        if has_rot { "" } else { " (position only)" }
+    );
+    if !args.quiet {
+        let _ = writeln!(out, "\nPer-pose errors ({name}, measured − model):");
+        out.push_str(&pose_table(&main, &ids, has_rot));
+    }
+    let _ = writeln!(
+        out,
+        "\nSummary (targets per pose: e_p < {} mm, e_φ < {}°):",
+        args.target_pos_mm, args.target_rot_deg
+    );
+    out.push_str(&summary_table(
+        std::slice::from_ref(&main),
+        targets,
+        has_rot,
+    ));
+    if evals.len() > 1 || evals.first().is_some_and(|e| e.name != name) {
+        let _ = writeln!(out, "\nAll models in {}:", args.model);
+        out.push_str(&summary_table(&evals, targets, has_rot));
+    }
+    match eq3 {
+        Some(a) => {
+            let _ = writeln!(
+                out,
+                "\nEq. (3): with d = {:.4} mm at the puncture point (r_t = {} mm, l_max = {} mm) a biopsy allows e_φ up to {:.4}°{}",
+                d_m * 1e3,
+                args.tumour_radius_mm,
+                args.insertion_mm,
+                a.to_degrees(),
+                if has_rot {
+                    format!(
+                        ": worst e_φ {:.4}° {}",
+                        main.summary.max_rot_rad.to_degrees(),
+                        if main.summary.max_rot_rad < a {
+                            "PASS"
+                        } else {
+                            "FAIL"
+                        }
+                    )
+                } else {
+                    String::new()
+                }
+            );
+        }
+        None => {
+            let _ = writeln!(
+                out,
+                "\nEq. (3): d = {:.4} mm is not below r_t = {} mm: no orientation error is allowed",
+                d_m * 1e3,
+                args.tumour_radius_mm
+            );
+        }
+    }
+    if let Some(p) = &args.plot {
+        let _ = writeln!(out, "Error figure written to {}", p.display());
+    }
+    if let Some(p) = &args.json {
+        let _ = writeln!(out, "Report written to {}", p.display());
+    }
+    crate::report::emit(&out);
+    Ok(())
+}

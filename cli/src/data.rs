@@ -1,0 +1,148 @@
+//! Conversions between measurement-file rows and core types: joint states and measured
+//! poses. No kinematics here: the rotation conventions live in `kincal::pose`.
+
+use std::path::Path;
+
+use kincal::identify::{ComponentMask, Measurement};
+use kincal::pose::{pose_from_xyz_rpy, quaternion_to_matrix, transform};
+use kincal::{Effect, EffectSet, JointState, Robot, Transform};
+use nalgebra::Vector3;
+
+use crate::error::CliError;
+use crate::measurements::{MeasurementRow, MeasurementSet, Orientation, ReadOptions};
+
+/// How a command reads DATA.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DataOptions {
+    /// The rows must carry measured poses (x, y, z at least).
+    pub require_pose: bool,
+    /// Accept joint readings outside the robot's limits.
+    pub allow_out_of_limits: bool,
+}
+
+/// Reads DATA for `robot`: its joint count, its limits (unless allowed), and the auxiliary
+/// columns the model's effects need (`effects`: those the command will use).
+pub fn read<const N: usize>(
+    path: &Path,
+    robot: &Robot<N>,
+    effects: EffectSet,
+    opts: DataOptions,
+) -> Result<MeasurementSet, CliError> {
+    let mut ro = ReadOptions::new(N);
+    ro.joint_limits = Some(robot.limits().iter().map(|l| (l.lower, l.upper)).collect());
+    ro.allow_out_of_limits = opts.allow_out_of_limits;
+    ro.require_pose = opts.require_pose;
+    let set = crate::measurements::read_measurements(path, &ro)?;
+    require_inputs(&set, effects)?;
+    Ok(set)
+}
+
+/// Refuses data without the columns that `effects` need, naming the missing column.
+pub fn require_inputs(set: &MeasurementSet, effects: EffectSet) -> Result<(), CliError> {
+    let missing = |col: &str, effect: Effect, what: &str| {
+        CliError::input(format!(
+            "{}:{}: missing column '{col}': the {effect} effect needs {what}",
+            set.source, set.header_line
+        ))
+    };
+    if effects.contains(Effect::Backlash) && !set.has_approach {
+        return Err(missing(
+            "s1",
+            Effect::Backlash,
+            &format!("the approach directions s1..s{}", set.n_joints),
+        ));
+    }
+    if effects.contains(Effect::Thermal) && !set.has_temperature {
+        return Err(missing(
+            "temp_c",
+            Effect::Thermal,
+            "the arm temperature in °C",
+        ));
+    }
+    Ok(())
+}
+
+/// The joint state of a row (readings, approach directions, temperature).
+pub fn joint_state<const N: usize>(row: &MeasurementRow) -> JointState<N> {
+    let mut q = [0.0; N];
+    for (d, s) in q.iter_mut().zip(&row.q_rad) {
+        *d = *s;
+    }
+    let approach = row.approach.as_ref().map(|s| {
+        let mut a = [0.0; N];
+        for (d, v) in a.iter_mut().zip(s) {
+            *d = f64::from(*v);
+        }
+        a
+    });
+    JointState {
+        q,
+        approach,
+        temp_c: row.temp_c,
+    }
+}
+
+/// The measured pose of a row and which components it carries; `None` without a position.
+pub fn measured_pose(
+    row: &MeasurementRow,
+    source: &str,
+) -> Result<Option<(Transform, ComponentMask)>, CliError> {
+    let Some(p) = row.position_m else {
+        return Ok(None);
+    };
+    Ok(Some(match row.orientation {
+        None => (
+            transform(
+                nalgebra::Matrix3::identity(),
+                Vector3::new(p[0], p[1], p[2]),
+            ),
+            ComponentMask::POSITION,
+        ),
+        Some(Orientation::Rpy {
+            roll_rad,
+            pitch_rad,
+            yaw_rad,
+        }) => (
+            pose_from_xyz_rpy(p, [roll_rad, pitch_rad, yaw_rad]),
+            ComponentMask::ALL,
+        ),
+        Some(Orientation::Quaternion { w, x, y, z }) => {
+            let r = quaternion_to_matrix(&[w, x, y, z]).map_err(|e| {
+                CliError::input(format!(
+                    "{source}:{}: column 'qw': {e}: expected a unit quaternion",
+                    row.line
+                ))
+            })?;
+            (
+                transform(r, Vector3::new(p[0], p[1], p[2])),
+                ComponentMask::ALL,
+            )
+        }
+    }))
+}
+
+/// Every row as a core measurement (the set must have positions).
+pub fn measurements<const N: usize>(set: &MeasurementSet) -> Result<Vec<Measurement<N>>, CliError> {
+    set.rows
+        .iter()
+        .map(|row| {
+            let (pose, mask) = measured_pose(row, &set.source)?.ok_or_else(|| {
+                CliError::input(format!(
+                    "{}:{}: missing column 'x': expected measured poses (x, y, z)",
+                    set.source, row.line
+                ))
+            })?;
+            Ok(Measurement {
+                state: joint_state::<N>(row),
+                pose,
+                mask,
+                weight: 1.0,
+            })
+        })
+        .collect()
+}
+
+/// Line of the file where pose `index` (zero-based row) starts.
+pub fn line_of(set: &MeasurementSet, index: usize) -> Option<u64> {
+    set.rows.get(index).map(|r| r.line)
+}

@@ -1,0 +1,413 @@
+//! Human-readable reports: aligned tables of parameters, identifiability, residuals,
+//! correlations, the consensus check and validation errors. Formatting only.
+
+use std::fmt::Write as _;
+
+use kincal::identify::{Identifiability, ResidualStats};
+use kincal::{ParamId, ParamIndex, ParamSet};
+
+use crate::calibration::{Calibration, Consensus};
+use crate::units::display_unit;
+
+/// Writes a report to stdout. A closed pipe (`kincal … | head`) is not an error: the
+/// outputs are already written.
+pub fn emit(text: &str) {
+    use std::io::Write as _;
+    let mut out = std::io::stdout().lock();
+    let _ = out.write_all(text.as_bytes()).and_then(|()| out.flush());
+}
+
+/// A plain text table: first column left-aligned, the others right-aligned.
+#[derive(Debug, Clone, Default)]
+pub struct Table {
+    pub header: Vec<String>,
+    pub rows: Vec<Vec<String>>,
+}
+
+impl Table {
+    pub fn new(header: &[&str]) -> Self {
+        Table {
+            header: header.iter().map(|s| s.to_string()).collect(),
+            rows: Vec::new(),
+        }
+    }
+    pub fn row(&mut self, cells: Vec<String>) {
+        self.rows.push(cells);
+    }
+    /// Renders with two spaces between columns, each line indented by `indent`.
+    pub fn render(&self, indent: &str) -> String {
+        let ncol = self.header.len();
+        let mut w = vec![0usize; ncol];
+        for r in std::iter::once(&self.header).chain(&self.rows) {
+            for (k, c) in r.iter().enumerate().take(ncol) {
+                w[k] = w[k].max(c.chars().count());
+            }
+        }
+        let mut out = String::new();
+        let line = |out: &mut String, r: &[String]| {
+            out.push_str(indent);
+            for (k, c) in r.iter().enumerate().take(ncol) {
+                let pad = w[k] - c.chars().count();
+                if k == 0 {
+                    out.push_str(c);
+                    out.push_str(&" ".repeat(pad));
+                } else {
+                    out.push_str("  ");
+                    out.push_str(&" ".repeat(pad));
+                    out.push_str(c);
+                }
+            }
+            while out.ends_with(' ') {
+                out.pop();
+            }
+            out.push('\n');
+        };
+        line(&mut out, &self.header);
+        let total: usize = w.iter().sum::<usize>() + 2 * ncol.saturating_sub(1);
+        out.push_str(indent);
+        out.push_str(&"-".repeat(total));
+        out.push('\n');
+        for r in &self.rows {
+            line(&mut out, r);
+        }
+        out
+    }
+}
+
+/// Label of flat parameter `i` of an `N`-joint model.
+pub fn label<const N: usize>(i: usize) -> String {
+    ParamId::from_index(ParamIndex(i), N).map_or_else(|_| format!("#{i}"), |id| id.to_string())
+}
+
+fn id<const N: usize>(i: usize) -> Option<ParamId> {
+    ParamId::from_index(ParamIndex(i), N).ok()
+}
+
+/// Fixed-point with 6 decimals for ordinary magnitudes, exponent form otherwise.
+pub fn fmt_value(v: f64) -> String {
+    if v == 0.0 || (1e-3..1e6).contains(&v.abs()) {
+        format!("{v:.6}")
+    } else {
+        format!("{v:.4e}")
+    }
+}
+
+/// A signed change: fixed-point for ordinary magnitudes, exponent form otherwise.
+pub fn fmt_change(v: f64) -> String {
+    if v == 0.0 {
+        "0".to_string()
+    } else if (1e-3..1e6).contains(&v.abs()) {
+        format!("{v:+.6}")
+    } else {
+        format!("{v:+.4e}")
+    }
+}
+
+/// Short exponent form (std errors, small quantities).
+pub fn fmt_small(v: f64) -> String {
+    format!("{v:.2e}")
+}
+
+fn unit<const N: usize>(i: usize) -> &'static str {
+    id::<N>(i).map_or("", |id| display_unit(id).0)
+}
+
+fn list<const N: usize>(set: &ParamSet, a: &Identifiability, out: &mut String) {
+    for i in set.iter() {
+        let _ = write!(out, "    {:<16}", label::<N>(i));
+        match a.partner.get(i).copied().flatten() {
+            Some(p) => {
+                let _ = writeln!(
+                    out,
+                    "aligned with {} (|cos| = {:.6})",
+                    label::<N>(p.param.0),
+                    p.cosine
+                );
+            }
+            None => {
+                let _ = writeln!(out, "no effect on the measured pose");
+            }
+        }
+    }
+}
+
+/// The identifiability report: what the data determine, what is redundant and why.
+pub fn identifiability<const N: usize>(
+    a: &Identifiability,
+    singular_values: &[f64],
+    poses: usize,
+    rows: usize,
+) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "Identifiability: {} parameters requested, {poses} poses ({rows} measured components)",
+        a.requested.len()
+    );
+    let cond = if a.condition_number.is_finite() {
+        format!("{:.4e}", a.condition_number)
+    } else {
+        "infinite".to_string()
+    };
+    let _ = writeln!(
+        out,
+        "  identifiable:           {} (rank {}, condition number {cond})",
+        a.identifiable.len(),
+        a.rank
+    );
+    if let (Some(first), Some(last)) = (singular_values.first(), singular_values.last()) {
+        let _ = writeln!(
+            out,
+            "  singular values (unit-scaled columns): {} … {}",
+            fmt_small(*first),
+            fmt_small(*last)
+        );
+    }
+    let _ = writeln!(
+        out,
+        "  structurally redundant: {}{}",
+        a.structural.len(),
+        if a.structural.is_empty() {
+            ""
+        } else {
+            " (redundant in the model whatever the poses; kept at their values)"
+        }
+    );
+    list::<N>(&a.structural, a, &mut out);
+    let _ = writeln!(
+        out,
+        "  data-deficient:         {}{}",
+        a.data_deficient.len(),
+        if a.data_deficient.is_empty() {
+            ""
+        } else {
+            " (identifiable in general, not from these poses)"
+        }
+    );
+    list::<N>(&a.data_deficient, a, &mut out);
+    out
+}
+
+/// Parameter table of run `k`: label, unit, nominal, identified, Δ, std error, notes.
+pub fn parameters<const N: usize>(cal: &Calibration<N>, k: usize) -> String {
+    let r = &cal.runs[k].ident;
+    let mut t = Table::new(&[
+        "parameter",
+        "unit",
+        "nominal",
+        "identified",
+        "change",
+        "std error",
+        "",
+    ]);
+    for i in cal.analysis.requested.iter() {
+        let (Ok(v0), Ok(v)) = (cal.start.param(ParamIndex(i)), r.robot.param(ParamIndex(i))) else {
+            continue;
+        };
+        let f = id::<N>(i).map_or(1.0, |id| display_unit(id).1);
+        let (se, note) = if cal.analysis.identifiable.contains(i) {
+            (
+                fmt_small(r.std_errors[i] * f),
+                if r.at_bound.contains(i) {
+                    "AT BOUND"
+                } else {
+                    ""
+                },
+            )
+        } else if cal.analysis.structural.contains(i) {
+            ("-".to_string(), "redundant (fixed)")
+        } else {
+            ("-".to_string(), "data-deficient (fixed)")
+        };
+        t.row(vec![
+            label::<N>(i),
+            unit::<N>(i).to_string(),
+            fmt_value(v0 * f),
+            fmt_value(v * f),
+            fmt_change((v - v0) * f),
+            se,
+            note.to_string(),
+        ]);
+    }
+    t.render("  ")
+}
+
+/// Every run side by side (for `--algorithm all`).
+pub fn side_by_side<const N: usize>(cal: &Calibration<N>) -> String {
+    let mut header = vec!["parameter".to_string(), "unit".into(), "nominal".into()];
+    for run in &cal.runs {
+        header.push(run.ident.algorithm.name().to_uppercase());
+    }
+    for run in &cal.runs {
+        header.push(format!("se {}", run.ident.algorithm.name().to_uppercase()));
+    }
+    let mut t = Table {
+        header,
+        rows: Vec::new(),
+    };
+    for i in cal.analysis.identifiable.iter() {
+        let f = id::<N>(i).map_or(1.0, |id| display_unit(id).1);
+        let mut row = vec![
+            label::<N>(i),
+            unit::<N>(i).to_string(),
+            fmt_value(cal.start.param(ParamIndex(i)).unwrap_or(f64::NAN) * f),
+        ];
+        for run in &cal.runs {
+            let v = run.ident.robot.param(ParamIndex(i)).unwrap_or(f64::NAN) * f;
+            let mark = if run.ident.at_bound.contains(i) {
+                "*"
+            } else {
+                ""
+            };
+            row.push(format!("{}{mark}", fmt_value(v)));
+        }
+        for run in &cal.runs {
+            row.push(fmt_small(run.ident.std_errors[i] * f));
+        }
+        t.row(row);
+    }
+    let mut s = t.render("  ");
+    if cal.runs.iter().any(|r| !r.ident.at_bound.is_empty()) {
+        s.push_str("  * ended on its OPT1 interval bound\n");
+    }
+    s
+}
+
+fn stats_row(name: &str, s: &ResidualStats) -> Vec<String> {
+    use crate::cmd_validate::fmt_err;
+    vec![
+        name.to_string(),
+        fmt_err(s.rms_pos_m * 1e3),
+        fmt_err(s.max_pos_m * 1e3),
+        fmt_err(s.rms_rot_rad.to_degrees()),
+        fmt_err(s.max_rot_rad.to_degrees()),
+        fmt_small(s.cost),
+    ]
+}
+
+/// Residuals before and after, per run.
+pub fn residuals<const N: usize>(cal: &Calibration<N>) -> String {
+    let mut t = Table::new(&[
+        "model",
+        "RMS e_p [mm]",
+        "max e_p [mm]",
+        "RMS e_φ [deg]",
+        "max e_φ [deg]",
+        "cost",
+    ]);
+    if let Some(first) = cal.runs.first() {
+        t.row(stats_row("before (initial)", &first.ident.initial));
+    }
+    for run in &cal.runs {
+        t.row(stats_row(
+            &format!(
+                "after {} ({} it, {:.2} s)",
+                run.ident.algorithm.name().to_uppercase(),
+                run.ident.iterations,
+                run.seconds
+            ),
+            &run.ident.fitted,
+        ));
+    }
+    t.render("  ")
+}
+
+/// Strongly correlated estimates of run `k`.
+pub fn correlations<const N: usize>(cal: &Calibration<N>, k: usize) -> String {
+    let r = &cal.runs[k].ident;
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "Correlations above {} ({}): {}",
+        kincal::identify::CORRELATION_REPORT_THRESHOLD,
+        r.algorithm.name().to_uppercase(),
+        if r.n_correlated == 0 {
+            "none".to_string()
+        } else {
+            r.n_correlated.to_string()
+        }
+    );
+    for c in r.correlations() {
+        let _ = writeln!(
+            out,
+            "    {:<14} ~ {:<14} ρ = {:+.4}",
+            label::<N>(c.a.0),
+            label::<N>(c.b.0),
+            c.rho
+        );
+    }
+    if r.n_correlated > r.correlations().len() {
+        let _ = writeln!(
+            out,
+            "    … {} more",
+            r.n_correlated - r.correlations().len()
+        );
+    }
+    out
+}
+
+/// The consensus check.
+pub fn consensus<const N: usize>(c: &Consensus) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "Consensus: two algorithms disagree on a parameter when |difference| > {} combined std errors + {:e} (SI units;\n  std errors rescaled to the smallest residual variance of the runs)",
+        c.k_sigma, c.floor_si
+    );
+    if let Some(l) = &c.largest {
+        let f = id::<N>(l.param.0).map_or(1.0, |id| display_unit(id).1);
+        let _ = writeln!(
+            out,
+            "  largest disagreement: {} {} vs {}: {} {} ({:.3}× its tolerance {} {})",
+            label::<N>(l.param.0),
+            l.a.name().to_uppercase(),
+            l.b.name().to_uppercase(),
+            fmt_small(l.difference * f),
+            unit::<N>(l.param.0),
+            l.ratio(),
+            fmt_small(l.tolerance * f),
+            unit::<N>(l.param.0),
+        );
+    }
+    if c.agree() {
+        let _ = writeln!(
+            out,
+            "  verdict: the algorithms agree on every identified parameter"
+        );
+    } else {
+        let mut params: Vec<usize> = c.disagreeing.iter().map(|d| d.param.0).collect();
+        params.sort_unstable();
+        params.dedup();
+        let _ = writeln!(
+            out,
+            "  verdict: disagreement on {} parameter(s) ({} pair comparisons):",
+            params.len(),
+            c.disagreeing.len()
+        );
+        for p in params {
+            let f = id::<N>(p).map_or(1.0, |id| display_unit(id).1);
+            let pairs: Vec<String> = c
+                .disagreeing
+                .iter()
+                .filter(|d| d.param.0 == p)
+                .map(|d| {
+                    format!(
+                        "{}−{} {} > {}",
+                        d.a.name().to_uppercase(),
+                        d.b.name().to_uppercase(),
+                        fmt_small(d.difference * f),
+                        fmt_small(d.tolerance * f)
+                    )
+                })
+                .collect();
+            let _ = writeln!(
+                out,
+                "    {:<12} {:<6} {}",
+                label::<N>(p),
+                format!("[{}]", unit::<N>(p)),
+                pairs.join("; ")
+            );
+        }
+    }
+    out
+}

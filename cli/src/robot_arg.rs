@@ -1,0 +1,117 @@
+//! ROBOT and MODEL arguments (spec/cli.md): ROBOT is a built-in name or a robot
+//! description file; MODEL is a model file or a ROBOT (its nominal model).
+
+use std::path::Path;
+
+use kincal::any::AnyRobot;
+use kincal::aria;
+
+use crate::error::CliError;
+use crate::model_file::{self, ModelFile};
+
+/// Built-in robots: name and description.
+pub const BUILT_IN: &[(&str, &str)] = &[(
+    "aria",
+    "the ARIA arm of Arent et al. 2024: Table 1 geometry, eq. (2) limits, assumed mass model",
+)];
+
+/// A resolved ROBOT.
+#[derive(Debug, Clone)]
+pub struct RobotSpec {
+    /// Name recorded in model files.
+    pub name: String,
+    pub robot: AnyRobot,
+}
+
+/// Resolves a ROBOT argument: a built-in name, else a robot description file. This is the
+/// one place robot sources are told apart.
+pub fn resolve_robot(arg: &str) -> Result<RobotSpec, CliError> {
+    if let Some(spec) = built_in(arg) {
+        return Ok(spec);
+    }
+    let path = Path::new(arg);
+    if path.is_file() {
+        return load_robot_file(path);
+    }
+    let names: Vec<&str> = BUILT_IN.iter().map(|(n, _)| *n).collect();
+    Err(CliError::usage(format!(
+        "unknown robot '{arg}': expected a built-in robot ({}) or an existing robot description file",
+        names.join(", ")
+    )))
+}
+
+fn built_in(name: &str) -> Option<RobotSpec> {
+    match name {
+        "aria" => Some(RobotSpec {
+            name: "aria".to_string(),
+            robot: AnyRobot::from(aria::nominal()),
+        }),
+        _ => None,
+    }
+}
+
+/// Loads a robot description file: URDF (`.urdf`, the unique chain from the root link to
+/// the single leaf) or the TOML description of docs/robot-description.md (anything else).
+fn load_robot_file(path: &Path) -> Result<RobotSpec, CliError> {
+    let is_urdf = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("urdf"));
+    if is_urdf {
+        let imported = crate::urdf::import_urdf_file(path, &crate::urdf::ChainSelection::default())
+            .map_err(|e| CliError::input(e.to_string()))?;
+        for note in &imported.notes {
+            eprintln!("kincal: note: {}: {note}", path.display());
+        }
+        return Ok(RobotSpec {
+            name: imported.robot_name,
+            robot: imported.robot,
+        });
+    }
+    let desc =
+        crate::robot_file::load_robot_file(path).map_err(|e| CliError::input(e.to_string()))?;
+    Ok(RobotSpec {
+        name: desc.name,
+        robot: desc.robot,
+    })
+}
+
+/// A resolved MODEL.
+#[derive(Debug, Clone)]
+pub struct ModelSpec {
+    /// The model itself.
+    pub robot: AnyRobot,
+    /// The model file (a nominal one for a ROBOT argument).
+    pub file: ModelFile,
+    /// Whether MODEL was a model file (rather than a ROBOT).
+    pub from_file: bool,
+}
+
+/// Resolves a MODEL argument: a model file (JSON with `schema_version`), else a ROBOT.
+pub fn resolve_model(arg: &str) -> Result<ModelSpec, CliError> {
+    let path = Path::new(arg);
+    if built_in(arg).is_none() && path.is_file() {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| CliError::input(format!("{arg}: cannot read: {e}")))?;
+        if model_file::looks_like_json(&text) {
+            let file = model_file::parse(&text, arg)?;
+            let robot = file
+                .robot
+                .any_robot()
+                .map_err(|m| CliError::input(format!("{arg}: robot: {m}")))?;
+            file.effects()
+                .map_err(|m| CliError::input(format!("{arg}: robot: {m}")))?;
+            return Ok(ModelSpec {
+                robot,
+                file,
+                from_file: true,
+            });
+        }
+    }
+    let spec = resolve_robot(arg)?;
+    let file = kincal::with_any_robot!(&spec.robot, r => ModelFile::nominal(&spec.name, r));
+    Ok(ModelSpec {
+        robot: spec.robot,
+        file,
+        from_file: false,
+    })
+}

@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# The one test command (README): installs what is missing on a fresh Debian machine (as
+# root), builds everything and runs every test. With CI=true a missing tool is a failure,
+# never a skip.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$PWD
+CI=${CI:-false}
+export CARGO_TERM_COLOR=${CARGO_TERM_COLOR:-never}
+
+step() { printf '\n==> %s\n' "$*"; }
+fail() { printf 'error: %s\n' "$*" >&2; exit 1; }
+
+need_apt() { # need_apt COMMAND PACKAGE...
+    local cmd=$1; shift
+    command -v "$cmd" >/dev/null 2>&1 && return 0
+    if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+        step "installing $* (for $cmd)"
+        if [ -z "${APT_UPDATED:-}" ]; then apt-get update -qq; APT_UPDATED=1; fi
+        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "$@" >/dev/null
+    fi
+    command -v "$cmd" >/dev/null 2>&1 || fail "$cmd is missing and could not be installed (apt-get install $*)"
+}
+
+step "tools"
+command -v cargo >/dev/null || fail "cargo is missing (install Rust with rustup)"
+need_apt g++ g++
+need_apt octave-cli octave liboctave-dev
+need_apt mkoctfile liboctave-dev
+if ! rustup target list --installed 2>/dev/null | grep -q thumbv7em-none-eabihf; then
+    rustup target add thumbv7em-none-eabihf || fail "cannot add the thumbv7em-none-eabihf target"
+fi
+rustup component list --installed 2>/dev/null | grep -q '^rustfmt' || rustup component add rustfmt clippy
+
+step "format and lints"
+cargo fmt --all -- --check
+cargo clippy --workspace --all-targets -- -D warnings
+
+step "no_std core for a bare-metal target"
+cargo build -p kincal --target thumbv7em-none-eabihf
+
+step "Rust unit, integration and doc tests"
+cargo test --workspace
+
+for extra in tests/cpp/run.sh matlab/tests/run.sh fuzz/smoke.sh; do
+    if [ -f "$extra" ]; then
+        step "$extra"
+        bash "$extra"
+    fi
+done
+
+step "all tests passed"
