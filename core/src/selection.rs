@@ -140,6 +140,10 @@ pub struct Constraints {
     pub cone: Option<Cone>,
     /// Distance kept from every joint limit [rad].
     pub joint_margin_rad: f64,
+    /// Smallest admissible [`dexterity`] (0: no test). Tool poses need it: near a
+    /// singularity a slightly different real robot may not reach the pose, or only with
+    /// large joint motions.
+    pub min_dexterity: f64,
 }
 
 impl Constraints {
@@ -150,6 +154,7 @@ impl Constraints {
             region: None,
             cone: None,
             joint_margin_rad: 0.0,
+            min_dexterity: 0.0,
         }
     }
     /// Whether a pose satisfies the region and cone.
@@ -174,11 +179,40 @@ impl Constraints {
         if !self.within_limits(robot, q) {
             return Ok(false);
         }
+        if self.min_dexterity > 0.0 && dexterity(robot, q)? < self.min_dexterity {
+            return Ok(false);
+        }
         if self.region.is_none() && self.cone.is_none() {
             return Ok(true);
         }
         Ok(self.admits_pose(&robot.fk_q(q)?))
     }
+}
+
+/// Distance from singularity: the smallest singular value of the 6 × N Jacobian of the pose
+/// `[p (m); φ (rad)]` with respect to the joints (0 at a singularity; for N < 6 the
+/// smallest of the N).
+pub fn dexterity<const N: usize>(robot: &Robot<N>, q: &[f64; N]) -> Result<f64> {
+    let st = JointState::new(*q);
+    let mut frames = crate::kinematics::Frames::default();
+    robot.fk_frames(&st, &mut frames)?;
+    let j = crate::ik::joint_jacobian(robot, &st, &frames);
+    // Eigenvalues of the smaller Gram matrix (JJᵀ for N >= 6, JᵀJ otherwise).
+    const M: usize = crate::any::MAX_JOINTS;
+    let k = N.min(6);
+    let mut g = [[0.0; M]; M];
+    for a in 0..k {
+        for b in a..k {
+            g[a][b] = if N >= 6 {
+                (0..N).map(|c| j[(a, c)] * j[(b, c)]).sum()
+            } else {
+                (0..6).map(|r| j[(r, a)] * j[(r, b)]).sum()
+            };
+        }
+    }
+    let (mut eig, mut off) = ([0.0; M], [0.0; M]);
+    crate::linalg::symeig::sym_eigenvalues(&mut g, k, &mut eig, &mut off)?;
+    Ok(sqrt(eig[k - 1].max(0.0)))
 }
 
 /// Sampling range of joint `j`: the limits less the margin, and at most one turn (±π) for

@@ -175,6 +175,7 @@ fn selection_respects_region_cone_margin_and_separation_and_is_deterministic() {
         region: Some(region),
         cone: Some(cone),
         joint_margin_rad: 0.1,
+        min_dexterity: 0.0,
     };
     let mut q = vec![[0.0; 6]; 120];
     let k = sample_region(
@@ -336,6 +337,7 @@ fn clustering_picks_distinct_cubes_with_equal_per_pose_index() {
         region: Some(region),
         cone: Some(Cone::new([0.0, 0.0, -1.0], 35f64.to_radians()).unwrap()),
         joint_margin_rad: 0.1,
+        min_dexterity: 0.0,
     };
     let mut q = vec![[0.0; 6]; 150];
     let k = sample_region(
@@ -402,4 +404,30 @@ fn clustering_picks_distinct_cubes_with_equal_per_pose_index() {
     let qs: Vec<[f64; 6]> = out.iter().map(|&i| owned.q[i]).collect();
     let o = observability(&robot, &qs, &obs, &mut ws).unwrap().o;
     assert!((o - cs.value).abs() < 1e-7 * o);
+}
+
+#[test]
+fn dexterity_is_the_smallest_singular_value_of_the_joint_jacobian() {
+    use kincal::selection::dexterity;
+    let robot = aria::nominal();
+    for q in joint_pool(5, &Constraints::none(), 21) {
+        let mut jac = [[0.0; 6]; 42];
+        robot
+            .jacobian(&kincal::JointState::new(q), &mut jac)
+            .unwrap();
+        // The θ0 columns are the joint columns.
+        let j = nalgebra::Matrix6::from_fn(|r, c| jac[5 * c][r]);
+        let want = j.singular_values().min();
+        let got = dexterity(&robot, &q).unwrap();
+        assert!((got - want).abs() < 1e-9, "{got} vs {want}");
+    }
+    // Near the wrist singularity (q5 = 0: axes 4 and 6 parallel, offset only by d_5) it
+    // is small.
+    let d = dexterity(&robot, &[0.3, 1.0, -1.0, 0.5, 0.0, 0.2]).unwrap();
+    assert!(d < 0.01, "{d}");
+    let c = Constraints {
+        min_dexterity: 0.05,
+        ..Constraints::none()
+    };
+    assert!(!c.admits(&robot, &[0.3, 1.0, -1.0, 0.5, 0.0, 0.2]).unwrap());
 }
