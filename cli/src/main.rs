@@ -4,9 +4,14 @@ mod args;
 mod calibration;
 mod cmd_calibrate;
 mod cmd_demo;
+mod cmd_design_tool;
+mod cmd_evaluate;
 mod cmd_predict;
+mod cmd_select;
 mod cmd_validate;
 mod data;
+mod design_args;
+mod designs;
 mod error;
 // Tested modules whose API is wider than the commands use so far.
 #[allow(dead_code)]
@@ -20,6 +25,9 @@ mod report;
 mod robot_arg;
 #[allow(dead_code)]
 mod robot_file;
+mod study;
+mod study_plot;
+mod tool_file;
 mod units;
 // URDF import serves ROBOT arguments; the export has no command yet.
 #[allow(dead_code)]
@@ -63,6 +71,15 @@ enum Command {
     /// Per-pose and summary errors of MODEL against measured poses
     #[command(long_about = cmd_validate::LONG_ABOUT, after_help = cmd_validate::EXAMPLE)]
     Validate(cmd_validate::Args),
+    /// Observability-optimal calibration poses (standard, local or workspace clustering)
+    #[command(long_about = cmd_select::LONG_ABOUT, after_help = cmd_select::EXAMPLE)]
+    SelectPoses(Box<cmd_select::Args>),
+    /// An optimised calibration tool that beats a baseline tool, as a workshop specification
+    #[command(long_about = cmd_design_tool::LONG_ABOUT, after_help = cmd_design_tool::EXAMPLE)]
+    DesignTool(Box<cmd_design_tool::Args>),
+    /// Monte-Carlo comparison of data-acquisition designs on the same random robots
+    #[command(long_about = cmd_evaluate::LONG_ABOUT, after_help = cmd_evaluate::EXAMPLE)]
+    EvaluateDesigns(Box<cmd_evaluate::Args>),
 }
 
 fn main() -> ExitCode {
@@ -72,6 +89,9 @@ fn main() -> ExitCode {
         Command::Calibrate(a) => cmd_calibrate::run(a),
         Command::Predict(a) => cmd_predict::run(a),
         Command::Validate(a) => cmd_validate::run(a),
+        Command::SelectPoses(a) => cmd_select::run(a),
+        Command::DesignTool(a) => cmd_design_tool::run(a),
+        Command::EvaluateDesigns(a) => cmd_evaluate::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -63,16 +63,18 @@ pub struct Scenario {
 }
 
 impl Scenario {
-    /// Section 2.4's errors (5 mm, 5°) and **assumed** metrology: 0.1 mm and 0.05° (1σ per
-    /// axis) of noise, the order of an optical tracker with a marker probe; a tool machined
-    /// to ±0.05 mm and ±0.05°.
+    /// Section 2.4's errors (5 mm, 5°) and **assumed** metrology: 0.05 mm and 0.02° (1σ per
+    /// axis) of noise, a static pose averaged over many frames of an optical tracker with a
+    /// marker probe (or the seating repeatability of a tool); a tool machined to ±0.05 mm
+    /// and ±0.02°. The paper gives no noise figures; errors after calibration scale about
+    /// linearly with these.
     #[must_use]
     pub const fn paper() -> Self {
         Scenario {
             length_error_m: 5e-3,
             angle_error_rad: 5.0 * core::f64::consts::PI / 180.0,
-            noise_pos_m: 1e-4,
-            noise_rot_rad: 0.05 * core::f64::consts::PI / 180.0,
+            noise_pos_m: 5e-5,
+            noise_rot_rad: 0.02 * core::f64::consts::PI / 180.0,
             tool_tol_pos_m: 5e-5,
             tool_tol_rot_rad: 0.02 * core::f64::consts::PI / 180.0,
         }
@@ -117,7 +119,11 @@ pub struct Study<'a, const N: usize> {
     pub params: ParamSet,
     /// Validation configurations.
     pub validation_q: &'a [[f64; N]],
-    /// The nominal model's poses there (for the errors before calibration).
+    /// `[sin q_j, cos q_j]` of the validation configurations ([`joint_sincos`]), so the
+    /// validation FK needs no trigonometry; empty: computed per run.
+    pub validation_sincos: &'a [[[f64; 2]; N]],
+    /// The nominal model's poses there, for the errors before calibration; empty: those
+    /// are not computed (they are the same for every design of a study).
     pub validation_nominal: &'a [Transform],
     /// Random ingredients.
     pub scenario: Scenario,
@@ -150,8 +156,8 @@ pub struct RunResult {
 pub fn identify_options<const N: usize>(study: &Study<'_, N>) -> IdentifyOptions<'static> {
     let mut o = IdentifyOptions::new(Algorithm::Ols, study.params);
     o.covariance = false;
-    o.xtol = 1e-8;
-    o.ftol = 1e-8;
+    o.xtol = 1e-5;
+    o.ftol = 1e-6;
     o.max_iterations = 50;
     o
 }
@@ -172,11 +178,17 @@ pub fn prepare<const N: usize, const P: usize>(
             found: data.len().min(design.reference.len()),
         });
     }
-    if study.validation_q.len() != study.validation_nominal.len() {
-        return Err(Error::DimensionMismatch {
-            expected: study.validation_q.len(),
-            found: study.validation_nominal.len(),
-        });
+    let nv = study.validation_q.len();
+    for len in [
+        study.validation_nominal.len(),
+        study.validation_sincos.len(),
+    ] {
+        if len != 0 && len != nv {
+            return Err(Error::DimensionMismatch {
+                expected: nv,
+                found: len,
+            });
+        }
     }
     for (d, q) in data.iter_mut().zip(design.q.iter()) {
         *d = Measurement::new(*q, study.nominal.fk_q(q)?);
@@ -236,29 +248,55 @@ pub fn reach_true<const N: usize>(
     target: &Transform,
     q0: &[f64; N],
 ) -> Result<[f64; N]> {
-    let q = match newton_ik(robot, target, q0) {
-        Ok(q) => q,
-        Err(_) => {
+    // Newton's answer counts only on the branch of `q0`: a step through a near-singular
+    // Jacobian can land on an equivalent but distant solution.
+    let newton = newton_ik(robot, target, q0)
+        .ok()
+        .map(|q| nearest_turn(robot, q, q0))
+        .filter(|q| {
+            q.iter()
+                .zip(q0.iter())
+                .all(|(a, b)| (a - b).abs() < BRANCH_RAD)
+        });
+    let q = match newton {
+        Some(q) => q,
+        None => {
             let opts = crate::ik::IkOptions {
                 first_solution: true,
                 tol_pos_m: 1e-12,
                 tol_rot_rad: 1e-12,
                 ..crate::ik::IkOptions::default()
             };
-            crate::ik::solve_ik(robot, target, &JointState::new(*q0), &opts)?.q
+            let q = crate::ik::solve_ik(robot, target, &JointState::new(*q0), &opts)?.q;
+            nearest_turn(robot, q, q0)
         }
     };
-    let mut q = q;
-    // A joint that turns further than one revolution may take the equivalent reading.
-    for (v, l) in q.iter_mut().zip(robot.limits().iter()) {
-        for k in [-2.0 * core::f64::consts::PI, 2.0 * core::f64::consts::PI] {
-            if !l.contains(*v) && l.contains(*v + k) {
-                *v += k;
-            }
-        }
-    }
     robot.check_limits(&q)?;
     Ok(q)
+}
+
+/// A joint of a true robot moves less than this from the nominal solution (manufacturing
+/// errors of a few millimetres and degrees, away from singularities) [rad].
+const BRANCH_RAD: f64 = 0.5;
+
+/// `q` with every joint shifted by whole turns to the reading nearest `q0` that lies within
+/// the limits (the same pose).
+fn nearest_turn<const N: usize>(robot: &Robot<N>, mut q: [f64; N], q0: &[f64; N]) -> [f64; N] {
+    const TURN: f64 = 2.0 * core::f64::consts::PI;
+    for ((v, l), &r) in q.iter_mut().zip(robot.limits().iter()).zip(q0.iter()) {
+        let k = libm::round((r - *v) / TURN);
+        let mut best = *v;
+        for dk in [0.0, -1.0, 1.0] {
+            let c = *v + (k + dk) * TURN;
+            let inside = l.contains(c);
+            let better = !l.contains(best) || (c - r).abs() < (best - r).abs();
+            if inside && better {
+                best = c;
+            }
+        }
+        *v = best;
+    }
+    q
 }
 
 /// Whether the tool pose `target` (nominal solution `q0`) is reached within the joint limits
@@ -297,20 +335,64 @@ fn newton_ik<const N: usize>(
         robot.fk_frames(&st, &mut frames)?;
         let e = pose_error(target, &frames.t_base_ee, OrientationError::Exact);
         let en = e.iter().map(|v| v * v).sum::<f64>();
-        if en < 1e-26 {
+        // 1e-10 m / rad: far below any simulated noise or tolerance.
+        if en < 1e-20 {
             return Ok(st.q);
         }
         let j = crate::ik::joint_jacobian(robot, &st, &frames);
-        let jjt = j * j.transpose() + SMatrix::<f64, 6, 6>::identity() * 1e-14;
-        let Some(ch) = Cholesky::new(jjt) else {
-            break;
-        };
-        let dq: SVector<f64, N> = j.transpose() * ch.solve(&SVector::<f64, 6>::from(e));
-        for (k, v) in st.q.iter_mut().enumerate() {
-            *v += dq[k];
+        if N == 6 {
+            // Square: Gaussian elimination with partial pivoting on [J | e].
+            let mut a = [[0.0; 7]; 6];
+            for (r, row) in a.iter_mut().enumerate() {
+                for c in 0..6 {
+                    row[c] = j[(r, c)];
+                }
+                row[6] = e[r];
+            }
+            let dq = solve6(&mut a).ok_or(Error::NotConverged { iterations: 0 })?;
+            for (k, v) in st.q.iter_mut().enumerate() {
+                *v += dq[k];
+            }
+        } else {
+            let jjt = j * j.transpose() + SMatrix::<f64, 6, 6>::identity() * 1e-14;
+            let Some(ch) = Cholesky::new(jjt) else {
+                break;
+            };
+            let dq: SVector<f64, N> = j.transpose() * ch.solve(&SVector::<f64, 6>::from(e));
+            for (k, v) in st.q.iter_mut().enumerate() {
+                *v += dq[k];
+            }
         }
     }
     Err(Error::NotConverged { iterations: 30 })
+}
+
+/// Solves the 6×6 system `[A | b]` in place (partial pivoting); `None` when a pivot is
+/// below 1e-12 of the largest entry (near-singular: the caller falls back to damped IK).
+fn solve6(a: &mut [[f64; 7]; 6]) -> Option<[f64; 6]> {
+    let scale = a
+        .iter()
+        .flat_map(|r| r[..6].iter())
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    for k in 0..6 {
+        let p = (k..6).fold(k, |b, r| if a[r][k].abs() > a[b][k].abs() { r } else { b });
+        if a[p][k].abs() <= 1e-12 * scale {
+            return None;
+        }
+        a.swap(k, p);
+        for r in (k + 1)..6 {
+            let f = a[r][k] / a[k][k];
+            for c in k..7 {
+                a[r][c] -= f * a[k][c];
+            }
+        }
+    }
+    let mut x = [0.0; 6];
+    for k in (0..6).rev() {
+        let s: f64 = ((k + 1)..6).map(|c| a[k][c] * x[c]).sum();
+        x[k] = (a[k][6] - s) / a[k][k];
+    }
+    Some(x)
 }
 
 /// Fills `data[..m]` with run `run`'s measurements of `design` on `truth`.
@@ -355,14 +437,40 @@ pub fn simulate_measurements<const N: usize>(
     Ok(())
 }
 
-/// Position and rotation-angle error between two poses.
-fn errors(a: &Transform, b: &Transform) -> (f64, f64) {
-    let e = pose_error(a, b, OrientationError::Exact);
-    let n = |v: &[f64]| crate::math::sqrt(v.iter().map(|x| x * x).sum());
-    (n(&e[..3]), n(&e[3..]))
+/// `[sin q_j, cos q_j]` of a configuration (for [`Study::validation_sincos`]).
+#[must_use]
+pub fn joint_sincos<const N: usize>(q: &[f64; N]) -> [[f64; 2]; N] {
+    q.map(|v| {
+        let (s, c) = crate::math::sin_cos(v);
+        [s, c]
+    })
 }
 
-/// The validation errors of `model` against `truth` (and of the nominal model).
+/// Position error |p_a − p_b| and rotation angle of `R_a·R_bᵀ` (atan2 of the sine and
+/// cosine parts, accurate for every angle).
+fn errors(a: &Transform, b: &Transform) -> (f64, f64) {
+    let dp = (a.translation.vector - b.translation.vector).norm();
+    let m = a.rotation.matrix() * b.rotation.matrix().transpose();
+    let v = Vector3::new(
+        m[(2, 1)] - m[(1, 2)],
+        m[(0, 2)] - m[(2, 0)],
+        m[(1, 0)] - m[(0, 1)],
+    );
+    let angle = crate::math::atan2(0.5 * v.norm(), 0.5 * (m.trace() - 1.0));
+    (dp, angle)
+}
+
+/// FK at validation pose `k` from its precomputed sines and cosines where possible.
+fn fk_at<const N: usize>(study: &Study<'_, N>, robot: &Robot<N>, k: usize) -> Result<Transform> {
+    let q = &study.validation_q[k];
+    match study.validation_sincos.get(k) {
+        Some(sc) => robot.fk_sincos(sc).or_else(|_| robot.fk_q(q)),
+        None => robot.fk_sincos(&joint_sincos(q)).or_else(|_| robot.fk_q(q)),
+    }
+}
+
+/// The validation errors of `model` against `truth` (and of the nominal model, when the
+/// study carries its poses).
 pub fn validation_errors<const N: usize>(
     study: &Study<'_, N>,
     truth: &Robot<N>,
@@ -370,18 +478,16 @@ pub fn validation_errors<const N: usize>(
 ) -> Result<RunResult> {
     let mut r = RunResult::default();
     let (mut sp, mut sr) = (0.0, 0.0);
-    for (q, tn) in study
-        .validation_q
-        .iter()
-        .zip(study.validation_nominal.iter())
-    {
-        let t_true = truth.fk_q(q)?;
-        let (ep, er) = errors(&t_true, &model.fk_q(q)?);
-        let (bp, br) = errors(&t_true, tn);
+    for k in 0..study.validation_q.len() {
+        let t_true = fk_at(study, truth, k)?;
+        let (ep, er) = errors(&t_true, &fk_at(study, model, k)?);
+        if let Some(tn) = study.validation_nominal.get(k) {
+            let (bp, br) = errors(&t_true, tn);
+            r.before_max_pos_m = r.before_max_pos_m.max(bp);
+            r.before_max_rot_rad = r.before_max_rot_rad.max(br);
+        }
         r.max_pos_m = r.max_pos_m.max(ep);
         r.max_rot_rad = r.max_rot_rad.max(er);
-        r.before_max_pos_m = r.before_max_pos_m.max(bp);
-        r.before_max_rot_rad = r.before_max_rot_rad.max(br);
         sp += ep * ep;
         sr += er * er;
     }
@@ -452,6 +558,7 @@ mod tests {
             nominal,
             params: nominal.geometric_param_set(),
             validation_q: &vq,
+            validation_sincos: &[],
             validation_nominal: &vn,
             scenario: scen,
             seed: 42,
@@ -469,9 +576,10 @@ mod tests {
             let truth = random_robot(&study, run).unwrap();
             simulate_measurements(&study, &design, &truth, run, &mut data).unwrap();
             for (d, r) in data.iter().zip(refs.iter()) {
-                // Noise- and tolerance-free: the true robot reaches the drawing's pose.
+                // Noise- and tolerance-free: the true robot reaches the drawing's pose (to
+                // the 1e-10 of the true-robot IK).
                 let (ep, er) = errors(&truth.fk(&d.state).unwrap(), r);
-                assert!(ep < 1e-11 && er < 1e-11, "{ep} {er}");
+                assert!(ep < 1e-10 && er < 1e-10, "{ep} {er}");
             }
             let r = simulate_run(&study, &design, &a, run, &mut ws, &mut data).unwrap();
             assert!(r.max_pos_m < 1e-9 && r.max_rot_rad < 1e-9, "{r:?}");

@@ -184,8 +184,11 @@ pub(crate) fn add_rows<const N: usize, const P: usize>(
         capacity: P,
     })?;
     let full = cols.iter().any(|&c| c >= Robot::<N>::NUM_GEOMETRIC_PARAMS);
+    let links = cols.iter().all(|&c| c < 5 * N);
     let n_jac = if full {
         Robot::<N>::NUM_PARAMS
+    } else if links {
+        5 * N
     } else {
         Robot::<N>::NUM_GEOMETRIC_PARAMS
     };

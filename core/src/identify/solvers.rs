@@ -285,10 +285,17 @@ fn gauss_newton<const N: usize, const P: usize>(
         let dx = scaled_norm(ws, n, &ws.step);
         let xn = scaled_norm(ws, n, &ws.x);
         unit_scale(ws, n);
+        // A full step this small ends the iteration once accepted: its cost suffices, its
+        // normal equations would never be used.
+        let last = dx <= opts.xtol * (xn + opts.xtol);
         let mut accepted = None;
         for _ in 0..30 {
             let trial = apply(robot, n, ws, None)?;
-            let c2 = accumulate_gram(&trial, data, opts, n, ws)?;
+            let c2 = if last {
+                cost(&trial, data, opts)?
+            } else {
+                accumulate_gram(&trial, data, opts, n, ws)?
+            };
             if c2 <= c {
                 accepted = Some((trial, c2));
                 break;
