@@ -5,6 +5,7 @@ mod calibration;
 mod cmd_calibrate;
 mod cmd_demo;
 mod cmd_design_tool;
+mod cmd_diagnose;
 mod cmd_evaluate;
 mod cmd_predict;
 mod cmd_select;
@@ -12,6 +13,7 @@ mod cmd_validate;
 mod data;
 mod design_args;
 mod designs;
+mod diagnosis_plot;
 mod error;
 // Tested modules whose API is wider than the commands use so far.
 #[allow(dead_code)]
@@ -80,6 +82,10 @@ enum Command {
     /// Monte-Carlo comparison of data-acquisition designs on the same random robots
     #[command(long_about = cmd_evaluate::LONG_ABOUT, after_help = cmd_evaluate::EXAMPLE)]
     EvaluateDesigns(Box<cmd_evaluate::Args>),
+    /// The sim-to-real diagnosis: where the residual lies, which effect causes it, how far
+    /// it shrinks
+    #[command(long_about = cmd_diagnose::LONG_ABOUT, after_help = cmd_diagnose::EXAMPLE)]
+    Diagnose(cmd_diagnose::Args),
 }
 
 fn main() -> ExitCode {
@@ -92,6 +98,7 @@ fn main() -> ExitCode {
         Command::SelectPoses(a) => cmd_select::run(a),
         Command::DesignTool(a) => cmd_design_tool::run(a),
         Command::EvaluateDesigns(a) => cmd_evaluate::run(a),
+        Command::Diagnose(a) => cmd_diagnose::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -249,11 +249,15 @@ impl<const N: usize> Robot<N> {
             let yi = f.t_base_link[i].rotation.matrix().column(1).into_owned();
             let xm = f.x_mid[i];
             let idx = |k: LinkParam| ParamId::Link { link: i, kind: k }.index(N).0;
-            jac[idx(LinkParam::Theta0)] = col(z_prev.cross(&(pe - p_prev)), z_prev);
-            jac[idx(LinkParam::D)] = col(z_prev * scale, zero);
-            jac[idx(LinkParam::A)] = col(xm * scale, zero);
-            jac[idx(LinkParam::Alpha)] = col(xm.cross(&(pe - pi)), xm);
-            jac[idx(LinkParam::Beta)] = col(yi.cross(&(pe - pi)), yi);
+            put(
+                jac,
+                idx(LinkParam::Theta0),
+                col(z_prev.cross(&(pe - p_prev)), z_prev),
+            );
+            put(jac, idx(LinkParam::D), col(z_prev * scale, zero));
+            put(jac, idx(LinkParam::A), col(xm * scale, zero));
+            put(jac, idx(LinkParam::Alpha), col(xm.cross(&(pe - pi)), xm));
+            put(jac, idx(LinkParam::Beta), col(yi.cross(&(pe - pi)), yi));
         }
         if links_only {
             return Ok(f.t_base_ee);
@@ -291,8 +295,8 @@ impl<const N: usize> Robot<N> {
                 let wt = r_e * jr_tool.column(ax);
                 (col(w.cross(&(pe - base_p)), w), col(zero, wt))
             };
-            jac[ParamId::Base(k).index(N).0] = b;
-            jac[ParamId::Tool(k).index(N).0] = t;
+            put(jac, ParamId::Base(k).index(N).0, b);
+            put(jac, ParamId::Tool(k).index(N).0, t);
         }
         if full {
             self.effect_columns(state, scale, jac);
@@ -307,35 +311,52 @@ impl<const N: usize> Robot<N> {
         let scaled = |c: JacobianColumn, f: f64| c.map(|v| v * f);
         let mut thermal = [0.0; 6];
         for j in 0..N {
-            let th = jac[ParamId::Link {
-                link: j,
-                kind: LinkParam::Theta0,
-            }
-            .index(N)
-            .0];
+            let th = col_at(
+                jac,
+                ParamId::Link {
+                    link: j,
+                    kind: LinkParam::Theta0,
+                }
+                .index(N)
+                .0,
+            );
             let q = state.q[j];
             let (s1, c1) = crate::math::sin_cos(q);
             let terms = [s1, c1, 2.0 * s1 * c1, c1 * c1 - s1 * s1];
-            jac[ParamId::Compliance(j).index(N).0] = scaled(th, tau[j]);
-            jac[ParamId::Scale(j).index(N).0] = scaled(th, q);
+            put(jac, ParamId::Compliance(j).index(N).0, scaled(th, tau[j]));
+            put(jac, ParamId::Scale(j).index(N).0, scaled(th, q));
             for t in CyclicTerm::ALL {
-                jac[ParamId::Cyclic(j, t).index(N).0] = scaled(th, terms[t as usize]);
+                put(
+                    jac,
+                    ParamId::Cyclic(j, t).index(N).0,
+                    scaled(th, terms[t as usize]),
+                );
             }
-            jac[ParamId::Backlash(j).index(N).0] = scaled(th, approach[j]);
+            put(
+                jac,
+                ParamId::Backlash(j).index(N).0,
+                scaled(th, approach[j]),
+            );
             // The d and a columns carry the factor `scale`; ∂/∂(scaled length) = col/scale.
             let l = &self.geom.links[j];
-            let dcol = jac[ParamId::Link {
-                link: j,
-                kind: LinkParam::D,
-            }
-            .index(N)
-            .0];
-            let acol = jac[ParamId::Link {
-                link: j,
-                kind: LinkParam::A,
-            }
-            .index(N)
-            .0];
+            let dcol = col_at(
+                jac,
+                ParamId::Link {
+                    link: j,
+                    kind: LinkParam::D,
+                }
+                .index(N)
+                .0,
+            );
+            let acol = col_at(
+                jac,
+                ParamId::Link {
+                    link: j,
+                    kind: LinkParam::A,
+                }
+                .index(N)
+                .0,
+            );
             for r in 0..6 {
                 thermal[r] += (l.d * dcol[r] + l.a * acol[r]) / scale;
             }
@@ -343,6 +364,21 @@ impl<const N: usize> Robot<N> {
         let dt = state
             .temp_c
             .map_or(0.0, |t| t - crate::model::THERMAL_REFERENCE_C);
-        jac[ParamId::Thermal.index(N).0] = scaled(thermal, dt);
+        put(jac, ParamId::Thermal.index(N).0, scaled(thermal, dt));
     }
+}
+
+/// Writes column `i`. The caller checked `jac.len()`; `get_mut` rather than indexing keeps a
+/// bounds check the compiler cannot elide (and its panic path) out of the panic-free build.
+#[inline(always)]
+fn put(jac: &mut [JacobianColumn], i: usize, column: JacobianColumn) {
+    if let Some(slot) = jac.get_mut(i) {
+        *slot = column;
+    }
+}
+
+/// Reads column `i` (zero out of range, which the length check excludes), see [`put`].
+#[inline(always)]
+fn col_at(jac: &[JacobianColumn], i: usize) -> JacobianColumn {
+    jac.get(i).copied().unwrap_or([0.0; 6])
 }

@@ -15,6 +15,7 @@ extern crate std;
 pub mod any;
 pub mod aria;
 pub mod axis_chain;
+pub mod diagnosis;
 pub mod effects;
 pub mod error;
 pub mod identify;
@@ -30,6 +31,7 @@ pub mod pose;
 pub mod registration;
 pub mod rng;
 pub mod selection;
+pub mod sim;
 pub mod validation;
 
 pub use effects::{Effect, EffectSet};
