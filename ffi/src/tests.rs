@@ -5,3 +5,4 @@
 mod abi;
 mod calibration;
 mod header;
+mod observability;
