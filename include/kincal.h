@@ -61,6 +61,11 @@
 #define KINCAL_MAX_FRAMES_LEN 160
 
 /*
+ Largest design `kincal_select_poses` selects (`m`; the core's exchange needs 3 more slots).
+ */
+#define KINCAL_MAX_SELECT 61
+
+/*
  A buffer of this many bytes holds every parameter label with its terminating NUL.
  */
 #define KINCAL_LABEL_CAPACITY 32
@@ -484,6 +489,86 @@ enum kincal_marker_status
 typedef enum kincal_marker_status kincal_marker_status;
 #else
 typedef uint32_t kincal_marker_status;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ How the Jacobian columns are scaled before the singular values are taken.
+ */
+enum kincal_scaling_kind
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     Raw columns (metres per metre, metres per radian): the indices depend on units.
+     */
+    KINCAL_SCALING_KIND_NONE = 0,
+    /*
+     Every column divided by its norm over the pose set (the default; the convention of
+     the identifiability condition number).
+     */
+    KINCAL_SCALING_KIND_UNIT_COLUMNS = 1,
+    /*
+     Columns times the expected error of their parameter: `length_m` for lengths,
+     `angle_rad` for angles (effect parameters unscaled).
+     */
+    KINCAL_SCALING_KIND_TOLERANCE = 2,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_scaling_kind kincal_scaling_kind;
+#else
+typedef uint32_t kincal_scaling_kind;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ The observability indices; all are "larger is better".
+ */
+enum kincal_obs_index
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     Eq. (17): σ_min/σ_max.
+     */
+    KINCAL_OBS_INDEX_O = 0,
+    /*
+     Borm–Menq: (σ_1···σ_p)^(1/p)/√m.
+     */
+    KINCAL_OBS_INDEX_O1 = 1,
+    /*
+     Inverse condition number (equal to O).
+     */
+    KINCAL_OBS_INDEX_O2 = 2,
+    /*
+     σ_min.
+     */
+    KINCAL_OBS_INDEX_O3 = 3,
+    /*
+     Noise amplification σ_min²/σ_max.
+     */
+    KINCAL_OBS_INDEX_O4 = 4,
+    /*
+     1/σ_max.
+     */
+    KINCAL_OBS_INDEX_O5 = 5,
+    /*
+     A-optimality 1/Σ σ⁻¹.
+     */
+    KINCAL_OBS_INDEX_A_OPT = 6,
+    /*
+     D-optimality ln det(JᵀJ).
+     */
+    KINCAL_OBS_INDEX_D_OPT = 7,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_obs_index kincal_obs_index;
+#else
+typedef uint32_t kincal_obs_index;
 #endif // __STDC_VERSION__ >= 202311L
 #endif // __cplusplus
 
@@ -949,6 +1034,131 @@ typedef struct kincal_ik_info {
      */
     size_t seed_index;
 } kincal_ik_info;
+
+/*
+ Column scaling of the observability exports. Plain data.
+ */
+typedef struct kincal_scaling {
+    /*
+     A `kincal_scaling_kind`.
+     */
+    uint32_t kind;
+    /*
+     Tolerance of lengths [m] (finite, > 0; used by `KINCAL_SCALING_KIND_TOLERANCE` only).
+     */
+    double length_m;
+    /*
+     Tolerance of angles [rad] (finite, > 0; used by `KINCAL_SCALING_KIND_TOLERANCE` only).
+     */
+    double angle_rad;
+} kincal_scaling;
+
+/*
+ The observability indices of a pose set (singular values σ of the stacked, scaled
+ identification Jacobian: rows `[Δp (m); Δφ (rad)]` per pose, one column per parameter).
+ */
+typedef struct kincal_observability_indices {
+    /*
+     Eq. (17), σ_min/σ_max.
+     */
+    double o;
+    /*
+     Borm–Menq, (σ_1···σ_p)^(1/p)/√m.
+     */
+    double o1;
+    /*
+     Inverse condition number.
+     */
+    double o2;
+    /*
+     σ_min.
+     */
+    double o3;
+    /*
+     σ_min²/σ_max.
+     */
+    double o4;
+    /*
+     1/σ_max.
+     */
+    double o5;
+    /*
+     A-optimality, 1/Σ σ⁻¹.
+     */
+    double a_optimality;
+    /*
+     D-optimality, ln det(JᵀJ) (−infinity when singular).
+     */
+    double d_optimality;
+    /*
+     Smallest singular value.
+     */
+    double sigma_min;
+    /*
+     Largest singular value.
+     */
+    double sigma_max;
+    /*
+     Number of poses m.
+     */
+    size_t poses;
+    /*
+     Number of parameters p (columns).
+     */
+    size_t params;
+} kincal_observability_indices;
+
+/*
+ An axis-aligned box in the base frame [m].
+ */
+typedef struct kincal_region {
+    /*
+     Lower corner `[x, y, z]` [m].
+     */
+    double min_m[3];
+    /*
+     Upper corner `[x, y, z]` [m] (each ≥ the lower one).
+     */
+    double max_m[3];
+} kincal_region;
+
+/*
+ The outcome of `kincal_select_poses`.
+ */
+typedef struct kincal_selection {
+    /*
+     Objective (the chosen index, from the Gram matrix) of the selected set.
+     */
+    double value;
+    /*
+     Objective after the greedy initial set.
+     */
+    double initial_value;
+    /*
+     Objective after the exchange, before the joint-space refinement.
+     */
+    double exchange_value;
+    /*
+     Objective evaluations.
+     */
+    uint64_t evaluations;
+    /*
+     Accepted exchanges.
+     */
+    size_t exchanges;
+    /*
+     Accepted refinement moves.
+     */
+    size_t refinements;
+    /*
+     The start that gave the result.
+     */
+    size_t start;
+    /*
+     The indices of the selected set (SVD route, as `kincal_observability`).
+     */
+    struct kincal_observability_indices indices;
+} kincal_selection;
 
 /*
  Options of `kincal_register`; `kincal_registration_options_default` fills them.
@@ -1459,6 +1669,138 @@ kincal_status kincal_robot_check_limits(const struct kincal_robot *robot,
                                         const double *q,
                                         size_t q_len,
                                         struct kincal_error *err);
+
+/*
+ Bytes of caller memory `kincal_observability` and `kincal_pose_singular_values` need for
+ `n_params` parameters (the mask's count, or `kincal_num_geometric_params`-sized default
+ set's count; the size is that of the smallest capacity, 32 or `KINCAL_MAX_PARAMS`, that
+ holds them). Returns 0 for 0 or more than `KINCAL_MAX_PARAMS` parameters.
+ */
+size_t kincal_observability_workspace_size(size_t n_params);
+
+/*
+ Bytes of caller memory `kincal_select_poses` needs for `n_params` parameters and a pool
+ of `pool_len` configurations (the core workspace and selection scratch, then one Jacobian
+ block and position per candidate: about 1.5 KB per candidate at capacity 32). Returns 0
+ for 0 or more than `KINCAL_MAX_PARAMS` parameters or an overflowing size.
+ */
+size_t kincal_select_workspace_size(size_t n_params,
+                                    size_t pool_len);
+
+/*
+ Observability indices of `n_poses` configurations of `robot` (normally the nominal
+ model): the singular values σ_1 ≥ … ≥ σ_p of the stacked identification Jacobian
+ (6 rows `[Δp (m); Δφ (rad)]` per pose, one column per parameter, scaled as `scaling`
+ says) and the indices O (eq. 17), O1–O5, A- and D-optimality.
+
+ - `qs`, `qs_len`: joint values [rad], `n_poses` × N row-major (pose l at `qs[l*N]`);
+   `qs_len` = `n_poses`·N, `n_poses` ≥ 1.
+ - `params`, `params_len`: parameter mask by flat index (`params_len` =
+   `kincal_num_params(N)`, non-zero = a column), or NULL for the robot's geometric set
+   (θ0, a, α and d-or-β of every link; `params_len` ignored).
+ - `scaling`: column scaling, or NULL for unit columns.
+ - `workspace`, `workspace_len`: caller memory of at least
+   `kincal_observability_workspace_size(p)` bytes aligned to `KINCAL_WORKSPACE_ALIGN`;
+   scratch.
+ - `indices_out`: the indices. `sv_out`, `sv_len`: the p singular values (descending), or
+   NULL if not wanted; `sv_len` = p.
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH (`workspace`: `expected` = bytes
+ needed), NON_FINITE, INVALID_ARGUMENT (`scaling`), TOO_FEW_DATA (no pose, empty mask),
+ CAPACITY_EXCEEDED, NOT_CONVERGED (SVD), any status of `kincal_robot_validate`. Outputs are
+ written on success only.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths (`workspace` writable for
+ `workspace_len` bytes and not overlapping the other arguments); `err` NULL or writable.
+ */
+kincal_status kincal_observability(const struct kincal_robot *robot,
+                                   const double *qs,
+                                   size_t n_poses,
+                                   size_t qs_len,
+                                   const uint8_t *params,
+                                   size_t params_len,
+                                   const struct kincal_scaling *scaling,
+                                   void *workspace,
+                                   size_t workspace_len,
+                                   struct kincal_observability_indices *indices_out,
+                                   double *sv_out,
+                                   size_t sv_len,
+                                   struct kincal_error *err);
+
+/*
+ The per-pose index: the six singular values (descending) of configuration `q`'s 6 × p
+ block of the identification Jacobian, columns scaled as `scaling` says (unit columns use
+ this pose's own column norms); what the workspace-clustering design compares.
+
+ - `q`, `q_len`: joint values [rad], `q_len` = N.
+ - `params`, `params_len`, `scaling`, `workspace`, `workspace_len`: as
+   `kincal_observability`.
+ - `sv_out`, `sv_len`: the six singular values; `sv_len` = 6.
+
+ Returns the statuses of `kincal_observability`.
+
+ # Safety
+ As `kincal_observability`.
+ */
+kincal_status kincal_pose_singular_values(const struct kincal_robot *robot,
+                                          const double *q,
+                                          size_t q_len,
+                                          const uint8_t *params,
+                                          size_t params_len,
+                                          const struct kincal_scaling *scaling,
+                                          void *workspace,
+                                          size_t workspace_len,
+                                          double *sv_out,
+                                          size_t sv_len,
+                                          struct kincal_error *err);
+
+/*
+ Pose selection (eq. 18): the `m` configurations that maximise the index `objective`, from
+ the caller's candidate pool (greedy start, DETMAX exchange, then joint-space refinement
+ within the joint limits minus `joint_margin_rad` and inside `region`; refined poses need
+ not be pool members). Deterministic for a given `seed` (the core's default of 4 starts).
+
+ - `pool_q`, `pool_q_len`: candidate joint values [rad], `pool_len` × N row-major;
+   `pool_q_len` = `pool_len`·N; `m` ≤ `pool_len`.
+ - `m`: poses to select, 1 ≤ `m` ≤ `KINCAL_MAX_SELECT`.
+ - `params`, `params_len`, `scaling`: as `kincal_observability`.
+ - `objective`: a `kincal_obs_index`. `seed`: random seed.
+ - `region`: the end effector's box [m], or NULL for none. `joint_margin_rad`: distance
+   kept from every joint limit [rad] (finite, ≥ 0).
+ - `workspace`, `workspace_len`: caller memory of at least
+   `kincal_select_workspace_size(p, pool_len)` bytes aligned to `KINCAL_WORKSPACE_ALIGN`;
+   scratch.
+ - `q_out`, `q_out_len`: the selected configurations, `m` × N row-major; `q_out_len` = m·N.
+ - `selection_out`: objective values, counts and the indices of the selected set (NULL if
+   not wanted).
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE, INVALID_ARGUMENT
+ (`objective`, `scaling`, `region`, `joint_margin_rad`), TOO_FEW_DATA (`m` = 0 or above the
+ pool), CAPACITY_EXCEEDED (`m` > `KINCAL_MAX_SELECT`), NOT_CONVERGED, any status of
+ `kincal_robot_validate`. Outputs are written on success only.
+
+ # Safety
+ As `kincal_observability`; `q_out` writable for `q_out_len` doubles.
+ */
+kincal_status kincal_select_poses(const struct kincal_robot *robot,
+                                  const double *pool_q,
+                                  size_t pool_len,
+                                  size_t pool_q_len,
+                                  size_t m,
+                                  const uint8_t *params,
+                                  size_t params_len,
+                                  const struct kincal_scaling *scaling,
+                                  uint32_t objective,
+                                  uint64_t seed,
+                                  const struct kincal_region *region,
+                                  double joint_margin_rad,
+                                  void *workspace,
+                                  size_t workspace_len,
+                                  double *q_out,
+                                  size_t q_out_len,
+                                  struct kincal_selection *selection_out,
+                                  struct kincal_error *err);
 
 /*
  The value of parameter `index` (flat layout, see `kincal_robot.params`).

@@ -1,6 +1,9 @@
 //! `kincal`: the command-line tool of the kincal calibration toolkit (spec/cli.md).
 
-use kincal_cli::{cmd_calibrate, cmd_demo, cmd_diagnose, cmd_predict, cmd_validate};
+use kincal_cli::{
+    cmd_calibrate, cmd_demo, cmd_design_tool, cmd_diagnose, cmd_evaluate, cmd_predict, cmd_select,
+    cmd_validate,
+};
 
 use std::process::ExitCode;
 
@@ -40,6 +43,15 @@ enum Command {
     /// Per-pose and summary errors of MODEL against measured poses
     #[command(long_about = cmd_validate::LONG_ABOUT, after_help = cmd_validate::EXAMPLE)]
     Validate(cmd_validate::Args),
+    /// Observability-optimal calibration poses (standard, local or workspace clustering)
+    #[command(long_about = cmd_select::LONG_ABOUT, after_help = cmd_select::EXAMPLE)]
+    SelectPoses(Box<cmd_select::Args>),
+    /// An optimised calibration tool that beats a baseline tool, as a workshop specification
+    #[command(long_about = cmd_design_tool::LONG_ABOUT, after_help = cmd_design_tool::EXAMPLE)]
+    DesignTool(Box<cmd_design_tool::Args>),
+    /// Monte-Carlo comparison of data-acquisition designs on the same random robots
+    #[command(long_about = cmd_evaluate::LONG_ABOUT, after_help = cmd_evaluate::EXAMPLE)]
+    EvaluateDesigns(Box<cmd_evaluate::Args>),
     /// The sim-to-real diagnosis: where the residual lies, which effect causes it, how far
     /// it shrinks
     #[command(long_about = cmd_diagnose::LONG_ABOUT, after_help = cmd_diagnose::EXAMPLE)]
@@ -53,6 +65,9 @@ fn main() -> ExitCode {
         Command::Calibrate(a) => cmd_calibrate::run(a),
         Command::Predict(a) => cmd_predict::run(a),
         Command::Validate(a) => cmd_validate::run(a),
+        Command::SelectPoses(a) => cmd_select::run(a),
+        Command::DesignTool(a) => cmd_design_tool::run(a),
+        Command::EvaluateDesigns(a) => cmd_evaluate::run(a),
         Command::Diagnose(a) => cmd_diagnose::run(a),
     };
     match result {

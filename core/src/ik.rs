@@ -249,7 +249,7 @@ fn descend<const N: usize>(
 /// The 6×N Jacobian of the pose with respect to the readings: the θ0 columns times
 /// dθ_j/dq_j of the scale and cyclic effects (compliance's dependence on q is neglected;
 /// it only slows convergence slightly).
-fn joint_jacobian<const N: usize>(
+pub(crate) fn joint_jacobian<const N: usize>(
     robot: &Robot<N>,
     state: &JointState<N>,
     f: &Frames<N>,
@@ -274,12 +274,16 @@ fn joint_jacobian<const N: usize>(
             )
         };
         let q = state.q[i];
-        let (s1, c1) = crate::math::sin_cos(q);
         let c = &e.cyclic[i];
-        let dtheta = 1.0 + e.scale[i] + c[CyclicTerm::Sin1 as usize] * c1
-            - c[CyclicTerm::Cos1 as usize] * s1
-            + 2.0 * c[CyclicTerm::Sin2 as usize] * (c1 * c1 - s1 * s1)
-            - 4.0 * c[CyclicTerm::Cos2 as usize] * s1 * c1;
+        let dcyclic = if c.iter().any(|&v| v != 0.0) {
+            let (s1, c1) = crate::math::sin_cos(q);
+            c[CyclicTerm::Sin1 as usize] * c1 - c[CyclicTerm::Cos1 as usize] * s1
+                + 2.0 * c[CyclicTerm::Sin2 as usize] * (c1 * c1 - s1 * s1)
+                - 4.0 * c[CyclicTerm::Cos2 as usize] * s1 * c1
+        } else {
+            0.0
+        };
+        let dtheta = 1.0 + e.scale[i] + dcyclic;
         let lin = z_prev.cross(&(pe - p_prev)) * dtheta;
         let ang = z_prev * dtheta;
         j.fixed_view_mut::<3, 1>(0, i).copy_from(&lin);

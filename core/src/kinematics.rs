@@ -68,12 +68,24 @@ fn chain<const N: usize>(
     g: &Geometry<N>,
     angles: &[f64; N],
     scale: f64,
-    mut on_link: impl FnMut(usize, &Vector3<f64>, &Matrix3<f64>, &Vector3<f64>),
+    on_link: impl FnMut(usize, &Vector3<f64>, &Matrix3<f64>, &Vector3<f64>),
 ) -> Transform {
     let mut sc = [(0.0, 1.0); N];
     for i in 0..N {
         sc[i] = crate::math::sin_cos(angles[i] + g.links[i].theta0);
     }
+    chain_sc(g, &sc, scale, on_link)
+}
+
+/// [`chain`] from the sines and cosines `(sin θ_i, cos θ_i)` of the full joint angles
+/// `θ_i = angle_i + θ0_i`.
+#[inline(always)]
+fn chain_sc<const N: usize>(
+    g: &Geometry<N>,
+    sc: &[(f64, f64); N],
+    scale: f64,
+    mut on_link: impl FnMut(usize, &Vector3<f64>, &Matrix3<f64>, &Vector3<f64>),
+) -> Transform {
     let r0 = g.t_base.rotation.matrix();
     let mut x: Vector3<f64> = r0.column(0).into_owned();
     let mut y: Vector3<f64> = r0.column(1).into_owned();
@@ -120,6 +132,31 @@ impl<const N: usize> Robot<N> {
         let t = chain(&self.geom, &angles, scale, |_, _, _, _| {});
         check_pose(&t)?;
         Ok(t)
+    }
+
+    /// End-effector pose of the geometric model from precomputed `[sin q_j, cos q_j]` of the
+    /// readings: no trigonometry per call (θ0's sines and cosines are kept with the model),
+    /// for evaluating many models at the same configurations (validation in Monte-Carlo
+    /// studies). Equals [`Robot::fk_q`] to rounding. A model with joint or thermal effects
+    /// is refused with [`Error::InvalidParameter`] naming its first non-zero effect
+    /// parameter.
+    pub fn fk_sincos(&self, sincos_q: &[[f64; 2]; N]) -> Result<Transform> {
+        if self.active_effects() != crate::EffectSet::NONE {
+            let first = crate::params::num_geometric_params(N);
+            for i in first..Self::NUM_PARAMS {
+                let v = self.param(crate::error::ParamIndex(i))?;
+                if v != 0.0 {
+                    return Err(Error::InvalidParameter { index: i, value: v });
+                }
+            }
+        }
+        let mut sc = [(0.0, 1.0); N];
+        for i in 0..N {
+            let [sq, cq] = sincos_q[i];
+            let [ct, st] = self.geom.theta0_cs[i];
+            sc[i] = (sq * ct + cq * st, cq * ct - sq * st);
+        }
+        Ok(chain_sc(&self.geom, &sc, 1.0, |_, _, _, _| {}))
     }
 
     /// End-effector pose for readings `q` alone (models without backlash/thermal).
@@ -180,8 +217,8 @@ impl<const N: usize> Robot<N> {
     /// The analytic identification Jacobian at `state`: column `i` is `∂[p; φ]/∂param_i`
     /// (rows `[Δp; Δφ]` in the base frame, see [`JacobianColumn`]); returns the pose.
     ///
-    /// `jac.len()` must be [`Robot::NUM_GEOMETRIC_PARAMS`] (links, base, tool) or
-    /// [`Robot::NUM_PARAMS`] (also the effect columns). Link columns follow eq. (13a–e):
+    /// `jac.len()` must be `5N` (link columns only), [`Robot::NUM_GEOMETRIC_PARAMS`]
+    /// (links, base, tool) or [`Robot::NUM_PARAMS`] (also the effect columns). Link columns follow eq. (13a–e):
     /// θ0_i → `[z_{i−1} × (p_e − p_{i−1}); z_{i−1}]`, d_i → `[z_{i−1}; 0]`, a_i → `[x_i; 0]`,
     /// α_i → `[x_i × (p_e − p_i); x_i]`, β_i → `[y_i × (p_e − p_i); y_i]`, with x_i the x
     /// axis before Ry(β_i) (exact for β ≠ 0). Base and tool columns use the SO(3) left
@@ -190,9 +227,10 @@ impl<const N: usize> Robot<N> {
     /// `(T − 20)·Σ_i (d_i·col(d_i) + a_i·col(a_i))`. Columns of effects whose input is
     /// missing (approach directions, temperature) are zero.
     pub fn jacobian(&self, state: &JointState<N>, jac: &mut [JacobianColumn]) -> Result<Transform> {
+        let links_only = jac.len() == 5 * N;
         let full = if jac.len() == Self::NUM_PARAMS {
             true
-        } else if jac.len() == Self::NUM_GEOMETRIC_PARAMS {
+        } else if jac.len() == Self::NUM_GEOMETRIC_PARAMS || links_only {
             false
         } else {
             return Err(Error::DimensionMismatch {
@@ -236,6 +274,9 @@ impl<const N: usize> Robot<N> {
             put(jac, idx(LinkParam::A), col(xm * scale, zero));
             put(jac, idx(LinkParam::Alpha), col(xm.cross(&(pe - pi)), xm));
             put(jac, idx(LinkParam::Beta), col(yi.cross(&(pe - pi)), yi));
+        }
+        if links_only {
+            return Ok(f.t_base_ee);
         }
         // Base: T_0^b = Trans(p)·Rot(r); a change dr rotates everything after it about the
         // base-frame axis J_l(r)·dr through p.

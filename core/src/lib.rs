@@ -24,10 +24,13 @@ pub mod kinematics;
 pub mod linalg;
 mod math;
 pub mod model;
+pub mod montecarlo;
+pub mod observability;
 pub mod params;
 pub mod pose;
 pub mod registration;
 pub mod rng;
+pub mod selection;
 pub mod sim;
 pub mod validation;
 

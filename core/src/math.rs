@@ -33,3 +33,7 @@ pub(crate) fn asin(x: f64) -> f64 {
 pub(crate) fn ln(x: f64) -> f64 {
     libm::log(x)
 }
+#[inline(always)]
+pub(crate) fn exp(x: f64) -> f64 {
+    libm::exp(x)
+}

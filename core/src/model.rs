@@ -201,6 +201,8 @@ pub(crate) struct Geometry<const N: usize> {
     /// `[cos α_i, sin α_i, cos β_i, sin β_i]`: the constant rotation `Rx(α_i)·Ry(β_i)` of
     /// each link, applied in FK as two plane rotations of column pairs.
     pub(crate) link_cs: [[f64; 4]; N],
+    /// `[cos θ0_i, sin θ0_i]`, for FK from precomputed joint sines and cosines.
+    pub(crate) theta0_cs: [[f64; 2]; N],
     pub(crate) t_base: Transform,
     pub(crate) t_tool: Transform,
 }
@@ -212,13 +214,21 @@ impl<const N: usize> Geometry<N> {
             base,
             tool,
             link_cs: [[1.0, 0.0, 1.0, 0.0]; N],
+            theta0_cs: [[1.0, 0.0]; N],
             t_base: pose_from_vector6(&base),
             t_tool: pose_from_vector6(&tool),
         };
         for i in 0..N {
             g.refresh_link(i);
+            g.refresh_theta0(i);
         }
         g
+    }
+    fn refresh_theta0(&mut self, i: usize) {
+        if let (Some(cs), Some(l)) = (self.theta0_cs.get_mut(i), self.links.get(i)) {
+            let (s, c) = crate::math::sin_cos(l.theta0);
+            *cs = [c, s];
+        }
     }
     fn refresh_link(&mut self, i: usize) {
         if let (Some(cs), Some(l)) = (self.link_cs.get_mut(i), self.links.get(i)) {
@@ -480,6 +490,9 @@ impl<const N: usize> Robot<N> {
                 }
                 if matches!(kind, LinkParam::Alpha | LinkParam::Beta) {
                     self.geom.refresh_link(link);
+                }
+                if kind == LinkParam::Theta0 {
+                    self.geom.refresh_theta0(link);
                 }
             }
             ParamId::Base(k) => {

@@ -205,14 +205,14 @@ pub struct kincal_identify_report {
 }
 
 /// Workspace capacities (parameters fitted at once) the C ABI instantiates.
-const CAPACITIES: [usize; 2] = [32, KINCAL_MAX_PARAMS];
+pub(crate) const CAPACITIES: [usize; 2] = [32, KINCAL_MAX_PARAMS];
 
 /// The smallest capacity holding `n` parameters.
-fn capacity_for(n: usize) -> Option<usize> {
+pub(crate) fn capacity_for(n: usize) -> Option<usize> {
     CAPACITIES.iter().copied().find(|&c| c >= n)
 }
 
-const fn round_up(x: usize, align: usize) -> usize {
+pub(crate) const fn round_up(x: usize, align: usize) -> usize {
     x.div_ceil(align) * align
 }
 

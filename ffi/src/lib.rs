@@ -34,6 +34,7 @@ pub mod effects;
 pub mod identify;
 pub mod ik;
 pub mod kinematics;
+pub mod observability;
 pub mod params;
 pub mod pose;
 pub mod registration;

@@ -6,3 +6,4 @@ mod abi;
 mod calibration;
 mod fuzz_regressions;
 mod header;
+mod observability;

@@ -1577,6 +1577,251 @@ static int op_check_limits(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *
 }
 
 /* ------------------------------------------------------------------------------------------ */
+/* Observability and pose selection                                                           */
+/* ------------------------------------------------------------------------------------------ */
+
+#if defined(KINCAL_MAX_SELECT)
+#define KC_HAS_OBSERVABILITY 1
+
+static const kc_name SCALINGS[] = {
+    {"none", KINCAL_SCALING_KIND_NONE},
+    {"unit", KINCAL_SCALING_KIND_UNIT_COLUMNS},
+    {"tolerance", KINCAL_SCALING_KIND_TOLERANCE},
+    {NULL, 0},
+};
+
+static const kc_name OBS_INDICES[] = {
+    {"o", KINCAL_OBS_INDEX_O},       {"o1", KINCAL_OBS_INDEX_O1},
+    {"o2", KINCAL_OBS_INDEX_O2},     {"o3", KINCAL_OBS_INDEX_O3},
+    {"o4", KINCAL_OBS_INDEX_O4},     {"o5", KINCAL_OBS_INDEX_O5},
+    {"aopt", KINCAL_OBS_INDEX_A_OPT}, {"dopt", KINCAL_OBS_INDEX_D_OPT},
+    {NULL, 0},
+};
+
+/* params: [] (the robot's geometric set) or a P x 1 logical / 0-1 mask over robot.params.
+ * Sets *mask to NULL for [] and counts the parameters in *n_params. */
+static int get_param_mask(kc_ctx *c, const kincal_robot *r, const mxArray *a, uint8_t *buf,
+                          const uint8_t **mask, size_t *n_params)
+{
+    size_t np = kincal_num_params(r->n_joints), i;
+    kincal_error err;
+    kincal_status st;
+    *n_params = 0;
+    if (is_default(a)) {
+        *mask = NULL;
+        st = kincal_robot_param_mask(r, 0, buf, np, &err);
+        if (st != KINCAL_STATUS_OK) {
+            return fail_status(c, st, &err, NULL);
+        }
+    } else if (mxIsLogical(a) && mxGetNumberOfElements(a) == np) {
+        const mxLogical *lg = mxGetLogicals(a);
+        for (i = 0; i < np; ++i) {
+            buf[i] = lg[i] ? 1 : 0;
+        }
+        *mask = buf;
+    } else {
+        const double *p;
+        if (get_vector(c, a, "params", np, &p) != 0) {
+            return -1;
+        }
+        for (i = 0; i < np; ++i) {
+            if (p[i] != 0.0 && p[i] != 1.0) {
+                return fail(c, "badValue", "argument 'params': element %.0f must be 0 or 1",
+                            one_based(i));
+            }
+            buf[i] = p[i] != 0.0;
+        }
+        *mask = buf;
+    }
+    for (i = 0; i < np; ++i) {
+        *n_params += buf[i] != 0;
+    }
+    return 0;
+}
+
+/* scaling name and tolerances ([length_m angle_rad] or [] unless 'tolerance') */
+static int get_scaling(kc_ctx *c, const mxArray *name, const mxArray *tol, kincal_scaling *s)
+{
+    const double *t;
+    if (get_choice(c, name, "scaling", SCALINGS, &s->kind) != 0) {
+        return -1;
+    }
+    s->length_m = 1.0;
+    s->angle_rad = 1.0;
+    if (s->kind == KINCAL_SCALING_KIND_TOLERANCE) {
+        if (get_vector(c, tol, "tolerance", 2, &t) != 0) {
+            return -1;
+        }
+        s->length_m = t[0];
+        s->angle_rad = t[1];
+    }
+    return 0;
+}
+
+/* Aligned scratch of `bytes` bytes (freed with the call). */
+static void *aligned_scratch(kc_ctx *c, size_t bytes)
+{
+    char *raw;
+    if (bytes == 0) {
+        fail(c, "capacityExceeded", "no workspace size for these parameters");
+        return NULL;
+    }
+    raw = (char *)kc_alloc(c, bytes + KINCAL_WORKSPACE_ALIGN);
+    if (raw == NULL) {
+        return NULL;
+    }
+    return raw + (KINCAL_WORKSPACE_ALIGN - (size_t)((uintptr_t)raw % KINCAL_WORKSPACE_ALIGN)) %
+                     KINCAL_WORKSPACE_ALIGN;
+}
+
+static const char *const INDICES_FIELDS[] = {
+    "o", "o1", "o2", "o3", "o4", "o5", "a_optimality", "d_optimality", "sigma_min",
+    "sigma_max", "poses", "params", NULL,
+};
+
+static mxArray *indices_struct(const kincal_observability_indices *i)
+{
+    mxArray *s = mxCreateStructMatrix(1, 1, 12, (const char **)INDICES_FIELDS);
+    mxSetField(s, 0, "o", mxCreateDoubleScalar(i->o));
+    mxSetField(s, 0, "o1", mxCreateDoubleScalar(i->o1));
+    mxSetField(s, 0, "o2", mxCreateDoubleScalar(i->o2));
+    mxSetField(s, 0, "o3", mxCreateDoubleScalar(i->o3));
+    mxSetField(s, 0, "o4", mxCreateDoubleScalar(i->o4));
+    mxSetField(s, 0, "o5", mxCreateDoubleScalar(i->o5));
+    mxSetField(s, 0, "a_optimality", mxCreateDoubleScalar(i->a_optimality));
+    mxSetField(s, 0, "d_optimality", mxCreateDoubleScalar(i->d_optimality));
+    mxSetField(s, 0, "sigma_min", mxCreateDoubleScalar(i->sigma_min));
+    mxSetField(s, 0, "sigma_max", mxCreateDoubleScalar(i->sigma_max));
+    mxSetField(s, 0, "poses", mxCreateDoubleScalar((double)i->poses));
+    mxSetField(s, 0, "params", mxCreateDoubleScalar((double)i->params));
+    return s;
+}
+
+/* observability(robot, q N x M, params, scaling, tolerance) -> indices struct, sv p x 1 */
+static int op_observability(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prhs[])
+{
+    kincal_robot r;
+    kincal_error err;
+    kincal_status st;
+    kincal_scaling sc;
+    kincal_observability_indices ind;
+    uint8_t buf[KINCAL_MAX_PARAMS];
+    const uint8_t *mask;
+    const double *q;
+    size_t n, m, np, p;
+    void *ws;
+    size_t ws_len;
+    mxArray *sv;
+    if (get_robot(c, prhs[0], &r) != 0) {
+        return -1;
+    }
+    n = r.n_joints;
+    np = kincal_num_params(n);
+    if (get_real_matrix(c, prhs[1], "q", n, KC_ANY, &q) != 0 ||
+        get_param_mask(c, &r, prhs[2], buf, &mask, &p) != 0 ||
+        get_scaling(c, prhs[3], prhs[4], &sc) != 0) {
+        return -1;
+    }
+    m = mxGetN(prhs[1]);
+    ws_len = kincal_observability_workspace_size(p);
+    if ((ws = aligned_scratch(c, ws_len)) == NULL) {
+        return -1;
+    }
+    sv = mxCreateDoubleMatrix((mwSize)p, 1, mxREAL);
+    st = kincal_observability(&r, q, m, n * m, mask, np, &sc, ws, ws_len, &ind, KC_DOUBLES(sv),
+                              p, &err);
+    if (st != KINCAL_STATUS_OK) {
+        mxDestroyArray(sv);
+        return fail_status(c, st, &err, NULL);
+    }
+    plhs[0] = indices_struct(&ind);
+    if (nlhs > 1) {
+        plhs[1] = sv;
+    } else {
+        mxDestroyArray(sv);
+    }
+    return 0;
+}
+
+static const char *const SELECTION_FIELDS[] = {
+    "value", "initial_value", "exchange_value", "evaluations", "exchanges", "refinements",
+    "start", "indices", NULL,
+};
+
+/* select_poses(robot, pool N x K, m, params, scaling, tolerance, objective, seed,
+ *              region 3 x 2 [min max] or [], joint_margin_rad) -> q N x m, selection struct */
+static int op_select_poses(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prhs[])
+{
+    kincal_robot r;
+    kincal_error err;
+    kincal_status st;
+    kincal_scaling sc;
+    kincal_selection sel;
+    kincal_region region;
+    const kincal_region *reg = NULL;
+    uint8_t buf[KINCAL_MAX_PARAMS];
+    const uint8_t *mask;
+    const double *pool, *g;
+    uint32_t objective;
+    size_t n, k, m, np, p, seed, i;
+    double margin;
+    void *ws;
+    size_t ws_len;
+    mxArray *q_out, *s;
+    if (get_robot(c, prhs[0], &r) != 0) {
+        return -1;
+    }
+    n = r.n_joints;
+    np = kincal_num_params(n);
+    if (get_real_matrix(c, prhs[1], "pool", n, KC_ANY, &pool) != 0 ||
+        get_count(c, prhs[2], "m", (double)KINCAL_MAX_SELECT, &m) != 0 ||
+        get_param_mask(c, &r, prhs[3], buf, &mask, &p) != 0 ||
+        get_scaling(c, prhs[4], prhs[5], &sc) != 0 ||
+        get_choice(c, prhs[6], "objective", OBS_INDICES, &objective) != 0 ||
+        get_count(c, prhs[7], "seed", 9007199254740992.0, &seed) != 0 ||
+        get_scalar(c, prhs[9], "joint_margin_rad", &margin) != 0) {
+        return -1;
+    }
+    if (!is_default(prhs[8])) {
+        if (get_real_matrix(c, prhs[8], "region", 3, 2, &g) != 0) {
+            return -1;
+        }
+        for (i = 0; i < 3; ++i) {
+            region.min_m[i] = g[i];
+            region.max_m[i] = g[3 + i];
+        }
+        reg = &region;
+    }
+    k = mxGetN(prhs[1]);
+    ws_len = kincal_select_workspace_size(p, k);
+    if ((ws = aligned_scratch(c, ws_len)) == NULL) {
+        return -1;
+    }
+    q_out = mxCreateDoubleMatrix((mwSize)n, (mwSize)m, mxREAL);
+    st = kincal_select_poses(&r, pool, k, n * k, m, mask, np, &sc, objective, (uint64_t)seed,
+                             reg, margin, ws, ws_len, KC_DOUBLES(q_out), n * m, &sel, &err);
+    if (st != KINCAL_STATUS_OK) {
+        mxDestroyArray(q_out);
+        return fail_status(c, st, &err, NULL);
+    }
+    plhs[0] = q_out;
+    if (nlhs > 1) {
+        s = mxCreateStructMatrix(1, 1, 8, (const char **)SELECTION_FIELDS);
+        mxSetField(s, 0, "value", mxCreateDoubleScalar(sel.value));
+        mxSetField(s, 0, "initial_value", mxCreateDoubleScalar(sel.initial_value));
+        mxSetField(s, 0, "exchange_value", mxCreateDoubleScalar(sel.exchange_value));
+        mxSetField(s, 0, "evaluations", mxCreateDoubleScalar((double)sel.evaluations));
+        mxSetField(s, 0, "exchanges", mxCreateDoubleScalar((double)sel.exchanges));
+        mxSetField(s, 0, "refinements", mxCreateDoubleScalar((double)sel.refinements));
+        mxSetField(s, 0, "start", mxCreateDoubleScalar(one_based(sel.start)));
+        mxSetField(s, 0, "indices", indices_struct(&sel.indices));
+        plhs[1] = s;
+    }
+    return 0;
+}
+#endif /* KINCAL_MAX_SELECT */
+
+/* ------------------------------------------------------------------------------------------ */
 /* Identification, identifiability, validation (with the C ABI's identification exports)      */
 /* ------------------------------------------------------------------------------------------ */
 
@@ -2377,6 +2622,10 @@ static const kc_operation OPERATIONS[] = {
     {"t_base_ee", op_t_base_ee, 2, 1},
 #endif
     {"robot_from_axes", op_robot_from_axes, 6, 1},
+#if defined(KC_HAS_OBSERVABILITY)
+    {"observability", op_observability, 5, 2},
+    {"select_poses", op_select_poses, 10, 2},
+#endif
 #if defined(KINCAL_TEST_PANIC)
     {"test_panic", op_test_panic, 0, 0},
 #endif

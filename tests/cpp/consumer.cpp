@@ -585,11 +585,49 @@ void test_panic_boundary() {
 
 }  // namespace
 
+// O (eq. 17) of the ten Table 2 tool poses (IK on the nominal model), default geometric
+// parameters, unit columns. Keep identical to `TABLE2_O` in ffi/src/tests/observability.rs.
+const double TABLE2_O = 1.453933636665828e-2;
+
+void test_observability_table2() {
+    kincal_robot nominal = aria(KINCAL_ARIA_MODEL_NOMINAL);
+    double seed[6];
+    kincal_error err;
+    CHECK_STATUS(kincal_aria_tool_seed(seed, 6, &err), KINCAL_STATUS_OK, err, nullptr);
+    std::vector<double> qs(6 * KINCAL_ARIA_NUM_TOOL_POSES);
+    for (size_t l = 0; l < KINCAL_ARIA_NUM_TOOL_POSES; ++l) {
+        double target[16];
+        CHECK_STATUS(kincal_aria_tool_pose(l, target, 16, &err), KINCAL_STATUS_OK, err,
+                     nullptr);
+        CHECK_STATUS(kincal_ik(&nominal, target, 16, seed, 6, nullptr, nullptr, &qs[6 * l], 6,
+                               nullptr, &err),
+                     KINCAL_STATUS_OK, err, nullptr);
+    }
+    const size_t size = kincal_observability_workspace_size(24);
+    CHECK(size > 0);
+    std::vector<std::max_align_t> workspace(size / sizeof(std::max_align_t) + 1);
+    kincal_observability_indices ind;
+    double sv[24];
+    CHECK_STATUS(kincal_observability(&nominal, qs.data(), KINCAL_ARIA_NUM_TOOL_POSES, qs.size(),
+                                      nullptr, 0, nullptr, workspace.data(), size, &ind, sv, 24,
+                                      &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    CHECK(ind.params == 24 && ind.poses == KINCAL_ARIA_NUM_TOOL_POSES);
+    CHECK(std::fabs(ind.o - TABLE2_O) < 1e-9 * TABLE2_O);
+    CHECK(sv[0] == ind.sigma_max && sv[23] == ind.sigma_min);
+    // A short workspace is refused with the size it needs.
+    CHECK_STATUS(kincal_observability(&nominal, qs.data(), KINCAL_ARIA_NUM_TOOL_POSES, qs.size(),
+                                      nullptr, 0, nullptr, workspace.data(), size - 1, &ind,
+                                      nullptr, 0, &err),
+                 KINCAL_STATUS_BAD_LENGTH, err, "workspace");
+}
+
 int main() {
     test_version_and_layout();
     test_fk_against_reference();
     test_shared_values();
     test_ik_every_tool_pose();
+    test_observability_table2();
     test_jacobian_theta0_column();
     test_effects_and_pose_error();
     test_bad_arguments();

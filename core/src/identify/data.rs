@@ -184,8 +184,11 @@ pub(crate) fn add_rows<const N: usize, const P: usize>(
         capacity: P,
     })?;
     let full = cols.iter().any(|&c| c >= Robot::<N>::NUM_GEOMETRIC_PARAMS);
+    let links = cols.iter().all(|&c| c < 5 * N);
     let n_jac = if full {
         Robot::<N>::NUM_PARAMS
+    } else if links {
+        5 * N
     } else {
         Robot::<N>::NUM_GEOMETRIC_PARAMS
     };
@@ -200,6 +203,23 @@ pub(crate) fn add_rows<const N: usize, const P: usize>(
         [0.0; 6]
     };
     let mut c = 0.0;
+    if ws.to_gram {
+        // The pose's six rows at once (the hot loop of the iterations).
+        let mut rows = [[0.0; P]; 6];
+        let mut wk = [0.0; 6];
+        for k in 0..6 {
+            if !m.mask.has(k) {
+                continue;
+            }
+            wk[k] = m.weight * weight(opts, k);
+            for (j, &col) in cols.iter().enumerate() {
+                rows[k][j] = jac.get(col).map_or(0.0, |jc| jc[k]) * ws.colscale[j];
+            }
+            c += wk[k] * e[k] * e[k];
+        }
+        ws.gram.add_rows6(&rows, &e, &wk)?;
+        return Ok(c);
+    }
     for k in 0..6 {
         if !m.mask.has(k) {
             continue;

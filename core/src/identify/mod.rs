@@ -156,6 +156,10 @@ pub struct IdentifyOptions<'a> {
     /// Fit the identifiable subset even when the data leave some generically identifiable
     /// parameters undetermined (otherwise that is [`crate::Error::RankDeficient`]).
     pub allow_data_deficiency: bool,
+    /// Compute σ², standard errors and correlations of the result (one more Jacobian pass
+    /// and a p×p inverse). Off, they are reported as 0 / none: for repeated fits that only
+    /// need the parameters, e.g. a Monte-Carlo study.
+    pub covariance: bool,
 }
 
 impl IdentifyOptions<'_> {
@@ -175,6 +179,7 @@ impl IdentifyOptions<'_> {
             weight_rot: 1.0,
             bounds: None,
             allow_data_deficiency: false,
+            covariance: true,
         }
     }
 }

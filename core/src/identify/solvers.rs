@@ -181,7 +181,10 @@ pub(crate) fn identify_into<const N: usize, const P: usize>(
             }
         }
     }
-    covariance(data, opts, n, rows, ws, out)
+    if opts.covariance {
+        covariance(data, opts, n, rows, ws, out)?;
+    }
+    Ok(())
 }
 
 use super::data::Measurement;
@@ -315,6 +318,11 @@ fn solve_normal<const P: usize>(mat: &[[f64; P]; P], n: usize, x: &mut [f64]) ->
 /// from the Cholesky factor of the scaled normal equations — for the full-rank identifiable
 /// set that is the unique, hence minimum-norm, solution — and from the SVD of the Givens
 /// factor when the normal equations are numerically singular at an iterate.
+///
+/// A trial point is evaluated by accumulating its normal equations (Jacobian and residual
+/// in one pass): an accepted trial's cost and normal equations are those the next
+/// iteration needs, so each iteration costs one Jacobian pass instead of a Jacobian pass
+/// plus a cost pass.
 fn gauss_newton<const N: usize, const P: usize>(
     robot: &mut Robot<N>,
     data: &[Measurement<N>],
@@ -324,10 +332,10 @@ fn gauss_newton<const N: usize, const P: usize>(
 ) -> Result<u32> {
     // One trial model, equal to `robot` except for the fitted parameters being tried.
     let mut trial = *robot;
+    unit_scale(ws, n);
+    let mut c = accumulate_gram(robot, data, opts, n, ws)?;
     for it in 0..opts.max_iterations {
         get_x(robot, n, ws)?;
-        unit_scale(ws, n);
-        let c = accumulate_gram(robot, data, opts, n, ws)?;
         if c <= opts.abs_cost_tol {
             return Ok(it);
         }
@@ -358,10 +366,18 @@ fn gauss_newton<const N: usize, const P: usize>(
         }
         let dx = scaled_norm(ws, n, &ws.step);
         let xn = scaled_norm(ws, n, &ws.x);
+        unit_scale(ws, n);
+        // A full step this small ends the iteration once accepted: its cost suffices, its
+        // normal equations would never be used.
+        let last = dx <= opts.xtol * (xn + opts.xtol);
         let mut accepted = None;
         for _ in 0..30 {
             apply(&mut trial, n, ws, None)?;
-            let c2 = cost(&trial, data, opts)?;
+            let c2 = if last {
+                cost(&trial, data, opts)?
+            } else {
+                accumulate_gram(&trial, data, opts, n, ws)?
+            };
             if c2 <= c {
                 accepted = Some(c2);
                 break;
@@ -378,6 +394,7 @@ fn gauss_newton<const N: usize, const P: usize>(
         if dx <= opts.xtol * (xn + opts.xtol) || (c - c2) <= opts.ftol * c {
             return Ok(it + 1);
         }
+        c = c2;
     }
     Err(Error::NotConverged {
         iterations: opts.max_iterations,

@@ -71,6 +71,59 @@ impl<const P: usize> GramAccumulator<P> {
         self.btb += w * b * b;
         Ok(())
     }
+    /// Folds the six equations `a[r]·x ≈ b[r]` with weights `w[r] >= 0` (a pose's rows; a
+    /// weight of 0 leaves a row out) at once: the same sums as six
+    /// [`add_row_weighted`](Self::add_row_weighted) calls, in a third of the memory traffic.
+    /// Only `a[r][..n]` is read.
+    pub fn add_rows6(&mut self, a: &[[f64; P]; 6], b: &[f64; 6], w: &[f64; 6]) -> Result<()> {
+        let n = self.n;
+        let finite = super::util::all_finite(a.iter().flat_map(|r| r[..n].iter()))
+            && super::util::all_finite(b.iter().chain(w.iter()));
+        if !finite || w.iter().any(|&v| v < 0.0) {
+            for r in a {
+                check_finite(&r[..n])?;
+            }
+            return Err(Error::NonFinite {
+                what: crate::error::Quantity::Parameter,
+                index: n,
+            });
+        }
+        let [a0, a1, a2, a3, a4, a5] = a;
+        for i in 0..n {
+            let c = [
+                w[0] * a0[i],
+                w[1] * a1[i],
+                w[2] * a2[i],
+                w[3] * a3[i],
+                w[4] * a4[i],
+                w[5] * a5[i],
+            ];
+            self.atb[i] += c.iter().zip(b.iter()).map(|(x, y)| x * y).sum::<f64>();
+            let row = &mut self.g[i][i..n];
+            if c[3] == 0.0 && c[4] == 0.0 && c[5] == 0.0 {
+                // Length columns have no rotation part: three terms suffice.
+                if c[0] == 0.0 && c[1] == 0.0 && c[2] == 0.0 {
+                    continue;
+                }
+                for (k, g) in row.iter_mut().enumerate() {
+                    let j = i + k;
+                    *g += c[0] * a0[j] + c[1] * a1[j] + c[2] * a2[j];
+                }
+            } else {
+                for (k, g) in row.iter_mut().enumerate() {
+                    let j = i + k;
+                    *g += c[0] * a0[j]
+                        + c[1] * a1[j]
+                        + c[2] * a2[j]
+                        + c[3] * a3[j]
+                        + c[4] * a4[j]
+                        + c[5] * a5[j];
+                }
+            }
+        }
+        self.btb += (0..6).map(|r| w[r] * b[r] * b[r]).sum::<f64>();
+        Ok(())
+    }
     /// Number of unknowns.
     #[must_use]
     pub fn n(&self) -> usize {
@@ -182,6 +235,44 @@ mod tests {
             let atb: f64 = (0..5).map(|k| l.r()[k][i] * l.qtb()[k]).sum();
             assert!((g.atb()[i] - atb).abs() < 1e-12);
         }
+        // Six rows at once equal six single rows.
+        let mut g6 = GramAccumulator::<P>::new();
+        let mut g1 = GramAccumulator::<P>::new();
+        g6.reset(5).unwrap();
+        g1.reset(5).unwrap();
+        for _ in 0..7 {
+            let mut a = [[0.0; P]; 6];
+            let (mut b, mut w) = ([0.0; 6], [0.0; 6]);
+            for r in 0..6 {
+                for v in a[r].iter_mut().take(5) {
+                    *v = next();
+                }
+                // Rotation-like rows with zero length columns, and a left-out row.
+                if r >= 3 {
+                    a[r][1] = 0.0;
+                    a[r][2] = 0.0;
+                }
+                b[r] = next();
+                w[r] = if r == 4 { 0.0 } else { 0.5 + next() };
+                g1.add_row_weighted(&a[r][..5], b[r], w[r]).unwrap();
+            }
+            g6.add_rows6(&a, &b, &w).unwrap();
+        }
+        for i in 0..5 {
+            for j in i..5 {
+                assert!((g6.gram()[i][j] - g1.gram()[i][j]).abs() < 1e-13);
+            }
+            assert!((g6.atb()[i] - g1.atb()[i]).abs() < 1e-13);
+        }
+        assert!((g6.btb() - g1.btb()).abs() < 1e-13);
+        let mut bad = [[0.0; P]; 6];
+        bad[2][3] = f64::NAN;
+        assert!(matches!(
+            g6.add_rows6(&bad, &[0.0; 6], &[1.0; 6]),
+            Err(Error::NonFinite { index: 3, .. })
+        ));
+        assert!(g6.add_rows6(&[[0.0; P]; 6], &[0.0; 6], &[-1.0; 6]).is_err());
+
         // A rank-deficient Gram matrix is refused at the right pivot.
         let mut d = GramAccumulator::<P>::new();
         d.reset(3).unwrap();

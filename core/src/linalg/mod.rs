@@ -24,6 +24,7 @@ pub mod lsq;
 pub mod minnorm;
 pub mod qr;
 pub mod svd;
+pub mod symeig;
 #[cfg(test)]
 mod testutil;
 pub mod tri;

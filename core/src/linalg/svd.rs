@@ -66,7 +66,14 @@ pub fn jacobi_svd<const P: usize>(
                 let alpha = sigma[p];
                 let beta = sigma[q];
                 let gamma = col_dot(a, n, p, q);
-                if gamma == 0.0 || libm::fabs(gamma) <= tol * libm::sqrt(alpha) * libm::sqrt(beta) {
+                // A column whose squared norm underflows to 0 (entries below ~1e-154 of the
+                // scaled block's largest) is numerically zero; without this test its
+                // non-zero inner products would fail the pair test for ever.
+                if gamma == 0.0
+                    || alpha == 0.0
+                    || beta == 0.0
+                    || libm::fabs(gamma) <= tol * libm::sqrt(alpha) * libm::sqrt(beta)
+                {
                     continue;
                 }
                 rotated = true;
@@ -76,8 +83,12 @@ pub fn jacobi_svd<const P: usize>(
                 let s = c * t;
                 rotate_cols(a, n, p, q, c, s);
                 rotate_cols(v, n, p, q, c, s);
-                sigma[p] = libm::fmax(alpha - t * gamma, 0.0);
-                sigma[q] = beta + t * gamma;
+                // Incremental norms; recomputed exactly when cancellation leaves nothing
+                // (a rank-deficient block): a clamped 0 against a column of rounding-level
+                // entries would fail the pair test for ever.
+                let (np, nq) = (alpha - t * gamma, beta + t * gamma);
+                sigma[p] = if np > 0.0 { np } else { col_dot(a, n, p, p) };
+                sigma[q] = if nq > 0.0 { nq } else { col_dot(a, n, q, q) };
             }
         }
         if !rotated {
@@ -246,6 +257,26 @@ mod tests {
         let sigma = check(&b, n);
         assert_eq!(sigma[n - 1], 0.0);
         assert!(sigma[n - 2] <= 1e-14 * sigma[0]);
+    }
+
+    #[test]
+    fn column_with_underflowing_squares_terminates() {
+        // Entries ~1e-200 next to entries ~1: the tiny column's squared norm underflows to
+        // 0 while its inner products do not (seen on the Givens factor of a rank-deficient
+        // pose set); the sweep used to rotate that pair for ever.
+        let n = 4;
+        let mut a = [[0.0; P]; P];
+        for i in 0..n {
+            for j in 0..n {
+                a[i][j] = 1.0 / (1.0 + (i + 2 * j) as f64);
+            }
+            a[i][2] = 1e-200 * (i as f64 + 1.0);
+        }
+        let mut sigma = [0.0; P];
+        let mut v = [[0.0; P]; P];
+        jacobi_svd(&mut a, n, &mut sigma, &mut v).unwrap();
+        assert!(sigma[n - 1] <= 1e-150, "{sigma:?}");
+        assert!(sigma[n - 2] > 1e-6, "{sigma:?}");
     }
 
     #[test]

@@ -24,8 +24,19 @@ pub(crate) fn check_len(len: usize, n: usize) -> Result<()> {
     Ok(())
 }
 
+/// Whether every value is finite, without a branch per value: a non-finite `f64` has all
+/// exponent bits set, and OR-ing the per-value flags vectorises.
+#[inline]
+pub(crate) fn all_finite<'a>(x: impl Iterator<Item = &'a f64>) -> bool {
+    const EXP: u64 = 0x7ff0_0000_0000_0000;
+    x.fold(0u64, |acc, v| acc | u64::from(v.to_bits() & EXP == EXP)) == 0
+}
+
 /// First non-finite entry of `x`, reported as a `Parameter` at its position.
 pub(crate) fn check_finite(x: &[f64]) -> Result<()> {
+    if all_finite(x.iter()) {
+        return Ok(());
+    }
     match x.iter().position(|v| !v.is_finite()) {
         Some(index) => Err(Error::NonFinite {
             what: Quantity::Parameter,
@@ -42,6 +53,14 @@ pub(crate) fn check_finite_block<const P: usize>(
     n: usize,
     upper: bool,
 ) -> Result<()> {
+    // Fast path; only a failing block is scanned for the index.
+    if a.iter()
+        .take(n)
+        .enumerate()
+        .all(|(i, row)| all_finite(row.iter().take(n).skip(if upper { i } else { 0 })))
+    {
+        return Ok(());
+    }
     for (i, row) in a.iter().take(n).enumerate() {
         let from = if upper { i } else { 0 };
         for (j, v) in row.iter().enumerate().take(n).skip(from) {

@@ -1,0 +1,378 @@
+//! `kincal evaluate-designs`: Monte-Carlo comparison of data-acquisition designs (Section
+//! 4.4, Fig. 7) on the same random robots.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use kincal::montecarlo::Acquisition;
+
+use crate::design_args::{Context, ScenarioArgs, SelectionArgs, SetupArgs};
+use crate::designs::{self, Design};
+use crate::error::CliError;
+use crate::robot_arg::resolve_robot;
+use crate::study::{self, DesignResult, Summary, Timing};
+
+pub const LONG_ABOUT: &str = "\
+Monte-Carlo evaluation of data-acquisition designs (the paper's Section 4.4 and Fig. 7, as a
+distribution over many robots instead of one).
+
+Each run draws a random true robot (every identified parameter off by a uniform error up to
+--length-error-mm / --angle-error-deg, the paper's 5 mm and 5°), simulates the design's
+measurements on it, identifies the parameters from the nominal model (OLS), and measures the
+identified model's errors e_p, e_φ against the true robot over the validation grid inside the
+working region; the run's result is its worst grid pose. Run k of every design uses the same
+robot k (and the same noise draws per pose index), so designs are compared on the same robots.
+
+How a design is measured:
+  instrument  commanded configurations, the pose measured by motion capture / a tracker with
+              noise --noise-pos-mm, --noise-rot-deg (1σ per axis);
+  tool        the end effector mated with the reference poses of a calibration tool: the
+              physical pose is the drawing's plus a manufacturing error (uniform, ±--tool-tol-mm,
+              ±--tool-tol-deg per axis, fixed per run) and seating noise (as above); the
+              readings come from the true robot's inverse kinematics; the identification uses
+              the drawing's poses.
+
+Designs (--designs): standard = whole-workspace, observability-optimal, instrument-measured;
+clustering = workspace clustering in the working region (poses of equal per-pose index in
+mutually different cubes of --cube-mm), used as a tool; table2 = the paper's calibration
+tool. Add tools with --tool NAME=FILE.csv (e.g. from design-tool) and instrument-measured
+configurations with --commanded NAME=FILE.csv (e.g. from select-poses).
+
+Prints a table (median, 95th percentile and maximum over the runs of the worst-pose errors),
+the ordering and the paper's targets (1 mm, 0.66°) as verdicts, and the timing; --plot writes
+the comparison figure (SVG), --json the numbers. Reproducible from --seed, in parallel (set
+RAYON_NUM_THREADS to choose the thread count; results do not depend on it).";
+
+pub const EXAMPLE: &str = "\
+Examples:
+  kincal evaluate-designs --runs 10000 --plot fig7.svg
+  kincal evaluate-designs --designs table2 --tool mine=tool.csv --runs 10000";
+
+/// A built-in design.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum BuiltIn {
+    Standard,
+    Clustering,
+    Table2,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pub setup: SetupArgs,
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+    #[command(flatten)]
+    pub selection: SelectionArgs,
+    /// Built-in designs, comma-separated (standard, clustering, table2)
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "standard,clustering,table2"
+    )]
+    pub designs: Vec<BuiltIn>,
+    /// A calibration tool file to evaluate, as NAME=FILE.csv (repeatable)
+    #[arg(long = "tool", value_name = "NAME=FILE")]
+    pub tools: Vec<String>,
+    /// Commanded configurations measured by an instrument, as NAME=FILE.csv (a measurement
+    /// CSV; only q1..qN are used; repeatable)
+    #[arg(long = "commanded", value_name = "NAME=FILE")]
+    pub commanded: Vec<String>,
+    /// Monte-Carlo runs per design
+    #[arg(long, default_value_t = 10000)]
+    pub runs: u64,
+    /// Write the comparison figure (SVG)
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<PathBuf>,
+    /// Write the numbers (JSON)
+    #[arg(long, value_name = "FILE.json")]
+    pub json: Option<PathBuf>,
+}
+
+fn named(arg: &str, flag: &str) -> Result<(String, PathBuf), CliError> {
+    match arg.split_once('=') {
+        Some((n, f)) if !n.trim().is_empty() && !f.is_empty() => {
+            Ok((n.trim().to_string(), PathBuf::from(f)))
+        }
+        _ => Err(CliError::usage(format!(
+            "{flag} '{arg}': expected NAME=FILE"
+        ))),
+    }
+}
+
+pub fn run(args: &Args) -> Result<(), CliError> {
+    if args.runs == 0 {
+        return Err(CliError::usage("--runs: expected at least 1"));
+    }
+    let spec = resolve_robot(&args.setup.robot)?;
+    kincal::with_any_robot!(&spec.robot, r => evaluate(*r, &spec.name, args))
+}
+
+/// Builds the requested designs (built-in ones from the seed, then the files).
+pub fn build_designs<const N: usize>(
+    ctx: &Context<N>,
+    builtin: &[BuiltIn],
+    tools: &[String],
+    commanded: &[String],
+    sel: &SelectionArgs,
+    scenario: &ScenarioArgs,
+    log: &mut String,
+) -> Result<Vec<Design<N>>, CliError> {
+    let settings = sel.settings()?;
+    let mut out = Vec::new();
+    for b in builtin {
+        let d = match b {
+            BuiltIn::Standard => {
+                let pb = crate::progress::counter(
+                    settings.pool as u64,
+                    "standard design: sampling the workspace",
+                );
+                let (d, s, _) = designs::standard_design(ctx, &settings, &pb)?;
+                pb.finish_and_clear();
+                let _ = writeln!(
+                    log,
+                    "  standard: {} = {:.4} ({} evaluations, {} exchanges, {} refinements)",
+                    settings.index.name(),
+                    s.value,
+                    s.evaluations,
+                    s.exchanges,
+                    s.refinements
+                );
+                d
+            }
+            BuiltIn::Clustering => {
+                let pb = crate::progress::counter(
+                    settings.pool as u64,
+                    "clustering design: robust poses of the working region",
+                );
+                let study = ctx.study(scenario.scenario(), ctx.seed);
+                let (d, c, _) = designs::clustering_design(ctx, &settings, &study, &pb)?;
+                pb.finish_and_clear();
+                let _ = writeln!(
+                    log,
+                    "  clustering: spread {:.3} (ln ratio), {} = {:.4}, {} occupied cubes",
+                    c.spread,
+                    settings.index.name(),
+                    c.value,
+                    c.occupied_cubes
+                );
+                d
+            }
+            BuiltIn::Table2 => designs::table2_design(ctx)?,
+        };
+        out.push(d);
+    }
+    for t in tools {
+        let (name, path) = named(t, "--tool")?;
+        out.push(designs::tool_from_file(ctx, &name, &path)?);
+    }
+    for c in commanded {
+        let (name, path) = named(c, "--commanded")?;
+        out.push(designs::commanded_from_file(ctx, &name, &path)?);
+    }
+    let mut names: Vec<&str> = out.iter().map(|d| d.name.as_str()).collect();
+    names.sort_unstable();
+    if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
+        return Err(CliError::usage(format!("two designs are named '{}'", w[0])));
+    }
+    if out.is_empty() {
+        return Err(CliError::usage("no design to evaluate"));
+    }
+    Ok(out)
+}
+
+/// Timing line.
+pub fn timing_line(t: &Timing) -> String {
+    let per = t.wall_s / t.calibrations.max(1) as f64 * 1e6;
+    let cpu = t.cpu_s.map_or(String::new(), |c| {
+        format!(
+            ", {c:.2} s CPU ({:.0} µs per calibration)",
+            c / t.calibrations.max(1) as f64 * 1e6
+        )
+    });
+    format!(
+        "{} calibrations in {:.2} s on {} threads ({per:.0} µs each){cpu}",
+        t.calibrations, t.wall_s, t.threads
+    )
+}
+
+fn verdicts(results: &[DesignResult]) -> String {
+    let mut s = String::new();
+    let get = |n: &str| results.iter().find(|r| r.name == n);
+    if let (Some(std), locals) = (
+        get("standard"),
+        results
+            .iter()
+            .filter(|r| r.name != "standard" && r.acquisition == Acquisition::Tool)
+            .collect::<Vec<_>>(),
+    ) {
+        for l in locals {
+            let (a, b) = (std.pos(), l.pos());
+            let (c, d) = (std.rot(), l.rot());
+            let smaller =
+                a.median < b.median && a.p95 < b.p95 && c.median < d.median && c.p95 < d.p95;
+            let _ = writeln!(
+                s,
+                "  whole-workspace data vs {}: median and p95 of e_p and e_φ {} ({:.3}/{:.3} mm vs {:.3}/{:.3} mm)",
+                l.name,
+                if smaller {
+                    "smaller"
+                } else {
+                    "NOT all smaller"
+                },
+                a.median,
+                a.p95,
+                b.median,
+                b.p95
+            );
+        }
+    }
+    for r in results {
+        let (p, a) = (r.pos(), r.rot());
+        let _ = writeln!(
+            s,
+            "  {}: 95 % of the runs have every validation pose within {:.3} mm and {:.3}° ({} 1 mm / 0.66°); worst run {:.3} mm, {:.3}°{}",
+            r.name,
+            p.p95,
+            a.p95,
+            if p.p95 < 1.0 && a.p95 < 0.66 {
+                "inside"
+            } else {
+                "NOT inside"
+            },
+            p.max,
+            a.max,
+            if r.failed > 0 {
+                format!(
+                    "; {} runs failed ({})",
+                    r.failed,
+                    r.first_failure.as_deref().unwrap_or("")
+                )
+            } else {
+                String::new()
+            }
+        );
+    }
+    s
+}
+
+fn evaluate<const N: usize>(
+    robot: kincal::Robot<N>,
+    name: &str,
+    args: &Args,
+) -> Result<(), CliError> {
+    let ctx = Context::new(robot, name, &args.setup)?;
+    let mut log = String::new();
+    let designs = build_designs(
+        &ctx,
+        &args.designs,
+        &args.tools,
+        &args.commanded,
+        &args.selection,
+        &args.scenario,
+        &mut log,
+    )?;
+    let mut out = String::new();
+    let _ = writeln!(out, "Design evaluation: {}", ctx.describe());
+    let _ = writeln!(out, "Scenario: {}", args.scenario.describe());
+    let _ = writeln!(out, "Designs:");
+    for d in &designs {
+        let _ = writeln!(out, "  {}: {}", d.name, d.note);
+    }
+    out.push_str(&log);
+    let (results, timing) = study::run_study(
+        &ctx,
+        &designs,
+        args.scenario.scenario(),
+        args.runs,
+        ctx.seed,
+        "Monte-Carlo",
+    )?;
+    let _ = writeln!(
+        out,
+        "\nWorst validation pose per run, over {} runs per design (same robots for every design):",
+        args.runs
+    );
+    out.push_str(&study::table(&results));
+    let _ = writeln!(out, "\nVerdicts:");
+    out.push_str(&verdicts(&results));
+    let _ = writeln!(out, "\nTiming: {}", timing_line(&timing));
+    crate::report::emit(&out);
+    let inputs: Vec<&Path> = Vec::new();
+    if let Some(p) = &args.plot {
+        crate::study_plot::write_comparison(
+            p,
+            &inputs,
+            "Design comparison: errors after calibration inside the working region",
+            &format!(
+                "{} runs per design, seed {}; {}",
+                args.runs,
+                ctx.seed,
+                args.scenario.describe()
+            ),
+            &results,
+        )?;
+    }
+    if let Some(p) = &args.json {
+        let json = report_json(&ctx, args, &results, &timing);
+        crate::files::write_atomic(p, &inputs, |w| {
+            serde_json::to_writer_pretty(&mut *w, &json).map_err(std::io::Error::other)?;
+            w.write_all(b"\n")
+        })?;
+    }
+    Ok(())
+}
+
+fn summary_json(s: Summary) -> serde_json::Value {
+    serde_json::json!({"median": s.median, "p95": s.p95, "max": s.max, "mean": s.mean})
+}
+
+/// The numbers of a study as JSON.
+pub fn results_json(results: &[DesignResult]) -> serde_json::Value {
+    serde_json::Value::Array(
+        results
+            .iter()
+            .map(|r| {
+                serde_json::json!({
+                    "name": r.name,
+                    "acquisition": match r.acquisition { Acquisition::Instrument => "instrument", Acquisition::Tool => "tool" },
+                    "poses": r.poses,
+                    "o_eq17": r.o,
+                    "runs": r.runs,
+                    "failed": r.failed,
+                    "first_failure": r.first_failure,
+                    "worst_pose_e_p_mm": summary_json(r.pos()),
+                    "worst_pose_e_phi_deg": summary_json(r.rot()),
+                    "rms_e_p_mm": summary_json(Summary::of(&r.rms_pos_mm)),
+                    "rms_e_phi_deg": summary_json(Summary::of(&r.rms_rot_deg)),
+                    "before_worst_pose_e_p_mm": summary_json(Summary::of(&r.before_pos_mm)),
+                    "before_worst_pose_e_phi_deg": summary_json(Summary::of(&r.before_rot_deg)),
+                    "mean_iterations": r.mean_iterations,
+                    "seconds": r.seconds,
+                })
+            })
+            .collect(),
+    )
+}
+
+fn report_json<const N: usize>(
+    ctx: &Context<N>,
+    args: &Args,
+    results: &[DesignResult],
+    t: &Timing,
+) -> serde_json::Value {
+    let s = args.scenario.scenario();
+    serde_json::json!({
+        "robot": ctx.robot_name,
+        "seed": ctx.seed,
+        "runs": args.runs,
+        "validation_poses": ctx.validation_q.len(),
+        "scenario": {
+            "length_error_m": s.length_error_m, "angle_error_rad": s.angle_error_rad,
+            "noise_pos_m": s.noise_pos_m, "noise_rot_rad": s.noise_rot_rad,
+            "tool_tol_pos_m": s.tool_tol_pos_m, "tool_tol_rot_rad": s.tool_tol_rot_rad,
+        },
+        "designs": results_json(results),
+        "timing": {"calibrations": t.calibrations, "wall_s": t.wall_s, "cpu_s": t.cpu_s, "threads": t.threads},
+    })
+}

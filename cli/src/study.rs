@@ -1,0 +1,282 @@
+//! Monte-Carlo comparison of designs (Section 4.4, Fig. 7): every design is calibrated on the
+//! same random robots (run k of every design uses robot k, see [`kincal::montecarlo`]),
+//! in parallel, and the errors of the identified models over the validation grid are
+//! summarised per design.
+
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use kincal::identify::{Measurement, Workspace};
+use kincal::montecarlo::{Acquisition, RunResult, Scenario, prepare, simulate_run};
+use kincal::pose::Transform;
+use rayon::prelude::*;
+
+use crate::design_args::{Context, P};
+use crate::designs::Design;
+use crate::error::CliError;
+
+/// Median, 95th percentile (nearest rank), maximum and mean of a sample.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Summary {
+    pub median: f64,
+    pub p95: f64,
+    pub max: f64,
+    pub mean: f64,
+}
+
+impl Summary {
+    /// Summary of `v` (NaN-free); all zeros for an empty sample.
+    pub fn of(v: &[f64]) -> Summary {
+        if v.is_empty() {
+            return Summary::default();
+        }
+        let mut s = v.to_vec();
+        s.sort_by(f64::total_cmp);
+        let n = s.len();
+        let rank = |p: f64| s[((p * n as f64).ceil() as usize).clamp(1, n) - 1];
+        let median = if n % 2 == 1 {
+            s[n / 2]
+        } else {
+            0.5 * (s[n / 2 - 1] + s[n / 2])
+        };
+        Summary {
+            median,
+            p95: rank(0.95),
+            max: s[n - 1],
+            mean: s.iter().sum::<f64>() / n as f64,
+        }
+    }
+}
+
+/// The outcome of one design in a study. Per-run values are per successful run, in run
+/// order; errors are the worst pose of the validation grid of each run.
+#[derive(Debug, Clone)]
+pub struct DesignResult {
+    pub name: String,
+    pub acquisition: Acquisition,
+    pub poses: usize,
+    /// Eq. (17) index of the design at the nominal model.
+    pub o: f64,
+    pub runs: u64,
+    pub failed: u64,
+    /// The first failure's reason (a tool pose a robot cannot reach, no convergence).
+    pub first_failure: Option<String>,
+    pub max_pos_mm: Vec<f64>,
+    pub max_rot_deg: Vec<f64>,
+    pub rms_pos_mm: Vec<f64>,
+    pub rms_rot_deg: Vec<f64>,
+    pub before_pos_mm: Vec<f64>,
+    pub before_rot_deg: Vec<f64>,
+    pub mean_iterations: f64,
+    /// Wall time of the runs (the analysis excluded).
+    pub seconds: f64,
+}
+
+impl DesignResult {
+    pub fn pos(&self) -> Summary {
+        Summary::of(&self.max_pos_mm)
+    }
+    pub fn rot(&self) -> Summary {
+        Summary::of(&self.max_rot_deg)
+    }
+}
+
+/// Timing of a study.
+#[derive(Debug, Clone, Copy)]
+pub struct Timing {
+    pub calibrations: u64,
+    pub wall_s: f64,
+    /// Process CPU time over the same span, where the OS reports it (Linux).
+    pub cpu_s: Option<f64>,
+    pub threads: usize,
+}
+
+/// Process CPU time (user + system) from /proc/self/stat, in seconds (10 ms ticks).
+pub fn cpu_seconds() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/self/stat").ok()?;
+    let f: Vec<&str> = s.rsplit(')').next()?.split_whitespace().collect();
+    let ticks = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
+}
+
+/// Runs `runs` calibrations of every design on the same random robots.
+pub fn run_study<const N: usize>(
+    ctx: &Context<N>,
+    designs: &[Design<N>],
+    scenario: Scenario,
+    runs: u64,
+    seed: u64,
+    label: &str,
+) -> Result<(Vec<DesignResult>, Timing), CliError> {
+    let with_before = ctx.study(scenario, seed);
+    // The errors before calibration depend on the robot only: the first design computes them.
+    let without_before = kincal::montecarlo::Study {
+        validation_nominal: &[],
+        ..with_before
+    };
+    let pb = ProgressBar::new(runs * designs.len() as u64);
+    pb.set_style(
+        ProgressStyle::with_template(
+            "{msg} [{bar:32}] {pos}/{len} calibrations, {per_sec}, eta {eta}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    pb.set_message(label.to_string());
+    let mut out = Vec::with_capacity(designs.len());
+    let (t0, c0) = (Instant::now(), cpu_seconds());
+    for (k, d) in designs.iter().enumerate() {
+        let study = if k == 0 { with_before } else { without_before };
+        let m = d.q.len();
+        let core = d.core();
+        let empty = Measurement::new([0.0; N], Transform::identity());
+        let mut data = vec![empty; m];
+        let analysis = prepare(
+            &study,
+            &core,
+            &mut Box::<Workspace<P>>::default(),
+            &mut data,
+        )
+        .map_err(|e| {
+            CliError::numeric(format!(
+                "design {}: the poses do not determine the parameters: {e}",
+                d.name
+            ))
+        })?;
+        let o = d.indices(ctx)?.o;
+        let t = Instant::now();
+        let results: Vec<Result<RunResult, kincal::Error>> = (0..runs as usize)
+            .into_par_iter()
+            .with_min_len(16)
+            .map_init(
+                || (Box::<Workspace<P>>::default(), vec![empty; m]),
+                |(ws, data), run| {
+                    let r = simulate_run(&study, &core, &analysis, run as u64, ws, data);
+                    pb.inc(1);
+                    r
+                },
+            )
+            .collect();
+        let seconds = t.elapsed().as_secs_f64();
+        let mut r = DesignResult {
+            name: d.name.clone(),
+            acquisition: d.acquisition,
+            poses: m,
+            o,
+            runs,
+            failed: 0,
+            first_failure: None,
+            max_pos_mm: Vec::with_capacity(results.len()),
+            max_rot_deg: Vec::with_capacity(results.len()),
+            rms_pos_mm: Vec::with_capacity(results.len()),
+            rms_rot_deg: Vec::with_capacity(results.len()),
+            before_pos_mm: Vec::with_capacity(results.len()),
+            before_rot_deg: Vec::with_capacity(results.len()),
+            mean_iterations: 0.0,
+            seconds,
+        };
+        let mut iters = 0u64;
+        for (run, res) in results.into_iter().enumerate() {
+            match res {
+                Ok(x) => {
+                    r.max_pos_mm.push(x.max_pos_m * 1e3);
+                    r.max_rot_deg.push(x.max_rot_rad.to_degrees());
+                    r.rms_pos_mm.push(x.rms_pos_m * 1e3);
+                    r.rms_rot_deg.push(x.rms_rot_rad.to_degrees());
+                    if k == 0 {
+                        r.before_pos_mm.push(x.before_max_pos_m * 1e3);
+                        r.before_rot_deg.push(x.before_max_rot_rad.to_degrees());
+                    }
+                    iters += u64::from(x.iterations);
+                }
+                Err(e) => {
+                    r.failed += 1;
+                    if r.first_failure.is_none() {
+                        r.first_failure = Some(format!("run {run}: {e}"));
+                    }
+                }
+            }
+        }
+        r.mean_iterations = iters as f64 / r.max_pos_mm.len().max(1) as f64;
+        out.push(r);
+    }
+    pb.finish_and_clear();
+    let wall_s = t0.elapsed().as_secs_f64();
+    let cpu_s = match (c0, cpu_seconds()) {
+        (Some(a), Some(b)) => Some(b - a),
+        _ => None,
+    };
+    Ok((
+        out,
+        Timing {
+            calibrations: runs * designs.len() as u64,
+            wall_s,
+            cpu_s,
+            threads: rayon::current_num_threads(),
+        },
+    ))
+}
+
+/// The comparison table: per design, runs, eq. (17) index and the distribution of the
+/// worst-pose errors.
+pub fn table(results: &[DesignResult]) -> String {
+    let mut t = crate::report::Table::new(&[
+        "design",
+        "measured by",
+        "poses",
+        "O (eq. 17)",
+        "runs ok/failed",
+        "e_p median",
+        "e_p p95",
+        "e_p max [mm]",
+        "e_φ median",
+        "e_φ p95",
+        "e_φ max [deg]",
+    ]);
+    for r in results {
+        let (p, a) = (r.pos(), r.rot());
+        t.row(vec![
+            r.name.clone(),
+            match r.acquisition {
+                Acquisition::Instrument => "instrument".into(),
+                Acquisition::Tool => "tool".into(),
+            },
+            r.poses.to_string(),
+            format!("{:.4}", r.o),
+            format!("{}/{}", r.runs - r.failed, r.failed),
+            format!("{:.3}", p.median),
+            format!("{:.3}", p.p95),
+            format!("{:.3}", p.max),
+            format!("{:.3}", a.median),
+            format!("{:.3}", a.p95),
+            format!("{:.3}", a.max),
+        ]);
+    }
+    let mut out = t.render("  ");
+    if let Some(first) = results.first().filter(|r| !r.before_pos_mm.is_empty()) {
+        let (b, c) = (
+            Summary::of(&first.before_pos_mm),
+            Summary::of(&first.before_rot_deg),
+        );
+        out.push_str(&format!(
+            "  before calibration (nominal model, same robots): worst pose e_p median {:.2} mm, p95 {:.2} mm; e_φ median {:.2}°, p95 {:.2}°\n",
+            b.median, b.p95, c.median, c.p95
+        ));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn summary_uses_nearest_rank_percentiles() {
+        let v: Vec<f64> = (1..=100).rev().map(f64::from).collect();
+        let s = Summary::of(&v);
+        assert_eq!((s.median, s.p95, s.max, s.mean), (50.5, 95.0, 100.0, 50.5));
+        let s = Summary::of(&[3.0, 1.0, 2.0]);
+        assert_eq!((s.median, s.p95, s.max), (2.0, 3.0, 3.0));
+        assert_eq!(Summary::of(&[]), Summary::default());
+    }
+}
