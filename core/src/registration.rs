@@ -349,6 +349,15 @@ pub fn weighted_rigid_fit(
     if rank < 2 {
         return Err(Error::RankDeficient { rank, required: 2 });
     }
+    let r = rotation_from_correlation(&s)?;
+    Ok(transform(r, cb - r * ca))
+}
+
+/// The proper rotation `R` maximising `Σ w·bᵀ·R·a` given the correlation
+/// `s = Σ w·a·bᵀ` (Horn's quaternion method, see the module docs). Fails with
+/// [`Error::RankDeficient`] when the best rotation is not unique (top two eigenvalues of
+/// Horn's matrix equal).
+pub(crate) fn rotation_from_correlation(s: &Matrix3<f64>) -> Result<Matrix3<f64>> {
     let (sxx, sxy, sxz) = (s[(0, 0)], s[(0, 1)], s[(0, 2)]);
     let (syx, syy, syz) = (s[(1, 0)], s[(1, 1)], s[(1, 2)]);
     let (szx, szy, szz) = (s[(2, 0)], s[(2, 1)], s[(2, 2)]);
@@ -371,8 +380,7 @@ pub fn weighted_rigid_fit(
     }
     let k = order[0];
     let q = [vecs[0][k], vecs[1][k], vecs[2][k], vecs[3][k]];
-    let r = quaternion_to_matrix(&q)?;
-    Ok(transform(r, cb - r * ca))
+    quaternion_to_matrix(&q)
 }
 
 fn check_inputs(markers: &Markers<'_>, opts: &RegistrationOptions) -> Result<usize> {

@@ -967,6 +967,7 @@ pub fn diagnose_into<const N: usize, const P: usize>(
         mask |= m.mask.0;
     }
     let mask = crate::identify::ComponentMask(mask);
+    let (points, n_points) = crate::identify::distinct_points(data);
     let any_approach = data.iter().any(|m| m.state.approach.is_some());
     let any_temp = data.iter().any(|m| m.state.temp_c.is_some());
     let mut structural = [ParamSet::new(); 7];
@@ -978,6 +979,7 @@ pub fn diagnose_into<const N: usize, const P: usize>(
         crate::identify::structural_step(
             &lin,
             mask,
+            &points[..n_points],
             any_approach,
             any_temp,
             &o,
