@@ -3,11 +3,14 @@
 mod args;
 mod calibration;
 mod cmd_calibrate;
+mod cmd_crossval;
 mod cmd_demo;
 mod cmd_diagnose;
+mod cmd_import;
 mod cmd_predict;
 mod cmd_validate;
 mod data;
+mod datasets;
 mod diagnosis_plot;
 mod error;
 // Tested modules whose API is wider than the commands use so far.
@@ -69,6 +72,13 @@ enum Command {
     /// it shrinks
     #[command(long_about = cmd_diagnose::LONG_ABOUT, after_help = cmd_diagnose::EXAMPLE)]
     Diagnose(cmd_diagnose::Args),
+    /// Held-out residuals of the nominal and the calibrated model (k-fold by pose_id), noise
+    /// floor, outliers
+    #[command(long_about = cmd_crossval::LONG_ABOUT, after_help = cmd_crossval::EXAMPLE)]
+    Crossval(cmd_crossval::Args),
+    /// A public real-robot data set, read as published, as measurement CSV and robot file
+    #[command(name = "import-dataset", long_about = cmd_import::LONG_ABOUT, after_help = cmd_import::EXAMPLE)]
+    ImportDataset(cmd_import::Args),
 }
 
 fn main() -> ExitCode {
@@ -79,6 +89,8 @@ fn main() -> ExitCode {
         Command::Predict(a) => cmd_predict::run(a),
         Command::Validate(a) => cmd_validate::run(a),
         Command::Diagnose(a) => cmd_diagnose::run(a),
+        Command::ImportDataset(a) => cmd_import::run(a),
+        Command::Crossval(a) => cmd_crossval::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
