@@ -7,6 +7,7 @@ mod cmd_crossval;
 mod cmd_demo;
 mod cmd_diagnose;
 mod cmd_import;
+mod cmd_markers;
 mod cmd_predict;
 mod cmd_validate;
 mod data;
@@ -76,6 +77,9 @@ enum Command {
     /// floor, outliers
     #[command(long_about = cmd_crossval::LONG_ABOUT, after_help = cmd_crossval::EXAMPLE)]
     Crossval(cmd_crossval::Args),
+    /// Motion-capture marker export + marker design + joint readings -> measurement CSV
+    #[command(long_about = cmd_markers::LONG_ABOUT, after_help = cmd_markers::EXAMPLE)]
+    Markers(cmd_markers::Args),
     /// A public real-robot data set, read as published, as measurement CSV and robot file
     #[command(name = "import-dataset", long_about = cmd_import::LONG_ABOUT, after_help = cmd_import::EXAMPLE)]
     ImportDataset(cmd_import::Args),
@@ -91,6 +95,7 @@ fn main() -> ExitCode {
         Command::Diagnose(a) => cmd_diagnose::run(a),
         Command::ImportDataset(a) => cmd_import::run(a),
         Command::Crossval(a) => cmd_crossval::run(a),
+        Command::Markers(a) => cmd_markers::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

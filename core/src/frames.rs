@@ -9,7 +9,8 @@
 //! `T_e^b` at the pose's joint state (its base and tool frames included), `r_l` the
 //! measured point ([`Measurement::point`], zero when absent), and the unknown rigid
 //! corrections `B` (applied before the base frame) and `X` (after the tool frame). The
-//! result is the robot with base frame `B·T_0^b` and tool frame `T_e^N·X`.
+//! result is the robot with base frame `B·T_0^b` and tool frame `T_e^N·X`, and its gravity
+//! vector (a direction in the base frame) turned by `B`'s rotation.
 //!
 //! # Method
 //! - **With orientations** (at least [`MIN_ORIENTED_POSES`] poses with a measured
@@ -58,7 +59,7 @@ const PAIR_SPAN: usize = 24;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FrameEstimate<const N: usize> {
     /// The robot with base frame `B·T_0^b` and tool frame `T_e^N·X` (both also its nominal
-    /// frames, see [`Robot::with_base`]).
+    /// frames, see [`Robot::with_base`]) and gravity `R_B·g`.
     pub robot: Robot<N>,
     /// `B`, the correction before the base frame.
     pub base_change: Transform,
@@ -237,9 +238,14 @@ pub fn estimate_frames<const N: usize>(
     let bt = transform(rb, Vector3::new(t[3], t[4], t[5]));
     let new_base = bt * robot.t_base_0();
     let new_tool = robot.t_n_tool() * x;
+    // Gravity is a direction in the base frame: it turns with it.
+    let mut mass = *robot.mass();
+    let g = rb * Vector3::new(mass.gravity[0], mass.gravity[1], mass.gravity[2]);
+    mass.gravity = [g.x, g.y, g.z];
     let out = robot
         .with_base(pose_to_vector6(&new_base))?
-        .with_tool(pose_to_vector6(&new_tool))?;
+        .with_tool(pose_to_vector6(&new_tool))?
+        .with_mass(mass)?;
     // Residuals of the estimate.
     let (mut sp, mut np, mut sr, mut nr) = (0.0, 0usize, 0.0, 0usize);
     poses.each(|p| {

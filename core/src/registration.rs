@@ -34,9 +34,11 @@
 //! fit of all visible markers leaves any marker inconsistent, every subset of 1, then 2, …
 //! up to [`RegistrationOptions::max_outliers`] markers is excluded in turn (keeping at least
 //! 3) and the smallest exclusion after which all remaining markers are consistent is taken
-//! (ties: smallest Σ(|r_j|/σ_j)²). Excluded markers are then named: two whose measured
-//! positions each match the other's predicted position within their thresholds are
-//! [`MarkerStatus::Swapped`]; any other is [`MarkerStatus::Moved`]. Masked markers are
+//! (ties: smallest Σ(|r_j|/σ_j)²). Excluded markers are then named: two for which
+//! exchanging their measured positions gives a consistent fit with both of them used are
+//! [`MarkerStatus::Swapped`] (a direct test of the swap; comparing each with the other's
+//! predicted position would also charge the prediction error of a fit on fewer markers);
+//! any other is [`MarkerStatus::Moved`]. Masked markers are
 //! [`MarkerStatus::Missing`] (their measured values are ignored, NaN allowed). When no
 //! exclusion explains the data, the all-visible fit is returned with
 //! [`Registration::consistent`] false and the inconsistent markers marked
@@ -473,7 +475,7 @@ pub fn register(markers: &Markers<'_>, opts: &RegistrationOptions) -> Result<Reg
     let d = design.get(..n).unwrap_or(&[]);
     let m = measured.get(..n).unwrap_or(&[]);
     // Score of a fit: (all used consistent, Σ (|r|/σ_j)²).
-    let score = |t: &Transform, w: &[f64; MAX_MARKERS]| {
+    let score_of = |t: &Transform, w: &[f64; MAX_MARKERS], measured: &[[f64; 3]]| {
         let mut ok = true;
         let mut chi = 0.0;
         for j in 0..n {
@@ -487,6 +489,7 @@ pub fn register(markers: &Markers<'_>, opts: &RegistrationOptions) -> Result<Reg
         }
         (ok, chi)
     };
+    let score = |t: &Transform, w: &[f64; MAX_MARKERS]| score_of(t, w, measured);
     let t_all = weighted_rigid_fit(d, m, w_all.get(..n).unwrap_or(&[]), opts.sigma_m)?;
     let (ok_all, _) = score(&t_all, &w_all);
     let mut best: Option<(Transform, [f64; MAX_MARKERS], f64)> = None;
@@ -562,7 +565,8 @@ pub fn register(markers: &Markers<'_>, opts: &RegistrationOptions) -> Result<Reg
             MarkerStatus::Moved
         };
     }
-    // Name swaps among the excluded markers.
+    // Name swaps among the excluded markers: a pair is swapped when exchanging their two
+    // measured positions gives a fit with both of them back in, all markers consistent.
     for j in 0..n {
         if fits[j].status != MarkerStatus::Moved {
             continue;
@@ -571,10 +575,15 @@ pub fn register(markers: &Markers<'_>, opts: &RegistrationOptions) -> Result<Reg
             if fits[k].status != MarkerStatus::Moved {
                 continue;
             }
-            let mj = v3(&measured[j]);
-            let mk = v3(&measured[k]);
-            if (mj - v3(&fits[k].predicted_m)).norm() <= thr[j]
-                && (mk - v3(&fits[j].predicted_m)).norm() <= thr[k]
+            let mut m2 = [[0.0; 3]; MAX_MARKERS];
+            m2[..n].copy_from_slice(m);
+            m2.swap(j, k);
+            let mut w2 = w_used;
+            w2[j] = weight(j);
+            w2[k] = weight(k);
+            let m2 = m2.get(..n).unwrap_or(&[]);
+            if let Ok(t2) = weighted_rigid_fit(d, m2, w2.get(..n).unwrap_or(&[]), opts.sigma_m)
+                && score_of(&t2, &w2, m2).0
             {
                 fits[j].status = MarkerStatus::Swapped { with: k };
                 fits[k].status = MarkerStatus::Swapped { with: j };

@@ -86,6 +86,10 @@ fn full_poses_give_both_frames_exactly() {
         "{bp:e} {br:e} {tp:e} {tr:e}"
     );
     assert!(est.rms_pos_m < 1e-9 && est.rms_rot_rad < 1e-9);
+    // Gravity turns with the base frame.
+    let g = est.base_change.rotation * nalgebra::Vector3::new(0.0, 0.0, -9.81);
+    let got = est.robot.mass().gravity;
+    assert!((nalgebra::Vector3::from(got) - g).norm() < 1e-12);
     // The estimate starts from the robot's own frames: a start near the truth gives the same.
     let near = aria::nominal()
         .with_base([0.7, -1.0, 0.5, 1.0, -1.1, 1.2])
