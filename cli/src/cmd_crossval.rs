@@ -506,6 +506,11 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
     let mut all =
         fit(nominal, &meas, req_cal, how(w)).map_err(|e| fail("calibration on all poses", e))?;
     let p_fit = |f: &Fit<N>| f.analysis.as_ref().map_or(0, |a| a.identifiable.len());
+    // Residual-based weights matter only when both kinds of rows are measured.
+    let both = orientation && meas.iter().any(|m| m.mask.has_position());
+    if w.mode == "residual" && !both {
+        w.mode = "residual (one kind of rows: weights immaterial)";
+    }
     if w.mode == "residual" {
         for _ in 0..WEIGHT_ROUNDS {
             let (sp, sr, _, nr) =
