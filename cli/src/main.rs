@@ -1,8 +1,8 @@
 //! `kincal`: the command-line tool of the kincal calibration toolkit (spec/cli.md).
 
 use kincal_cli::{
-    cmd_calibrate, cmd_demo, cmd_design_tool, cmd_diagnose, cmd_evaluate, cmd_predict, cmd_select,
-    cmd_validate,
+    cmd_calibrate, cmd_crossval, cmd_demo, cmd_design_tool, cmd_diagnose, cmd_evaluate, cmd_import,
+    cmd_markers, cmd_predict, cmd_select, cmd_validate,
 };
 
 use std::process::ExitCode;
@@ -56,6 +56,16 @@ enum Command {
     /// it shrinks
     #[command(long_about = cmd_diagnose::LONG_ABOUT, after_help = cmd_diagnose::EXAMPLE)]
     Diagnose(cmd_diagnose::Args),
+    /// Held-out residuals of the nominal and the calibrated model (k-fold by pose_id), noise
+    /// floor, outliers
+    #[command(long_about = cmd_crossval::LONG_ABOUT, after_help = cmd_crossval::EXAMPLE)]
+    Crossval(cmd_crossval::Args),
+    /// Motion-capture marker export + marker design + joint readings -> measurement CSV
+    #[command(long_about = cmd_markers::LONG_ABOUT, after_help = cmd_markers::EXAMPLE)]
+    Markers(cmd_markers::Args),
+    /// A public real-robot data set, read as published, as measurement CSV and robot file
+    #[command(name = "import-dataset", long_about = cmd_import::LONG_ABOUT, after_help = cmd_import::EXAMPLE)]
+    ImportDataset(cmd_import::Args),
 }
 
 fn main() -> ExitCode {
@@ -69,6 +79,9 @@ fn main() -> ExitCode {
         Command::DesignTool(a) => cmd_design_tool::run(a),
         Command::EvaluateDesigns(a) => cmd_evaluate::run(a),
         Command::Diagnose(a) => cmd_diagnose::run(a),
+        Command::ImportDataset(a) => cmd_import::run(a),
+        Command::Crossval(a) => cmd_crossval::run(a),
+        Command::Markers(a) => cmd_markers::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -18,6 +18,7 @@ pub mod axis_chain;
 pub mod diagnosis;
 pub mod effects;
 pub mod error;
+pub mod frames;
 pub mod identify;
 pub mod ik;
 pub mod kinematics;

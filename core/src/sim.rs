@@ -237,6 +237,7 @@ pub fn simulate_session<const N: usize>(
             pose,
             mask: crate::identify::ComponentMask::ALL,
             weight: 1.0,
+            point: None,
         };
         groups[k] = (k + 1) as u32;
     }
@@ -251,6 +252,7 @@ pub fn simulate_session<const N: usize>(
             pose,
             mask: crate::identify::ComponentMask::ALL,
             weight: 1.0,
+            point: None,
         };
         groups[cfg.poses + r] = (r + 1) as u32;
     }
@@ -395,7 +397,7 @@ pub fn measure<const N: usize>(
     rng: &mut SplitMix64,
 ) -> Result<()> {
     for m in data.iter_mut() {
-        m.pose = add_noise(&truth.fk(&m.state)?, sigma_pos_m, sigma_rot_rad, rng);
+        m.pose = add_noise(&m.model_pose(truth)?, sigma_pos_m, sigma_rot_rad, rng);
     }
     Ok(())
 }

@@ -571,3 +571,26 @@ fn measure_reproduces_exact_poses_without_noise() {
         }
     }
 }
+
+/// Position-only data: the residuals the diagnosis reports (per pose, by axis and by region)
+/// hold no orientation, since none was measured.
+#[test]
+fn position_only_residuals_have_no_orientation() {
+    let truth = truth_with(None, 0.0, 21);
+    let (mut data, groups) = session(&truth, 22, |c| c.repeated = 0);
+    for m in &mut data {
+        m.mask = kincal::identify::ComponentMask::POSITION;
+    }
+    let cfg = Config {
+        sigma_pos_m: Some(1e-4),
+        sigma_rot_rad: Some(0.02f64.to_radians()),
+        pairs: false,
+        ..Config::default()
+    };
+    let mut ws = workspace();
+    let (d, poses) = run(&data, &groups, &cfg, &mut ws);
+    assert!(poses.iter().all(|p| p.residual[3..] == [0.0; 3]));
+    assert!(pos_norm(&poses[0].residual) > 0.0);
+    assert_eq!(d.location.rms_rot_rad, 0.0);
+    assert!(d.location.regions.iter().all(|r| r.rms_rot_rad == 0.0));
+}

@@ -416,6 +416,7 @@ fn synthetic(truth: &Robot<6>, u: &[[f64; 6]], inputs: bool) -> Vec<Measurement<
                 pose: truth.fk(&st).unwrap(),
                 mask: kincal::identify::ComponentMask::ALL,
                 weight: 1.0,
+                point: None,
             }
         })
         .collect()

@@ -550,6 +550,7 @@ impl Data<'_> {
             pose,
             mask,
             weight,
+            point: None,
         })
     }
 }

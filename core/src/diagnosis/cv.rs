@@ -36,7 +36,7 @@ pub(crate) fn pose_rows<const N: usize, const P: usize>(
         needed: n_jac,
         capacity: crate::identify::MAX_MODEL_PARAMS,
     })?;
-    let t = lin.jacobian(&m.state, jac)?;
+    let t = m.model_jacobian(lin, jac)?;
     let e = pose_error(&m.pose, &t, OrientationError::Exact);
     for k in 0..6 {
         let w = if m.mask.has(k) { sw[k] } else { 0.0 };

@@ -351,7 +351,8 @@ pub struct PoseDiagnosis {
     pub group: u32,
     /// Cross-validation fold.
     pub fold: u16,
-    /// Residual of the geometric calibration on all rows, `[Δp (m); Δφ (rad)]`.
+    /// Residual of the geometric calibration on all rows, `[Δp (m); Δφ (rad)]`; zero in the
+    /// components the pose does not measure.
     pub residual: [f64; 6],
     /// Held-out residual of the geometric model (fitted without this pose's fold).
     pub heldout_baseline: [f64; 6],
@@ -969,6 +970,7 @@ pub fn diagnose_into<const N: usize, const P: usize>(
         mask |= m.mask.0;
     }
     let mask = crate::identify::ComponentMask(mask);
+    let (points, n_points) = crate::identify::distinct_points(data);
     let any_approach = data.iter().any(|m| m.state.approach.is_some());
     let any_temp = data.iter().any(|m| m.state.temp_c.is_some());
     let mut structural = [ParamSet::new(); 7];
@@ -980,6 +982,7 @@ pub fn diagnose_into<const N: usize, const P: usize>(
         crate::identify::structural_step(
             &lin,
             mask,
+            &points[..n_points],
             any_approach,
             any_temp,
             &o,
@@ -1040,8 +1043,15 @@ pub fn diagnose_into<const N: usize, const P: usize>(
     // 5a. Whitened Gram of all rows at the geometric calibration; in-sample residuals.
     ws.g_all.reset(n_u)?;
     for (l, m) in data.iter().enumerate() {
-        let e = cv::pose_rows(&lin, m, &sw, ws)?;
+        let mut e = cv::pose_rows(&lin, m, &sw, ws)?;
         cv::fold_rows(ws, false)?;
+        // Components the pose does not measure have no residual (the where-analysis and the
+        // reports must not see the model's unmeasured orientation).
+        for (k, v) in e.iter_mut().enumerate() {
+            if !m.mask.has(k) {
+                *v = 0.0;
+            }
+        }
         poses[l].residual = e;
     }
     // 5b. What the poses determine, per model; keep only those columns.

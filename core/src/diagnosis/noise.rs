@@ -48,7 +48,7 @@ fn pooled<const N: usize>(
     }
     let (mut ss_p, mut dof_p, mut ss_r, mut dof_r, mut subgroups) = (0.0, 0, 0.0, 0, 0);
     let residual = |l: usize| -> Result<[f64; 6]> {
-        let t = reference.fk(&data[l].state)?;
+        let t = data[l].model_pose(reference)?;
         Ok(pose_error(&data[l].pose, &t, OrientationError::Exact))
     };
     for s in 0..n {

@@ -161,12 +161,14 @@ pub(crate) fn analyze_into<const N: usize, const P: usize>(
         });
     }
     let mask = ComponentMask(union);
+    let (points, n_points) = super::data::distinct_points(data);
     out.reset(requested);
 
     // 1. Structural: generic configurations.
     let n_struct = structural_step(
         robot,
         mask,
+        &points[..n_points],
         any_approach,
         any_temp,
         opts,
@@ -222,7 +224,8 @@ pub(crate) fn analyze_into<const N: usize, const P: usize>(
 }
 
 /// Which of `opts.requested` are structurally redundant (step 1 of [`analyze`]): the
-/// greedy test on generic configurations with the measured components `mask` and, when
+/// greedy test on generic configurations with the measured components `mask` of each of the
+/// measured `points` (see [`Measurement::point`]; empty: the tool-frame origin) and, when
 /// `any_approach`/`any_temp`, random approach directions and temperatures. Redundant
 /// parameters go to `structural` with their partner; the kept ones are left in
 /// `ws.free[..k]` (flat indices, priority order) and `k` is returned.
@@ -230,6 +233,7 @@ pub(crate) fn analyze_into<const N: usize, const P: usize>(
 pub(crate) fn structural_step<const N: usize, const P: usize>(
     robot: &Robot<N>,
     mask: ComponentMask,
+    points: &[Option<[f64; 3]>],
     any_approach: bool,
     any_temp: bool,
     opts: &IdentifyOptions<'_>,
@@ -271,13 +275,22 @@ pub(crate) fn structural_step<const N: usize, const P: usize>(
         if any_temp {
             st.temp_c = Some(40.0 * halton(s, 41));
         }
-        let m = Measurement {
-            state: st,
-            pose: crate::pose::Transform::identity(),
-            mask,
-            weight: 1.0,
+        let origin = [None];
+        let points = if points.is_empty() {
+            &origin[..]
+        } else {
+            points
         };
-        add_rows(robot, &m, false, opts, p, ws)?;
+        for &point in points {
+            let m = Measurement {
+                state: st,
+                pose: crate::pose::Transform::identity(),
+                mask,
+                weight: 1.0,
+                point,
+            };
+            add_rows(robot, &m, false, opts, p, ws)?;
+        }
     }
     let kept = greedy(ws, p, STRUCTURAL_TOL, partner)?;
     let mut n_struct = 0;

@@ -18,8 +18,8 @@ pub mod robust;
 mod solvers;
 mod workspace;
 
-pub(crate) use data::validate as validate_data;
 pub use data::{ComponentMask, Measurement, ResidualStats, residual_stats};
+pub(crate) use data::{distinct_points, validate as validate_data};
 pub(crate) use identifiability::structural_step;
 pub use identifiability::{Identifiability, Partner, analyze};
 pub use robust::{

@@ -230,7 +230,7 @@ fn residual_norms<const N: usize>(
     report: &mut [PoseResidual],
 ) -> Result<()> {
     for (m, r) in data.iter().zip(report.iter_mut()) {
-        let t = robot.fk(&m.state)?;
+        let t = m.model_pose(robot)?;
         let e = pose_error(&m.pose, &t, OrientationError::Exact);
         let (mut p2, mut r2, mut k) = (0.0, 0.0, 0u8);
         for (c, v) in e.iter().enumerate() {
