@@ -113,6 +113,10 @@ pub struct Args {
     pub robot_out: Option<PathBuf>,
 }
 
+/// A fold's held-out errors (pose, nominal, calibrated), data-deficient parameter count and
+/// the algorithm that fitted it.
+type FoldResult = Result<(Vec<(usize, PoseErrors, PoseErrors)>, usize, &'static str), String>;
+
 /// Residual-based weighting: rounds of the fixed point.
 const WEIGHT_ROUNDS: usize = 4;
 
@@ -442,13 +446,13 @@ fn repeat_noise<const N: usize>(
             };
             let mut mean = [0.0; 3];
             for &j in &idx {
-                for a in 0..3 {
-                    mean[a] += v(j)[a] / idx.len() as f64;
+                for (m, x) in mean.iter_mut().zip(v(j)) {
+                    *m += x / idx.len() as f64;
                 }
             }
             for &j in &idx {
-                for a in 0..3 {
-                    *ss += (v(j)[a] - mean[a]).powi(2);
+                for (m, x) in mean.iter().zip(v(j)) {
+                    *ss += (x - m).powi(2);
                 }
             }
             *dof += 3 * (idx.len() - 1);
@@ -535,32 +539,31 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
 
     // Folds.
     let pb = crate::progress::spinner(format!("cross-validating ({} folds)", args.folds));
-    let folds: Vec<Result<(Vec<(usize, PoseErrors, PoseErrors)>, usize, &'static str), String>> =
-        (0..args.folds)
-            .into_par_iter()
-            .map(|k| {
-                let train: Vec<Measurement<N>> = meas
-                    .iter()
-                    .zip(&fold_of)
-                    .map(|(m, &f)| Measurement {
-                        weight: if f == k { 0.0 } else { m.weight },
-                        ..*m
-                    })
-                    .collect();
-                let a = fit(nominal, &train, req_nom, how(w))
-                    .map_err(|e| format!("fold {}: nominal: {e}", k + 1))?;
-                let b = fit(nominal, &train, req_cal, how(w))
-                    .map_err(|e| format!("fold {}: calibrated: {e}", k + 1))?;
-                let deficient = b.analysis.as_ref().map_or(0, |x| x.data_deficient.len());
-                let mut out = Vec::new();
-                for (i, m) in meas.iter().enumerate() {
-                    if fold_of[i] == k {
-                        out.push((i, errors(&a.robot, m)?, errors(&b.robot, m)?));
-                    }
+    let folds: Vec<FoldResult> = (0..args.folds)
+        .into_par_iter()
+        .map(|k| {
+            let train: Vec<Measurement<N>> = meas
+                .iter()
+                .zip(&fold_of)
+                .map(|(m, &f)| Measurement {
+                    weight: if f == k { 0.0 } else { m.weight },
+                    ..*m
+                })
+                .collect();
+            let a = fit(nominal, &train, req_nom, how(w))
+                .map_err(|e| format!("fold {}: nominal: {e}", k + 1))?;
+            let b = fit(nominal, &train, req_cal, how(w))
+                .map_err(|e| format!("fold {}: calibrated: {e}", k + 1))?;
+            let deficient = b.analysis.as_ref().map_or(0, |x| x.data_deficient.len());
+            let mut out = Vec::new();
+            for (i, m) in meas.iter().enumerate() {
+                if fold_of[i] == k {
+                    out.push((i, errors(&a.robot, m)?, errors(&b.robot, m)?));
                 }
-                Ok((out, deficient, b.algorithm))
-            })
-            .collect();
+            }
+            Ok((out, deficient, b.algorithm))
+        })
+        .collect();
     pb.finish_and_clear();
     let mut held_nom = vec![PoseErrors::default(); meas.len()];
     let mut held_cal = vec![PoseErrors::default(); meas.len()];

@@ -224,7 +224,8 @@ pub fn heldout_svg(
         root.fill(&WHITE)?;
         let body = root.titled(title, ("sans-serif", 22))?;
         let parts = body.split_evenly((panels as usize, 1));
-        let rows: [(&str, &dyn Fn(&PoseErrors) -> f64); 2] = [
+        type Row<'a> = (&'a str, &'a dyn Fn(&PoseErrors) -> f64);
+        let rows: [Row<'_>; 2] = [
             ("held-out |e_p| [mm]", &|e: &PoseErrors| e.pos_norm_m * 1e3),
             ("held-out |e_φ| [deg]", &|e: &PoseErrors| {
                 e.rot_norm_rad.to_degrees()
@@ -234,7 +235,7 @@ pub fn heldout_svg(
             let top = nominal
                 .iter()
                 .chain(calibrated)
-                .map(|e| value(e))
+                .map(value)
                 .fold(0.0f64, f64::max);
             let hi = if top > 0.0 { top * 1.15 } else { 1e-9 };
             let mut chart = ChartBuilder::on(area)

@@ -126,7 +126,8 @@ fn hand_eye_rotation<const N: usize>(
             let rf = pi.f.rotation.matrix().transpose() * pj.f.rotation.matrix();
             let rm = pi.m.rotation.matrix().transpose() * pj.m.rotation.matrix();
             let angle = rotation_log(&rf).norm();
-            if angle < MIN_PAIR_ANGLE_RAD || angle > core::f64::consts::PI - MIN_PAIR_ANGLE_RAD {
+            let informative = MIN_PAIR_ANGLE_RAD..=core::f64::consts::PI - MIN_PAIR_ANGLE_RAD;
+            if !informative.contains(&angle) {
                 continue;
             }
             let (l, r) = (quat_l(&quat_pos(&rf)), quat_r(&quat_pos(&rm)));
@@ -155,7 +156,7 @@ fn hand_eye_rotation<const N: usize>(
     order.sort_unstable_by(|&i, &j| lambda[i].total_cmp(&lambda[j]));
     let scale = lambda.iter().fold(0.0_f64, |m, l| m.max(l.abs()));
     // A unique solution needs the second-smallest eigenvalue clearly above the smallest.
-    if !(scale > 0.0) || lambda[order[1]] - lambda[order[0]] <= 1e-9 * scale {
+    if scale.is_nan() || scale <= 0.0 || lambda[order[1]] - lambda[order[0]] <= 1e-9 * scale {
         return Err(Error::RankDeficient {
             rank: 2,
             required: 3,
@@ -173,7 +174,8 @@ fn solve6(mut a: [[f64; 6]; 6], mut b: [f64; 6]) -> Result<[f64; 6]> {
         let piv = (col..6)
             .max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))
             .unwrap_or(col);
-        if !(a[piv][col].abs() > 1e-12 * scale) {
+        let pivot = a[piv][col].abs();
+        if pivot.is_nan() || pivot <= 1e-12 * scale {
             return Err(Error::RankDeficient {
                 rank: col,
                 required: 6,
