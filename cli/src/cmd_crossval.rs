@@ -113,6 +113,10 @@ pub struct Args {
     pub robot_out: Option<PathBuf>,
 }
 
+/// A fold's held-out errors (pose, nominal, calibrated), data-deficient parameter count and
+/// the algorithm that fitted it.
+type FoldResult = Result<(Vec<(usize, PoseErrors, PoseErrors)>, usize, &'static str), String>;
+
 /// Residual-based weighting: rounds of the fixed point.
 const WEIGHT_ROUNDS: usize = 4;
 
@@ -447,7 +451,7 @@ fn repeat_noise<const N: usize>(
                 }
             }
             for &j in &idx {
-                for (x, m) in v(j).iter().zip(mean.iter()) {
+                for (m, x) in mean.iter().zip(v(j)) {
                     *ss += (x - m).powi(2);
                 }
             }
@@ -535,10 +539,7 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
 
     // Folds.
     let pb = crate::progress::spinner(format!("cross-validating ({} folds)", args.folds));
-    #[allow(clippy::type_complexity)] // one fold's (held-out errors, size, status) or its failure
-    let folds: Vec<
-        Result<(Vec<(usize, PoseErrors, PoseErrors)>, usize, &'static str), String>,
-    > = (0..args.folds)
+    let folds: Vec<FoldResult> = (0..args.folds)
         .into_par_iter()
         .map(|k| {
             let train: Vec<Measurement<N>> = meas

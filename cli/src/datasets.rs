@@ -658,10 +658,12 @@ fn fr3(dir: &Path) -> Result<Imported, CliError> {
 /// itself is CC BY-NC-ND and not copied, only these kinematic numbers are used), with
 /// `arm_left_5_joint` held at 0 (kincal models at most 8 joints). Masses: the URDF's link
 /// masses (the gripper's subtree as the tool mass). Also returns the 9-joint axis chain.
+// The limits are the URDF's own literals (e.g. -1.57079632679), kept as published.
+#[allow(clippy::approx_constant)]
 fn talos_description() -> Result<(RobotDescription, AxisChain<9>), CliError> {
     // (name, origin xyz, axis, limits, child link mass [kg])
-    #[allow(clippy::type_complexity)] // (name, origin xyz, axis, limits, child link mass)
-    let table: [(&str, [f64; 3], [f64; 3], (f64, f64), f64); 9] = [
+    type Row = (&'static str, [f64; 3], [f64; 3], (f64, f64), f64);
+    let table: [Row; 9] = [
         (
             "torso_1_joint",
             [0.0, 0.0, 0.0722],
@@ -680,7 +682,7 @@ fn talos_description() -> Result<(RobotDescription, AxisChain<9>), CliError> {
             "arm_left_1_joint",
             [0.0, 0.1575, 0.232],
             [0.0, 0.0, 1.0],
-            (-core::f64::consts::FRAC_PI_2, core::f64::consts::FRAC_PI_4),
+            (-1.57079632679, 0.785398163397),
             2.714567,
         ),
         (

@@ -100,8 +100,9 @@ fn synthetic() -> Synthetic {
         }
         for (name, p) in PROBE {
             let m = apply(&t_mocap_ee, p);
-            let hidden = (f == 9 && name == "P3") || (f == 17 && name != "P1" && name != "P2");
-            let visible = !hidden;
+            let occluded = f == 9 && name == "P3";
+            let hidden_f17 = f == 17 && name != "P1" && name != "P2";
+            let visible = !(occluded || hidden_f17);
             rows.push((name.into(), visible.then_some(m)));
         }
         if f == 5 {

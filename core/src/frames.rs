@@ -126,7 +126,8 @@ fn hand_eye_rotation<const N: usize>(
             let rf = pi.f.rotation.matrix().transpose() * pj.f.rotation.matrix();
             let rm = pi.m.rotation.matrix().transpose() * pj.m.rotation.matrix();
             let angle = rotation_log(&rf).norm();
-            if !(MIN_PAIR_ANGLE_RAD..=core::f64::consts::PI - MIN_PAIR_ANGLE_RAD).contains(&angle) {
+            let informative = MIN_PAIR_ANGLE_RAD..=core::f64::consts::PI - MIN_PAIR_ANGLE_RAD;
+            if !informative.contains(&angle) {
                 continue;
             }
             let (l, r) = (quat_l(&quat_pos(&rf)), quat_r(&quat_pos(&rm)));
