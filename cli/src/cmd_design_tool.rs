@@ -68,6 +68,10 @@ pub struct Args {
     /// Smallest distance between two sockets [mm]
     #[arg(long, default_value_t = 60.0, value_parser = crate::args::non_negative)]
     pub min_separation_mm: f64,
+    /// Objectives to try, comma-separated: pv (prediction variance over the validation
+    /// grid, orientation rows weighted 1 m/rad), pv01 (weighted 0.1 m/rad), o (eq. 17), dopt
+    #[arg(long, value_delimiter = ',', default_value = "pv,pv01,o,dopt")]
+    pub objectives: Vec<ObjectiveArg>,
     /// The tool to beat, NAME=FILE.csv (ARIA default: the Table 2 tool)
     #[arg(long, value_name = "NAME=FILE")]
     pub baseline: Option<String>,
@@ -88,7 +92,39 @@ pub struct Args {
     pub json: Option<PathBuf>,
 }
 
+/// An objective of the tool search.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ObjectiveArg {
+    Pv,
+    Pv01,
+    O,
+    Dopt,
+}
+
+impl ObjectiveArg {
+    /// (label, orientation-row weight [m/rad], objective).
+    fn spec(self) -> (&'static str, f64, Objective) {
+        match self {
+            ObjectiveArg::Pv => (
+                "prediction variance (w 1)",
+                1.0,
+                Objective::PredictionVariance,
+            ),
+            ObjectiveArg::Pv01 => (
+                "prediction variance (w 0.1)",
+                0.1,
+                Objective::PredictionVariance,
+            ),
+            ObjectiveArg::O => ("O (eq. 17)", 1.0, Objective::Index(Index::O)),
+            ObjectiveArg::Dopt => ("D-optimal", 1.0, Objective::Index(Index::DOpt)),
+        }
+    }
+}
+
 pub fn run(args: &Args) -> Result<(), CliError> {
+    if args.objectives.is_empty() {
+        return Err(CliError::usage("--objectives: expected at least one"));
+    }
     if args.runs == 0 || args.screen_runs == 0 {
         return Err(CliError::usage(
             "--runs and --screen-runs: expected at least 1",
@@ -242,21 +278,8 @@ fn design<const N: usize>(
         settings.min_dexterity,
         settings.robust_robots
     );
-    // Objectives: (label, orientation-row weight, objective).
-    let objectives: [(&str, f64, Objective); 4] = [
-        (
-            "prediction variance (w 1)",
-            1.0,
-            Objective::PredictionVariance,
-        ),
-        (
-            "prediction variance (w 0.1)",
-            0.1,
-            Objective::PredictionVariance,
-        ),
-        ("O (eq. 17)", 1.0, Objective::Index(Index::O)),
-        ("D-optimal", 1.0, Objective::Index(Index::DOpt)),
-    ];
+    let objectives: Vec<(&str, f64, Objective)> =
+        args.objectives.iter().map(|o| o.spec()).collect();
     let pb = crate::progress::counter(0, "tool candidates");
     let mut candidates: Vec<Candidate<N>> = Vec::new();
     for &z in &heights {
@@ -271,7 +294,7 @@ fn design<const N: usize>(
         if q.len() < settings.m {
             continue;
         }
-        for (label, w, objective) in objectives {
+        for &(label, w, objective) in &objectives {
             pb.set_message(format!("z = {:.0} mm: selecting by {label}", z * 1e3));
             let mut obs = ObservabilityOptions::new(ctx.params);
             obs.rot_weight = w;

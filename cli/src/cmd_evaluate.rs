@@ -104,6 +104,12 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     if args.runs == 0 {
         return Err(CliError::usage("--runs: expected at least 1"));
     }
+    for t in &args.tools {
+        named(t, "--tool")?;
+    }
+    for c in &args.commanded {
+        named(c, "--commanded")?;
+    }
     let spec = resolve_robot(&args.setup.robot)?;
     kincal::with_any_robot!(&spec.robot, r => evaluate(*r, &spec.name, args))
 }
@@ -119,6 +125,22 @@ pub fn build_designs<const N: usize>(
     log: &mut String,
 ) -> Result<Vec<Design<N>>, CliError> {
     let settings = sel.settings()?;
+    // Arguments first: a typo should not wait for the built-in designs.
+    let tools: Vec<(String, PathBuf)> = tools
+        .iter()
+        .map(|t| named(t, "--tool"))
+        .collect::<Result<_, _>>()?;
+    let commanded: Vec<(String, PathBuf)> = commanded
+        .iter()
+        .map(|c| named(c, "--commanded"))
+        .collect::<Result<_, _>>()?;
+    let mut from_files = Vec::new();
+    for (name, path) in &tools {
+        from_files.push(designs::tool_from_file(ctx, name, path)?);
+    }
+    for (name, path) in &commanded {
+        from_files.push(designs::commanded_from_file(ctx, name, path)?);
+    }
     let mut out = Vec::new();
     for b in builtin {
         let d = match b {
@@ -162,14 +184,7 @@ pub fn build_designs<const N: usize>(
         };
         out.push(d);
     }
-    for t in tools {
-        let (name, path) = named(t, "--tool")?;
-        out.push(designs::tool_from_file(ctx, &name, &path)?);
-    }
-    for c in commanded {
-        let (name, path) = named(c, "--commanded")?;
-        out.push(designs::commanded_from_file(ctx, &name, &path)?);
-    }
+    out.extend(from_files);
     let mut names: Vec<&str> = out.iter().map(|d| d.name.as_str()).collect();
     names.sort_unstable();
     if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {

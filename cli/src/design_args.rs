@@ -367,10 +367,20 @@ impl<const N: usize> Context<N> {
     /// branch: of all converging IK seeds, the solution nearest [`Context::seed_q`]),
     /// admissible under `c` (joint limits always), or `None`.
     pub fn nominal_ik(&self, target: &Transform, c: &Constraints) -> Option<[f64; N]> {
+        self.nominal_ik_from(target, None, c)
+    }
+
+    /// As [`Context::nominal_ik`] from `seed` instead of [`Context::seed_q`] when given.
+    pub fn nominal_ik_from(
+        &self,
+        target: &Transform,
+        seed: Option<&[f64; N]>,
+        c: &Constraints,
+    ) -> Option<[f64; N]> {
         let sol = solve_ik(
             &self.robot,
             target,
-            &JointState::new(self.seed_q),
+            &JointState::new(*seed.unwrap_or(&self.seed_q)),
             &IkOptions::default(),
         )
         .ok()?;

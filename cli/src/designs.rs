@@ -419,7 +419,15 @@ pub fn tool_from_file<const N: usize>(
     let poses = crate::tool_file::read_tool(path)?;
     let mut q = Vec::with_capacity(poses.len());
     for p in &poses {
-        let ql = ctx.nominal_ik(&p.pose, &Constraints::none()).ok_or_else(|| {
+        // The file's nominal configuration (if any) chooses the branch.
+        let seed = if p.q_hint.len() == N {
+            let mut s = [0.0; N];
+            s.copy_from_slice(&p.q_hint);
+            Some(s)
+        } else {
+            None
+        };
+        let ql = ctx.nominal_ik_from(&p.pose, seed.as_ref(), &Constraints::none()).ok_or_else(|| {
             CliError::numeric(format!(
                 "{}:{}: the nominal robot cannot reach this reference pose within its joint limits",
                 path.display(),

@@ -26,6 +26,9 @@ use crate::measurements::{InputError, format_f64};
 pub struct ToolPose {
     pub pose_id: Option<String>,
     pub pose: Transform,
+    /// The nominal configuration of the `extra_q1_rad … extra_qN_rad` columns, if the file
+    /// has them (the branch to approach the pose on).
+    pub q_hint: Vec<f64>,
     /// 1-based line in the file (0 when not read from a file).
     pub line: u64,
 }
@@ -36,6 +39,8 @@ enum Col {
     Pos(usize, f64),
     Rpy(usize, f64),
     Quat(usize),
+    /// `extra_q{k}_rad` (zero-based k).
+    Hint(usize),
     Extra,
 }
 
@@ -52,6 +57,14 @@ fn err(path: &str, line: Option<u64>, column: Option<&str>, reason: String) -> I
 fn classify(name: &str) -> Option<Col> {
     if name == "pose_id" {
         return Some(Col::Id);
+    }
+    if let Some(k) = name
+        .strip_prefix("extra_q")
+        .and_then(|r| r.strip_suffix("_rad"))
+        .and_then(|k| k.parse::<usize>().ok())
+        .filter(|&k| k >= 1)
+    {
+        return Some(Col::Hint(k - 1));
     }
     if name.starts_with("extra_") {
         return Some(Col::Extra);
@@ -129,6 +142,21 @@ pub fn parse_tool(text: &str, name: &str) -> Result<Vec<ToolPose>, InputError> {
         }
     }
     let _ = n_pos;
+    // Hints count only as a complete extra_q1_rad … extra_qK_rad run.
+    let hints: Vec<usize> = cols
+        .iter()
+        .filter_map(|c| if let Col::Hint(k) = c { Some(*k) } else { None })
+        .collect();
+    let n_hint = if (0..hints.len()).all(|k| hints.contains(&k)) {
+        hints.len()
+    } else {
+        for c in cols.iter_mut() {
+            if matches!(c, Col::Hint(_)) {
+                *c = Col::Extra;
+            }
+        }
+        0
+    };
     let form_rpy = match (n_rpy, n_quat) {
         (3, 0) => true,
         (0, 4) => false,
@@ -156,6 +184,7 @@ pub fn parse_tool(text: &str, name: &str) -> Result<Vec<ToolPose>, InputError> {
             ));
         }
         let (mut p, mut rpy, mut quat, mut id) = ([0.0; 3], [0.0; 3], [0.0; 4], None);
+        let mut hint = vec![f64::NAN; n_hint];
         for ((c, cell), n) in cols.iter().zip(&cells).zip(&names) {
             let num = || -> Result<f64, InputError> {
                 match cell.parse::<f64>() {
@@ -173,6 +202,7 @@ pub fn parse_tool(text: &str, name: &str) -> Result<Vec<ToolPose>, InputError> {
                 Col::Pos(k, s) => p[k] = num()? * s,
                 Col::Rpy(k, s) => rpy[k] = num()? * s,
                 Col::Quat(k) => quat[k] = num()?,
+                Col::Hint(k) => hint[k] = num()?,
                 Col::Extra => {}
             }
         }
@@ -200,6 +230,11 @@ pub fn parse_tool(text: &str, name: &str) -> Result<Vec<ToolPose>, InputError> {
         out.push(ToolPose {
             pose_id: id,
             pose: transform(r, Vector3::new(p[0], p[1], p[2])),
+            q_hint: if hint.iter().all(|v| v.is_finite()) {
+                hint
+            } else {
+                Vec::new()
+            },
             line,
         });
     }
@@ -273,6 +308,7 @@ mod tests {
             assert!((a.pose.rotation.matrix() - b.rotation.matrix()).norm() < 1e-12);
         }
         assert_eq!(back[0].line, 3);
+        assert_eq!(back[0].q_hint, vec![0.5; 6]);
         assert_eq!(back[9].pose_id.as_deref(), Some("10"));
     }
 

@@ -882,11 +882,14 @@ pub struct ClusterSelection {
     pub occupied_cubes: usize,
 }
 
+/// `max_k |ln a_k − ln b_k|`, as the logarithm of the largest ratio (one logarithm).
 fn log_distance(a: &[f64; 6], b: &[f64; 6]) -> f64 {
-    let l = |v: f64| crate::math::ln(v.max(1e-300));
-    (0..6)
-        .map(|k| (l(a[k]) - l(b[k])).abs())
-        .fold(0.0, f64::max)
+    let mut r = 1.0f64;
+    for k in 0..6 {
+        let (x, y) = (a[k].max(1e-300), b[k].max(1e-300));
+        r = r.max(x / y).max(y / x);
+    }
+    crate::math::ln(r)
 }
 
 /// The workspace-clustering design (Section 4.2): `m` pool members in mutually different

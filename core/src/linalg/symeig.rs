@@ -64,11 +64,11 @@ fn tridiagonalise<const P: usize>(
         let l = i - 1;
         let mut h = 0.0;
         if l > 0 {
-            let scale: f64 = (0..=l).map(|k| libm::fabs(a[i][k])).sum();
+            let scale: f64 = (0..l + 1).map(|k| libm::fabs(a[i][k])).sum();
             if scale == 0.0 {
                 e[i] = a[i][l];
             } else {
-                for k in 0..=l {
+                for k in 0..l + 1 {
                     a[i][k] /= scale;
                     h += a[i][k] * a[i][k];
                 }
@@ -82,23 +82,23 @@ fn tridiagonalise<const P: usize>(
                 h -= f * g;
                 a[i][l] = f - g;
                 let mut f = 0.0;
-                for j in 0..=l {
+                for j in 0..l + 1 {
                     let mut g = 0.0;
-                    for k in 0..=j {
+                    for k in 0..j + 1 {
                         g += a[j][k] * a[i][k];
                     }
-                    for k in (j + 1)..=l {
+                    for k in (j + 1)..(l + 1) {
                         g += a[k][j] * a[i][k];
                     }
                     e[j] = g / h;
                     f += e[j] * a[i][j];
                 }
                 let hh = f / (h + h);
-                for j in 0..=l {
+                for j in 0..l + 1 {
                     let f = a[i][j];
                     let g = e[j] - hh * f;
                     e[j] = g;
-                    for k in 0..=j {
+                    for k in 0..j + 1 {
                         a[j][k] -= f * e[k] + g * a[i][k];
                     }
                 }
@@ -150,7 +150,8 @@ fn tql<const P: usize>(n: usize, d: &mut [f64; P], e: &mut [f64; P]) -> Result<(
                 i -= 1;
                 let f = s * e[i];
                 let b = c * e[i];
-                r = libm::hypot(f, g);
+                // |f|, |g| are bounded by the matrix norm here: no overflow, plain sqrt.
+                r = libm::sqrt(f * f + g * g);
                 e[i + 1] = r;
                 if r == 0.0 {
                     d[i + 1] -= p;
