@@ -5,9 +5,8 @@
 %       working region split into cubes of side 0.1 m, one pose at the centre of each of
 %       ten cubes in a checkerboard, with varied roll and yaw. The paper's search for
 %       configurations of equal observability is not in this build (see below);
-%     - "optimal": poses maximising the observability index, eq. (18), when the linked
-%       library has the pose-selection export (the gateway operation 'select_poses');
-%       otherwise this design is skipped with a note.
+%     - "optimal": ten poses maximising the observability index O, eq. (18), selected
+%       by KINCAL_SELECT_POSES from candidates with the tool in the working region.
 %   For each design: the identifiability analysis (rank, condition number of the scaled
 %   identification Jacobian), OLS / OPT1 / OPT2 from the Table 1 nominal model, the
 %   parameter table, and the errors at a common grid of validation poses. The "true" arm
@@ -23,7 +22,6 @@
 %   See also WORKFLOW_A_VIRTUAL, WORKFLOW_C_REAL_DATA, KINCAL_IDENTIFIABILITY.
 
 out = setup_toolbox('b_tool_design');
-[~, operations] = kincal_version();
 nominal = kincal_robot('aria');
 truth = kincal_robot('aria_real');
 compliance = [0, 1.5e-4, 1.0e-4, 0.5e-4, 0.5e-4, 0];   % rad/(N m), as make_example_data.m
@@ -47,13 +45,20 @@ rolls = repmat([-150, -170], 1, ceil(m / 2)) * pi / 180;
 yaws = repmat([-30, 0, 30], 1, ceil(m / 3)) * pi / 180;
 designs(end + 1) = struct('name', 'cubes', 'targets', kincal_pose_from_xyzrpy( ...
     [cx; cy; 0.285 * ones(1, m); rolls(1:m); zeros(1, m); yaws(1:m)]));
-if any(strcmp(operations, 'select_poses'))
-    designs(end + 1) = struct('name', 'optimal', 'targets', ...
-        kincal_select_poses(nominal, 10, 'seed', seed));
-else
-    fprintf(['\nnote: the "optimal" design (eq. 18) needs the C ABI''s pose-selection ' ...
-        'export, which this build lacks; it is skipped.\n']);
-end
+% Optimal poses (eq. 18): candidates inside the joint limits (deterministic, golden-ratio
+% sequence) whose tool position lies in the working region, selected on the nominal model.
+region = [0.066, 0.566; 0.116, 0.592; 0.235, 0.335];
+k = 6000;
+u = reshape(mod((1:6 * k)' * 0.6180339887498949, 1), 6, k);
+pool = repmat(nominal.limits(:, 1), 1, k) + u .* repmat(diff(nominal.limits, 1, 2), 1, k);
+T_pool = kincal_fk(nominal, pool);
+p = reshape(T_pool(1:3, 4, :), 3, k);
+inside = all(p >= repmat(region(:, 1), 1, k) & p <= repmat(region(:, 2), 1, k), 1);
+[q_opt, sel] = kincal_select_poses(nominal, 10, pool(:, inside), 'seed', 1, 'region', region);
+I_t2 = kincal_observability(nominal, kincal_ik(nominal, T_tool, seed));
+fprintf('\nobservability O (eq. 17): Table 2 %.4g, optimal %.4g (%d candidates)\n', ...
+    I_t2.o, sel.indices.o, nnz(inside));
+designs(end + 1) = struct('name', 'optimal', 'targets', kincal_fk(nominal, q_opt));
 
 % Validation poses: the biopsy region above the tool plate, measured on the truth.
 targets = region_poses(linspace(0.166, 0.466, 3), linspace(0.204, 0.504, 3), ...
