@@ -33,6 +33,10 @@ struct Input {
     poses: [[f64; 6]; 4],
     masks: [u8; 4],
     weights: [f64; 4],
+    /// Measured point in the tool frame per pose (used when the pose's bit in `point_set` is
+    /// set), exercising the position-of-a-marker path.
+    points: [[f64; 3]; 4],
+    point_set: u8,
     quaternion: [f64; 4],
     rpy: [f64; 3],
     ops: u8,
@@ -103,11 +107,13 @@ fuzz_target!(|inp: Input| {
             .iter()
             .zip(inp.poses.iter())
             .zip(inp.masks.iter().zip(inp.weights.iter()))
-            .map(|((st, p), (&mask, &w))| Measurement {
+            .enumerate()
+            .map(|(i, ((st, p), (&mask, &w)))| Measurement {
                 state: *st,
                 pose: pose_from_vector6(p),
                 mask: ComponentMask(mask),
                 weight: w,
+                point: (inp.point_set >> i & 1 == 1).then_some(inp.points[i]),
             })
             .collect();
         let alg = [Algorithm::Ols, Algorithm::Opt1, Algorithm::Opt2][usize::from(inp.ops >> 4) % 3];
