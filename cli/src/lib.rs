@@ -12,6 +12,7 @@ pub mod cmd_diagnose;
 pub mod cmd_evaluate;
 pub mod cmd_import;
 pub mod cmd_markers;
+pub mod cmd_observed_point;
 pub mod cmd_predict;
 pub mod cmd_select;
 pub mod cmd_validate;

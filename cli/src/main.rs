@@ -2,7 +2,7 @@
 
 use kincal_cli::{
     cmd_calibrate, cmd_crossval, cmd_demo, cmd_design_tool, cmd_diagnose, cmd_evaluate, cmd_import,
-    cmd_markers, cmd_predict, cmd_select, cmd_validate,
+    cmd_markers, cmd_observed_point, cmd_predict, cmd_select, cmd_validate,
 };
 
 use std::process::ExitCode;
@@ -66,6 +66,10 @@ enum Command {
     /// A public real-robot data set, read as published, as measurement CSV and robot file
     #[command(name = "import-dataset", long_about = cmd_import::LONG_ABOUT, after_help = cmd_import::EXAMPLE)]
     ImportDataset(cmd_import::Args),
+    /// Camera poses re-expressed at the point the camera looks at (position rows where
+    /// the measurement is precise)
+    #[command(name = "observed-point", long_about = cmd_observed_point::LONG_ABOUT, after_help = cmd_observed_point::EXAMPLE)]
+    ObservedPoint(cmd_observed_point::Args),
 }
 
 fn main() -> ExitCode {
@@ -82,6 +86,7 @@ fn main() -> ExitCode {
         Command::ImportDataset(a) => cmd_import::run(a),
         Command::Crossval(a) => cmd_crossval::run(a),
         Command::Markers(a) => cmd_markers::run(a),
+        Command::ObservedPoint(a) => cmd_observed_point::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -34,6 +34,7 @@ pub mod rng;
 pub mod selection;
 pub mod sim;
 pub mod validation;
+pub mod view_point;
 
 pub use effects::{Effect, EffectSet};
 pub use error::{Error, JointIndex, ParamIndex, PoseIndex, Quantity, Result};
