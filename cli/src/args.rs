@@ -2,7 +2,7 @@
 
 use clap::ValueEnum;
 use kincal::Effect;
-use kincal::identify::Algorithm;
+use kincal::identify::{Algorithm, Loss};
 use kincal::pose::OrientationError;
 
 /// `--algorithm`.
@@ -26,6 +26,24 @@ impl AlgorithmArg {
             AlgorithmArg::Opt1 => vec![Algorithm::Opt1],
             AlgorithmArg::Opt2 => vec![Algorithm::Opt2],
             AlgorithmArg::All => Algorithm::ALL.to_vec(),
+        }
+    }
+}
+
+/// `--robust LOSS`: the loss of the robust (IRLS) fit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum LossArg {
+    /// Huber: weight min(1, c/d); convex, started from the least-squares fit.
+    Huber,
+    /// Cauchy: weight 1/(1 + d²/c²); a gross outlier ends near weight 0; started from Huber.
+    Cauchy,
+}
+
+impl From<LossArg> for Loss {
+    fn from(l: LossArg) -> Self {
+        match l {
+            LossArg::Huber => Loss::Huber,
+            LossArg::Cauchy => Loss::Cauchy,
         }
     }
 }

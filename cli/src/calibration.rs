@@ -1,11 +1,13 @@
 //! Runs the core's identification for the CLI: the identifiability analysis once, then the
-//! requested algorithms in parallel (rayon), and the consensus check between them.
+//! requested algorithms in parallel (rayon), each by least squares or, with
+//! `Settings::robust`, by the core's robust IRLS fit, and the consensus check between them.
 
 use std::time::Instant;
 
 use kincal::identify::{
     Algorithm, Bounds, Identifiability, Identification, IdentifyOptions, MAX_MODEL_PARAMS,
-    Measurement, Workspace, analyze, identify,
+    Measurement, PoseResidual, RobustOptions, Workspace, analyze, identify, identify_robust,
+    robust::ResidualTest,
 };
 use kincal::pose::OrientationError;
 use kincal::{EffectSet, ParamIndex, ParamSet, Robot};
@@ -68,6 +70,9 @@ pub struct Settings {
     pub orientation: OrientationError,
     pub allow_data_deficiency: bool,
     pub max_iterations: u32,
+    /// Robust fit (core `identify_robust`: Huber/Cauchy IRLS around each algorithm) instead
+    /// of plain least squares; `None`: least squares.
+    pub robust: Option<RobustOptions>,
 }
 
 impl Settings {
@@ -83,6 +88,7 @@ impl Settings {
             orientation: OrientationError::Exact,
             allow_data_deficiency: false,
             max_iterations: 200,
+            robust: None,
         }
     }
 
@@ -107,8 +113,33 @@ impl Settings {
 /// One algorithm's result.
 #[derive(Debug, Clone)]
 pub struct Run<const N: usize> {
+    /// With a robust fit: the final reweighted fit (its cost, σ² and standard errors are
+    /// those of the robustly weighted problem).
     pub ident: Identification<N>,
     pub seconds: f64,
+    /// The robust fit's residual test, when `Settings::robust` is set.
+    pub robust: Option<RobustRun>,
+}
+
+/// What the robust fit of one algorithm found.
+#[derive(Debug, Clone)]
+pub struct RobustRun {
+    /// Scales and suspect count at the final model.
+    pub test: ResidualTest,
+    /// Reweighted fits performed (both phases for Cauchy).
+    pub reweights: u32,
+    /// One per pose, in data order: residuals, standardised residual d, final robust weight,
+    /// suspect flag.
+    pub poses: Vec<PoseResidual>,
+}
+
+impl RobustRun {
+    /// Indices (data order) of the suspect poses.
+    pub fn suspects(&self) -> Vec<usize> {
+        (0..self.poses.len())
+            .filter(|&i| self.poses[i].suspect)
+            .collect()
+    }
 }
 
 /// The outcome of a calibration.
@@ -212,10 +243,32 @@ pub fn calibrate<const N: usize>(
             ));
             let opts = settings.options(algorithm, requested, Some(&bounds));
             let mut ws = new_workspace();
-            let ident = identify(start, data, &opts, &mut ws).map_err(core(Some(algorithm)))?;
+            let (ident, robust) = match &settings.robust {
+                None => (
+                    identify(start, data, &opts, &mut ws).map_err(core(Some(algorithm)))?,
+                    None,
+                ),
+                Some(ro) => {
+                    // The core writes the robust weights into the data while it iterates
+                    // (and restores them): each run works on its own copy.
+                    let mut own = data.to_vec();
+                    let mut poses = vec![PoseResidual::default(); own.len()];
+                    let r = identify_robust(start, &mut own, &opts, ro, &mut poses, &mut ws)
+                        .map_err(core(Some(algorithm)))?;
+                    (
+                        r.fit,
+                        Some(RobustRun {
+                            test: r.test,
+                            reweights: r.reweights,
+                            poses,
+                        }),
+                    )
+                }
+            };
             Ok(Run {
                 ident,
                 seconds: t0.elapsed().as_secs_f64(),
+                robust,
             })
         })
         .collect();

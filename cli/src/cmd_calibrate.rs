@@ -1,16 +1,18 @@
 //! `kincal calibrate DATA --robot ROBOT [--effects E1,E2] [--algorithm ols|opt1|opt2|all]
-//! --out MODEL`.
+//! [--robust huber|cauchy] --out MODEL`.
 
 use std::path::{Path, PathBuf};
 
-use kincal::identify::Algorithm;
+use std::fmt::Write as _;
+
+use kincal::identify::{Algorithm, RobustOptions};
 use kincal::{EffectSet, Robot};
 
-use crate::args::{AlgorithmArg, OrientationArg, parse_effect, positive};
+use crate::args::{AlgorithmArg, LossArg, OrientationArg, parse_effect, positive};
 use crate::calibration::{self, Failure, Settings, Weighting};
 use crate::data::{self, DataOptions};
 use crate::error::{CliError, core_error};
-use crate::model_file::{DataJson, ModelFile};
+use crate::model_file::{DataJson, ModelFile, PoseLabel};
 use crate::report;
 use crate::robot_arg;
 
@@ -47,6 +49,24 @@ point's position in the tool frame (known by design); the rows measure T_e^b·Tr
 so the points share one tool frame and together determine its rotation. Units in the model
 file are SI (m, rad).
 
+Robust fit: --robust huber|cauchy fits by iteratively reweighted least squares (core
+kincal::identify::identify_robust) instead, so a few bad rows (a glitch of some millimetres,
+a row recorded with the wrong joint readings) do not pull the model. Each pose's residual is
+standardised by robust per-axis scales σ_p, σ_φ estimated from the residuals themselves (the
+median, then the RMS over the accepted poses; not the --sigma-* values, so a misstated noise
+does not condemn every row): d² = |e_p|²/σ_p² + |e_φ|²/σ_φ². Its weight is
+min(1, c/d) (Huber, convex, started from the least-squares fit) or 1/(1 + d²/c²) (Cauchy,
+redescending: a gross outlier ends near weight 0; started from the Huber fit), times the
+--weight-*/--sigma-* weighting. c² defaults to the 95 % χ² quantile for the pose's k measured
+components (c = 3.55 for a full pose, 2.80 for a position); --robust-tuning C sets c for
+every pose. Rows with d² above the 99.99 % χ² quantile (d > 5.28 full pose, > 4.59 position)
+are suspects: printed with their CSV line, pose_id, d, residual and robust weight, and
+recorded in the model file under calibration.robust with the loss and the scales. The
+residual table then covers every row (suspects included); the cost, σ² and standard errors
+are those of the robustly weighted fit. With --algorithm all each algorithm is fitted
+robustly (OPT1 inside its intervals), the consensus compares the robust fits, and the model
+is the robust OLS fit; suspects another algorithm names differently are listed too.
+
 Unknown base and tool frames (a camera on the wrist observing a board, a tracker set up
 anywhere): --effects base_frame,tool_frame identifies them with the geometry, starting from
 the ROBOT's frames; when those are far off (more than a few cm or degrees), --init-frames
@@ -60,7 +80,8 @@ pub const EXAMPLE: &str = "\
 Example:
   kincal calibrate poses.csv --robot aria --algorithm all --out aria-model.json
   kincal calibrate poses.csv --robot aria --effects joint_compliance --sigma-pos-mm 0.1 \\
-      --sigma-rot-deg 0.02 --out aria-compliant.json";
+      --sigma-rot-deg 0.02 --out aria-compliant.json
+  kincal calibrate poses.csv --robot aria --robust cauchy --out aria-robust.json";
 
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
@@ -112,6 +133,14 @@ pub struct Args {
     /// Estimate the base and tool frames from the data (nominal geometry) before identifying
     #[arg(long)]
     pub init_frames: bool,
+    /// Robust fit (IRLS with this loss) instead of least squares; names suspect rows
+    #[arg(long, value_enum, value_name = "LOSS")]
+    pub robust: Option<LossArg>,
+    /// Threshold c of the robust weight on the standardised residual d, for every pose
+    /// [1] (default: sqrt of the 95 % χ² quantile for the pose's measured components: 3.55
+    /// for a full pose, 2.80 for a position)
+    #[arg(long, value_name = "C", value_parser = positive, requires = "robust")]
+    pub robust_tuning: Option<f64>,
 }
 
 impl Args {
@@ -144,6 +173,13 @@ impl Args {
             orientation: self.orientation_error.into(),
             allow_data_deficiency: self.allow_data_deficiency,
             max_iterations: self.max_iterations,
+            robust: self.robust.map(|loss| {
+                let mut o = RobustOptions::new(loss.into());
+                if let Some(c) = self.robust_tuning {
+                    o.tuning_chi2 = [c * c; 6];
+                }
+                o
+            }),
         }
     }
 }
@@ -179,7 +215,13 @@ fn calibrate<const N: usize>(start: &Robot<N>, name: &str, args: &Args) -> Resul
         .map(|m| (0..6).filter(|&k| m.mask.has(k)).count())
         .sum();
     let names: Vec<&str> = settings.algorithms.iter().map(|a| a.name()).collect();
-    let pb = crate::progress::spinner(format!("identifying ({})", names.join(", ")));
+    let pb = crate::progress::spinner(format!(
+        "identifying ({}){}",
+        names.join(", "),
+        settings
+            .robust
+            .map_or(String::new(), |r| format!(", robust {}", r.loss.name()))
+    ));
     let result = calibration::calibrate(start, &meas, &settings);
     pb.finish_and_clear();
     let cal = match result {
@@ -200,6 +242,10 @@ fn calibrate<const N: usize>(start: &Robot<N>, name: &str, args: &Args) -> Resul
         Err(Failure::Core { algorithm, error }) => {
             let e = core_error(error, &set.source, |i| data::line_of(&set, i));
             let hint = match (algorithm, error) {
+                (Some(_), kincal::Error::NotConverged { .. }) if settings.robust.is_some() => {
+                    "\nhint: the robust reweighting or one of its fits did not settle: raise --max-iterations, \
+                     try --robust huber (convex), or --algorithm opt2 (Levenberg–Marquardt)"
+                }
                 (Some(Algorithm::Ols), kincal::Error::NotConverged { .. }) => {
                     "\nhint: Gauss–Newton (OLS) can stall far from the solution or on nearly singular data; \
                      OPT2 (Levenberg–Marquardt) is more robust: --algorithm opt2"
@@ -225,7 +271,16 @@ fn calibrate<const N: usize>(start: &Robot<N>, name: &str, args: &Args) -> Resul
         poses: meas.len(),
         rows,
     };
-    let file = ModelFile::from_calibration(name, &cal, 0, data_json, args.allow_out_of_limits);
+    let mut file = ModelFile::from_calibration(name, &cal, 0, data_json, args.allow_out_of_limits);
+    let labels: Vec<PoseLabel> = set
+        .rows
+        .iter()
+        .map(|r| PoseLabel {
+            line: r.line,
+            pose_id: r.pose_id.clone(),
+        })
+        .collect();
+    file.record_robust(&cal, 0, &labels);
     let text = file.to_json();
     let mut inputs: Vec<&Path> = vec![&args.data];
     let robot_path = Path::new(&args.robot);
@@ -235,6 +290,7 @@ fn calibrate<const N: usize>(start: &Robot<N>, name: &str, args: &Args) -> Resul
     crate::files::write_atomic(&args.out, &inputs, |w| w.write_all(text.as_bytes()))?;
 
     let mut out = summary(&cal, name, &set.source, meas.len(), rows);
+    out.push_str(&robust_report(&cal, &labels));
     out.push_str(&format!(
         "Model written to {} ({} model).\n",
         args.out.display(),
@@ -273,14 +329,21 @@ pub fn summary<const N: usize>(
         rows,
     ));
     s.push('\n');
+    let robust_note = cal
+        .settings
+        .robust
+        .map_or(String::new(), |r| format!(", robust {} fit", r.loss.name()));
     if cal.runs.len() == 1 {
         s.push_str(&format!(
-            "Parameters ({}; lengths in mm, angles in degrees):\n",
-            cal.runs[0].ident.algorithm.name().to_uppercase()
+            "Parameters ({}{}; lengths in mm, angles in degrees):\n",
+            cal.runs[0].ident.algorithm.name().to_uppercase(),
+            robust_note
         ));
         s.push_str(&report::parameters::<N>(cal, 0));
     } else {
-        s.push_str("Identified parameters by algorithm (lengths in mm, angles in degrees):\n");
+        s.push_str(&format!(
+            "Identified parameters by algorithm{robust_note} (lengths in mm, angles in degrees):\n"
+        ));
         s.push_str(&report::side_by_side::<N>(cal));
     }
     s.push('\n');
@@ -291,6 +354,11 @@ pub fn summary<const N: usize>(
         report::fmt_small(wr)
     ));
     s.push_str(&report::residuals::<N>(cal));
+    if cal.settings.robust.is_some() {
+        s.push_str(
+            "  (robust fit: RMS and max over every row, suspects included; cost and σ² of the robustly weighted problem)\n",
+        );
+    }
     for run in &cal.runs {
         s.push_str(&format!(
             "  σ² {} = {}{}\n",
@@ -327,6 +395,141 @@ pub fn summary<const N: usize>(
     if let Some(c) = &cal.consensus {
         s.push('\n');
         s.push_str(&report::consensus::<N>(c));
+    }
+    s
+}
+
+/// The robust fit's scales and suspect rows (empty without `--robust`): a table for the
+/// model's run (the first), and for every other run the suspects that differ from it.
+pub fn robust_report<const N: usize>(
+    cal: &calibration::Calibration<N>,
+    labels: &[PoseLabel],
+) -> String {
+    let mut s = String::new();
+    let Some(opts) = cal.settings.robust else {
+        return s;
+    };
+    let Some((main, rest)) = cal.runs.split_first() else {
+        return s;
+    };
+    let Some(r) = &main.robust else {
+        return s;
+    };
+    let orientation = r.poses.iter().any(|p| p.components > 3);
+    let where_ = |i: usize| {
+        labels.get(i).map_or_else(
+            || format!("row {}", i + 1),
+            |l| {
+                format!(
+                    "line {} (pose {})",
+                    l.line,
+                    l.pose_id.as_deref().unwrap_or("-")
+                )
+            },
+        )
+    };
+    let tuned = if opts.tuning_chi2.iter().all(|&c2| c2 == opts.tuning_chi2[0]) {
+        format!("c = {:.3}", opts.tuning_chi2[0].sqrt())
+    } else {
+        format!(
+            "c = {:.2} (full pose) / {:.2} (position): 95 % χ² quantiles",
+            opts.tuning_chi2[5].sqrt(),
+            opts.tuning_chi2[2].sqrt()
+        )
+    };
+    let _ = writeln!(
+        s,
+        "\nRobust fit ({} IRLS, {tuned}; {}: {} reweighted fits): robust scales σ_pos {:.4} mm{} per axis",
+        opts.loss.name(),
+        main.ident.algorithm.name().to_uppercase(),
+        r.reweights,
+        r.test.scale_pos_m * 1e3,
+        if orientation {
+            format!(", σ_rot {:.4}°", r.test.scale_rot_rad.to_degrees())
+        } else {
+            String::new()
+        }
+    );
+    let suspects = r.suspects();
+    let _ = writeln!(
+        s,
+        "Suspect rows (d² above the 99.99 % χ² quantile: d > {:.2} full pose, > {:.2} position): {}",
+        opts.suspect_chi2[5].sqrt(),
+        opts.suspect_chi2[2].sqrt(),
+        if suspects.is_empty() {
+            "none".to_string()
+        } else {
+            suspects.len().to_string()
+        }
+    );
+    if !suspects.is_empty() {
+        let mut t = report::Table::new(&[
+            "line",
+            "pose_id",
+            "d",
+            "|e_p| [mm]",
+            "|e_φ| [deg]",
+            "robust weight",
+        ]);
+        for &i in &suspects {
+            let p = &r.poses[i];
+            let l = labels.get(i);
+            t.row(vec![
+                l.map_or_else(|| "-".into(), |l| l.line.to_string()),
+                l.and_then(|l| l.pose_id.clone())
+                    .unwrap_or_else(|| "-".into()),
+                format!("{:.2}", p.distance),
+                format!("{:.4}", p.pos_m * 1e3),
+                if p.components > 3 {
+                    format!("{:.4}", p.rot_rad.to_degrees())
+                } else {
+                    "-".into()
+                },
+                format!("{:.3e}", p.robust_weight),
+            ]);
+        }
+        s.push_str(&t.render("  "));
+    }
+    for run in rest {
+        let Some(o) = &run.robust else { continue };
+        let theirs = o.suspects();
+        let name = run.ident.algorithm.name().to_uppercase();
+        if theirs == suspects {
+            let _ = writeln!(
+                s,
+                "  {name} (σ_pos {:.4} mm, {} reweighted fits): the same suspects",
+                o.test.scale_pos_m * 1e3,
+                o.reweights
+            );
+        } else {
+            let list = |v: Vec<usize>| {
+                if v.is_empty() {
+                    "none".to_string()
+                } else {
+                    v.into_iter().map(where_).collect::<Vec<_>>().join(", ")
+                }
+            };
+            let _ = writeln!(
+                s,
+                "  {name} (σ_pos {:.4} mm, {} reweighted fits) also names: {}; does not name: {}",
+                o.test.scale_pos_m * 1e3,
+                o.reweights,
+                list(
+                    theirs
+                        .iter()
+                        .copied()
+                        .filter(|i| !suspects.contains(i))
+                        .collect()
+                ),
+                list(
+                    suspects
+                        .iter()
+                        .copied()
+                        .filter(|i| !theirs.contains(i))
+                        .collect()
+                ),
+            );
+        }
     }
     s
 }

@@ -332,6 +332,7 @@ fn calibration_of<const N: usize>(start: &Robot<N>, d: &Diagnosis<N>) -> Calibra
         runs: vec![Run {
             ident: d.fit,
             seconds: 0.0,
+            robust: None,
         }],
         consensus: None,
     }

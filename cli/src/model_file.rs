@@ -17,8 +17,15 @@
 //!   "calibration": { "data": { "path", "sha256", "poses", "rows" },
 //!                    "algorithm", "algorithms", "effects", "options",
 //!                    "identifiability", "residuals": { "before", "after" },
-//!                    "results": [ per algorithm ], "consensus"? } }
+//!                    "results": [ per algorithm, "robust"? ], "consensus"?,
+//!                    "robust"? } }
 //! ```
+//!
+//! `robust` (written by `calibrate --robust LOSS` only; absent otherwise, so readers that
+//! do not know it are unaffected): the loss, the weight thresholds c² and suspect thresholds
+//! d² per number of measured components, and the model's run's robust scales, reweighted
+//! fits and suspect rows (CSV line, pose_id, d, |e_p|, |e_φ|, robust weight); each entry of
+//! `results` carries its own run's scales and suspects under `robust`.
 //!
 //! Values are SI (m, rad, rad/(N·m), 1/K) written by serde_json in the shortest form that
 //! reads back to the same `f64` (parsed with `float_roundtrip`), so a loaded model
@@ -31,7 +38,7 @@ use kincal::model::{JointLimits, LengthParam, Link, MassModel};
 use kincal::{Effect, EffectSet, ParamId, ParamIndex, ParamSet, Robot};
 use serde::{Deserialize, Serialize};
 
-use crate::calibration::{Calibration, Consensus, Disagreement};
+use crate::calibration::{Calibration, Consensus, Disagreement, RobustRun};
 use crate::error::CliError;
 use crate::units::si_unit;
 
@@ -132,6 +139,9 @@ pub struct CalibrationJson {
     pub results: Vec<ResultJson>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub consensus: Option<ConsensusJson>,
+    /// The robust fit (with `calibrate --robust`): loss, thresholds, and the model's run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub robust: Option<RobustJson>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -209,6 +219,9 @@ pub struct ResultJson {
     /// The identified parameters (every other parameter keeps the model's value).
     pub parameters: Vec<ResultParamJson>,
     pub correlations: Vec<CorrelationJson>,
+    /// This run's robust fit (with `calibrate --robust`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub robust: Option<RobustRunJson>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -225,6 +238,58 @@ pub struct CorrelationJson {
     pub a: String,
     pub b: String,
     pub rho: f64,
+}
+
+/// The robust fit of the stored model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RobustJson {
+    /// `huber` or `cauchy`.
+    pub loss: String,
+    /// c² of the weight function for a pose with k = 1..6 measured components (index k − 1),
+    /// in units of the standardised residual d².
+    pub tuning_chi2: [f64; 6],
+    /// A pose with d² above this (index k − 1) is a suspect.
+    pub suspect_chi2: [f64; 6],
+    /// The algorithm whose robust fit is the model (the first run).
+    pub algorithm: String,
+    #[serde(flatten)]
+    pub run: RobustRunJson,
+}
+
+/// One algorithm's robust fit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RobustRunJson {
+    /// Reweighted fits performed.
+    pub reweights: u32,
+    /// Robust per-axis position scale σ_p [mm].
+    pub scale_pos_mm: f64,
+    /// Robust per-axis orientation scale σ_φ [deg]; `null` for position-only data.
+    pub scale_rot_deg: Option<f64>,
+    /// The poses the residual test names, in data order.
+    pub suspects: Vec<SuspectJson>,
+}
+
+/// A suspect row.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SuspectJson {
+    /// Line of DATA where the row is.
+    pub line: u64,
+    pub pose_id: Option<String>,
+    /// Standardised residual d.
+    pub distance: f64,
+    /// |e_p| at the model [mm].
+    pub pos_mm: f64,
+    /// |e_φ| at the model [deg]; `null` for a position-only row.
+    pub rot_deg: Option<f64>,
+    /// Final robust weight factor in (0, 1].
+    pub robust_weight: f64,
+}
+
+/// Where a pose of the calibration data sits in DATA.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PoseLabel {
+    pub line: u64,
+    pub pose_id: Option<String>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -433,6 +498,31 @@ pub fn consensus_json<const N: usize>(c: &Consensus) -> ConsensusJson {
     }
 }
 
+fn robust_run_json(r: &RobustRun, labels: &[PoseLabel]) -> RobustRunJson {
+    let orientation = r.poses.iter().any(|p| p.components > 3);
+    RobustRunJson {
+        reweights: r.reweights,
+        scale_pos_mm: r.test.scale_pos_m * 1e3,
+        scale_rot_deg: orientation.then(|| r.test.scale_rot_rad.to_degrees()),
+        suspects: r
+            .suspects()
+            .into_iter()
+            .map(|i| {
+                let p = &r.poses[i];
+                let label = labels.get(i);
+                SuspectJson {
+                    line: label.map_or(0, |l| l.line),
+                    pose_id: label.and_then(|l| l.pose_id.clone()),
+                    distance: p.distance,
+                    pos_mm: p.pos_m * 1e3,
+                    rot_deg: (p.components > 3).then(|| p.rot_rad.to_degrees()),
+                    robust_weight: p.robust_weight,
+                }
+            })
+            .collect(),
+    }
+}
+
 impl ModelFile {
     /// A nominal robot (no calibration).
     pub fn nominal<const N: usize>(name: &str, robot: &Robot<N>) -> Self {
@@ -495,6 +585,7 @@ impl ModelFile {
                             rho: c.rho,
                         })
                         .collect(),
+                    robust: None,
                 }
             })
             .collect();
@@ -530,8 +621,37 @@ impl ModelFile {
                 },
                 results,
                 consensus: cal.consensus.as_ref().map(consensus_json::<N>),
+                robust: None,
             }),
         }
+    }
+
+    /// Records the robust fits of `cal` (runs with `Calibration::runs[k].robust`): each
+    /// result's scales and suspects, and under `calibration.robust` the loss, thresholds and
+    /// run `primary`'s (the model's). `labels[i]` places pose `i` in DATA. Nothing is
+    /// recorded without a robust fit.
+    pub fn record_robust<const N: usize>(
+        &mut self,
+        cal: &Calibration<N>,
+        primary: usize,
+        labels: &[PoseLabel],
+    ) {
+        let (Some(c), Some(opts)) = (self.calibration.as_mut(), cal.settings.robust) else {
+            return;
+        };
+        for (res, run) in c.results.iter_mut().zip(&cal.runs) {
+            res.robust = run.robust.as_ref().map(|r| robust_run_json(r, labels));
+        }
+        let Some(main) = cal.runs.get(primary) else {
+            return;
+        };
+        c.robust = main.robust.as_ref().map(|r| RobustJson {
+            loss: opts.loss.name().to_string(),
+            tuning_chi2: opts.tuning_chi2,
+            suspect_chi2: opts.suspect_chi2,
+            algorithm: main.ident.algorithm.name().to_string(),
+            run: robust_run_json(r, labels),
+        });
     }
 
     /// Pretty JSON text (ends with a newline).
@@ -818,6 +938,36 @@ mod tests {
         for (a, b) in values.iter().zip(&back) {
             assert_eq!(a.to_bits(), b.to_bits(), "{a:e}");
         }
+    }
+
+    #[test]
+    fn robust_block_round_trips_flat() {
+        let r = RobustJson {
+            loss: "cauchy".into(),
+            tuning_chi2: kincal::identify::robust::CHI2_95,
+            suspect_chi2: kincal::identify::robust::CHI2_9999,
+            algorithm: "ols".into(),
+            run: RobustRunJson {
+                reweights: 12,
+                scale_pos_mm: 0.1 + 0.2,
+                scale_rot_deg: None,
+                suspects: vec![SuspectJson {
+                    line: 26,
+                    pose_id: Some("p24".into()),
+                    distance: 99.2,
+                    pos_mm: 4.999,
+                    rot_deg: None,
+                    robust_weight: 1.277e-3,
+                }],
+            },
+        };
+        let text = serde_json::to_string(&r).unwrap();
+        // The run's fields sit beside the loss (flattened), as documented.
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(v["suspects"][0]["line"], 26);
+        assert_eq!(v["reweights"], 12);
+        let back: RobustJson = serde_json::from_str(&text).unwrap();
+        assert_eq!(back, r);
     }
 
     #[test]
