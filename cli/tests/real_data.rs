@@ -71,11 +71,18 @@ fn import(root: &Path, name: &str, dir: &Path) -> String {
     text(&o)
 }
 
-/// crossval as docs/real-data.sh runs it; returns its JSON.
-fn crossval(dir: &Path, extra: &[&str]) -> Value {
+/// `observed-point data.csv --out obs.csv` as docs/real-data.sh runs it; returns stdout.
+fn observed_point(dir: &Path) -> String {
+    let o = kincal(&["observed-point", "data.csv", "--out", "obs.csv"], dir);
+    assert!(o.status.success(), "{}", text(&o));
+    text(&o)
+}
+
+/// crossval of `data` as docs/real-data.sh runs it; returns its JSON.
+fn crossval_of(dir: &Path, data: &str, extra: &[&str]) -> Value {
     let mut args = vec![
         "crossval",
-        "data.csv",
+        data,
         "--robot",
         "robot.toml",
         "--effects",
@@ -88,10 +95,35 @@ fn crossval(dir: &Path, extra: &[&str]) -> Value {
         "--json",
         "cv.json",
     ];
+    if extra.contains(&"--folds") {
+        // The caller's fold count replaces the default 5.
+        let at = args.iter().position(|a| *a == "--folds").unwrap();
+        args.drain(at..at + 2);
+    }
     args.extend_from_slice(extra);
     let o = kincal(&args, dir);
     assert!(o.status.success(), "{}", text(&o));
     serde_json::from_str(&std::fs::read_to_string(dir.join("cv.json")).unwrap()).unwrap()
+}
+
+/// crossval of the data as imported.
+fn crossval(dir: &Path, extra: &[&str]) -> Value {
+    crossval_of(dir, "data.csv", extra)
+}
+
+/// Held-out RMS (position [mm], rotation [deg]) of the nominal and the calibrated model.
+fn held_out(cv: &Value) -> ((f64, f64), (f64, f64)) {
+    let get = |m: &str, k: &str| num(cv, &["heldout", m, k]);
+    (
+        (
+            get("nominal", "rms_pos_mm"),
+            get("calibrated", "rms_pos_mm"),
+        ),
+        (
+            get("nominal", "rms_rot_deg"),
+            get("calibrated", "rms_rot_deg"),
+        ),
+    )
 }
 
 fn num(v: &Value, path: &[&str]) -> f64 {
@@ -143,6 +175,27 @@ fn fr3_held_out_residual_clearly_below_nominal() {
     close(cal_p, 1.472, "FR3 calibrated held-out RMS position [mm]");
     close(nom_r, 0.6894, "FR3 nominal held-out RMS rotation [deg]");
     close(cal_r, 0.2153, "FR3 calibrated held-out RMS rotation [deg]");
+
+    // At the point the camera looks at (322 mm along its axis), where the position is
+    // measured precisely: the gain in position grows to 8.8x.
+    let out = observed_point(dir.path());
+    assert!(
+        out.contains("re-expressed 322.5 mm along z (auto)"),
+        "{out}"
+    );
+    let ((nom_p, cal_p), (nom_r, cal_r)) = held_out(&crossval_of(dir.path(), "obs.csv", &[]));
+    assert!(cal_p < 0.2 * nom_p, "{cal_p} mm vs {nom_p} mm");
+    assert!(cal_r < 0.5 * nom_r, "{cal_r}° vs {nom_r}°");
+    close(
+        nom_p,
+        6.459,
+        "FR3 nominal held-out RMS position at the observed point [mm]",
+    );
+    close(
+        cal_p,
+        0.738,
+        "FR3 calibrated held-out RMS position at the observed point [mm]",
+    );
 }
 
 #[test]
@@ -171,6 +224,47 @@ fn ur10e_held_out_orientation_improves_position_stays_at_the_noise() {
         "UR10e calibrated held-out RMS rotation [deg]",
     );
     assert_eq!(cv["outliers"]["suspects"].as_array().unwrap().len(), 2);
+}
+
+#[test]
+fn ur10e_held_out_residual_clearly_below_nominal_at_the_observed_point() {
+    let Some(root) = realdata() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    import(&root, "figaroh-ur10e", dir.path());
+    // The camera's axes converge 486 mm ahead (within 24 mm RMS): its position carries the
+    // orientation noise times 0.49 m; re-expressed there, the calibration gains 2.5x.
+    let out = observed_point(dir.path());
+    assert!(
+        out.contains("re-expressed 485.5 mm along z (auto)"),
+        "{out}"
+    );
+    assert!(out.contains("miss RMS 23.7 mm"), "{out}");
+    let cv = crossval_of(dir.path(), "obs.csv", &[]);
+    let ((nom_p, cal_p), (nom_r, cal_r)) = held_out(&cv);
+    assert!(cal_p < 0.5 * nom_p, "{cal_p} mm vs {nom_p} mm");
+    assert!(cal_r < 0.85 * nom_r, "{cal_r}° vs {nom_r}°");
+    close(
+        nom_p,
+        4.566,
+        "UR10e nominal held-out RMS position at the observed point [mm]",
+    );
+    close(
+        cal_p,
+        1.789,
+        "UR10e calibrated held-out RMS position at the observed point [mm]",
+    );
+    close(nom_r, 0.6012, "UR10e nominal held-out RMS rotation [deg]");
+    close(
+        cal_r,
+        0.4446,
+        "UR10e calibrated held-out RMS rotation [deg]",
+    );
+    // Leave-one-out agrees.
+    let ((nom_p, cal_p), _) = held_out(&crossval_of(dir.path(), "obs.csv", &["--folds", "23"]));
+    assert!(
+        cal_p < 0.5 * nom_p,
+        "leave-one-out: {cal_p} mm vs {nom_p} mm"
+    );
 }
 
 #[test]

@@ -116,9 +116,9 @@ pub fn view_point(poses: &[Transform], axis: Axis) -> Result<ViewPoint> {
     }
     let rows: [[f64; 3]; 3] = core::array::from_fn(|i| core::array::from_fn(|j| a[(i, j)]));
     let (values, _) = symmetric_eigen(rows)?;
-    let (lo, hi) = values
-        .iter()
-        .fold((f64::INFINITY, 0.0f64), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+    let (lo, hi) = values.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &v| {
+        (lo.min(v), hi.max(v))
+    });
     if !(lo > PARALLEL_AXES_RATIO * hi) {
         let rank = values
             .iter()
@@ -215,9 +215,8 @@ mod tests {
             assert!((v.point_m[k] - target[k]).abs() < 1e-12, "{v:?}");
         }
         assert!(v.miss_max_m < 1e-12);
-        let dists: [f64; 4] = core::array::from_fn(|i| {
-            (Vector3::from(eyes[i]) - Vector3::from(target)).norm()
-        });
+        let dists: [f64; 4] =
+            core::array::from_fn(|i| (Vector3::from(eyes[i]) - Vector3::from(target)).norm());
         let mean = dists.iter().sum::<f64>() / 4.0;
         assert!((v.mean_distance_m - mean).abs() < 1e-12);
         assert!((v.min_distance_m - dists.iter().cloned().fold(9.0, f64::min)).abs() < 1e-12);
@@ -255,7 +254,10 @@ mod tests {
         ));
         assert!(matches!(
             view_point(&[a], Axis::Z),
-            Err(Error::TooFewData { found: 1, needed: 2 })
+            Err(Error::TooFewData {
+                found: 1,
+                needed: 2
+            })
         ));
         let mut c = a;
         c.translation.vector.x = f64::NAN;
