@@ -119,7 +119,7 @@ pub fn view_point(poses: &[Transform], axis: Axis) -> Result<ViewPoint> {
     let (lo, hi) = values.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &v| {
         (lo.min(v), hi.max(v))
     });
-    if !(lo > PARALLEL_AXES_RATIO * hi) {
+    if lo.is_nan() || lo <= PARALLEL_AXES_RATIO * hi {
         let rank = values
             .iter()
             .filter(|&&v| v > PARALLEL_AXES_RATIO * hi)
