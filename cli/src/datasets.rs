@@ -209,38 +209,58 @@ fn row(id: String, q: Vec<f64>, p: [f64; 3], orientation: Option<Orientation>) -
     }
 }
 
+/// The orientation of `r` as a unit quaternion (core's Shepperd conversion, unit to rounding).
 fn quaternion(r: &Matrix3<f64>) -> Orientation {
     let [w, x, y, z] = matrix_to_quaternion(r);
-    let n = (w * w + x * x + y * y + z * z).sqrt();
-    Orientation::Quaternion {
-        w: w / n,
-        x: x / n,
-        y: y / n,
-        z: z / n,
-    }
+    Orientation::Quaternion { w, x, y, z }
 }
 
-fn set_of(
-    source: String,
-    comments: Vec<String>,
+/// What an adapter read, before the common tail of every import: provenance (files with
+/// their SHA-256, robot) and notes as CSV comments, the measurement set, the robot.
+struct Parts<'a> {
+    /// The set's name (its folder name).
+    name: &'a str,
+    /// The files read; the first is the measurement set's source.
+    files: &'a [&'a Path],
+    /// The robot, as named in the CSV comments.
+    robot_label: &'a str,
     n_joints: usize,
     rows: Vec<MeasurementRow>,
     form: Option<OrientationForm>,
     extra_columns: Vec<String>,
-) -> MeasurementSet {
-    MeasurementSet {
-        source,
-        comments,
-        n_joints,
-        rows,
-        extra_columns,
-        orientation_form: form,
-        has_position: true,
-        has_point: false,
-        has_approach: false,
-        has_temperature: false,
-        sha256: String::new(),
-        header_line: 0,
+    robot: RobotDescription,
+    robot_comments: Vec<String>,
+    notes: Vec<String>,
+}
+
+impl Parts<'_> {
+    fn finish(self) -> Result<Imported, CliError> {
+        let files = self
+            .files
+            .iter()
+            .map(|&f| Ok((f, sha256_of(f)?)))
+            .collect::<Result<Vec<_>, CliError>>()?;
+        let mut comments = provenance(self.name, &files, self.robot_label);
+        comments.extend(self.notes.iter().map(|n| format!(" note: {n}")));
+        Ok(Imported {
+            set: MeasurementSet {
+                source: self.files[0].display().to_string(),
+                comments,
+                n_joints: self.n_joints,
+                rows: self.rows,
+                extra_columns: self.extra_columns,
+                orientation_form: self.form,
+                has_position: true,
+                has_point: false,
+                has_approach: false,
+                has_temperature: false,
+                sha256: String::new(),
+                header_line: 0,
+            },
+            robot: self.robot,
+            robot_comments: self.robot_comments,
+            notes: self.notes,
+        })
     }
 }
 
@@ -460,24 +480,14 @@ fn ur10e(dir: &Path) -> Result<Imported, CliError> {
             .to_string(),
         "robot: the set's robot_ur10e.urdf, chain base_link -> wrist_3_link".to_string(),
     ];
-    let mut comments = provenance(
-        "figaroh-ur10e",
-        &[
-            (&csv_path, sha256_of(&csv_path)?),
-            (&urdf_path, sha256_of(&urdf_path)?),
-        ],
-        "ur10e (robot_ur10e.urdf, base_link -> wrist_3_link)",
-    );
-    comments.extend(notes.iter().map(|n| format!(" note: {n}")));
-    Ok(Imported {
-        set: set_of(
-            csv_path.display().to_string(),
-            comments,
-            6,
-            rows,
-            Some(OrientationForm::Rpy),
-            Vec::new(),
-        ),
+    Parts {
+        name: "figaroh-ur10e",
+        files: &[&csv_path, &urdf_path],
+        robot_label: "ur10e (robot_ur10e.urdf, base_link -> wrist_3_link)",
+        n_joints: 6,
+        rows,
+        form: Some(OrientationForm::Rpy),
+        extra_columns: Vec::new(),
         robot: RobotDescription {
             name: "ur10e".into(),
             joint_names: imported.joint_names,
@@ -489,7 +499,8 @@ fn ur10e(dir: &Path) -> Result<Imported, CliError> {
                 .into(),
         ],
         notes,
-    })
+    }
+    .finish()
 }
 
 /// Reads a row-major 3×4 transform table (`r11..r33, tx..tz`) of the FR3 set.
@@ -579,13 +590,9 @@ fn fr3(dir: &Path) -> Result<Imported, CliError> {
         match first_tcp {
             None => first_tcp = Some(c),
             Some(c0) => {
-                let e = kincal::pose::pose_error(&c, &c0, kincal::OrientationError::Exact);
-                tcp_dev.0 = tcp_dev
-                    .0
-                    .max((e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt());
-                tcp_dev.1 = tcp_dev
-                    .1
-                    .max((e[3] * e[3] + e[4] * e[4] + e[5] * e[5]).sqrt());
+                let e = kincal::validation::PoseErrors::between(&c, &c0);
+                tcp_dev.0 = tcp_dev.0.max(e.pos_norm_m);
+                tcp_dev.1 = tcp_dev.1.max(e.rot_norm_rad);
             }
         }
         let m = cams[r];
@@ -620,25 +627,14 @@ fn fr3(dir: &Path) -> Result<Imported, CliError> {
             tj.rows.len()
         ),
     ];
-    let mut comments = provenance(
-        "robotkinecal-fr3",
-        &[
-            (&jp, sha256_of(&jp)?),
-            (&cp, sha256_of(&cp)?),
-            (&tp, sha256_of(&tp)?),
-        ],
-        "fr3 (Franka's published kinematics, camera mount of the set's README as the tool)",
-    );
-    comments.extend(notes.iter().map(|n| format!(" note: {n}")));
-    Ok(Imported {
-        set: set_of(
-            jp.display().to_string(),
-            comments,
-            7,
-            rows,
-            Some(OrientationForm::Quaternion),
-            Vec::new(),
-        ),
+    Parts {
+        name: "robotkinecal-fr3",
+        files: &[&jp, &cp, &tp],
+        robot_label: "fr3 (Franka's published kinematics, camera mount of the set's README as the tool)",
+        n_joints: 7,
+        rows,
+        form: Some(OrientationForm::Quaternion),
+        extra_columns: Vec::new(),
         robot: RobotDescription {
             name: "fr3-camera".into(),
             joint_names: desc.joint_names,
@@ -650,7 +646,8 @@ fn fr3(dir: &Path) -> Result<Imported, CliError> {
             " (Franka documentation); no mass model. See docs/robots/fr3.toml.".into(),
         ],
         notes,
-    })
+    }
+    .finish()
 }
 
 /// TALOS torso + left arm from base_link to gripper_left_base_link, from the joint origins
@@ -812,10 +809,8 @@ fn talos(dir: &Path) -> Result<Imported, CliError> {
             chain.fk(&qa).map_err(|e| CliError::input(e.to_string()))?,
             chain.fk(&qz).map_err(|e| CliError::input(e.to_string()))?,
         );
-        let e = kincal::pose::pose_error(&a, &b, kincal::OrientationError::Exact);
-        let dp = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
-        let dr = (e[3] * e[3] + e[4] * e[4] + e[5] * e[5]).sqrt();
-        worst = worst.max(dp + 0.1 * dr);
+        let e = kincal::validation::PoseErrors::between(&a, &b);
+        worst = worst.max(e.pos_norm_m + 0.1 * e.rot_norm_rad);
         let mut rw = row(
             t.text(r, tcol).trim().to_string(),
             q8,
@@ -860,21 +855,14 @@ fn talos(dir: &Path) -> Result<Imported, CliError> {
          TALOS example; numbers only, the file is CC BY-NC-ND and not copied)"
             .to_string(),
     ];
-    let mut comments = provenance(
-        "figaroh-talos-arm",
-        &[(&path, sha256_of(&path)?)],
-        "talos-left-arm-8 (base_link -> gripper_left_base_link, arm_left_5_joint held at 0)",
-    );
-    comments.extend(notes.iter().map(|n| format!(" note: {n}")));
-    Ok(Imported {
-        set: set_of(
-            path.display().to_string(),
-            comments,
-            8,
-            rows,
-            None,
-            vec!["extra_arm_left_5_joint".into()],
-        ),
+    Parts {
+        name: "figaroh-talos-arm",
+        files: &[&path],
+        robot_label: "talos-left-arm-8 (base_link -> gripper_left_base_link, arm_left_5_joint held at 0)",
+        n_joints: 8,
+        rows,
+        form: None,
+        extra_columns: vec!["extra_arm_left_5_joint".into()],
         robot: desc,
         robot_comments: vec![
             " TALOS torso + left arm, base_link -> gripper_left_base_link, arm_left_5_joint held"
@@ -884,7 +872,8 @@ fn talos(dir: &Path) -> Result<Imported, CliError> {
             " and not copied. Built by kincal import-dataset figaroh-talos-arm.".into(),
         ],
         notes,
-    })
+    }
+    .finish()
 }
 
 /// The positioner's entries: (stamp, joints, position, quaternion w, x, y, z), each with
@@ -1008,8 +997,13 @@ fn positioner(dir: &Path) -> Result<Imported, CliError> {
     let path = dir.join("measurements.yaml");
     let entries = read_positioner_yaml(&path)?;
     let mut rows = Vec::new();
-    for (line, stamp, q, p, [w, x, y, z]) in entries {
-        let n = (w * w + x * x + y * y + z * z).sqrt();
+    for (line, stamp, q, p, quat) in entries {
+        let ([w, x, y, z], n) = kincal::pose::normalized_quaternion(&quat).map_err(|e| {
+            CliError::input(format!(
+                "{}:{line}: entry '{stamp}': quaternion: {e}",
+                path.display()
+            ))
+        })?;
         if (n - 1.0).abs() > 1e-6 {
             return Err(CliError::input(format!(
                 "{}:{line}: entry '{stamp}': quaternion norm {n}, expected 1",
@@ -1020,12 +1014,7 @@ fn positioner(dir: &Path) -> Result<Imported, CliError> {
             stamp,
             q,
             p,
-            Some(Orientation::Quaternion {
-                w: w / n,
-                x: x / n,
-                y: y / n,
-                z: z / n,
-            }),
+            Some(Orientation::Quaternion { w, x, y, z }),
         ));
     }
     // Classical DH [d, θ, r, α] = [0, 0, 0, −π/2] and [−0.475, −π/2, 0, 0], each
@@ -1056,21 +1045,14 @@ fn positioner(dir: &Path) -> Result<Imported, CliError> {
          limits not stated (±2π used)"
             .to_string(),
     ];
-    let mut comments = provenance(
-        "ical-2axis-positioner",
-        &[(&path, sha256_of(&path)?)],
-        "ical-positioner (two revolute axes, classical DH of the README)",
-    );
-    comments.extend(notes.iter().map(|n| format!(" note: {n}")));
-    Ok(Imported {
-        set: set_of(
-            path.display().to_string(),
-            comments,
-            2,
-            rows,
-            Some(OrientationForm::Quaternion),
-            Vec::new(),
-        ),
+    Parts {
+        name: "ical-2axis-positioner",
+        files: &[&path],
+        robot_label: "ical-positioner (two revolute axes, classical DH of the README)",
+        n_joints: 2,
+        rows,
+        form: Some(OrientationForm::Quaternion),
+        extra_columns: Vec::new(),
         robot: desc,
         robot_comments: vec![
             " Two-axis positioner of industrial_calibration's kinematic_calibration example:"
@@ -1079,7 +1061,8 @@ fn positioner(dir: &Path) -> Result<Imported, CliError> {
             " Trans(2.2, 0, 1.6)·Rx(π/2), as stated in the ical-2axis-positioner README.".into(),
         ],
         notes,
-    })
+    }
+    .finish()
 }
 
 /// Writes a robot description with leading comment lines.

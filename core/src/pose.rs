@@ -97,17 +97,26 @@ pub fn matrix_to_rpy(r: &Matrix3<f64>) -> [f64; 3] {
     [roll, pitch, yaw]
 }
 
-/// Rotation matrix of the quaternion `[w, x, y, z]`, normalised first.
+/// The quaternion `q` = `[w, x, y, z]` divided by its norm, and that norm (so that a
+/// reader can refuse a norm far from 1 instead of silently normalising it).
 ///
 /// Fails with [`Error::NonFinite`] on a non-finite element and [`Error::InvalidParameter`]
 /// (index 0, value = norm) when the norm is zero.
-pub fn quaternion_to_matrix(q: &[f64; 4]) -> Result<Matrix3<f64>> {
+pub fn normalized_quaternion(q: &[f64; 4]) -> Result<([f64; 4], f64)> {
     crate::error::check_finite(q, Quantity::Orientation)?;
     let n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
     if n < 1e-300 {
         return Err(Error::InvalidParameter { index: 0, value: n });
     }
-    let (w, x, y, z) = (q[0] / n, q[1] / n, q[2] / n, q[3] / n);
+    Ok(([q[0] / n, q[1] / n, q[2] / n, q[3] / n], n))
+}
+
+/// Rotation matrix of the quaternion `[w, x, y, z]`, normalised first.
+///
+/// Fails with [`Error::NonFinite`] on a non-finite element and [`Error::InvalidParameter`]
+/// (index 0, value = norm) when the norm is zero.
+pub fn quaternion_to_matrix(q: &[f64; 4]) -> Result<Matrix3<f64>> {
+    let ([w, x, y, z], _) = normalized_quaternion(q)?;
     Ok(Matrix3::new(
         1.0 - 2.0 * (y * y + z * z),
         2.0 * (x * y - w * z),
