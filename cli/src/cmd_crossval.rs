@@ -2,7 +2,9 @@
 //! held-out residuals of the nominal geometry and of the calibrated model (k-fold
 //! cross-validation by pose_id), the noise floor (repeats, or an upper bound from the
 //! residuals), and the outliers a robust fit names. Every number comes from the core:
-//! `frames::estimate_frames`, `identify::identify`, `identify::identify_robust`.
+//! `frames::estimate_frames`, `identify::identify`, `identify::identify_robust`,
+//! `validation::{PoseErrors, ErrorSummary}`, `noise::{pooled_repeat_scatter,
+//! residual_sigma}` (the diagnosis's noise-floor estimator).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -11,7 +13,8 @@ use kincal::identify::{
     Algorithm, Identifiability, IdentifyOptions, Loss, Measurement, PoseResidual, RobustOptions,
     identify, identify_robust,
 };
-use kincal::validation::PoseErrors;
+use kincal::noise::{pooled_repeat_scatter, repeat_leader, residual_sigma};
+use kincal::validation::{ErrorSummary, PoseErrors};
 use kincal::{Effect, EffectSet, ParamSet, Robot};
 use rayon::prelude::*;
 use serde_json::{Value, json};
@@ -44,8 +47,10 @@ with σ the per-axis RMS residual of the calibrated model on all poses, iterated
 point and corrected for the fitted parameters (so neither kind of row dominates by its unit).
 
 Also printed (and in --json): the noise floor — the pooled scatter of repeated pose_ids
-when the data have them, else an upper bound: the calibrated model's dof-corrected residual
-per axis, which contains whatever the model does not explain; the robust fit (Cauchy IRLS on
+when the data have them (the estimator of `kincal diagnose`: repeats count together when
+they share approach directions and temperatures within 0.5 °C), else an upper bound: the
+calibrated model's dof-corrected residual per axis, which contains whatever the model does
+not explain; the robust fit (Cauchy IRLS on
 all poses, core identify_robust) and the poses its residual test names as outliers (d² above
 the 99.99 % χ² quantile); the identifiability of the calibrated model on all poses.
 
@@ -260,103 +265,49 @@ fn fit<const N: usize>(
     Err(last)
 }
 
-/// Errors of `robot` on pose `m` (rotation zero without a measured orientation).
+/// Errors of `robot` on pose `m` (components `m` does not measure zero).
 fn errors<const N: usize>(robot: &Robot<N>, m: &Measurement<N>) -> Result<PoseErrors, String> {
-    let t = m.model_pose(robot).map_err(|e| e.to_string())?;
-    let mut e = PoseErrors::between(&m.pose, &t);
-    if !m.mask.has_orientation() {
-        e.rot_rad = [0.0; 3];
-        e.rot_norm_rad = 0.0;
-    }
-    if !m.mask.has_position() {
-        e.pos_m = [0.0; 3];
-        e.pos_norm_m = 0.0;
-    }
-    Ok(e)
+    PoseErrors::of_measurement(robot, m).map_err(|e| e.to_string())
 }
 
-/// RMS and max of |e_p| [mm] and |e_φ| [deg] over the poses that measure them.
-#[derive(Debug, Clone, Copy, Default)]
-struct Summary {
-    rms_pos_mm: f64,
-    max_pos_mm: f64,
-    rms_rot_deg: f64,
-    max_rot_deg: f64,
-}
-
+/// Core summary of the poses `keep` selects, each kind over the poses measuring it.
 fn summarize<const N: usize>(
     meas: &[Measurement<N>],
     e: &[PoseErrors],
     keep: impl Fn(usize) -> bool,
-) -> Summary {
-    let (mut sp, mut np, mut sr, mut nr) = (0.0, 0usize, 0.0, 0usize);
-    let mut s = Summary::default();
+) -> ErrorSummary {
+    let mut s = ErrorSummary::default();
     for (i, (m, e)) in meas.iter().zip(e).enumerate() {
-        if !keep(i) {
-            continue;
+        if keep(i) {
+            s.add_measured(e, m.mask);
         }
-        if m.mask.has_position() {
-            sp += e.pos_norm_m * e.pos_norm_m;
-            np += 1;
-            s.max_pos_mm = s.max_pos_mm.max(e.pos_norm_m * 1e3);
-        }
-        if m.mask.has_orientation() {
-            sr += e.rot_norm_rad * e.rot_norm_rad;
-            nr += 1;
-            s.max_rot_deg = s.max_rot_deg.max(e.rot_norm_rad.to_degrees());
-        }
-    }
-    if np > 0 {
-        s.rms_pos_mm = (sp / np as f64).sqrt() * 1e3;
-    }
-    if nr > 0 {
-        s.rms_rot_deg = (sr / nr as f64).sqrt().to_degrees();
     }
     s
 }
 
-fn summary_json(s: &Summary, orientation: bool) -> Value {
-    let mut v = json!({"rms_pos_mm": s.rms_pos_mm, "max_pos_mm": s.max_pos_mm});
+/// RMS and max of |e_p| [mm] and |e_φ| [deg].
+fn summary_json(s: &ErrorSummary, orientation: bool) -> Value {
+    let mut v = json!({"rms_pos_mm": s.rms_pos_m() * 1e3, "max_pos_mm": s.max_pos_m * 1e3});
     if orientation {
-        v["rms_rot_deg"] = json!(s.rms_rot_deg);
-        v["max_rot_deg"] = json!(s.max_rot_deg);
+        v["rms_rot_deg"] = json!(s.rms_rot_rad().to_degrees());
+        v["max_rot_deg"] = json!(s.max_rot_rad.to_degrees());
     }
     v
 }
 
-/// Per-axis residual σ of `robot` on `data`: (σ_pos [m], σ_rot [rad]), corrected by
-/// `rows / (rows − p)`; 0 where the data have no such rows.
-fn residual_sigma<const N: usize>(
+/// Per-axis residual σ of `robot` on `data` (core `noise::residual_sigma`, corrected for
+/// `p` fitted parameters): (σ_pos [m], σ_rot [rad], position rows, rotation rows).
+fn residual_sigma_of<const N: usize>(
     robot: &Robot<N>,
     data: &[Measurement<N>],
     p: usize,
 ) -> Result<(f64, f64, usize, usize), String> {
-    let (mut sp, mut np, mut sr, mut nr) = (0.0, 0usize, 0.0, 0usize);
-    for m in data {
-        let e = errors(robot, m)?;
-        if m.mask.has_position() {
-            sp += e.pos_norm_m * e.pos_norm_m;
-            np += 3;
-        }
-        if m.mask.has_orientation() {
-            sr += e.rot_norm_rad * e.rot_norm_rad;
-            nr += 3;
-        }
-    }
-    let rows = np + nr;
-    let corr = if rows > p {
-        rows as f64 / (rows - p) as f64
-    } else {
-        f64::INFINITY
-    };
-    let s = |ss: f64, n: usize| {
-        if n > 0 {
-            (ss / n as f64 * corr).sqrt()
-        } else {
-            0.0
-        }
-    };
-    Ok((s(sp, np), s(sr, nr), np, nr))
+    let poses: Vec<(PoseErrors, kincal::identify::ComponentMask)> = data
+        .iter()
+        .map(|m| Ok((errors(robot, m)?, m.mask)))
+        .collect::<Result<_, String>>()?;
+    let s = residual_sigma(poses, p);
+    Ok((s.sigma_pos_m, s.sigma_rot_rad, s.rows_pos, s.rows_rot))
 }
 
 /// Folds by pose group: groups in order of first appearance, shuffled with `seed`, dealt
@@ -387,11 +338,7 @@ fn assign_folds(
         )));
     }
     let mut order: Vec<usize> = (0..n_groups).collect();
-    let mut rng = kincal::rng::SplitMix64::new(seed);
-    for i in (1..n_groups).rev() {
-        let j = rng.below(i + 1);
-        order.swap(i, j);
-    }
+    kincal::rng::SplitMix64::new(seed).shuffle(&mut order);
     let mut fold_of_group = vec![0; n_groups];
     for (pos, &g) in order.iter().enumerate() {
         fold_of_group[g] = pos % k;
@@ -402,67 +349,62 @@ fn assign_folds(
     ))
 }
 
-/// Noise floor from repeated pose_ids: pooled per-axis scatter of the residuals within
-/// groups, `(σ_pos [m], σ_rot [rad], dof_pos, dof_rot)`; `None` without repeats.
+/// Pooled repeat noise `(σ_pos [m], σ_rot [rad], dof_pos, dof_rot)`, or why there is none.
+type Repeats = Result<(f64, f64, usize, usize), &'static str>;
+
+/// Noise floor from repeated pose_ids: the diagnosis's estimator (core
+/// `noise::pooled_repeat_scatter` over the repeat subgroups of `noise::repeat_leader`, with
+/// the diagnosis's default temperature tolerance), residuals against `robot`;
+/// `Ok((σ_pos [m], σ_rot [rad], dof_pos, dof_rot))`, or `Err(why there are no repeats)`.
 fn repeat_noise<const N: usize>(
     robot: &Robot<N>,
     set: &MeasurementSet,
     meas: &[Measurement<N>],
-) -> Result<Option<(f64, f64, usize, usize)>, String> {
-    let mut groups: Vec<(String, Vec<usize>)> = Vec::new();
+) -> Result<Repeats, String> {
+    const NO_IDS: &str = "no repeated pose_ids";
+    // Group leader of each row: the first row with its pose_id (strings are the CLI's).
+    let mut firsts: Vec<(&str, usize)> = Vec::new();
+    let mut group_leader = Vec::with_capacity(set.rows.len());
     for (i, r) in set.rows.iter().enumerate() {
-        let Some(id) = &r.pose_id else {
-            return Ok(None);
+        let Some(id) = r.pose_id.as_deref() else {
+            return Ok(Err(NO_IDS));
         };
-        match groups.iter_mut().find(|(g, _)| g == id) {
-            Some((_, v)) => v.push(i),
-            None => groups.push((id.clone(), vec![i])),
-        }
-    }
-    let (mut sp, mut dp, mut sr, mut dr) = (0.0, 0usize, 0.0, 0usize);
-    for (_, rows) in groups.iter().filter(|(_, v)| v.len() >= 2) {
-        let es: Vec<PoseErrors> = rows
-            .iter()
-            .map(|&i| errors(robot, &meas[i]))
-            .collect::<Result<_, _>>()?;
-        for (kind, ss, dof) in [(0, &mut sp, &mut dp), (1, &mut sr, &mut dr)] {
-            let has = |i: usize| {
-                if kind == 0 {
-                    meas[i].mask.has_position()
-                } else {
-                    meas[i].mask.has_orientation()
-                }
-            };
-            let idx: Vec<usize> = (0..rows.len()).filter(|&j| has(rows[j])).collect();
-            if idx.len() < 2 {
-                continue;
+        let g = match firsts.iter().find(|(g, _)| *g == id) {
+            Some(&(_, g)) => g,
+            None => {
+                firsts.push((id, i));
+                i
             }
-            let v = |j: usize| {
-                if kind == 0 {
-                    es[j].pos_m
-                } else {
-                    es[j].rot_rad
-                }
-            };
-            let mut mean = [0.0; 3];
-            for &j in &idx {
-                for (m, x) in mean.iter_mut().zip(v(j)) {
-                    *m += x / idx.len() as f64;
-                }
-            }
-            for &j in &idx {
-                for (m, x) in mean.iter().zip(v(j)) {
-                    *ss += (x - m).powi(2);
-                }
-            }
-            *dof += 3 * (idx.len() - 1);
-        }
+        };
+        group_leader.push(g);
     }
-    if dp + dr == 0 {
-        return Ok(None);
+    let tol = kincal::diagnosis::Config::default().repeat_temp_tol_c;
+    let sub_leader: Vec<usize> = (0..meas.len())
+        .map(|l| repeat_leader(meas, l, |m| group_leader[m], tol))
+        .collect();
+    let r = pooled_repeat_scatter(
+        meas.len(),
+        |l| sub_leader[l],
+        |l| meas[l].mask,
+        |l| {
+            let e = errors(robot, &meas[l])?;
+            let (p, q) = (e.pos_m, e.rot_rad);
+            Ok::<_, String>([p[0], p[1], p[2], q[0], q[1], q[2]])
+        },
+    )?;
+    if r.dof_pos + r.dof_rot == 0 {
+        return Ok(Err(if firsts.len() < meas.len() {
+            "no repeated pose_ids under the same conditions (approach directions, temperature)"
+        } else {
+            NO_IDS
+        }));
     }
-    let s = |ss: f64, d: usize| if d > 0 { (ss / d as f64).sqrt() } else { 0.0 };
-    Ok(Some((s(sp, dp), s(sr, dr), dp, dr)))
+    Ok(Ok((
+        r.sigma_pos_m().unwrap_or(0.0),
+        r.sigma_rot_rad().unwrap_or(0.0),
+        r.dof_pos,
+        r.dof_rot,
+    )))
 }
 
 fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Result<(), CliError> {
@@ -517,8 +459,8 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
     }
     if w.mode == "residual" {
         for _ in 0..WEIGHT_ROUNDS {
-            let (sp, sr, _, nr) =
-                residual_sigma(&all.robot, &meas, p_fit(&all)).map_err(|e| fail("residuals", e))?;
+            let (sp, sr, _, nr) = residual_sigma_of(&all.robot, &meas, p_fit(&all))
+                .map_err(|e| fail("residuals", e))?;
             if !(sp > 0.0 && sp.is_finite()) {
                 break;
             }
@@ -533,7 +475,7 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
         }
     }
     let (sig_p, sig_r, _, _) =
-        residual_sigma(&all.robot, &meas, p_fit(&all)).map_err(|e| fail("residuals", e))?;
+        residual_sigma_of(&all.robot, &meas, p_fit(&all)).map_err(|e| fail("residuals", e))?;
     let nom_all =
         fit(nominal, &meas, req_nom, how(w)).map_err(|e| fail("nominal fit on all poses", e))?;
 
@@ -695,18 +637,18 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
         "RMS e_φ [deg]",
         "max e_φ [deg]",
     ]);
-    let line = |label: &str, x: &Summary| {
+    let line = |label: &str, x: &ErrorSummary| {
         vec![
             label.to_string(),
-            format!("{:.4}", x.rms_pos_mm),
-            format!("{:.4}", x.max_pos_mm),
+            format!("{:.4}", x.rms_pos_m() * 1e3),
+            format!("{:.4}", x.max_pos_m * 1e3),
             if orientation {
-                format!("{:.4}", x.rms_rot_deg)
+                format!("{:.4}", x.rms_rot_rad().to_degrees())
             } else {
                 "-".into()
             },
             if orientation {
-                format!("{:.4}", x.max_rot_deg)
+                format!("{:.4}", x.max_rot_rad.to_degrees())
             } else {
                 "-".into()
             },
@@ -722,15 +664,18 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
     let _ = writeln!(
         s,
         "  held-out RMS position: {:.3} mm -> {:.3} mm ({:.2}x lower){}",
-        s_nom.rms_pos_mm,
-        s_cal.rms_pos_mm,
-        ratio(s_nom.rms_pos_mm, s_cal.rms_pos_mm),
+        s_nom.rms_pos_m() * 1e3,
+        s_cal.rms_pos_m() * 1e3,
+        ratio(s_nom.rms_pos_m() * 1e3, s_cal.rms_pos_m() * 1e3),
         if orientation {
             format!(
                 "; orientation {:.4}° -> {:.4}° ({:.2}x)",
-                s_nom.rms_rot_deg,
-                s_cal.rms_rot_deg,
-                ratio(s_nom.rms_rot_deg, s_cal.rms_rot_deg)
+                s_nom.rms_rot_rad().to_degrees(),
+                s_cal.rms_rot_rad().to_degrees(),
+                ratio(
+                    s_nom.rms_rot_rad().to_degrees(),
+                    s_cal.rms_rot_rad().to_degrees()
+                )
             )
         } else {
             String::new()
@@ -754,8 +699,8 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
         ft.row(vec![
             format!("{}", k + 1),
             n.to_string(),
-            format!("{:.4}", a.rms_pos_mm),
-            format!("{:.4}", b.rms_pos_mm),
+            format!("{:.4}", a.rms_pos_m() * 1e3),
+            format!("{:.4}", b.rms_pos_m() * 1e3),
             deficient.to_string(),
             algorithm.to_uppercase(),
         ]);
@@ -768,7 +713,7 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
     s.push_str(&ft.render("  "));
     s.push('\n');
     let noise_json = match repeats {
-        Some((sp, sr, dp, dr)) => {
+        Ok((sp, sr, dp, dr)) => {
             let _ = writeln!(
                 s,
                 "Noise floor (repeated pose_ids, pooled scatter): σ_pos {:.4} mm ({dp} dof){}",
@@ -781,10 +726,10 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
             );
             json!({"source": "repeats", "sigma_pos_mm": sp * 1e3, "sigma_rot_deg": sr.to_degrees(), "dof_pos": dp, "dof_rot": dr})
         }
-        None => {
+        Err(why) => {
             let _ = writeln!(
                 s,
-                "Noise floor: no repeated pose_ids; upper bound from the calibrated residual (dof-corrected): σ_pos {:.4} mm per axis (√3σ = {:.4} mm){}",
+                "Noise floor: {why}; upper bound from the calibrated residual (dof-corrected): σ_pos {:.4} mm per axis (√3σ = {:.4} mm){}",
                 sig_p * 1e3,
                 3f64.sqrt() * sig_p * 1e3,
                 if orientation {

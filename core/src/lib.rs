@@ -26,6 +26,7 @@ pub mod linalg;
 mod math;
 pub mod model;
 pub mod montecarlo;
+pub mod noise;
 pub mod observability;
 pub mod params;
 pub mod pose;

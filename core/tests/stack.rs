@@ -7,9 +7,11 @@
 //! binary re-executed with `KINCAL_STACK_PROBE=<bytes>` runs [`stack_probe_child`] only.
 //! The test checks that the workload runs within [`STACK_BOUND`] and then bisects for the
 //! smallest stack that works (printed; `cargo test -p kincal --release --test stack --
-//! --nocapture` gives the release figure).
+//! --nocapture` gives the release figure). The probe and the bisection are shared with
+//! `tests/diagnosis_stack.rs` (`tests/common/stack_probe.rs`).
 
-use std::process::Command;
+#[path = "common/stack_probe.rs"]
+mod stack_probe;
 
 use kincal::identify::{
     Algorithm, Bounds, IdentifyOptions, Loss, Measurement, PoseResidual, RobustOptions, Workspace,
@@ -134,49 +136,23 @@ fn workload(data: &mut [Measurement<6>], report: &mut [PoseResidual], ws: &mut W
     }
 }
 
-/// Runs the workload on a thread with `bytes` of stack (only in a child process).
+/// Runs the workload on a thread with the probed stack (only in a child process).
 #[test]
 fn stack_probe_child() {
-    let Ok(bytes) = std::env::var(ENV) else {
-        return;
-    };
-    let bytes: usize = bytes.parse().unwrap();
-    let mut data = data();
-    let mut report = vec![PoseResidual::default(); data.len()];
-    // The workspace is the caller's memory (a `static` on firmware): on the heap, made
-    // outside the probed thread.
-    let mut ws = Box::<Ws>::default();
-    std::thread::Builder::new()
-        .stack_size(bytes)
-        .spawn(move || workload(&mut data, &mut report, &mut ws))
-        .unwrap()
-        .join()
-        .unwrap();
+    stack_probe::run_probe(ENV, || {
+        let mut data = data();
+        let mut report = vec![PoseResidual::default(); data.len()];
+        // The workspace is the caller's memory (a `static` on firmware): on the heap, made
+        // outside the probed thread.
+        let mut ws = Box::<Ws>::default();
+        move || workload(&mut data, &mut report, &mut ws)
+    });
 }
 
 /// Whether the workload completes with `bytes` of stack; a failure other than a stack
 /// overflow fails the test.
 fn fits(bytes: usize) -> bool {
-    let out = Command::new(std::env::current_exe().unwrap())
-        .args([
-            "--exact",
-            "stack_probe_child",
-            "--nocapture",
-            "--test-threads=1",
-        ])
-        .env(ENV, bytes.to_string())
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    if out.status.success() {
-        return true;
-    }
-    assert!(
-        stderr.contains("has overflowed its stack"),
-        "probe with {bytes} bytes failed for another reason: {}\n{stderr}",
-        out.status
-    );
-    false
+    stack_probe::fits("stack_probe_child", ENV, bytes)
 }
 
 #[test]
@@ -186,27 +162,11 @@ fn identification_with_every_effect_fits_in_the_stack_bound() {
         fits(STACK_BOUND),
         "identification needs more than {STACK_BOUND} bytes of stack"
     );
-    // Bisect for the smallest stack that works: lo fails (or is the floor), hi works.
-    let (mut lo, mut hi) = (FLOOR, STACK_BOUND);
-    if fits(lo) {
-        hi = lo;
-    }
-    while hi - lo > RESOLUTION {
-        let mid = (lo + hi) / 2 / 256 * 256;
-        if fits(mid) {
-            hi = mid;
-        } else {
-            lo = mid;
-        }
-    }
+    let hi = stack_probe::smallest_stack(fits, FLOOR, STACK_BOUND, RESOLUTION);
     println!(
         "identification (ARIA, every effect, OLS/OPT1/OPT2, analysis, Huber/Cauchy) needs at most {hi} bytes of stack ({:.1} KiB; bound {} KiB; profile {})",
         hi as f64 / 1024.0,
         STACK_BOUND / 1024,
-        if cfg!(debug_assertions) {
-            "dev (core at opt-level 2)"
-        } else {
-            "release"
-        }
+        stack_probe::profile()
     );
 }

@@ -4,91 +4,32 @@ use super::{Config, NoiseFloor, PoseDiagnosis};
 use crate::error::{Error, Quantity, Result, check_finite};
 use crate::identify::Measurement;
 use crate::model::Robot;
+use crate::noise::{RepeatScatter, pooled_repeat_scatter, repeat_leader};
 use crate::pose::{OrientationError, pose_error};
 
-/// Whether measurements `a` and `b` of the same group are repeats of the same physical
-/// pose: same measured components, same approach directions (backlash makes
-/// opposite-direction repeats differ, spec/effects.md), and — our extension of the same
-/// reasoning to thermal expansion — temperatures within `temp_tol_c` (or both absent).
-fn same_conditions<const N: usize>(
-    a: &Measurement<N>,
-    b: &Measurement<N>,
-    temp_tol_c: f64,
-) -> bool {
-    let temp_ok = match (a.state.temp_c, b.state.temp_c) {
-        (None, None) => true,
-        (Some(x), Some(y)) => (x - y).abs() <= temp_tol_c,
-        _ => false,
-    };
-    a.mask == b.mask && a.state.approach == b.state.approach && temp_ok
-}
-
 /// Pooled within-repeat sums of squares from the residuals against `reference` (any model
-/// close to the arm: the residual differences between repeats remove the model's
-/// prediction exactly when the readings are equal, and to second order otherwise).
-/// A subgroup is a measurement and the later measurements of its group whose first match
-/// ([`same_conditions`]) it is. Writes each measurement's subgroup leader into `poses`.
-/// Returns `(ss_pos, dof_pos, ss_rot, dof_rot, subgroups)`, degrees of freedom counted per
-/// axis. O(n²) time.
+/// close to the arm), by the shared [`crate::noise`] estimator: writes each measurement's
+/// repeat-subgroup leader ([`crate::noise::repeat_leader`] within its group) into `poses`
+/// and pools the scatter ([`crate::noise::pooled_repeat_scatter`]). O(n²) time.
 fn pooled<const N: usize>(
     reference: &Robot<N>,
     data: &[Measurement<N>],
     poses: &mut [PoseDiagnosis],
     temp_tol_c: f64,
-) -> Result<(f64, usize, f64, usize, usize)> {
-    let n = data.len();
-    for l in 0..n {
-        let lead = (0..l)
-            .find(|&m| {
-                poses[m].leader == poses[l].leader
-                    && same_conditions(&data[m], &data[l], temp_tol_c)
-            })
-            .unwrap_or(l);
+) -> Result<RepeatScatter> {
+    for l in 0..data.len() {
+        let lead = repeat_leader(data, l, |m| poses[m].leader as usize, temp_tol_c);
         poses[l].sub_leader = lead as u32;
     }
-    let (mut ss_p, mut dof_p, mut ss_r, mut dof_r, mut subgroups) = (0.0, 0, 0.0, 0, 0);
-    let residual = |l: usize| -> Result<[f64; 6]> {
-        let t = data[l].model_pose(reference)?;
-        Ok(pose_error(&data[l].pose, &t, OrientationError::Exact))
-    };
-    for s in 0..n {
-        if poses[s].sub_leader as usize != s {
-            continue;
-        }
-        let count = (s..n)
-            .filter(|&l| poses[l].sub_leader as usize == s)
-            .count();
-        if count < 2 {
-            continue;
-        }
-        subgroups += 1;
-        let mut mean = [0.0; 6];
-        for l in (s..n).filter(|&l| poses[l].sub_leader as usize == s) {
-            let e = residual(l)?;
-            for k in 0..6 {
-                mean[k] += e[k] / count as f64;
-            }
-        }
-        for l in (s..n).filter(|&l| poses[l].sub_leader as usize == s) {
-            let e = residual(l)?;
-            for k in (0..6).filter(|&k| data[s].mask.has(k)) {
-                let d = e[k] - mean[k];
-                if k < 3 {
-                    ss_p += d * d;
-                } else {
-                    ss_r += d * d;
-                }
-            }
-        }
-        for k in (0..6).filter(|&k| data[s].mask.has(k)) {
-            if k < 3 {
-                dof_p += count - 1;
-            } else {
-                dof_r += count - 1;
-            }
-        }
-    }
-    Ok((ss_p, dof_p, ss_r, dof_r, subgroups))
+    pooled_repeat_scatter(
+        data.len(),
+        |l| poses[l].sub_leader as usize,
+        |l| data[l].mask,
+        |l| {
+            let t = data[l].model_pose(reference)?;
+            Ok(pose_error(&data[l].pose, &t, OrientationError::Exact))
+        },
+    )
 }
 
 /// The noise floor of a diagnosis: stated σ where given (infinite degrees of freedom),
@@ -102,8 +43,13 @@ pub(crate) fn noise_floor<const N: usize>(
 ) -> Result<NoiseFloor> {
     let any_pos = data.iter().any(|m| (0..3).any(|k| m.mask.has(k)));
     let any_rot = data.iter().any(|m| (3..6).any(|k| m.mask.has(k)));
-    let (ss_p, dof_p, ss_r, dof_r, subgroups) =
-        pooled(reference, data, poses, cfg.repeat_temp_tol_c)?;
+    let RepeatScatter {
+        ss_pos: ss_p,
+        dof_pos: dof_p,
+        ss_rot: ss_r,
+        dof_rot: dof_r,
+        subgroups,
+    } = pooled(reference, data, poses, cfg.repeat_temp_tol_c)?;
     let pick = |stated: Option<f64>, ss: f64, dof: usize, needed: bool| -> Result<(f64, f64)> {
         match stated {
             Some(s) => {
