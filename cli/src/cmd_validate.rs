@@ -97,13 +97,10 @@ pub fn evaluate<const N: usize>(
         .iter()
         .enumerate()
         .map(|(i, m)| {
-            let t = m.model_pose(robot).map_err(|e| (i, e))?;
-            let mut e = PoseErrors::between(&m.pose, &t);
-            if !m.mask.has_orientation() {
-                e.rot_rad = [0.0; 3];
-                e.rot_norm_rad = 0.0;
-            }
-            summary.add(&e);
+            // Unmeasured components are zero; each kind's RMS and max run over the poses
+            // that measure it (position-only rows do not dilute the orientation RMS).
+            let e = PoseErrors::of_measurement(robot, m).map_err(|e| (i, e))?;
+            summary.add_measured(&e, m.mask);
             Ok(e)
         })
         .collect::<Result<Vec<_>, _>>()?;
