@@ -16,7 +16,8 @@
  *   (t[4*col + row]); quaternions are [w, x, y, z]. Indices are zero-based; parameter
  *   labels use 1-based link numbers ("theta0_3").
  * - Static strings returned by the library are never freed.
- * - Library version: kincal_version(); sizeof(kincal_robot) == kincal_robot_size().
+ * - Library version: kincal_version(); sizeof(kincal_robot) == kincal_robot_size(),
+ *   sizeof(kincal_prepared) == kincal_prepared_size().
  */
 
 #ifndef KINCAL_H
@@ -75,6 +76,21 @@
  this, and det R > 0.
  */
 #define KINCAL_ROTATION_TOLERANCE 1e-6
+
+/*
+ Size in bytes of `kincal_prepared` (`sizeof(kincal_prepared)`; also `kincal_prepared_size()`).
+ */
+#define KINCAL_PREPARED_SIZE 3072
+
+/*
+ Alignment in bytes of `kincal_prepared` (`alignof(kincal_prepared)`, that of `uint64_t`).
+ */
+#define KINCAL_PREPARED_ALIGN 8
+
+/*
+ Number of `uint64_t` words of `kincal_prepared.opaque`: `KINCAL_PREPARED_SIZE / 8`.
+ */
+#define KINCAL_PREPARED_WORDS 384
 
 /*
  Most markers on one body.
@@ -207,6 +223,11 @@ enum kincal_status
      A joint axis was given with a zero (or non-normalisable) direction (`joint`).
      */
     KINCAL_STATUS_DEGENERATE_AXIS = 116,
+    /*
+     A `kincal_prepared` handle was not filled by `kincal_prepare` of this library build, or
+     has been overwritten or corrupted since (`argument`): prepare it again.
+     */
+    KINCAL_STATUS_BAD_HANDLE = 117,
     /*
      Inverse kinematics found no configuration within the limits that reaches the pose
      (`residual_pos_m`, `residual_rot_rad`: the best residual found).
@@ -1161,6 +1182,26 @@ typedef struct kincal_selection {
 } kincal_selection;
 
 /*
+ A prepared robot model: the core model built and validated once by `kincal_prepare`, for
+ fast repeated FK and IK (`kincal_prepared_*`). Caller-owned storage of
+ `KINCAL_PREPARED_SIZE` bytes aligned to `KINCAL_PREPARED_ALIGN`, wherever the caller puts it
+ (static, stack): the library allocates nothing and keeps no pointer to it.
+
+ The content is opaque and private to the library build that wrote it: do not edit it, do
+ not persist it across library builds or versions (prepare again at start-up). A handle may
+ be copied with `memcpy`. Storage that `kincal_prepare` did not fill (uninitialised,
+ zeroed, overwritten, corrupted, or from another build) makes every `kincal_prepared_*`
+ call return `KINCAL_STATUS_BAD_HANDLE` (a checksum over the whole stored model guards
+ against corruption).
+ */
+typedef struct kincal_prepared {
+    /*
+     Opaque; written only by `kincal_prepare`.
+     */
+    uint64_t opaque[KINCAL_PREPARED_WORDS];
+} kincal_prepared;
+
+/*
  Options of `kincal_register`; `kincal_registration_options_default` fills them.
  */
 typedef struct kincal_registration_options {
@@ -2033,6 +2074,131 @@ kincal_status kincal_pose_to_xyz_rpy(const double *t,
                                      double *xyz_rpy_out,
                                      size_t xyz_rpy_len,
                                      struct kincal_error *err);
+
+/*
+ `sizeof(kincal_prepared)` as the library was built (`KINCAL_PREPARED_SIZE`): compare with
+ the header's to detect a header/library mismatch.
+ */
+size_t kincal_prepared_size(void);
+
+/*
+ Validates `robot` once and writes the built model into the caller's handle storage
+ `prepared_out` (`KINCAL_PREPARED_SIZE` bytes, aligned to `KINCAL_PREPARED_ALIGN`; need not
+ be initialised). The handle then serves `kincal_prepared_fk`, `kincal_prepared_fk_pq`,
+ `kincal_prepared_joint_angles` and `kincal_prepared_ik`, which give bit-identical results
+ to `kincal_fk`, `kincal_fk_pq`, `kincal_joint_angles` and `kincal_ik` on `robot` without
+ converting the parameter table on every call.
+
+ The handle is a snapshot: later edits of `*robot` do not reach it (prepare again). It keeps
+ no pointer to `robot` and may be copied with `memcpy`. `*prepared_out` is written on success
+ only (a failed call leaves an earlier handle in it intact).
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER or any status of `kincal_robot_validate`.
+
+ # Safety
+ `robot` must be NULL or point to a readable `kincal_robot`; `prepared_out` NULL or writable
+ for `KINCAL_PREPARED_SIZE` bytes; `err` NULL or writable.
+ */
+kincal_status kincal_prepare(const struct kincal_robot *robot,
+                             struct kincal_prepared *prepared_out,
+                             struct kincal_error *err);
+
+/*
+ Checks a prepared handle: OK when `kincal_prepare` filled it (with this library build) and
+ it is intact, else BAD_HANDLE; NULL_POINTER or MISALIGNED_POINTER for a bad pointer. Every
+ `kincal_prepared_*` call makes the same check first, so this is only needed to test a
+ handle ahead of use (e.g. after a memory self-test). `n_joints_out`: the joint count, or
+ NULL.
+
+ # Safety
+ `prepared` must be NULL or point to `KINCAL_PREPARED_SIZE` readable bytes; `n_joints_out`
+ NULL or writable; `err` NULL or writable.
+ */
+kincal_status kincal_prepared_validate(const struct kincal_prepared *prepared,
+                                       size_t *n_joints_out,
+                                       struct kincal_error *err);
+
+/*
+ `kincal_fk` on a prepared model: the tool pose `T_e^b` (effects compensated) as a 4×4
+ column-major matrix in `t_base_tool_out` (16 doubles), bit-identical to `kincal_fk` on the
+ prepared robot.
+
+ - `prepared`: a handle filled by `kincal_prepare` (read only).
+ - `q`, `q_len`: joint readings [rad], `q_len` = the prepared robot's joint count.
+ - `aux`: approach directions / temperature, or NULL (as `kincal_fk`).
+
+ Joint limits are not checked. Returns OK, BAD_HANDLE, NULL_POINTER, MISALIGNED_POINTER,
+ BAD_LENGTH, NON_FINITE, INVALID_ARGUMENT (an approach direction not −1/0/+1) or
+ MISSING_INPUT.
+
+ # Safety
+ `prepared` must be NULL or point to `KINCAL_PREPARED_SIZE` readable bytes; other non-NULL
+ pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_prepared_fk(const struct kincal_prepared *prepared,
+                                 const double *q,
+                                 size_t q_len,
+                                 const struct kincal_joint_aux *aux,
+                                 double *t_base_tool_out,
+                                 size_t t_base_tool_len,
+                                 struct kincal_error *err);
+
+/*
+ As `kincal_prepared_fk`, with the pose as position + quaternion `[px, py, pz, qw, qx, qy,
+ qz]` in `pq_out` (7 doubles), bit-identical to `kincal_fk_pq`.
+
+ # Safety
+ As `kincal_prepared_fk`.
+ */
+kincal_status kincal_prepared_fk_pq(const struct kincal_prepared *prepared,
+                                    const double *q,
+                                    size_t q_len,
+                                    const struct kincal_joint_aux *aux,
+                                    double *pq_out,
+                                    size_t pq_len,
+                                    struct kincal_error *err);
+
+/*
+ `kincal_joint_angles` on a prepared model: the joint angles after the joint effects
+ (compliance, scale, cyclic, backlash), `q_j + Δθ_j` without θ0, in `angles_out` (N doubles)
+ [rad]. Arguments and statuses as `kincal_prepared_fk`.
+
+ # Safety
+ As `kincal_prepared_fk`.
+ */
+kincal_status kincal_prepared_joint_angles(const struct kincal_prepared *prepared,
+                                           const double *q,
+                                           size_t q_len,
+                                           const struct kincal_joint_aux *aux,
+                                           double *angles_out,
+                                           size_t angles_len,
+                                           struct kincal_error *err);
+
+/*
+ `kincal_ik` on a prepared model: readings `q_out` (N doubles, within the joint limits)
+ whose effect-compensated FK reaches `target` (16 doubles, column-major rigid transform),
+ bit-identical to `kincal_ik` on the prepared robot. Arguments as `kincal_ik` with
+ `prepared` in place of `robot`: `q_seed` (N doubles), `aux` or NULL, `opts` or NULL for the
+ defaults, `q_out` (N doubles; may overlap `q_seed`), `info_out` or NULL.
+
+ Returns OK, UNREACHABLE, BAD_HANDLE, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH,
+ NON_FINITE, INVALID_TRANSFORM, INVALID_ARGUMENT or MISSING_INPUT.
+
+ # Safety
+ `prepared` must be NULL or point to `KINCAL_PREPARED_SIZE` readable bytes; other non-NULL
+ pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_prepared_ik(const struct kincal_prepared *prepared,
+                                 const double *target,
+                                 size_t target_len,
+                                 const double *q_seed,
+                                 size_t q_seed_len,
+                                 const struct kincal_joint_aux *aux,
+                                 const struct kincal_ik_options *opts,
+                                 double *q_out,
+                                 size_t q_out_len,
+                                 struct kincal_ik_info *info_out,
+                                 struct kincal_error *err);
 
 /*
  Default registration options for noise `sigma_m` [m]: k = 4, up to 2 outliers. Returns OK,

@@ -67,12 +67,16 @@ impl Link {
 }
 
 /// Which of d and β a link identifies (they never both matter for a revolute joint).
+///
+/// One byte, 0 or 1 (`repr(u8)`): the C ABI's prepared-model handle checks these bytes of a
+/// stored [`Robot`] before it reads it (see [`Robot::LENGTH_PARAM_OFFSET`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u8)]
 pub enum LengthParam {
     /// Identify d, keep β at its nominal value (non-parallel axes).
-    D,
+    D = 0,
     /// Identify β, keep d at its nominal value (parallel axes).
-    Beta,
+    Beta = 1,
 }
 
 /// Inclusive joint limits [rad].
@@ -242,6 +246,13 @@ impl<const N: usize> Geometry<N> {
 /// A robot model with `N` revolute joints: geometry (links, base, tool), joint limits, mass
 /// model, and effect parameters. Plain data; every algorithm is a method or a free function
 /// taking it by reference, so there is no hidden state.
+///
+/// Layout contract with the C ABI (ffi/src/prepared.rs keeps a built model byte for byte in
+/// caller-owned storage and validates it before use): every field except `length_param` is
+/// made of `f64` only, so any bit pattern of them is a valid value; `length_param` is the only
+/// field with invalid bit patterns and sits at [`Robot::LENGTH_PARAM_OFFSET`]. A field of
+/// another type breaks that contract: update ffi/src/prepared.rs with it (its size assertion
+/// catches most such changes).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Robot<const N: usize> {
     pub(crate) geom: Geometry<N>,
@@ -259,6 +270,11 @@ impl<const N: usize> Robot<N> {
     pub const NUM_PARAMS: usize = num_params(N);
     /// Number of geometric parameters (links, base, tool).
     pub const NUM_GEOMETRIC_PARAMS: usize = num_geometric_params(N);
+    /// Byte offset of the `[LengthParam; N]` field inside `Robot<N>` (layout introspection
+    /// for the C ABI's prepared-model handle, which checks those bytes of a stored model; see
+    /// the layout contract on [`Robot`]).
+    #[doc(hidden)]
+    pub const LENGTH_PARAM_OFFSET: usize = core::mem::offset_of!(Robot<N>, length_param);
 
     /// A robot from its links and joint limits, with identity base and tool frames, no
     /// masses and no effects. The d/β choice of every link is made from axis parallelism

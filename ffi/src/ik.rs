@@ -40,7 +40,7 @@ impl From<IkOptions> for kincal_ik_options {
     }
 }
 
-fn options(o: &kincal_ik_options) -> FfiResult<IkOptions> {
+pub(crate) fn options(o: &kincal_ik_options) -> FfiResult<IkOptions> {
     for (v, name) in [
         (o.tol_pos_m, c"opts->tol_pos_m"),
         (o.tol_rot_rad, c"opts->tol_rot_rad"),
@@ -94,23 +94,30 @@ pub unsafe extern "C" fn kincal_ik_options_default(
     })
 }
 
-fn ik_of<const N: usize>(
+/// The solution of one IK call on a built model: readings (first N used) and the info.
+pub(crate) fn ik_of<const N: usize>(
     r: &Robot<N>,
     target: &Transform,
     seed: &[f64; KINCAL_MAX_JOINTS],
     aux: Option<&kincal_joint_aux>,
     opts: &IkOptions,
-) -> FfiResult<([f64; KINCAL_MAX_JOINTS], IkSolution<N>)> {
+) -> FfiResult<([f64; KINCAL_MAX_JOINTS], kincal_ik_info)> {
     let s = seed
         .get(..N)
         .ok_or(kincal_error::new(kincal_status::Internal))?;
     let state = joint_state::<N>(s, aux, CALL_AUX)?;
-    let sol = solve_ik(r, target, &state, opts)?;
+    let sol: IkSolution<N> = solve_ik(r, target, &state, opts)?;
     let mut q = [0.0; KINCAL_MAX_JOINTS];
     for (d, s) in q.iter_mut().zip(sol.q.iter()) {
         *d = *s;
     }
-    Ok((q, sol))
+    let info = kincal_ik_info {
+        residual_pos_m: sol.residual_pos_m,
+        residual_rot_rad: sol.residual_rot_rad,
+        iterations: sol.iterations,
+        seed_index: sol.seed_index,
+    };
+    Ok((q, info))
 }
 
 /// Inverse kinematics: readings `q_out` (N doubles [rad], within the joint limits) whose
@@ -158,16 +165,7 @@ pub unsafe extern "C" fn kincal_ik(
         };
         let out = arg_out!(q_out, q_out_len, n);
         let info = if info_out.is_null() { None } else { Some(arg_out1!(info_out)) };
-        let (q, info_v) = with_any_robot!(&any, r => {
-            ik_of(r, &target, &seed, aux.as_ref(), &opts).map(|(q, s)| {
-                (q, kincal_ik_info {
-                    residual_pos_m: s.residual_pos_m,
-                    residual_rot_rad: s.residual_rot_rad,
-                    iterations: s.iterations,
-                    seed_index: s.seed_index,
-                })
-            })
-        })?;
+        let (q, info_v) = with_any_robot!(&any, r => ik_of(r, &target, &seed, aux.as_ref(), &opts))?;
         // SAFETY: checked by `arg_out!`/`arg_out1!`; writable by contract.
         unsafe {
             out.write(&q);

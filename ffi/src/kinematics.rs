@@ -113,7 +113,7 @@ fn q_n(q: &[f64; KINCAL_MAX_JOINTS], n: usize) -> FfiResult<&[f64]> {
     q.get(..n).ok_or(kincal_error::new(kincal_status::Internal))
 }
 
-fn fk_of<const N: usize>(
+pub(crate) fn fk_of<const N: usize>(
     r: &Robot<N>,
     q: &[f64; KINCAL_MAX_JOINTS],
     aux: Option<&kincal_joint_aux>,
@@ -373,7 +373,7 @@ fn gravity_of<const N: usize>(
     Ok(per_joint(&tau))
 }
 
-fn angles_of<const N: usize>(
+pub(crate) fn angles_of<const N: usize>(
     r: &Robot<N>,
     q: &[f64; KINCAL_MAX_JOINTS],
     aux: Option<&kincal_joint_aux>,

@@ -10,6 +10,7 @@
 //! Module per capability, each a thin shell over the core: [`status`] (codes, detail, text),
 //! [`robot`] (the `kincal_robot` model and its editors), [`axis_chain`] (a robot from joint axes), [`params`] (parameters by index and
 //! label), [`effects`], [`kinematics`] (FK, frames, Jacobian, gravity torques), [`ik`],
+//! [`prepared`] (a model built once into caller-owned storage, for fast FK and IK),
 //! [`pose`] (pose error, conversions), [`identify`] (identifiability, OLS/OPT1/OPT2),
 //! [`validation`] (metrics, biopsy requirement), [`registration`] (markers), [`aria`]
 //! (built-in arm).
@@ -37,6 +38,7 @@ pub mod kinematics;
 pub mod observability;
 pub mod params;
 pub mod pose;
+pub mod prepared;
 pub mod registration;
 pub mod robot;
 pub mod status;

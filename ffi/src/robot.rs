@@ -8,7 +8,7 @@
 //! or restored from storage can never cause undefined behaviour, only a status code. The price
 //! is that conversion, which rebuilds the precomputed link constants: a few microseconds, about
 //! the cost of ten forward kinematics evaluations. Batch APIs (identification) convert once
-//! per call.
+//! per call, and control loops convert once into a prepared handle ([`crate::prepared`]).
 
 use kincal::any::{AnyRobot, MAX_JOINTS};
 use kincal::params::{num_geometric_params, num_params};

@@ -58,6 +58,9 @@ pub enum kincal_status {
     MisalignedPointer = 115,
     /// A joint axis was given with a zero (or non-normalisable) direction (`joint`).
     DegenerateAxis = 116,
+    /// A `kincal_prepared` handle was not filled by `kincal_prepare` of this library build, or
+    /// has been overwritten or corrupted since (`argument`): prepare it again.
+    BadHandle = 117,
     /// Inverse kinematics found no configuration within the limits that reaches the pose
     /// (`residual_pos_m`, `residual_rot_rad`: the best residual found).
     Unreachable = 200,
@@ -77,7 +80,7 @@ pub enum kincal_status {
 
 impl kincal_status {
     /// Every status, in numeric order (used by the tests and `kincal_status_str`).
-    pub(crate) const ALL: [kincal_status; 24] = [
+    pub(crate) const ALL: [kincal_status; 25] = [
         kincal_status::Ok,
         kincal_status::NullPointer,
         kincal_status::BadLength,
@@ -96,6 +99,7 @@ impl kincal_status {
         kincal_status::BadPose,
         kincal_status::MisalignedPointer,
         kincal_status::DegenerateAxis,
+        kincal_status::BadHandle,
         kincal_status::Unreachable,
         kincal_status::NotConverged,
         kincal_status::RankDeficient,
@@ -155,6 +159,9 @@ impl kincal_status {
             }
             kincal_status::DegenerateAxis => {
                 c"KINCAL_STATUS_DEGENERATE_AXIS: a joint axis has a zero direction"
+            }
+            kincal_status::BadHandle => {
+                c"KINCAL_STATUS_BAD_HANDLE: a kincal_prepared was not filled by kincal_prepare or is corrupted"
             }
             kincal_status::Unreachable => {
                 c"KINCAL_STATUS_UNREACHABLE: no configuration within the limits reaches the pose"

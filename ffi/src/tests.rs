@@ -7,3 +7,4 @@ mod calibration;
 mod fuzz_regressions;
 mod header;
 mod observability;
+mod prepared;

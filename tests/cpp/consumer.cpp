@@ -6,6 +6,8 @@
 //   Hayati/mDH chain of spec/aria.md, reading the parameters through the parameter API;
 // - literal values shared with the Rust test `values_shared_with_cpp` (ffi/src/tests/abi.rs);
 // - inverse kinematics of every Table 2 pose (FK of the solution reaches the pose);
+// - the prepared-model handle (kincal_prepare, kincal_prepared_*) bit-identical to the plain
+//   exports, and NULL, zeroed, garbage and corrupted handles refused with a status;
 // - a Jacobian column against the analytic formula of eq. (13a) built from kincal_fk_frames;
 // - effects on the model, pose error in both forms;
 // - the documented status codes for bad arguments (NULL, short buffers, NaN, wrong joint
@@ -260,6 +262,124 @@ void test_ik_every_tool_pose() {
                  KINCAL_STATUS_UNREACHABLE, err, nullptr);
     CHECK(err.residual_pos_m > 3.0);
     CHECK(q[0] == 0.0);  // outputs are written on success only
+}
+
+// The prepared-model handle: bit-identical to the plain exports on the three ARIA models and on
+// a model with backlash and thermal expansion (which need aux inputs); misuse is a status.
+static_assert(sizeof(kincal_prepared) == KINCAL_PREPARED_SIZE, "kincal_prepared size");
+static_assert(alignof(kincal_prepared) == KINCAL_PREPARED_ALIGN, "kincal_prepared alignment");
+
+void check_prepared_matches(const kincal_robot &r, const kincal_prepared &p,
+                            const kincal_joint_aux *aux) {
+    kincal_error err;
+    const double qs[3][6] = {{0.3, 0.7, -0.4, 1.1, -0.6, 0.9},
+                             {0.0, 0.0, 0.0, 0.0, 0.0, 0.0},
+                             {-1.2, 0.2, 1.9, -2.5, 0.4, 3.0}};
+    for (const auto &q : qs) {
+        double t1[16], t2[16], pq1[7], pq2[7], a1[6], a2[6];
+        CHECK_STATUS(kincal_fk(&r, q, 6, aux, t1, 16, &err), KINCAL_STATUS_OK, err, nullptr);
+        CHECK_STATUS(kincal_prepared_fk(&p, q, 6, aux, t2, 16, &err), KINCAL_STATUS_OK, err,
+                     nullptr);
+        CHECK(std::memcmp(t1, t2, sizeof t1) == 0);
+        CHECK_STATUS(kincal_fk_pq(&r, q, 6, aux, pq1, 7, &err), KINCAL_STATUS_OK, err, nullptr);
+        CHECK_STATUS(kincal_prepared_fk_pq(&p, q, 6, aux, pq2, 7, &err), KINCAL_STATUS_OK, err,
+                     nullptr);
+        CHECK(std::memcmp(pq1, pq2, sizeof pq1) == 0);
+        CHECK_STATUS(kincal_joint_angles(&r, q, 6, aux, a1, 6, &err), KINCAL_STATUS_OK, err,
+                     nullptr);
+        CHECK_STATUS(kincal_prepared_joint_angles(&p, q, 6, aux, a2, 6, &err), KINCAL_STATUS_OK,
+                     err, nullptr);
+        CHECK(std::memcmp(a1, a2, sizeof a1) == 0);
+    }
+    double seed[6];
+    CHECK_STATUS(kincal_aria_tool_seed(seed, 6, &err), KINCAL_STATUS_OK, err, nullptr);
+    for (size_t l = 0; l < KINCAL_ARIA_NUM_TOOL_POSES; l += 3) {
+        double target[16], q1[6], q2[6];
+        kincal_ik_info i1, i2;
+        CHECK_STATUS(kincal_aria_tool_pose(l, target, 16, &err), KINCAL_STATUS_OK, err, nullptr);
+        const kincal_status s1 =
+            kincal_ik(&r, target, 16, seed, 6, aux, nullptr, q1, 6, &i1, &err);
+        CHECK_STATUS(kincal_prepared_ik(&p, target, 16, seed, 6, aux, nullptr, q2, 6, &i2, &err),
+                     s1, err, nullptr);
+        if (s1 == KINCAL_STATUS_OK) {
+            CHECK(std::memcmp(q1, q2, sizeof q1) == 0);
+            CHECK(i1.residual_pos_m == i2.residual_pos_m &&
+                  i1.residual_rot_rad == i2.residual_rot_rad &&
+                  i1.iterations == i2.iterations && i1.seed_index == i2.seed_index);
+        }
+    }
+}
+
+void test_prepared_handle() {
+    CHECK(kincal_prepared_size() == sizeof(kincal_prepared));
+    kincal_error err;
+    // Static storage, as firmware would keep it (no heap).
+    static kincal_prepared prepared;
+    size_t n = 0;
+    for (kincal_aria_model m : {KINCAL_ARIA_MODEL_NOMINAL, KINCAL_ARIA_MODEL_VIRTUAL_TRUTH,
+                                KINCAL_ARIA_MODEL_REAL_IDENTIFIED}) {
+        const kincal_robot r = aria(m);
+        CHECK_STATUS(kincal_prepare(&r, &prepared, &err), KINCAL_STATUS_OK, err, nullptr);
+        CHECK_STATUS(kincal_prepared_validate(&prepared, &n, &err), KINCAL_STATUS_OK, err,
+                     nullptr);
+        CHECK(n == 6);
+        check_prepared_matches(r, prepared, nullptr);
+    }
+    kincal_robot r = aria(KINCAL_ARIA_MODEL_VIRTUAL_TRUTH);
+    CHECK_STATUS(kincal_robot_set_param_by_label(&r, "backlash_3", 0.01, &err), KINCAL_STATUS_OK,
+                 err, nullptr);
+    CHECK_STATUS(kincal_robot_set_param_by_label(&r, "thermal_kappa", 1e-5, &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    CHECK_STATUS(kincal_robot_set_param_by_label(&r, "compliance_2", 1e-3, &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    CHECK_STATUS(kincal_prepare(&r, &prepared, &err), KINCAL_STATUS_OK, err, nullptr);
+    kincal_joint_aux aux{};
+    aux.has_approach = 1;
+    aux.has_temp = 1;
+    const double approach[6] = {1, -1, 1, 0, 1, -1};
+    std::memcpy(aux.approach, approach, sizeof approach);
+    aux.temp_c = 30.0;
+    check_prepared_matches(r, prepared, &aux);
+    double t[16];
+    CHECK_STATUS(kincal_prepared_fk(&prepared, Q, 6, nullptr, t, 16, &err),
+                 KINCAL_STATUS_MISSING_INPUT, err, nullptr);
+
+    // A copy is as good as the original.
+    kincal_prepared copy;
+    std::memcpy(&copy, &prepared, sizeof copy);
+    CHECK_STATUS(kincal_prepared_fk(&copy, Q, 6, &aux, t, 16, &err), KINCAL_STATUS_OK, err,
+                 nullptr);
+
+    // Misuse: NULL, zeroed, garbage and corrupted storage.
+    CHECK_STATUS(kincal_prepared_fk(nullptr, Q, 6, &aux, t, 16, &err),
+                 KINCAL_STATUS_NULL_POINTER, err, "prepared");
+    CHECK_STATUS(kincal_prepare(&r, nullptr, &err), KINCAL_STATUS_NULL_POINTER, err,
+                 "prepared_out");
+    auto bad = std::make_unique<kincal_prepared>();
+    std::memset(bad.get(), 0, sizeof *bad);
+    CHECK_STATUS(kincal_prepared_fk(bad.get(), Q, 6, &aux, t, 16, &err),
+                 KINCAL_STATUS_BAD_HANDLE, err, "prepared");
+    std::memset(bad.get(), 0x5a, sizeof *bad);
+    CHECK_STATUS(kincal_prepared_fk_pq(bad.get(), Q, 6, &aux, t, 7, &err),
+                 KINCAL_STATUS_BAD_HANDLE, err, "prepared");
+    for (size_t w : {size_t{0}, size_t{1}, size_t{3}, size_t{10}, size_t{200}}) {
+        std::memcpy(bad.get(), &prepared, sizeof *bad);
+        bad->opaque[w] ^= uint64_t{1} << (w % 64);
+        double q[6] = {9, 9, 9, 9, 9, 9}, target[16];
+        CHECK_STATUS(kincal_aria_tool_pose(0, target, 16, &err), KINCAL_STATUS_OK, err, nullptr);
+        CHECK_STATUS(kincal_prepared_ik(bad.get(), target, 16, Q, 6, &aux, nullptr, q, 6, nullptr,
+                                        &err),
+                     KINCAL_STATUS_BAD_HANDLE, err, "prepared");
+        CHECK(q[0] == 9.0);
+        CHECK_STATUS(kincal_prepared_validate(bad.get(), nullptr, &err), KINCAL_STATUS_BAD_HANDLE,
+                     err, "prepared");
+    }
+    // A failed prepare leaves the earlier handle intact.
+    kincal_robot broken = r;
+    broken.n_joints = 0;
+    CHECK_STATUS(kincal_prepare(&broken, &prepared, &err), KINCAL_STATUS_BAD_JOINT_COUNT, err,
+                 "robot->n_joints");
+    CHECK_STATUS(kincal_prepared_validate(&prepared, &n, &err), KINCAL_STATUS_OK, err, nullptr);
 }
 
 void test_jacobian_theta0_column() {
@@ -627,6 +747,7 @@ int main() {
     test_fk_against_reference();
     test_shared_values();
     test_ik_every_tool_pose();
+    test_prepared_handle();
     test_observability_table2();
     test_jacobian_theta0_column();
     test_effects_and_pose_error();

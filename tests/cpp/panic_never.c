@@ -11,11 +11,12 @@
  * Every export is referenced except those listed in NOT_PANIC_PROVEN of tests/cpp/run.sh
  * (identification and marker registration: their core kernels index arrays by loop counters
  * whose bounds the compiler cannot prove; run.sh checks that nothing else is left out). The
- * program also runs FK, IK and a validation on the built-in ARIA as a smoke test of the
- * no_std build.
+ * program also runs FK, IK (plain and through a prepared handle) and a validation on the
+ * built-in ARIA as a smoke test of the no_std build.
  */
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 
 #include "kincal.h"
 
@@ -54,6 +55,29 @@ int main(void) {
     CHECK(!(fabs(t[12] - 0.566) > 1e-9 || fabs(t[13] - 0.354) > 1e-9 || fabs(t[14] - 0.235) > 1e-9));
     for (int i = 0; i < 6; ++i) q[i] = 0.1 * i;
     CHECK(kincal_fk_pq(&robot, q, 6, NULL, pq, 7, &err) == KINCAL_STATUS_OK);
+    {
+        /* The prepared handle: the same results as the plain exports; a corrupted one refused. */
+        static kincal_prepared prepared;
+        double t2[16], pq2[7], q2[6], a1[6], a2[6];
+        size_t n = 0;
+        CHECK(kincal_prepared_size() == sizeof prepared);
+        CHECK(kincal_prepare(&robot, &prepared, &err) == KINCAL_STATUS_OK);
+        CHECK(kincal_prepared_validate(&prepared, &n, &err) == KINCAL_STATUS_OK && n == 6);
+        CHECK(kincal_prepared_fk_pq(&prepared, q, 6, NULL, pq2, 7, &err) == KINCAL_STATUS_OK);
+        CHECK(memcmp(pq, pq2, sizeof pq) == 0);
+        CHECK(kincal_prepared_fk(&prepared, q_ik, 6, NULL, t2, 16, &err) == KINCAL_STATUS_OK);
+        CHECK(kincal_fk(&robot, q_ik, 6, NULL, t, 16, &err) == KINCAL_STATUS_OK);
+        CHECK(memcmp(t, t2, sizeof t) == 0);
+        CHECK(kincal_joint_angles(&robot, q, 6, NULL, a1, 6, &err) == KINCAL_STATUS_OK);
+        CHECK(kincal_prepared_joint_angles(&prepared, q, 6, NULL, a2, 6, &err) == KINCAL_STATUS_OK);
+        CHECK(memcmp(a1, a2, sizeof a1) == 0);
+        CHECK(kincal_aria_tool_pose(0, t2, 16, &err) == KINCAL_STATUS_OK);
+        CHECK(kincal_prepared_ik(&prepared, t2, 16, seed, 6, NULL, &opts, q2, 6, &info, &err) ==
+              KINCAL_STATUS_OK);
+        CHECK(memcmp(q2, q_ik, sizeof q2) == 0);
+        prepared.opaque[20] ^= 1u;
+        CHECK(kincal_prepared_fk(&prepared, q, 6, NULL, t2, 16, &err) == KINCAL_STATUS_BAD_HANDLE);
+    }
     CHECK(kincal_fk_frames(&robot, q, 6, NULL, frames, 16 * 8, &err) == KINCAL_STATUS_OK);
     CHECK(kincal_jacobian(&robot, q, 6, NULL, jac, 6 * 85, t, 16, &err) == KINCAL_STATUS_OK);
     CHECK(kincal_gravity_torques(&robot, q, 6, tau, 6, &err) == KINCAL_STATUS_OK);

@@ -138,6 +138,7 @@ fn status_numbers_are_fixed() {
         (S::BadPose, 114),
         (S::MisalignedPointer, 115),
         (S::DegenerateAxis, 116),
+        (S::BadHandle, 117),
         (S::Unreachable, 200),
         (S::NotConverged, 201),
         (S::RankDeficient, 202),
@@ -170,7 +171,7 @@ fn status_str_is_static_and_names_the_code() {
             s as u32
         );
     }
-    for unknown in [1, 99, 117, 204, 901, 1000, u32::MAX] {
+    for unknown in [1, 99, 118, 204, 901, 1000, u32::MAX] {
         let text = unsafe { CStr::from_ptr(kincal_status_str(unknown)) };
         assert_eq!(text.to_str().unwrap(), "unknown kincal status code");
     }
