@@ -278,39 +278,24 @@ pub(crate) fn add_rows<const N: usize, const P: usize>(
     } else {
         [0.0; 6]
     };
+    // The pose's six rows at once (unmeasured ones with weight 0).
     let mut c = 0.0;
-    if ws.to_gram {
-        // The pose's six rows at once (the hot loop of the iterations).
-        let mut rows = [[0.0; P]; 6];
-        let mut wk = [0.0; 6];
-        for k in 0..6 {
-            if !m.mask.has(k) {
-                continue;
-            }
-            wk[k] = m.weight * weight(opts, k);
-            for (j, &col) in cols.iter().enumerate() {
-                rows[k][j] = jac.get(col).map_or(0.0, |jc| jc[k]) * ws.colscale[j];
-            }
-            c += wk[k] * e[k] * e[k];
-        }
-        ws.gram.add_rows6(&rows, &e, &wk)?;
-        return Ok(c);
-    }
+    let mut rows = [[0.0; P]; 6];
+    let mut wk = [0.0; 6];
     for k in 0..6 {
         if !m.mask.has(k) {
             continue;
         }
-        let w = m.weight * weight(opts, k);
+        wk[k] = m.weight * weight(opts, k);
         for (j, &col) in cols.iter().enumerate() {
-            let v = jac.get(col).map_or(0.0, |jc| jc[k]);
-            ws.row[j] = v * ws.colscale[j];
+            rows[k][j] = jac.get(col).map_or(0.0, |jc| jc[k]) * ws.colscale[j];
         }
-        if ws.to_gram {
-            ws.gram.add_row_weighted(&ws.row[..n_cols], e[k], w)?;
-        } else {
-            ws.lsq.add_row_weighted(&ws.row[..n_cols], e[k], w)?;
-        }
-        c += w * e[k] * e[k];
+        c += wk[k] * e[k] * e[k];
+    }
+    if ws.to_gram {
+        ws.gram.add_rows6(&rows, &e, &wk)?;
+    } else {
+        ws.lsq.add_rows6(&rows, &e, &wk)?;
     }
     Ok(c)
 }

@@ -18,7 +18,8 @@
 use super::data::{ComponentMask, Measurement, add_rows};
 use super::{IdentifyOptions, MAX_MODEL_PARAMS, Workspace};
 use crate::error::{Error, ParamIndex, Result};
-use crate::linalg::svd::jacobi_svd;
+use crate::linalg::dot;
+use crate::linalg::svd::jacobi_singular_values;
 use crate::math::sqrt;
 use crate::model::{JointState, Robot};
 use crate::params::ParamSet;
@@ -197,20 +198,18 @@ pub(crate) fn analyze_into<const N: usize, const P: usize>(
     }
     out.rank = n_id;
 
-    // 3. Conditioning of the identifiable set (unit-scaled columns).
+    // 3. Conditioning of the identifiable set (unit-scaled columns). The factor of step 2
+    // is that of the identifiable columns unless some were dropped.
     for k in 0..n_id {
         ws.cols[k] = ws.free[k];
         ws.colscale[k] = 1.0;
     }
-    super::data::accumulate(robot, data, opts, n_id, ws)?;
-    for k in 0..n_id {
-        let norm = column_norm(ws, k);
-        ws.colscale[k] = if norm > 0.0 { 1.0 / norm } else { 1.0 };
+    if n_id < n_struct {
+        super::data::accumulate(robot, data, opts, n_id, ws)?;
     }
-    super::data::accumulate(robot, data, opts, n_id, ws)?;
-    copy_r(ws, n_id);
-    let Workspace { mat, sv, v, .. } = ws;
-    jacobi_svd(mat, n_id, sv, v)?;
+    copy_r_unit_scaled(ws, n_id);
+    let Workspace { mat, sv, .. } = ws;
+    jacobi_singular_values(mat, n_id, sv)?;
     ws.n_sv = n_id;
     if n_id > 0 {
         let (smax, smin) = (ws.sv[0], ws.sv[n_id - 1]);
@@ -318,12 +317,22 @@ fn column_norm<const P: usize>(ws: &Workspace<P>, k: usize) -> f64 {
     sqrt((0..=k).map(|i| r[i][k] * r[i][k]).sum::<f64>())
 }
 
-/// Copies R (upper triangle, zero below) into `ws.mat`.
-fn copy_r<const P: usize>(ws: &mut Workspace<P>, n: usize) {
+/// Copies `R·D` into `ws.mat` (upper triangle, zero below), `D` scaling each column of the
+/// Jacobian to unit length (`ws.colscale`): `J·D = Q·(R·D)`, so the column-scaled
+/// Jacobian's factor needs no second pass over the data.
+fn copy_r_unit_scaled<const P: usize>(ws: &mut Workspace<P>, n: usize) {
+    for k in 0..n {
+        let norm = column_norm(ws, k);
+        ws.colscale[k] = if norm > 0.0 { 1.0 / norm } else { 1.0 };
+    }
     let r = ws.lsq.r();
     for i in 0..n {
         for j in 0..n {
-            ws.mat[i][j] = if j >= i { r[i][j] } else { 0.0 };
+            ws.mat[i][j] = if j >= i {
+                r[i][j] * ws.colscale[j]
+            } else {
+                0.0
+            };
         }
     }
 }
@@ -358,14 +367,15 @@ fn greedy<const P: usize>(
             // Two passes of modified Gram–Schmidt for a stable residual.
             for _ in 0..2 {
                 for b in 0..n_basis {
-                    let d: f64 = (0..n).map(|i| ws.mat[b][i] * ws.tmp[i]).sum();
-                    for i in 0..n {
-                        ws.tmp[i] -= d * ws.mat[b][i];
+                    let (q, t) = (&ws.mat[b][..n], &mut ws.tmp[..n]);
+                    let d = dot(q, t);
+                    for (ti, &qi) in t.iter_mut().zip(q.iter()) {
+                        *ti -= d * qi;
                     }
                 }
             }
         }
-        let res = sqrt((0..n).map(|i| ws.tmp[i] * ws.tmp[i]).sum::<f64>());
+        let res = sqrt(dot(&ws.tmp[..n], &ws.tmp[..n]));
         if norm > 0.0 && res >= tol {
             for i in 0..n {
                 ws.mat[n_basis][i] = ws.tmp[i] / res;

@@ -21,7 +21,7 @@ pub struct Workspace<const P: usize> {
     pub(crate) svd: SvdScratch<P>,
     /// Scratch matrix (orthonormal basis, covariance).
     pub(crate) mat: [[f64; P]; P],
-    /// Right singular vectors of the last analysis.
+    /// Scratch matrix (right singular vectors, covariance factor).
     pub(crate) v: [[f64; P]; P],
     /// Singular values of the last analysis (scaled Jacobian of the identifiable set).
     pub(crate) sv: [f64; P],

@@ -93,6 +93,122 @@ impl<const P: usize> LsqAccumulator<P> {
         Ok(())
     }
 
+    /// Folds the six equations `a[r]·x ≈ b[r]` with weights `w[r] >= 0` (a pose's rows; a
+    /// weight of 0 leaves a row out and does not count it) at once, by one Householder
+    /// reflection per column of the stacked `[R; rows]` instead of a Givens rotation per
+    /// row and column: one square root and one division per column instead of six, and
+    /// the updates of the remaining columns are independent (they vectorise), where the
+    /// Givens chain of a row is serial. Same invariants as row by row, to rounding; `R`'s
+    /// diagonal stays non-negative. Only `a[r][..n]` is read.
+    ///
+    /// Errors (accumulator unchanged): `NonFinite { Parameter, index }` as
+    /// [`add_row`](Self::add_row), `NonFinite { Setting, 0 }` for a negative or non-finite
+    /// weight.
+    pub fn add_rows6(&mut self, a: &[[f64; P]; 6], b: &[f64; 6], w: &[f64; 6]) -> Result<()> {
+        let n = self.n;
+        check_capacity::<P>(n)?;
+        if !super::util::all_finite(w.iter()) || w.iter().any(|&v| v < 0.0) {
+            return Err(bad_setting());
+        }
+        for row in a {
+            check_finite(&row[..n])?;
+        }
+        if !super::util::all_finite(b.iter()) {
+            return Err(Error::NonFinite {
+                what: Quantity::Parameter,
+                index: n,
+            });
+        }
+        let mut rows = [[0.0; P]; 6];
+        let mut beta = [0.0; 6];
+        for r in 0..6 {
+            let sw = libm::sqrt(w[r]);
+            for (dst, src) in rows[r][..n].iter_mut().zip(a[r][..n].iter()) {
+                *dst = sw * *src;
+            }
+            beta[r] = sw * b[r];
+        }
+        for k in 0..n {
+            self.reflect_column(&mut rows, &mut beta, k);
+        }
+        self.rss += beta.iter().map(|x| x * x).sum::<f64>();
+        let counted = w.iter().filter(|&&v| v > 0.0).count();
+        self.rows = self.rows.saturating_add(counted);
+        Ok(())
+    }
+
+    /// Zeroes column `k` of `rows` (columns before `k` are zero already) against `R[k][k]`
+    /// with the Householder reflection that makes the new diagonal `μ = |(R[k][k], rows[·][k])|`
+    /// (LAPACK `dlarfgp`'s non-negative form), applied to the rest of row `k` of `R`, the
+    /// rows, `qtb[k]` and `beta`. The norm is taken on entries scaled by their largest
+    /// magnitude, so no square can overflow or underflow.
+    fn reflect_column(&mut self, rows: &mut [[f64; P]; 6], beta: &mut [f64; 6], k: usize) {
+        let n = self.n;
+        let (Some(rk), Some(qk)) = (self.r.get_mut(k), self.qtb.get_mut(k)) else {
+            return;
+        };
+        let Some(&x0) = rk.get(k) else {
+            return;
+        };
+        let mut x = [0.0; 6];
+        for (xi, row) in x.iter_mut().zip(rows.iter()) {
+            *xi = row.get(k).copied().unwrap_or(0.0);
+        }
+        let m = x.iter().fold(libm::fabs(x0), |m, v| m.max(libm::fabs(*v)));
+        if x.iter().all(|&v| v == 0.0) || m == 0.0 {
+            return;
+        }
+        let inv = 1.0 / m;
+        let sigma: f64 = x.iter().map(|v| (v * inv) * (v * inv)).sum();
+        let mu = m * libm::sqrt((x0 * inv) * (x0 * inv) + sigma);
+        // v0 = x0 − μ without cancellation when x0 > 0.
+        let v0 = if x0 > 0.0 {
+            -(m * sigma) * (m / (x0 + mu))
+        } else {
+            x0 - mu
+        };
+        if v0 == 0.0 {
+            // The rows' part underflowed against R[k][k]: nothing to fold to rounding.
+            return;
+        }
+        let tau = -v0 / mu;
+        let mut v = [0.0; 6];
+        for (vi, xi) in v.iter_mut().zip(x.iter()) {
+            *vi = xi / v0;
+        }
+        rk[k] = mu;
+        for row in rows.iter_mut() {
+            if let Some(e) = row.get_mut(k) {
+                *e = 0.0;
+            }
+        }
+        // s_j = τ·(R[k][j] + Σ_i v_i·rows[i][j]), then R[k][j] −= s_j, rows[i][j] −= s_j·v_i,
+        // all six rows in one pass per column.
+        let [a0, a1, a2, a3, a4, a5] = rows;
+        for j in (k + 1)..n {
+            let s = tau
+                * (rk[j]
+                    + v[0] * a0[j]
+                    + v[1] * a1[j]
+                    + v[2] * a2[j]
+                    + v[3] * a3[j]
+                    + v[4] * a4[j]
+                    + v[5] * a5[j]);
+            rk[j] -= s;
+            a0[j] -= s * v[0];
+            a1[j] -= s * v[1];
+            a2[j] -= s * v[2];
+            a3[j] -= s * v[3];
+            a4[j] -= s * v[4];
+            a5[j] -= s * v[5];
+        }
+        let sb = tau * (*qk + v.iter().zip(beta.iter()).map(|(a, b)| a * b).sum::<f64>());
+        *qk -= sb;
+        for (bi, vi) in beta.iter_mut().zip(v.iter()) {
+            *bi -= sb * vi;
+        }
+    }
+
     /// Number of unknowns `n`.
     pub fn n(&self) -> usize {
         self.n
@@ -156,6 +272,57 @@ mod tests {
             let row: Vec<f64> = (0..n).map(|j| a[(i, j)]).collect();
             acc.add_row_weighted(&row, b[i], w[i]).unwrap();
         }
+    }
+
+    #[test]
+    fn six_rows_at_once_match_six_givens_rows() {
+        let mut rng = Rng(321);
+        let n = 7;
+        let mut one = Box::new(LsqAccumulator::<P>::new());
+        let mut six = Box::new(LsqAccumulator::<P>::new());
+        one.reset(n).unwrap();
+        six.reset(n).unwrap();
+        for block in 0..5 {
+            let mut a = [[0.0; P]; 6];
+            let (mut b, mut w) = ([0.0; 6], [0.0; 6]);
+            for r in 0..6 {
+                for v in a[r].iter_mut().take(n) {
+                    *v = rng.sym();
+                }
+                // Rotation-like rows with zero columns, a left-out row, a negative diagonal
+                // candidate in the first block.
+                if r >= 3 {
+                    a[r][1] = 0.0;
+                }
+                b[r] = rng.sym();
+                w[r] = if r == 4 && block > 0 {
+                    0.0
+                } else {
+                    0.5 + 0.4 * rng.sym()
+                };
+                if w[r] > 0.0 {
+                    one.add_row_weighted(&a[r][..n], b[r], w[r]).unwrap();
+                }
+            }
+            six.add_rows6(&a, &b, &w).unwrap();
+        }
+        for i in 0..n {
+            assert!(six.r()[i][i] >= 0.0);
+            for j in 0..n {
+                assert!((six.r()[i][j] - one.r()[i][j]).abs() < 1e-13, "{i},{j}");
+            }
+            assert!((six.qtb()[i] - one.qtb()[i]).abs() < 1e-13);
+        }
+        assert!((six.rss() - one.rss()).abs() < 1e-13);
+        assert_eq!(six.rows(), one.rows());
+        let mut bad = [[0.0; P]; 6];
+        bad[2][3] = f64::NAN;
+        assert!(six.add_rows6(&bad, &[0.0; 6], &[1.0; 6]).is_err());
+        assert!(
+            six.add_rows6(&[[0.0; P]; 6], &[0.0; 6], &[-1.0; 6])
+                .is_err()
+        );
+        assert!((six.rss() - one.rss()).abs() < 1e-13, "unchanged on error");
     }
 
     #[test]

@@ -29,3 +29,5 @@ pub mod symeig;
 mod testutil;
 pub mod tri;
 mod util;
+
+pub(crate) use util::dot;

@@ -24,6 +24,26 @@ pub(crate) fn check_len(len: usize, n: usize) -> Result<()> {
     Ok(())
 }
 
+/// `Σ x[i]·y[i]` over the shorter length, in four interleaved partial sums: a single
+/// running sum is one dependent chain of additions (latency-bound, ~4 cycles per term),
+/// four independent ones pipeline and vectorise. The order is fixed, so the result is
+/// deterministic.
+#[inline]
+pub(crate) fn dot(x: &[f64], y: &[f64]) -> f64 {
+    let n = x.len().min(y.len());
+    let (x, y) = (&x[..n], &y[..n]);
+    let mut acc = [0.0; 4];
+    let (xc, yc) = (x.chunks_exact(4), y.chunks_exact(4));
+    let (xr, yr) = (xc.remainder(), yc.remainder());
+    for (a, b) in xc.zip(yc) {
+        for k in 0..4 {
+            acc[k] += a[k] * b[k];
+        }
+    }
+    let tail: f64 = xr.iter().zip(yr.iter()).map(|(a, b)| a * b).sum();
+    (acc[0] + acc[2]) + (acc[1] + acc[3]) + tail
+}
+
 /// Whether every value is finite, without a branch per value: a non-finite `f64` has all
 /// exponent bits set, and OR-ing the per-value flags vectorises.
 #[inline]
