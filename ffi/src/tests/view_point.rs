@@ -117,14 +117,14 @@ fn view_point_equals_the_core_bit_for_bit() {
     let (_, v, _) = call(&m, 5, kincal_axis::Z as u32);
     assert_eq!(v.miss_max_pose, 4);
     assert!(v.miss_max_m > 1e-3 && v.miss_max_m < 3e-3, "{v:?}");
-    for k in 0..3 {
-        assert!((v.point_m[k] - TARGET[k]).abs() < 2e-3, "{v:?}");
+    for (p, t) in v.point_m.iter().zip(TARGET) {
+        assert!((p - t).abs() < 2e-3, "{v:?}");
     }
     // Exact convergence without the offset camera.
     let (s, v, _) = call(&m[..64], 4, kincal_axis::Z as u32);
     assert_eq!(s, kincal_status::Ok);
-    for k in 0..3 {
-        assert!((v.point_m[k] - TARGET[k]).abs() < 1e-12, "{v:?}");
+    for (p, t) in v.point_m.iter().zip(TARGET) {
+        assert!((p - t).abs() < 1e-12, "{v:?}");
     }
     assert!(v.miss_max_m < 1e-12);
 }
