@@ -594,6 +594,37 @@ typedef uint32_t kincal_obs_index;
 #endif // __cplusplus
 
 /*
+ A frame axis: the viewing direction of a camera frame (`KINCAL_AXIS_Z` for the optical
+ frame of OpenCV, ROS `*_optical_frame` and most calibration toolboxes). Passed as a
+ `uint32_t`.
+ */
+enum kincal_axis
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     The frame's x axis.
+     */
+    KINCAL_AXIS_X = 0,
+    /*
+     The frame's y axis.
+     */
+    KINCAL_AXIS_Y = 1,
+    /*
+     The frame's z axis.
+     */
+    KINCAL_AXIS_Z = 2,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_axis kincal_axis;
+#else
+typedef uint32_t kincal_axis;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
  Where and why a call failed: a caller-owned plain struct (pass NULL when the detail is not
  wanted; it need not be initialised). Every export that takes one overwrites all of it before
  returning: `status` = the returned code, the fields that code documents set, the others
@@ -1316,6 +1347,43 @@ typedef struct kincal_validation_summary {
      */
     uint32_t rot_ok;
 } kincal_validation_summary;
+
+/*
+ The result of `kincal_view_point`: where the viewing axes of a set of poses converge (the
+ `_result` suffix: in C a type cannot share the function's name).
+ */
+typedef struct kincal_view_point_result {
+    /*
+     The point nearest (least squares) to every viewing axis, in the frame the poses are
+     given in [m].
+     */
+    double point_m[3];
+    /*
+     Mean distance from the frame origins to the point, measured along each axis [m]: the
+     re-expression distance `s` (the point `s·e_axis` of every frame).
+     */
+    double mean_distance_m;
+    /*
+     Smallest distance along an axis [m] (negative: the point lies behind that frame).
+     */
+    double min_distance_m;
+    /*
+     Largest distance along an axis [m].
+     */
+    double max_distance_m;
+    /*
+     RMS over the poses of the point's distance from each viewing axis [m].
+     */
+    double miss_rms_m;
+    /*
+     Largest distance of the point from a viewing axis [m].
+     */
+    double miss_max_m;
+    /*
+     Index (zero-based) of the pose whose axis passes farthest from the point.
+     */
+    size_t miss_max_pose;
+} kincal_view_point_result;
 
 #ifdef __cplusplus
 extern "C" {
@@ -2482,6 +2550,59 @@ kincal_status kincal_biopsy_allowed_rotation(double r_t_m,
                                              double l_max_m,
                                              double *rotation_out,
                                              struct kincal_error *err);
+
+/*
+ The point where the `axis` directions of `n_poses` poses (lines through each frame
+ origin) converge, least squares: `min_c Σ |(I − dᵢ·dᵢᵀ)(c − pᵢ)|²` with `pᵢ` the origin
+ and `dᵢ` the unit `axis` of pose i; with the distances along the axes and how closely
+ the axes pass the point (a set whose camera did not look at one place shows a large
+ miss). Nothing is allocated: the poses are read twice.
+
+ - `poses`, `poses_len`: `n_poses` 4×4 column-major rigid transforms one after the other
+   (pose l at `poses[16*l]`), all in one frame; `poses_len` = 16·`n_poses`.
+ - `n_poses`: at least 2.
+ - `axis`: a `kincal_axis`, the viewing direction in each frame.
+ - `view_point_out`: written on success only.
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH, TOO_FEW_DATA (fewer than 2
+ poses), NON_FINITE or INVALID_TRANSFORM (`pose`, and `index` within `poses` for a
+ non-finite value), INVALID_ARGUMENT (`axis`) or RANK_DEFICIENT (axes parallel within
+ 1e-9 of the eigenvalue ratio of `Σ (I − d·dᵀ)`: no point is determined; `found` = rank).
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_view_point(const double *poses,
+                                size_t poses_len,
+                                size_t n_poses,
+                                uint32_t axis,
+                                struct kincal_view_point_result *view_point_out,
+                                struct kincal_error *err);
+
+/*
+ `t·Trans(point)`: the same rigid body's frame moved (not rotated) to `point`, given in
+ that frame [m]; the pose a measurement row with measured point `point` carries. With
+ `point` = `(0, 0, s)` and `s` = `kincal_view_point_result.mean_distance_m`, a camera pose moved to
+ the point it looks at.
+
+ - `t`, `t_len`: a 4×4 column-major rigid transform, 16 doubles.
+ - `point`, `point_len`: 3 doubles [m].
+ - `t_out`, `t_out_len`: the moved pose, 16 doubles; written on success only, may overlap
+   the inputs.
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE or
+ INVALID_TRANSFORM.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_moved_to_point(const double *t,
+                                    size_t t_len,
+                                    const double *point,
+                                    size_t point_len,
+                                    double *t_out,
+                                    size_t t_out_len,
+                                    struct kincal_error *err);
 
 #ifdef __cplusplus
 }  // extern "C"

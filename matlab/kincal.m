@@ -24,6 +24,8 @@ function kincal()
 %     kincal_pose_from_xyzrpy, kincal_pose_to_xyzrpy   R = Rz(yaw) Ry(pitch) Rx(roll)
 %     kincal_pose_from_pq, kincal_pose_to_pq           position + quaternion [w x y z]
 %     kincal_aria_tool        the Table 2 calibration-tool poses and an IK seed
+%     kincal_view_point       where camera poses look (their viewing axes converge); the
+%                             poses moved to that point (kincal observed-point)
 %   Calibration
 %     kincal_identify         OLS / OPT1 / OPT2 identification with report
 %     kincal_identifiability  rank, conditioning, redundant and undetermined parameters

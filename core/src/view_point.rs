@@ -94,16 +94,36 @@ pub struct ViewPoint {
 /// # Errors
 /// As listed above.
 pub fn view_point(poses: &[Transform], axis: Axis) -> Result<ViewPoint> {
-    if poses.len() < 2 {
+    view_point_from(
+        poses.len(),
+        |i| poses.get(i).copied().unwrap_or_else(Transform::identity),
+        axis,
+    )
+}
+
+/// [`view_point`] of the `n` poses `pose(0)`, …, `pose(n − 1)`, without a slice: for
+/// callers that hold the poses in another form (the C ABI's column-major matrices) and
+/// must not allocate. `pose` is called twice for every index (two passes over the data)
+/// and must return the same transform both times. The result equals [`view_point`] of the
+/// same poses bit for bit (it is the same computation).
+///
+/// # Errors
+/// As [`view_point`].
+pub fn view_point_from(
+    n: usize,
+    pose: impl Fn(usize) -> Transform,
+    axis: Axis,
+) -> Result<ViewPoint> {
+    if n < 2 {
         return Err(Error::TooFewData {
-            found: poses.len(),
+            found: n,
             needed: 2,
         });
     }
     let mut a = Matrix3::<f64>::zeros();
     let mut b = Vector3::<f64>::zeros();
-    for (i, t) in poses.iter().enumerate() {
-        let (p, d) = origin_and_axis(t, axis);
+    for i in 0..n {
+        let (p, d) = origin_and_axis(&pose(i), axis);
         if !(p.iter().all(|v| v.is_finite()) && d.iter().all(|v| v.is_finite())) {
             return Err(Error::NonFinite {
                 what: Quantity::Position,
@@ -137,8 +157,8 @@ pub fn view_point(poses: &[Transform], axis: Axis) -> Result<ViewPoint> {
     let mut sum_s = 0.0;
     let (mut min_s, mut max_s) = (f64::INFINITY, f64::NEG_INFINITY);
     let (mut sum_miss2, mut miss_max, mut miss_max_pose) = (0.0, 0.0f64, 0);
-    for (i, t) in poses.iter().enumerate() {
-        let (p, d) = origin_and_axis(t, axis);
+    for i in 0..n {
+        let (p, d) = origin_and_axis(&pose(i), axis);
         let v = c - p;
         let s = v.dot(&d);
         let miss = (v - d * s).norm();
@@ -151,7 +171,7 @@ pub fn view_point(poses: &[Transform], axis: Axis) -> Result<ViewPoint> {
             miss_max_pose = i;
         }
     }
-    let n = poses.len() as f64;
+    let n = n as f64;
     Ok(ViewPoint {
         point_m: [c.x, c.y, c.z],
         mean_distance_m: sum_s / n,
@@ -264,6 +284,42 @@ mod tests {
         assert!(matches!(
             view_point(&[a, b, c], Axis::Z),
             Err(Error::NonFinite { index: 2, .. })
+        ));
+    }
+
+    #[test]
+    fn the_streaming_form_equals_the_slice_form() {
+        let target = [0.4, 0.2, -0.1];
+        let eyes = [
+            [1.0, 0.1, 0.5],
+            [0.2, 1.1, 0.4],
+            [0.5, 0.4, 1.2],
+            [1.1, 1.0, 0.3],
+        ];
+        let mut poses: [Transform; 4] =
+            core::array::from_fn(|i| look_at(eyes[i], target, 0.2 * i as f64));
+        // Not converging exactly: the statistics are not all zero.
+        poses[1].translation.vector += Vector3::new(0.0, 0.0, 0.01);
+        let v = view_point(&poses, Axis::Z).unwrap();
+        let calls = core::cell::Cell::new(0usize);
+        let w = view_point_from(
+            poses.len(),
+            |i| {
+                calls.set(calls.get() + 1);
+                poses[i]
+            },
+            Axis::Z,
+        )
+        .unwrap();
+        assert_eq!(v, w);
+        assert_eq!(calls.get(), 2 * poses.len());
+        assert!(v.miss_rms_m > 0.0 && v.miss_max_pose == 1, "{v:?}");
+        assert!(matches!(
+            view_point_from(1, |i| poses[i], Axis::Z),
+            Err(Error::TooFewData {
+                found: 1,
+                needed: 2
+            })
         ));
     }
 

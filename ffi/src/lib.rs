@@ -12,8 +12,8 @@
 //! label), [`effects`], [`kinematics`] (FK, frames, Jacobian, gravity torques), [`ik`],
 //! [`prepared`] (a model built once into caller-owned storage, for fast FK and IK),
 //! [`pose`] (pose error, conversions), [`identify`] (identifiability, OLS/OPT1/OPT2),
-//! [`validation`] (metrics, biopsy requirement), [`registration`] (markers), [`aria`]
-//! (built-in arm).
+//! [`validation`] (metrics, biopsy requirement), [`registration`] (markers), [`view_point`]
+//! (where camera poses look, a pose moved to a point), [`aria`] (built-in arm).
 #![cfg_attr(not(feature = "std"), no_std)]
 #![deny(missing_docs)]
 #![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
@@ -43,6 +43,7 @@ pub mod registration;
 pub mod robot;
 pub mod status;
 pub mod validation;
+pub mod view_point;
 
 #[cfg(test)]
 mod tests;

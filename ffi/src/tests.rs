@@ -8,3 +8,4 @@ mod fuzz_regressions;
 mod header;
 mod observability;
 mod prepared;
+mod view_point;

@@ -199,6 +199,7 @@ static const char *matlab_argument_name(const char *a)
         {"data->aux", "approach/temp_c"},
         {"data->n_poses", "q"},
         {"t_base_tool_out", "T"},
+        {"poses", "T"},
     };
     static char buf[96];
     const char *arrow;
@@ -1426,7 +1427,7 @@ static int convert_from_poses(kc_ctx *c, mxArray *plhs[], const mxArray *a, size
     for (j = 0; j < m; ++j) {
         st = f(t + 16 * j, 16, v + rows * j, rows, &err);
         if (st != KINCAL_STATUS_OK) {
-            return fail_status(c, st, &err, column_of(what, sizeof what, "T", j, m));
+            return fail_status(c, st, &err, column_of(what, sizeof what, "the poses", j, m));
         }
     }
     return 0;
@@ -2507,6 +2508,67 @@ static int op_t_base_ee(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prh
 }
 #endif /* KINCAL_MAX_MARKERS */
 
+/* ------------------------------------------------------------------------------------------ */
+/* Where camera poses look                                                                    */
+/* ------------------------------------------------------------------------------------------ */
+
+static const kc_name AXES[] = {
+    {"x", KINCAL_AXIS_X},
+    {"y", KINCAL_AXIS_Y},
+    {"z", KINCAL_AXIS_Z},
+    {NULL, 0},
+};
+
+static const char *const VIEW_POINT_FIELDS[] = {
+    "point_m", "mean_distance_m", "min_distance_m", "max_distance_m",
+    "miss_rms_m", "miss_max_m", "miss_max_pose", NULL,
+};
+
+/* view_point(T 4x4xM, axis 'x'|'y'|'z') -> struct (point_m 3x1, distances, misses,
+ * miss_max_pose 1-based), 4x4xM poses moved along their axis by mean_distance_m */
+static int op_view_point(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prhs[])
+{
+    const double *t;
+    size_t m, j;
+    uint32_t axis;
+    double point[3] = {0.0, 0.0, 0.0}, *moved;
+    kincal_view_point_result v;
+    kincal_error err;
+    kincal_status st;
+    char what[64];
+    mxArray *p;
+    if (get_poses(c, prhs[0], "T", &m, &t) != 0 ||
+        get_choice(c, prhs[1], "axis", AXES, &axis) != 0) {
+        return -1;
+    }
+    st = kincal_view_point(t, 16 * m, m, axis, &v, &err);
+    if (st != KINCAL_STATUS_OK) {
+        return fail_status(c, st, &err, NULL);
+    }
+    plhs[0] = mxCreateStructMatrix(1, 1, 7, (const char **)VIEW_POINT_FIELDS);
+    p = mxCreateDoubleMatrix(3, 1, mxREAL);
+    memcpy(KC_DOUBLES(p), v.point_m, sizeof v.point_m);
+    mxSetField(plhs[0], 0, "point_m", p);
+    mxSetField(plhs[0], 0, "mean_distance_m", mxCreateDoubleScalar(v.mean_distance_m));
+    mxSetField(plhs[0], 0, "min_distance_m", mxCreateDoubleScalar(v.min_distance_m));
+    mxSetField(plhs[0], 0, "max_distance_m", mxCreateDoubleScalar(v.max_distance_m));
+    mxSetField(plhs[0], 0, "miss_rms_m", mxCreateDoubleScalar(v.miss_rms_m));
+    mxSetField(plhs[0], 0, "miss_max_m", mxCreateDoubleScalar(v.miss_max_m));
+    mxSetField(plhs[0], 0, "miss_max_pose", mxCreateDoubleScalar(one_based(v.miss_max_pose)));
+    if (nlhs > 1) {
+        point[axis < 3 ? axis : 2] = v.mean_distance_m;
+        plhs[1] = create_poses(m);
+        moved = KC_DOUBLES(plhs[1]);
+        for (j = 0; j < m; ++j) {
+            st = kincal_moved_to_point(t + 16 * j, 16, point, 3, moved + 16 * j, 16, &err);
+            if (st != KINCAL_STATUS_OK) {
+                return fail_status(c, st, &err, column_of(what, sizeof what, "the poses", j, m));
+            }
+        }
+    }
+    return 0;
+}
+
 /* robot_from_axes(points N x 3, directions N x 3, t_ref_base 4x4 or [], t_ref_tool 4x4 or [],
  * limits N x 2, name) -> robot */
 static int op_robot_from_axes(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prhs[])
@@ -2622,6 +2684,7 @@ static const kc_operation OPERATIONS[] = {
     {"t_base_ee", op_t_base_ee, 2, 1},
 #endif
     {"robot_from_axes", op_robot_from_axes, 6, 1},
+    {"view_point", op_view_point, 2, 2},
 #if defined(KC_HAS_OBSERVABILITY)
     {"observability", op_observability, 5, 2},
     {"select_poses", op_select_poses, 10, 2},

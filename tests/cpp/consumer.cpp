@@ -14,7 +14,9 @@
 //   count, corrupt robot struct, unknown labels), and with KINCAL_TEST_PANIC the panic boundary.
 // - a full calibration of the paper's simulation study: Table 3 truth measured at the Table 2
 //   tool poses, identified from Table 1 with OLS, OPT1 and OPT2, validated before and after;
-// - marker registration with a hidden and a moved marker.
+// - marker registration with a hidden and a moved marker;
+// - where camera poses look (kincal_view_point: cameras aimed at a known target) and a pose
+//   moved to a point (kincal_moved_to_point), with their bad-argument statuses.
 
 #include <kincal.h>
 
@@ -694,6 +696,97 @@ void test_registration() {
     CHECK(err.index == 6);
 }
 
+// A camera frame at `eye` whose z axis looks at `target` (column-major 4×4).
+Mat4 look_at(const std::array<double, 3> &eye, const std::array<double, 3> &target) {
+    auto cross = [](const std::array<double, 3> &a, const std::array<double, 3> &b) {
+        return std::array<double, 3>{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                                     a[0] * b[1] - a[1] * b[0]};
+    };
+    auto unit = [](std::array<double, 3> a) {
+        const double n = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+        for (double &x : a) x /= n;
+        return a;
+    };
+    const auto z = unit({target[0] - eye[0], target[1] - eye[1], target[2] - eye[2]});
+    const std::array<double, 3> helper =
+        std::fabs(z[0]) < 0.9 ? std::array<double, 3>{1, 0, 0} : std::array<double, 3>{0, 1, 0};
+    const auto x = unit(cross(helper, z));
+    const auto y = cross(z, x);
+    Mat4 m = identity();
+    for (int k = 0; k < 3; ++k) {
+        m[k] = x[k];
+        m[4 + k] = y[k];
+        m[8 + k] = z[k];
+        m[12 + k] = eye[k];
+    }
+    return m;
+}
+
+void test_view_point() {
+    const std::array<double, 3> target{0.5, -0.2, 0.3};
+    const std::array<std::array<double, 3>, 4> eyes{{
+        {1.0, -0.2, 0.3}, {0.5, 0.5, 0.4}, {0.4, -0.1, 1.2}, {1.1, 0.3, 0.9}}};
+    std::vector<double> poses;
+    std::array<double, 4> dist{};
+    for (size_t i = 0; i < eyes.size(); ++i) {
+        const Mat4 m = look_at(eyes[i], target);
+        poses.insert(poses.end(), m.begin(), m.end());
+        double d2 = 0.0;
+        for (int k = 0; k < 3; ++k) d2 += (eyes[i][k] - target[k]) * (eyes[i][k] - target[k]);
+        dist[i] = std::sqrt(d2);
+    }
+    kincal_error err;
+    kincal_view_point_result v;
+    CHECK_STATUS(kincal_view_point(poses.data(), poses.size(), 4, KINCAL_AXIS_Z, &v, &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    CHECK(max_abs_diff(v.point_m, target.data(), 3) < 1e-12);
+    CHECK(v.miss_max_m < 1e-12 && v.miss_rms_m < 1e-12 && v.miss_max_pose < 4);
+    CHECK(std::fabs(v.mean_distance_m - (dist[0] + dist[1] + dist[2] + dist[3]) / 4) < 1e-12);
+    CHECK(std::fabs(v.min_distance_m - 0.5) < 1e-12);
+    CHECK(std::fabs(v.max_distance_m - dist[3]) < 1e-12);
+    // Each camera moved along its axis by its own distance lands on the target, not rotated.
+    for (size_t i = 0; i < eyes.size(); ++i) {
+        const double point[3] = {0.0, 0.0, dist[i]};
+        double moved[16];
+        CHECK_STATUS(kincal_moved_to_point(&poses[16 * i], 16, point, 3, moved, 16, &err),
+                     KINCAL_STATUS_OK, err, nullptr);
+        CHECK(max_abs_diff(moved + 12, target.data(), 3) < 1e-12);
+        CHECK(max_abs_diff(moved, &poses[16 * i], 12) == 0.0);
+    }
+    // Bad arguments.
+    CHECK_STATUS(kincal_view_point(poses.data(), 16, 1, KINCAL_AXIS_Z, &v, &err),
+                 KINCAL_STATUS_TOO_FEW_DATA, err, "n_poses");
+    CHECK_STATUS(kincal_view_point(poses.data(), 60, 4, KINCAL_AXIS_Z, &v, &err),
+                 KINCAL_STATUS_BAD_LENGTH, err, "poses");
+    CHECK_STATUS(kincal_view_point(poses.data(), 64, 4, 7, &v, &err),
+                 KINCAL_STATUS_INVALID_ARGUMENT, err, "axis");
+    CHECK_STATUS(kincal_view_point(nullptr, 64, 4, KINCAL_AXIS_Z, &v, &err),
+                 KINCAL_STATUS_NULL_POINTER, err, "poses");
+    std::vector<double> bad = poses;
+    bad[16 * 2 + 13] = NAN;
+    CHECK_STATUS(kincal_view_point(bad.data(), 64, 4, KINCAL_AXIS_Z, &v, &err),
+                 KINCAL_STATUS_NON_FINITE, err, "poses");
+    CHECK(err.pose == 2 && err.index == 16 * 2 + 13);
+    bad = poses;
+    for (int k = 0; k < 3; ++k) bad[16 * 1 + k] *= 1.1;  // x axis of pose 1 not unit
+    CHECK_STATUS(kincal_view_point(bad.data(), 64, 4, KINCAL_AXIS_Z, &v, &err),
+                 KINCAL_STATUS_INVALID_TRANSFORM, err, "poses");
+    CHECK(err.pose == 1);
+    // Parallel axes: two cameras side by side looking straight down.
+    const Mat4 a = look_at({0, 0, 1}, {0, 0, 0}), b = look_at({0.2, 0, 1}, {0.2, 0, 0});
+    double par[32];
+    std::memcpy(par, a.data(), sizeof(double) * 16);
+    std::memcpy(par + 16, b.data(), sizeof(double) * 16);
+    CHECK_STATUS(kincal_view_point(par, 32, 2, KINCAL_AXIS_Z, &v, &err),
+                 KINCAL_STATUS_RANK_DEFICIENT, err, nullptr);
+    const double point[3] = {0, 0, 1};
+    double moved[16];
+    CHECK_STATUS(kincal_moved_to_point(poses.data(), 16, point, 2, moved, 16, &err),
+                 KINCAL_STATUS_BAD_LENGTH, err, "point");
+    CHECK_STATUS(kincal_moved_to_point(bad.data() + 16, 16, point, 3, moved, 16, &err),
+                 KINCAL_STATUS_INVALID_TRANSFORM, err, "t");
+}
+
 void test_panic_boundary() {
 #if defined(KINCAL_TEST_PANIC)
     kincal_error err;
@@ -755,6 +848,7 @@ int main() {
     test_robot_from_table();
     test_full_calibration();
     test_registration();
+    test_view_point();
     test_panic_boundary();
     std::printf("kincal %s C++ consumer: %d checks, %d failed\n", kincal_version(), g_checks,
                 g_failures);

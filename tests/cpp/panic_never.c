@@ -133,6 +133,18 @@ int main(void) {
         CHECK(kincal_biopsy_allowed_rotation(5e-3, 1.7e-3, 0.2, &v, &err) == KINCAL_STATUS_OK);
     }
     {
+        /* Two cameras 1 m from the origin looking at it along +z and +x (their z axes). */
+        const double views[32] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, -1, 1,
+                                  0, 0, -1, 0, 0, 1, 0, 0, 1, 0, 0, 0, -1, 0, 0, 1};
+        const double point[3] = {0, 0, 1};
+        double moved[16];
+        kincal_view_point_result vp;
+        CHECK(kincal_view_point(views, 32, 2, KINCAL_AXIS_Z, &vp, &err) == KINCAL_STATUS_OK);
+        CHECK(fabs(vp.point_m[0]) < 1e-12 && fabs(vp.point_m[2]) < 1e-12);
+        CHECK(kincal_moved_to_point(views, 16, point, 3, moved, 16, &err) == KINCAL_STATUS_OK);
+        CHECK(fabs(moved[14]) < 1e-12);
+    }
+    {
         /* A planar 2R arm from its axes: both along z, through (0,0,0) and (0.5,0,0). */
         const double points[6] = {0, 0, 0, 0.5, 0, 0}, dirs[6] = {0, 0, 1, 0, 0, 1};
         const double lims[4] = {-3, 3, -3, 3}, q2[2] = {0.0, 0.0};
