@@ -97,7 +97,23 @@ pub(crate) unsafe fn robot_and_q(
 ) -> FfiResult<(AnyRobot, [f64; KINCAL_MAX_JOINTS], Option<kincal_joint_aux>)> {
     let r = arg_ref!(robot);
     let any = to_any(r)?;
-    let n = any.n_joints();
+    // SAFETY: forwarded contract.
+    let (q, aux) = unsafe { joint_args(any.n_joints(), q, q_len, q_name, aux) }?;
+    Ok((any, q, aux))
+}
+
+/// The joint arguments of an `n`-joint export: `q` checked (length `n`, finite) and copied,
+/// `aux` copied (NULL: none).
+///
+/// # Safety
+/// `q`, `aux` NULL or valid as the exports document.
+pub(crate) unsafe fn joint_args(
+    n: usize,
+    q: *const f64,
+    q_len: usize,
+    q_name: &'static CStr,
+    aux: *const kincal_joint_aux,
+) -> FfiResult<([f64; KINCAL_MAX_JOINTS], Option<kincal_joint_aux>)> {
     // SAFETY: forwarded contract.
     let q = unsafe { crate::args::slice(q, q_len, n, q_name) }?;
     crate::args::finite(q, q_name)?;
@@ -106,7 +122,7 @@ pub(crate) unsafe fn robot_and_q(
     for (d, s) in qq.iter_mut().zip(q) {
         *d = *s;
     }
-    Ok((any, qq, aux))
+    Ok((qq, aux))
 }
 
 fn q_n(q: &[f64; KINCAL_MAX_JOINTS], n: usize) -> FfiResult<&[f64]> {

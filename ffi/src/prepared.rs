@@ -323,16 +323,10 @@ unsafe fn prepared_and_q<'a>(
 )> {
     // SAFETY: forwarded contract.
     let model = unsafe { prepared_robot(prepared) }?;
-    let n = model.n_joints();
     // SAFETY: forwarded contract.
-    let q = unsafe { crate::args::slice(q, q_len, n, q_name) }?;
-    crate::args::finite(q, q_name)?;
-    let aux = arg_opt!(aux).copied();
-    let mut qq = [0.0; KINCAL_MAX_JOINTS];
-    for (d, s) in qq.iter_mut().zip(q) {
-        *d = *s;
-    }
-    Ok((model, qq, aux))
+    let (q, aux) =
+        unsafe { crate::kinematics::joint_args(model.n_joints(), q, q_len, q_name, aux) }?;
+    Ok((model, q, aux))
 }
 
 /// `sizeof(kincal_prepared)` as the library was built (`KINCAL_PREPARED_SIZE`): compare with
