@@ -19,9 +19,14 @@ use kincal_ffi::kinematics::kincal_joint_aux;
 use kincal_ffi::kinematics::{kincal_fk, kincal_gravity_torques, kincal_jacobian};
 use kincal_ffi::params::kincal_robot_set_params;
 use kincal_ffi::pose::kincal_pose_error;
+use kincal_ffi::prepared::{
+    kincal_prepare, kincal_prepared, kincal_prepared_fk, kincal_prepared_ik,
+    kincal_prepared_validate,
+};
 use kincal_ffi::robot::{kincal_robot, kincal_robot_init};
 use kincal_ffi::status::{kincal_error, kincal_status};
 use kincal_ffi::validation::{kincal_validate, kincal_validation_summary};
+use kincal_ffi::view_point::{kincal_moved_to_point, kincal_view_point, kincal_view_point_result};
 use libfuzzer_sys::fuzz_target;
 
 #[derive(Arbitrary, Debug)]
@@ -42,6 +47,12 @@ struct Input {
     form: u32,
     max_iterations: u8,
     ops: u16,
+    /// (byte offset, xor mask) applied to a prepared handle before use: corrupted or
+    /// uninitialised handle storage must give a status.
+    corrupt: Vec<(u16, u8)>,
+    /// Number of poses for the view point (cut from the pool).
+    n_view: u8,
+    view_axis: u32,
 }
 
 struct Pool<'a> {
@@ -336,5 +347,100 @@ fuzz_target!(|inp: Input| {
                 &mut err,
             )
         });
+    }
+
+    // The prepared handle: built from the robot, possibly corrupted; then FK and IK through
+    // it. A corrupted handle must be refused (a status) or, if the flipped bytes happen to
+    // leave it valid, give finite results.
+    if inp.ops & 512 != 0 {
+        let mut h: kincal_prepared = unsafe { core::mem::zeroed() };
+        let _ = ok("prepare", unsafe {
+            kincal_prepare(&robot, &mut h, &mut err)
+        });
+        {
+            // SAFETY: plain u64 storage viewed as bytes.
+            let bytes: &mut [u8] = unsafe {
+                core::slice::from_raw_parts_mut(
+                    h.opaque.as_mut_ptr().cast::<u8>(),
+                    core::mem::size_of::<kincal_prepared>(),
+                )
+            };
+            for &(at, mask) in inp.corrupt.iter().take(8) {
+                let i = usize::from(at) % bytes.len();
+                bytes[i] ^= mask;
+            }
+        }
+        let mut nj = 0usize;
+        let _ = ok("prepared_validate", unsafe {
+            kincal_prepared_validate(&h, &mut nj, &mut err)
+        });
+        let q = pool.take(n);
+        let mut t = [0.0; 16];
+        if ok("prepared_fk", unsafe {
+            kincal_prepared_fk(
+                &h,
+                q.as_ptr(),
+                len(n, d[3]).min(q.len()),
+                aux_ptr,
+                t.as_mut_ptr(),
+                16,
+                &mut err,
+            )
+        }) {
+            finite("prepared_fk", &t);
+        }
+        if inp.ops & 32 != 0 {
+            let mut opts: kincal_ik_options = unsafe { core::mem::zeroed() };
+            let _ = ok("ik_options", unsafe {
+                kincal_ik_options_default(&mut opts, &mut err)
+            });
+            opts.max_iterations = u32::from(inp.max_iterations % 16);
+            opts.extra_seeds = 0;
+            let target = pool.take(16);
+            let mut q_out = vec![0.0; n];
+            let mut info: kincal_ik_info = unsafe { core::mem::zeroed() };
+            let _ = ok("prepared_ik", unsafe {
+                kincal_prepared_ik(
+                    &h,
+                    target.as_ptr(),
+                    16,
+                    q.as_ptr(),
+                    n,
+                    aux_ptr,
+                    &opts,
+                    q_out.as_mut_ptr(),
+                    n,
+                    &mut info,
+                    &mut err,
+                )
+            });
+        }
+    }
+
+    // The view point of hostile poses, and a pose moved to a hostile point (in place).
+    if inp.ops & 1024 != 0 {
+        let m = usize::from(inp.n_view % 16);
+        let poses = pool.take(16 * m);
+        let mut v: kincal_view_point_result = unsafe { core::mem::zeroed() };
+        if ok("view_point", unsafe {
+            kincal_view_point(
+                ptr(&poses, null_at(12)),
+                len(poses.len(), d[0]).min(poses.len()),
+                m,
+                inp.view_axis % 4,
+                &mut v,
+                &mut err,
+            )
+        }) {
+            finite("view_point", &v.point_m);
+        }
+        let mut t = pool.take(16);
+        let point = pool.take(3);
+        let t_ptr = t.as_mut_ptr();
+        if ok("moved_to_point", unsafe {
+            kincal_moved_to_point(t_ptr, 16, point.as_ptr(), 3, t_ptr, 16, &mut err)
+        }) {
+            finite("moved_to_point", &t);
+        }
     }
 });
