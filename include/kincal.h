@@ -59,7 +59,7 @@
 /*
  Largest `frames_len` of `kincal_fk_frames`: 16·(`KINCAL_MAX_JOINTS` + 2).
  */
-#define KINCAL_MAX_FRAMES_LEN 160
+#define KINCAL_MAX_FRAMES_LEN 176
 
 /*
  Largest design `kincal_select_poses` selects (`m`; the core's exchange needs 3 more slots).
@@ -105,18 +105,18 @@
 /*
  Largest joint count of a `kincal_robot`.
  */
-#define KINCAL_MAX_JOINTS 8
+#define KINCAL_MAX_JOINTS 9
 
 /*
- Capacity of `kincal_robot.params`: `kincal_num_params(KINCAL_MAX_JOINTS)` = 12·8 + 13.
+ Capacity of `kincal_robot.params`: `kincal_num_params(KINCAL_MAX_JOINTS)` = 12·9 + 13.
  */
-#define KINCAL_MAX_PARAMS 109
+#define KINCAL_MAX_PARAMS 121
 
 /*
  Capacity of `kincal_robot.nominal`: `kincal_num_geometric_params(KINCAL_MAX_JOINTS)` =
- 5·8 + 12.
+ 5·9 + 12.
  */
-#define KINCAL_MAX_GEOMETRIC_PARAMS 52
+#define KINCAL_MAX_GEOMETRIC_PARAMS 57
 
 /*
  The paper's position target of Section 4.4: every pose error below 1 mm [m].
@@ -1527,7 +1527,7 @@ kincal_status kincal_robot_clear_effects(struct kincal_robot *robot,
  Bytes of caller memory `kincal_identify` and `kincal_analyze_identifiability` need for
  `n_poses` measurements of an `n_joints` robot when `n_requested` parameters are
  requested (the count of non-zero `requested` entries; the size is that of the smallest
- capacity, 32 or `KINCAL_MAX_PARAMS`, that holds them: about 66 KB or 680 KB,
+ capacity, 32 or `KINCAL_MAX_PARAMS`, that holds them: about 66 KB or 840 KB,
  plus about 0.25 KB per pose). Returns 0 for an invalid joint count, more than
  `KINCAL_MAX_PARAMS` parameters, or an overflowing size.
  */

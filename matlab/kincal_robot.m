@@ -25,7 +25,7 @@ function robot = kincal_robot(spec)
 %   The struct is the whole model: nothing is kept inside the MEX file between calls, so a
 %   robot can be saved, copied and edited like any other variable. Fields:
 %       name            label (informative)
-%       n_joints        N (1..8)
+%       n_joints        N (1..9)
 %       length_param    1 x N: 0 = link identifies d, 1 = link identifies beta
 %       params          P x 1 current parameters, P = 12N+13, flat layout: link i in
 %                       5(i-1)+(1:5) as [theta0 d a alpha beta]; base (6), tool (6);

@@ -102,8 +102,8 @@ pub struct Args {
 }
 
 /// Capacity of the diagnosis workspace: the union of every model's columns of the largest
-/// supported robot (15N + 7 ≤ 127 for 8 joints).
-pub const DIAG_PARAMS: usize = 128;
+/// supported robot (15N + 7 ≤ 142 for 9 joints).
+pub const DIAG_PARAMS: usize = 144;
 
 /// A zeroed diagnosis workspace on the heap (about a megabyte).
 pub fn new_workspace() -> Box<DiagWorkspace<DIAG_PARAMS>> {

@@ -20,9 +20,8 @@ Sets (--list prints them with what they measure):
   figaroh-ur10e           UR10e, eye-in-hand camera, 6-D poses; robot from the set's URDF
   robotkinecal-fr3        FR3, eye-in-hand camera, 6-D poses; Franka's published kinematics
                           (docs/robots/fr3.toml) with the set's camera mount as the tool
-  figaroh-talos-arm       TALOS torso + arm, one mocap marker, positions only; 9 joints, of
-                          which arm_left_5_joint (|q| < 0.026 rad here) is held at 0, with
-                          the bound of what that changes printed
+  figaroh-talos-arm       TALOS torso + arm, one mocap marker, positions only; 9 joints
+                          (torso 2 + arm 7), all modelled
   ical-2axis-positioner   two-axis positioner, static sensor, 6-D poses; DH of the README
 figaroh-tiago-mocap, figaroh-mate-planes, mukca and hilti-jaibot-stationing are refused with
 the reason (prismatic joints, unclear provenance, no external instrument, licence).

@@ -14,9 +14,7 @@
 //!   README as the tool. `tcp_poses.csv` (the robot's own forward kinematics) is only used
 //!   to check the description's FK.
 //! - `figaroh-talos-arm`: one motion-capture marker on the left gripper, position only,
-//!   9 joints (torso 2 + arm 7). kincal models up to 8 joints: `arm_left_5_joint` (it moves
-//!   by at most 0.025 rad in this recording) is held at 0 and carried as an `extra_`
-//!   column; the effect of that on the nominal marker prediction is computed and reported.
+//!   9 joints (torso 2 + arm 7), all modelled.
 //! - `ical-2axis-positioner`: a static sensor measuring the 6-D pose of a target on a
 //!   two-axis positioner (`measurements.yaml`, position and unit quaternion). Robot: the
 //!   two classical DH rows stated in the set's README.
@@ -652,9 +650,9 @@ fn fr3(dir: &Path) -> Result<Imported, CliError> {
 
 /// TALOS torso + left arm from base_link to gripper_left_base_link, from the joint origins
 /// of PAL Robotics' `talos_full_v2.urdf` (as shipped in FIGAROH's TALOS example; the file
-/// itself is CC BY-NC-ND and not copied, only these kinematic numbers are used), with
-/// `arm_left_5_joint` held at 0 (kincal models at most 8 joints). Masses: the URDF's link
-/// masses (the gripper's subtree as the tool mass). Also returns the 9-joint axis chain.
+/// itself is CC BY-NC-ND and not copied, only these kinematic numbers are used), all 9
+/// joints. Masses: the URDF's link masses (the gripper's subtree as the tool mass). Also
+/// returns the same chain as joint axes, to check the description's FK against.
 // The limits are the URDF's own literals (e.g. -1.57079632679), kept as published.
 #[allow(clippy::approx_constant)]
 fn talos_description() -> Result<(RobotDescription, AxisChain<9>), CliError> {
@@ -732,12 +730,8 @@ fn talos_description() -> Result<(RobotDescription, AxisChain<9>), CliError> {
     let tool_kg =
         0.637534 + 0.134356 + 0.087986 + 3.0 * 0.026301 + 0.107923 + 0.047177 + 0.095 + 0.001;
     let mut joints = Vec::new();
-    for (i, &(name, xyz, axis, lim, mass)) in table.iter().enumerate() {
-        if i == 6 {
-            joints.push(fixed(name, xyz, [0.0; 3], mass));
-        } else {
-            joints.push(joint(name, xyz, [0.0; 3], axis, lim, mass));
-        }
+    for &(name, xyz, axis, lim, mass) in &table {
+        joints.push(joint(name, xyz, [0.0; 3], axis, lim, mass));
     }
     joints.push(fixed(
         "gripper_left_base_link_joint",
@@ -745,8 +739,8 @@ fn talos_description() -> Result<(RobotDescription, AxisChain<9>), CliError> {
         [0.0; 3],
         tool_kg,
     ));
-    let desc = chain_robot("talos-left-arm-8", &joints)?;
-    // The full 9-joint chain as joint axes (all origins have zero rotation).
+    let desc = chain_robot("talos-left-arm", &joints)?;
+    // The same chain as joint axes (all origins have zero rotation).
     let mut p = Vector3::zeros();
     let mut axes = [JointAxis::new([0.0; 3], [0.0, 0.0, 1.0]); 9];
     for (k, &(_, xyz, axis, _, _)) in table.iter().enumerate() {
@@ -785,58 +779,34 @@ fn talos(dir: &Path) -> Result<Imported, CliError> {
         .collect::<Result<_, _>>()?;
     let tcol = t.col("t")?;
     let (desc, chain) = talos_description()?;
-    let AnyRobot::J8(r8) = &desc.robot else {
-        return Err(CliError::input("talos description: expected 8 joints"));
+    let AnyRobot::J9(r9) = &desc.robot else {
+        return Err(CliError::input("talos description: expected 9 joints"));
     };
     let mut rows = Vec::new();
-    let (mut worst, mut q5max) = (0.0_f64, 0.0_f64);
     for r in 0..t.rows.len() {
-        let q9: Vec<f64> = jc.iter().map(|&c| t.num(r, c)).collect::<Result<_, _>>()?;
+        let q: Vec<f64> = jc.iter().map(|&c| t.num(r, c)).collect::<Result<_, _>>()?;
         let p: Vec<f64> = pc.iter().map(|&c| t.num(r, c)).collect::<Result<_, _>>()?;
-        let mut q8 = q9.clone();
-        let q5 = q8.remove(6);
-        q5max = q5max.max(q5.abs());
-        // What holding joint 5 at 0 changes at the gripper (nominal geometry), for a point
-        // up to 0.1 m from the gripper frame's origin: the 9-joint chain's gripper pose
-        // against the same chain with q5 = 0.
-        let qa: [f64; 9] = q9
-            .clone()
-            .try_into()
-            .map_err(|_| CliError::input("9 joints"))?;
-        let mut qz = qa;
-        qz[6] = 0.0;
-        let (a, b) = (
-            chain.fk(&qa).map_err(|e| CliError::input(e.to_string()))?,
-            chain.fk(&qz).map_err(|e| CliError::input(e.to_string()))?,
-        );
-        let e = kincal::validation::PoseErrors::between(&a, &b);
-        worst = worst.max(e.pos_norm_m + 0.1 * e.rot_norm_rad);
-        let mut rw = row(
+        rows.push(row(
             t.text(r, tcol).trim().to_string(),
-            q8,
+            q,
             [p[0], p[1], p[2]],
             None,
-        );
-        rw.extras = vec![format!("{q5:?}")];
-        rows.push(rw);
+        ));
     }
-    // The 8-joint model equals the 9-joint chain at q5 = 0 (checked on the first row).
+    // The model equals the joint-axis chain (checked on the first row).
     if let Some(first) = rows.first() {
-        let q8: [f64; 8] = first
+        let q: [f64; 9] = first
             .q_rad
             .clone()
             .try_into()
-            .map_err(|_| CliError::input("8 joints"))?;
-        let mut q9 = [0.0; 9];
-        q9[..6].copy_from_slice(&q8[..6]);
-        q9[7..].copy_from_slice(&q8[6..]);
+            .map_err(|_| CliError::input("9 joints"))?;
         let (a, b) = (
-            r8.fk_q(&q8).map_err(|e| CliError::input(e.to_string()))?,
-            chain.fk(&q9).map_err(|e| CliError::input(e.to_string()))?,
+            r9.fk_q(&q).map_err(|e| CliError::input(e.to_string()))?,
+            chain.fk(&q).map_err(|e| CliError::input(e.to_string()))?,
         );
         if (a.to_homogeneous() - b.to_homogeneous()).abs().max() > 1e-9 {
             return Err(CliError::input(
-                "talos description: the 8-joint model differs from the 9-joint chain at q5 = 0",
+                "talos description: the model differs from the joint-axis chain",
             ));
         }
     }
@@ -845,12 +815,6 @@ fn talos(dir: &Path) -> Result<Imported, CliError> {
          of the positions and the marker's place on the gripper are unknown (base frame and tool \
          translation to identify; the tool rotation cannot be seen through one point)"
             .to_string(),
-        format!(
-            "9 joints, kincal models at most 8: arm_left_5_joint is held at 0 (kept as \
-             extra_arm_left_5_joint; |q5| <= {q5max:.4} rad here), which moves a point within \
-             0.1 m of the gripper frame by at most {:.2} mm in the nominal geometry",
-            worst * 1e3
-        ),
         "robot: joint origins and link masses of PAL Robotics' talos_full_v2.urdf (FIGAROH's \
          TALOS example; numbers only, the file is CC BY-NC-ND and not copied)"
             .to_string(),
@@ -858,18 +822,17 @@ fn talos(dir: &Path) -> Result<Imported, CliError> {
     Parts {
         name: "figaroh-talos-arm",
         files: &[&path],
-        robot_label: "talos-left-arm-8 (base_link -> gripper_left_base_link, arm_left_5_joint held at 0)",
-        n_joints: 8,
+        robot_label: "talos-left-arm (base_link -> gripper_left_base_link)",
+        n_joints: 9,
         rows,
         form: None,
-        extra_columns: vec!["extra_arm_left_5_joint".into()],
+        extra_columns: Vec::new(),
         robot: desc,
         robot_comments: vec![
-            " TALOS torso + left arm, base_link -> gripper_left_base_link, arm_left_5_joint held"
-                .into(),
-            " at 0 (8 joints). Joint origins, limits and link masses are the numbers of PAL".into(),
-            " Robotics' talos_full_v2.urdf (FIGAROH TALOS example); the URDF is CC BY-NC-ND".into(),
-            " and not copied. Built by kincal import-dataset figaroh-talos-arm.".into(),
+            " TALOS torso + left arm, base_link -> gripper_left_base_link, 9 joints.".into(),
+            " Joint origins, limits and link masses are the numbers of PAL Robotics'".into(),
+            " talos_full_v2.urdf (FIGAROH TALOS example); the URDF is CC BY-NC-ND and".into(),
+            " not copied. Built by kincal import-dataset figaroh-talos-arm.".into(),
         ],
         notes,
     }

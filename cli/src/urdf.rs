@@ -440,6 +440,7 @@ fn build_any(
         6 => arm!(6),
         7 => arm!(7),
         8 => arm!(8),
+        9 => arm!(9),
         n => Err(kincal::Error::CapacityExceeded {
             needed: n,
             capacity: MAX_JOINTS,

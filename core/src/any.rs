@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use crate::model::{JointLimits, Link, Robot};
 
 /// Largest joint count a run-time robot may have.
-pub const MAX_JOINTS: usize = 8;
+pub const MAX_JOINTS: usize = 9;
 
 /// A [`Robot`] with 1 to [`MAX_JOINTS`] joints.
 #[derive(Debug, Clone, PartialEq)]
@@ -23,6 +23,7 @@ pub enum AnyRobot {
     J6(Robot<6>),
     J7(Robot<7>),
     J8(Robot<8>),
+    J9(Robot<9>),
 }
 
 /// Runs `$body` with `$r` bound to the concrete `Robot<N>` inside an [`AnyRobot`] (by value,
@@ -47,6 +48,7 @@ macro_rules! with_any_robot {
             $crate::any::AnyRobot::J6($r) => $body,
             $crate::any::AnyRobot::J7($r) => $body,
             $crate::any::AnyRobot::J8($r) => $body,
+            $crate::any::AnyRobot::J9($r) => $body,
         }
     };
 }
@@ -60,7 +62,7 @@ macro_rules! impl_from {
         }
     )*};
 }
-impl_from!(J1 1, J2 2, J3 3, J4 4, J5 5, J6 6, J7 7, J8 8);
+impl_from!(J1 1, J2 2, J3 3, J4 4, J5 5, J6 6, J7 7, J8 8, J9 9);
 
 fn build<const N: usize>(links: &[Link], limits: &[JointLimits]) -> Result<Robot<N>> {
     let l: [Link; N] = links.try_into().map_err(|_| Error::DimensionMismatch {
@@ -94,6 +96,7 @@ impl AnyRobot {
             6 => build::<6>(links, limits)?.into(),
             7 => build::<7>(links, limits)?.into(),
             8 => build::<8>(links, limits)?.into(),
+            9 => build::<9>(links, limits)?.into(),
             0 => {
                 return Err(Error::DimensionMismatch {
                     expected: 1,

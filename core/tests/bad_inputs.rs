@@ -358,31 +358,31 @@ fn any_robot_joint_counts() {
             found: 0
         })
     );
-    let nine_links = [link; 9];
-    let nine_limits = [lim; 9];
+    let ten_links = [link; 10];
+    let ten_limits = [lim; 10];
     assert_eq!(
-        AnyRobot::new(&nine_links, &nine_limits).map(|_| ()),
+        AnyRobot::new(&ten_links, &ten_limits).map(|_| ()),
         Err(Error::CapacityExceeded {
-            needed: 9,
+            needed: 10,
             capacity: MAX_JOINTS
         })
     );
     assert_eq!(
-        AnyRobot::new(&nine_links[..3], &nine_limits[..4]).map(|_| ()),
+        AnyRobot::new(&ten_links[..3], &ten_limits[..4]).map(|_| ()),
         Err(Error::DimensionMismatch {
             expected: 3,
             found: 4
         })
     );
     for n in 1..=MAX_JOINTS {
-        let any = AnyRobot::new(&nine_links[..n], &nine_limits[..n]).expect("robot");
+        let any = AnyRobot::new(&ten_links[..n], &ten_limits[..n]).expect("robot");
         assert_eq!(any.n_joints(), n);
     }
     // Errors of the links pass through.
     let mut bad = [link; 7];
     bad[4].alpha = f64::NAN;
     assert_eq!(
-        AnyRobot::new(&bad, &nine_limits[..7]).map(|_| ()),
+        AnyRobot::new(&bad, &ten_limits[..7]).map(|_| ()),
         Err(non_finite(Quantity::Parameter, 5 * 4 + 3))
     );
     let mut bad_lim = [lim; 7];

@@ -110,7 +110,8 @@ pub unsafe extern "C" fn kincal_robot_from_axes(
             5 => build::<5>(points, directions, base, tool, limits),
             6 => build::<6>(points, directions, base, tool, limits),
             7 => build::<7>(points, directions, base, tool, limits),
-            _ => build::<8>(points, directions, base, tool, limits),
+            8 => build::<8>(points, directions, base, tool, limits),
+            _ => build::<9>(points, directions, base, tool, limits),
         }?;
         // SAFETY: checked by `arg_out1!`; writable by contract.
         unsafe { out.put(r) };

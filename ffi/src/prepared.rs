@@ -86,19 +86,25 @@ const LANE_SEEDS: [u64; 4] = [
 ];
 const MUL: u64 = 0x9E37_79B9_7F4A_7C15;
 
+/// Words of a `Robot<N>` taken by the N bytes of `[LengthParam; N]` and their padding.
+const fn lp_words<const N: usize>() -> usize {
+    N.div_ceil(8)
+}
+
 /// Whether a `Robot<N>` fits the storage with the layout this module relies on: 8-byte words
 /// (all `f64`: `32N + 77` of them) plus the N bytes of `[LengthParam; N]` at an 8-aligned
-/// offset padded to a whole word. A core change of `Robot`'s fields fails this at compile time.
+/// offset padded to whole words ([`lp_words`]). A core change of `Robot`'s fields fails this
+/// at compile time.
 const fn payload_fits<const N: usize>() -> bool {
     let size = size_of::<Robot<N>>();
     let lp = Robot::<N>::LENGTH_PARAM_OFFSET;
-    N <= 8
-        && size == 8 * (32 * N + 77) + 8
+    N <= 64
+        && size == 8 * (32 * N + 77) + 8 * lp_words::<N>()
         && (HEADER_WORDS * 8 + size) <= KINCAL_PREPARED_SIZE
         && align_of::<Robot<N>>() <= KINCAL_PREPARED_ALIGN
         && (HEADER_WORDS * 8).is_multiple_of(align_of::<Robot<N>>())
         && lp.is_multiple_of(8)
-        && lp + 8 <= size
+        && lp + 8 * lp_words::<N>() <= size
         && size_of::<LengthParam>() == 1
 }
 const _: () = assert!(
@@ -110,8 +116,9 @@ const _: () = assert!(
         && payload_fits::<6>()
         && payload_fits::<7>()
         && payload_fits::<8>()
+        && payload_fits::<9>()
 );
-const _: () = assert!(KINCAL_MAX_JOINTS == 8);
+const _: () = assert!(KINCAL_MAX_JOINTS == 9);
 const _: () = assert!(LengthParam::D as u8 == 0 && LengthParam::Beta as u8 == 1);
 
 /// Word 1 of a handle holding a `Robot<N>`.
@@ -123,14 +130,14 @@ fn bad_handle() -> kincal_error {
     kincal_error::new(kincal_status::BadHandle).arg(c"prepared")
 }
 
-/// The N bytes of `[LengthParam; N]` of the stored model as one word (byte k = link k), if
+/// The N bytes of `[LengthParam; N]` of the stored model as one word (bit k = link k), if
 /// each is a valid `LengthParam` (0 or 1). Reads only those N bytes, never the padding after.
 ///
 /// # Safety
 /// `base` points to `KINCAL_PREPARED_WORDS` readable words.
 unsafe fn length_param_word<const N: usize>(base: *const u64) -> Option<u64> {
-    // SAFETY: `HEADER_WORDS + LENGTH_PARAM_OFFSET / 8 + 1` words lie within the storage
-    // (`payload_fits`), and N <= 8 bytes from an 8-aligned offset stay within that word.
+    // SAFETY: `HEADER_WORDS + LENGTH_PARAM_OFFSET / 8 + lp_words::<N>()` words lie within the
+    // storage (`payload_fits`), and N bytes from an 8-aligned offset stay within those words.
     let p = unsafe {
         base.add(HEADER_WORDS)
             .cast::<u8>()
@@ -138,18 +145,19 @@ unsafe fn length_param_word<const N: usize>(base: *const u64) -> Option<u64> {
     };
     let mut word = 0u64;
     for k in 0..N {
-        // SAFETY: see above (k < N <= 8).
+        // SAFETY: see above (k < N).
         let b = unsafe { p.add(k).read() };
         if b > 1 {
             return None;
         }
-        word |= u64::from(b) << (8 * k);
+        // N <= 64 (`payload_fits`): one bit per link.
+        word |= u64::from(b) << k;
     }
     Some(word)
 }
 
-/// Checksum of header words 0–2 and of the stored `Robot<N>` (its length-param word given as
-/// `lp_word`, so the padding bytes after the length params are never read). Four independent
+/// Checksum of header words 0–2 and of the stored `Robot<N>` (its length params given packed
+/// as `lp_word`, so the padding bytes after them are never read). Four independent
 /// lanes of xor-multiply steps keep the multiply chain short.
 ///
 /// # Safety
@@ -157,16 +165,17 @@ unsafe fn length_param_word<const N: usize>(base: *const u64) -> Option<u64> {
 unsafe fn checksum<const N: usize>(base: *const u64, lp_word: u64) -> u64 {
     let words = size_of::<Robot<N>>() / 8;
     let lp_index = Robot::<N>::LENGTH_PARAM_OFFSET / 8;
-    // SAFETY: lp_index < words and HEADER_WORDS + words <= KINCAL_PREPARED_WORDS
-    // (`payload_fits`), so both runs lie within the storage; every stored-model word except
-    // `lp_index` belongs to f64 fields only (layout contract of `Robot`), so it is initialised
-    // when `store` wrote it (and any bits are a valid u64).
+    let lp_end = lp_index + lp_words::<N>();
+    // SAFETY: lp_end <= words and HEADER_WORDS + words <= KINCAL_PREPARED_WORDS
+    // (`payload_fits`), so both runs lie within the storage; every stored-model word outside
+    // `lp_index..lp_end` belongs to f64 fields only (layout contract of `Robot`), so it is
+    // initialised when `store` wrote it (and any bits are a valid u64).
     let (header, head, tail) = unsafe {
         let payload = base.add(HEADER_WORDS);
         (
             [base.read(), base.add(1).read(), base.add(2).read(), lp_word],
             core::slice::from_raw_parts(payload, lp_index),
-            core::slice::from_raw_parts(payload.add(lp_index + 1), words - lp_index - 1),
+            core::slice::from_raw_parts(payload.add(lp_end), words - lp_end),
         )
     };
     let mut lanes = LANE_SEEDS;
@@ -227,6 +236,7 @@ pub(crate) enum PreparedRobot<'a> {
     J6(&'a Robot<6>),
     J7(&'a Robot<7>),
     J8(&'a Robot<8>),
+    J9(&'a Robot<9>),
 }
 
 /// Runs `$body` with `$r` bound to the `&Robot<N>` of a [`PreparedRobot`].
@@ -241,6 +251,7 @@ macro_rules! with_prepared_robot {
             PreparedRobot::J6($r) => $body,
             PreparedRobot::J7($r) => $body,
             PreparedRobot::J8($r) => $body,
+            PreparedRobot::J9($r) => $body,
         }
     };
 }
@@ -301,6 +312,7 @@ pub(crate) unsafe fn prepared_robot<'a>(p: *const kincal_prepared) -> FfiResult<
         6 => PreparedRobot::J6(unsafe { view::<6>(base) }?),
         7 => PreparedRobot::J7(unsafe { view::<7>(base) }?),
         8 => PreparedRobot::J8(unsafe { view::<8>(base) }?),
+        9 => PreparedRobot::J9(unsafe { view::<9>(base) }?),
         _ => return Err(bad_handle()),
     })
 }

@@ -17,12 +17,12 @@ use kincal::{JointLimits, LengthParam, Link, MassModel, ParamIndex, Robot, with_
 use crate::status::{FfiResult, kincal_error, kincal_status};
 
 /// Largest joint count of a `kincal_robot`.
-pub const KINCAL_MAX_JOINTS: usize = 8;
-/// Capacity of `kincal_robot.params`: `kincal_num_params(KINCAL_MAX_JOINTS)` = 12·8 + 13.
-pub const KINCAL_MAX_PARAMS: usize = 109;
+pub const KINCAL_MAX_JOINTS: usize = 9;
+/// Capacity of `kincal_robot.params`: `kincal_num_params(KINCAL_MAX_JOINTS)` = 12·9 + 13.
+pub const KINCAL_MAX_PARAMS: usize = 121;
 /// Capacity of `kincal_robot.nominal`: `kincal_num_geometric_params(KINCAL_MAX_JOINTS)` =
-/// 5·8 + 12.
-pub const KINCAL_MAX_GEOMETRIC_PARAMS: usize = 52;
+/// 5·9 + 12.
+pub const KINCAL_MAX_GEOMETRIC_PARAMS: usize = 57;
 
 const _: () = assert!(KINCAL_MAX_JOINTS == MAX_JOINTS);
 const _: () = assert!(KINCAL_MAX_PARAMS == num_params(KINCAL_MAX_JOINTS));
@@ -234,6 +234,7 @@ pub(crate) fn to_any(r: &kincal_robot) -> FfiResult<AnyRobot> {
         6 => to_robot::<6>(r)?.into(),
         7 => to_robot::<7>(r)?.into(),
         8 => to_robot::<8>(r)?.into(),
+        9 => to_robot::<9>(r)?.into(),
         n => {
             return Err(bad_joint_count(n as usize));
         }
@@ -573,7 +574,7 @@ pub unsafe extern "C" fn kincal_robot_adopt_geometry_as_nominal(
     })
 }
 
-/// The joint count of `*robot` (1..=8), checking the pointer first.
+/// The joint count of `*robot` (1..=`KINCAL_MAX_JOINTS`), checking the pointer first.
 ///
 /// # Safety
 /// `robot` is NULL or points to a readable `kincal_robot`.

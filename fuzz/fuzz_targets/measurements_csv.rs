@@ -10,7 +10,11 @@ fuzz_target!(|data: &[u8]| {
     let Some((&sel, text)) = data.split_first() else {
         return;
     };
-    let n = 1 + usize::from(sel & 7);
+    // Joint count 1..=9: bits 0-2, and bit 6 with bits 0-2 all set for 9.
+    let n = match sel & 7 {
+        7 if sel & 64 != 0 => 9,
+        k => 1 + usize::from(k),
+    };
     let mut opts = ReadOptions::new(n);
     opts.require_pose = sel & 8 != 0;
     if sel & 16 != 0 {

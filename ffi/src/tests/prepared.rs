@@ -1,6 +1,6 @@
-//! The prepared-model handle: results bit-identical to the plain exports (ARIA and a 7-joint arm
-//! with every effect), and misuse (NULL, misaligned, uninitialised, corrupted storage) returning
-//! a status.
+//! The prepared-model handle: results bit-identical to the plain exports (ARIA, a 7-joint and
+//! a 9-joint arm with every effect), and misuse (NULL, misaligned, uninitialised, corrupted
+//! storage) returning a status.
 
 use core::ffi::CStr;
 use core::ptr::{null, null_mut};
@@ -48,7 +48,7 @@ fn bits(v: &[f64]) -> Vec<u64> {
 /// tool, masses and every effect set.
 fn seven_joint_arm() -> kincal_robot {
     use core::f64::consts::FRAC_PI_2 as H;
-    let links: [f64; 35] = [
+    let links = [
         0.0, 0.36, 0.0, -H, 0.0, //
         0.0, 0.0, 0.0, H, 0.0, //
         0.0, 0.42, 0.0, H, 0.0, //
@@ -57,15 +57,51 @@ fn seven_joint_arm() -> kincal_robot {
         0.0, 0.0, 0.0, H, 0.0, //
         0.0, 0.126, 0.0, 0.0, 0.0,
     ];
-    let mut limits = [0.0; 14];
+    arm_with_every_effect(&links, &[4.0, 4.0, 3.0, 2.7, 1.7, 1.8, 0.3])
+}
+
+/// A 9-joint arm (`KINCAL_MAX_JOINTS`): a two-joint torso before the 7-joint arm, set up
+/// like [`seven_joint_arm`].
+fn nine_joint_arm() -> kincal_robot {
+    use core::f64::consts::FRAC_PI_2 as H;
+    let links = [
+        0.0, 0.07, 0.0, 0.0, 0.0, //
+        0.0, 0.0, 0.0, -H, 0.0, //
+        0.15, 0.36, 0.0, H, 0.0, //
+        0.0, 0.0, 0.0, H, 0.0, //
+        0.0, 0.42, 0.0, H, 0.0, //
+        0.0, 0.0, 0.0, -H, 0.0, //
+        0.0, 0.40, 0.0, -H, 0.0, //
+        0.0, 0.0, 0.0, H, 0.0, //
+        0.0, 0.126, 0.0, 0.0, 0.0,
+    ];
+    assert_eq!(links.len(), 5 * KINCAL_MAX_JOINTS);
+    arm_with_every_effect(&links, &[2.3, 17.0, 4.0, 4.0, 3.0, 2.7, 1.7, 1.8, 0.3])
+}
+
+/// An arm of `masses.len()` joints from its link table, its geometry perturbed as by a
+/// calibration, with base, tool, masses and every effect set.
+fn arm_with_every_effect(links: &[f64], masses: &[f64]) -> kincal_robot {
+    let n = masses.len();
+    assert_eq!(links.len(), 5 * n);
+    let mut limits = vec![0.0; 2 * n];
     for (j, l) in limits.chunks_exact_mut(2).enumerate() {
         let m = if j % 2 == 0 { 2.96 } else { 2.09 };
         l.copy_from_slice(&[-m, m]);
     }
     let mut r = kincal_robot::ZERO;
     let mut e = kincal_error::CLEAR;
-    let s =
-        unsafe { kincal_robot_init(&mut r, 7, links.as_ptr(), 35, limits.as_ptr(), 14, &mut e) };
+    let s = unsafe {
+        kincal_robot_init(
+            &mut r,
+            n,
+            links.as_ptr(),
+            links.len(),
+            limits.as_ptr(),
+            limits.len(),
+            &mut e,
+        )
+    };
     assert_eq!(s, kincal_status::Ok, "{e:?}");
     let base = [0.1, -0.05, 0.02, 0.01, -0.02, 0.3];
     let tool = [0.0, 0.01, 0.15, 0.05, 0.0, -0.1];
@@ -77,24 +113,23 @@ fn seven_joint_arm() -> kincal_robot {
         unsafe { crate::robot::kincal_robot_set_tool(&mut r, tool.as_ptr(), 6, &mut e) },
         kincal_status::Ok
     );
-    let masses = [4.0, 4.0, 3.0, 2.7, 1.7, 1.8, 0.3];
     let g = [0.0, 0.0, -9.81];
     assert_eq!(
-        unsafe { kincal_robot_set_mass(&mut r, masses.as_ptr(), 7, 1.2, g.as_ptr(), 3, &mut e) },
+        unsafe { kincal_robot_set_mass(&mut r, masses.as_ptr(), n, 1.2, g.as_ptr(), 3, &mut e) },
         kincal_status::Ok
     );
-    let np = kincal_num_params(7);
+    let np = kincal_num_params(n);
     let mut p = vec![0.0; np];
     assert_eq!(
         unsafe { kincal_robot_get_params(&r, p.as_mut_ptr(), np, &mut e) },
         kincal_status::Ok
     );
     // Calibrated geometry: every link parameter off its nominal value.
-    for (i, v) in p.iter_mut().take(5 * 7).enumerate() {
+    for (i, v) in p.iter_mut().take(5 * n).enumerate() {
         *v += 1e-4 * ((i % 7) as f64 - 3.0);
     }
-    // Effects: compliance, scale, cyclic, backlash (7 each, cyclic 4·7), thermal κ.
-    for (i, v) in p.iter_mut().skip(5 * 7 + 12).enumerate() {
+    // Effects: compliance, scale, cyclic, backlash (N each, cyclic 4·N), thermal κ.
+    for (i, v) in p.iter_mut().skip(5 * n + 12).enumerate() {
         *v = 1e-5 * (1.0 + (i % 5) as f64);
     }
     assert_eq!(
@@ -109,7 +144,7 @@ fn aux7() -> kincal_joint_aux {
     kincal_joint_aux {
         has_approach: 1,
         has_temp: 1,
-        approach: [1.0, -1.0, 0.0, 1.0, 1.0, -1.0, 1.0, 0.0],
+        approach: [1.0, -1.0, 0.0, 1.0, 1.0, -1.0, 1.0, 0.0, 0.0],
         temp_c: 31.5,
     }
 }
@@ -337,6 +372,55 @@ fn seven_joint_arm_with_every_effect_is_bit_identical() {
 }
 
 #[test]
+fn nine_joint_arm_with_every_effect_is_bit_identical() {
+    let r = nine_joint_arm();
+    let mut e = kincal_error::CLEAR;
+    assert_eq!(
+        unsafe { kincal_robot_validate(&r, &mut e) },
+        kincal_status::Ok,
+        "{e:?}"
+    );
+    let p = prepare(&r);
+    let aux = aux7();
+    let qs = [
+        [0.2, -0.1, 0.3, 0.7, -0.4, 1.1, -0.6, 0.9, 0.2],
+        [-1.0, 0.4, -0.5, 2.0, -1.5, 2.5, 1.0, -2.0, 0.7],
+    ];
+    for q in &qs {
+        assert_fk_identical(&r, &p, q, &aux);
+    }
+    let q_true = qs[0];
+    let mut target = [0.0; 16];
+    assert_eq!(
+        unsafe {
+            kincal_fk(
+                &r,
+                q_true.as_ptr(),
+                9,
+                &aux,
+                target.as_mut_ptr(),
+                16,
+                &mut e,
+            )
+        },
+        kincal_status::Ok
+    );
+    let seed: Vec<f64> = q_true.iter().map(|q| q + 0.05).collect();
+    let q = assert_ik_identical(&r, &p, &target, &seed, &aux);
+    let mut t = [0.0; 16];
+    assert_eq!(
+        unsafe { kincal_prepared_fk(&*p, q.as_ptr(), 9, &aux, t.as_mut_ptr(), 16, &mut e) },
+        kincal_status::Ok
+    );
+    let d = t
+        .iter()
+        .zip(&target)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(d < 1e-9, "IK solution misses the target by {d}");
+}
+
+#[test]
 fn a_copied_handle_works_and_a_handle_is_a_snapshot() {
     let mut r = aria_robot(kincal_aria_model::Nominal);
     let p = prepare(&r);
@@ -456,6 +540,7 @@ fn every_single_bit_flip_of_the_model_is_detected() {
     for r in [
         aria_robot(kincal_aria_model::VirtualTruth),
         seven_joint_arm(),
+        nine_joint_arm(),
     ] {
         let good = prepare(&r);
         let n = r.n_joints as usize;
@@ -468,11 +553,15 @@ fn every_single_bit_flip_of_the_model_is_detected() {
                 core::mem::size_of::<kincal::Robot<7>>(),
                 kincal::Robot::<7>::LENGTH_PARAM_OFFSET,
             ),
+            9 => (
+                core::mem::size_of::<kincal::Robot<9>>(),
+                kincal::Robot::<9>::LENGTH_PARAM_OFFSET,
+            ),
             _ => unreachable!(),
         };
         // Header (32 bytes) and model; the padding bytes after the N length-param bytes are
         // not part of the model (never read) and the storage tail after the model is unused.
-        let padding = 32 + lp + n..32 + lp + 8;
+        let padding = 32 + lp + n..32 + lp + 8 * n.div_ceil(8);
         let mut p = Box::new(*good);
         for byte in (0..32 + size).filter(|b| !padding.contains(b)) {
             for bit in 0..8 {
@@ -502,6 +591,13 @@ fn every_single_bit_flip_of_the_model_is_detected() {
         };
         bytes[32 + lp] = 2;
         assert_eq!(fk_status(&*p).0, kincal_status::BadHandle);
+        // So is the last one (for N = 9, in the second length-param word).
+        bytes[32 + lp] = good.opaque[4 + lp / 8].to_le_bytes()[0];
+        let validate =
+            |p: &kincal_prepared| unsafe { kincal_prepared_validate(p, null_mut(), null_mut()) };
+        assert_eq!(validate(&p), kincal_status::Ok);
+        bytes[32 + lp + n - 1] = 2;
+        assert_eq!(validate(&p), kincal_status::BadHandle);
     }
 }
 
@@ -511,7 +607,7 @@ fn a_failed_prepare_leaves_the_handle_intact() {
     let mut p = prepare(&r);
     let before = *p;
     let mut bad = r;
-    bad.n_joints = 9;
+    bad.n_joints = 10;
     let mut e = kincal_error::CLEAR;
     assert_eq!(
         unsafe { kincal_prepare(&bad, &mut *p, &mut e) },
