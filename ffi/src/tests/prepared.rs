@@ -318,45 +318,34 @@ fn aria_results_are_bit_identical() {
     }
 }
 
-#[test]
-fn seven_joint_arm_with_every_effect_is_bit_identical() {
-    let r = seven_joint_arm();
+/// An arm with every effect: FK bit-identical through the handle at `qs`, IK from a seed
+/// near `qs[0]` bit-identical and on target, and the effects' inputs required through the
+/// handle as well.
+fn assert_arm_with_every_effect_identical(r: &kincal_robot, qs: &[&[f64]]) {
     let mut e = kincal_error::CLEAR;
     assert_eq!(
-        unsafe { kincal_robot_validate(&r, &mut e) },
-        kincal_status::Ok
+        unsafe { kincal_robot_validate(r, &mut e) },
+        kincal_status::Ok,
+        "{e:?}"
     );
-    let p = prepare(&r);
+    let p = prepare(r);
     let aux = aux7();
-    let qs = [
-        [0.3, 0.7, -0.4, 1.1, -0.6, 0.9, 0.2],
-        [-1.0, -0.5, 2.0, -1.5, 2.5, 1.0, -2.0],
-    ];
-    for q in &qs {
-        assert_fk_identical(&r, &p, q, &aux);
+    for q in qs {
+        assert_fk_identical(r, &p, q, &aux);
     }
     // IK: a reachable target (FK of known readings), seeded nearby.
     let q_true = qs[0];
+    let n = q_true.len();
     let mut target = [0.0; 16];
     assert_eq!(
-        unsafe {
-            kincal_fk(
-                &r,
-                q_true.as_ptr(),
-                7,
-                &aux,
-                target.as_mut_ptr(),
-                16,
-                &mut e,
-            )
-        },
+        unsafe { kincal_fk(r, q_true.as_ptr(), n, &aux, target.as_mut_ptr(), 16, &mut e,) },
         kincal_status::Ok
     );
     let seed: Vec<f64> = q_true.iter().map(|q| q + 0.05).collect();
-    let q = assert_ik_identical(&r, &p, &target, &seed, &aux);
+    let q = assert_ik_identical(r, &p, &target, &seed, &aux);
     let mut t = [0.0; 16];
     assert_eq!(
-        unsafe { kincal_prepared_fk(&*p, q.as_ptr(), 7, &aux, t.as_mut_ptr(), 16, &mut e) },
+        unsafe { kincal_prepared_fk(&*p, q.as_ptr(), n, &aux, t.as_mut_ptr(), 16, &mut e) },
         kincal_status::Ok
     );
     let d = t
@@ -367,57 +356,30 @@ fn seven_joint_arm_with_every_effect_is_bit_identical() {
     assert!(d < 1e-9, "IK solution misses the target by {d}");
 
     // The effects need their inputs through the handle as well.
-    let s = unsafe { kincal_prepared_fk(&*p, q.as_ptr(), 7, null(), t.as_mut_ptr(), 16, &mut e) };
+    let s = unsafe { kincal_prepared_fk(&*p, q.as_ptr(), n, null(), t.as_mut_ptr(), 16, &mut e) };
     assert_eq!(s, kincal_status::MissingInput);
 }
 
 #[test]
+fn seven_joint_arm_with_every_effect_is_bit_identical() {
+    assert_arm_with_every_effect_identical(
+        &seven_joint_arm(),
+        &[
+            &[0.3, 0.7, -0.4, 1.1, -0.6, 0.9, 0.2],
+            &[-1.0, -0.5, 2.0, -1.5, 2.5, 1.0, -2.0],
+        ],
+    );
+}
+
+#[test]
 fn nine_joint_arm_with_every_effect_is_bit_identical() {
-    let r = nine_joint_arm();
-    let mut e = kincal_error::CLEAR;
-    assert_eq!(
-        unsafe { kincal_robot_validate(&r, &mut e) },
-        kincal_status::Ok,
-        "{e:?}"
+    assert_arm_with_every_effect_identical(
+        &nine_joint_arm(),
+        &[
+            &[0.2, -0.1, 0.3, 0.7, -0.4, 1.1, -0.6, 0.9, 0.2],
+            &[-1.0, 0.4, -0.5, 2.0, -1.5, 2.5, 1.0, -2.0, 0.7],
+        ],
     );
-    let p = prepare(&r);
-    let aux = aux7();
-    let qs = [
-        [0.2, -0.1, 0.3, 0.7, -0.4, 1.1, -0.6, 0.9, 0.2],
-        [-1.0, 0.4, -0.5, 2.0, -1.5, 2.5, 1.0, -2.0, 0.7],
-    ];
-    for q in &qs {
-        assert_fk_identical(&r, &p, q, &aux);
-    }
-    let q_true = qs[0];
-    let mut target = [0.0; 16];
-    assert_eq!(
-        unsafe {
-            kincal_fk(
-                &r,
-                q_true.as_ptr(),
-                9,
-                &aux,
-                target.as_mut_ptr(),
-                16,
-                &mut e,
-            )
-        },
-        kincal_status::Ok
-    );
-    let seed: Vec<f64> = q_true.iter().map(|q| q + 0.05).collect();
-    let q = assert_ik_identical(&r, &p, &target, &seed, &aux);
-    let mut t = [0.0; 16];
-    assert_eq!(
-        unsafe { kincal_prepared_fk(&*p, q.as_ptr(), 9, &aux, t.as_mut_ptr(), 16, &mut e) },
-        kincal_status::Ok
-    );
-    let d = t
-        .iter()
-        .zip(&target)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max);
-    assert!(d < 1e-9, "IK solution misses the target by {d}");
 }
 
 #[test]
