@@ -7,6 +7,9 @@ cd "$(dirname "$0")/.."
 ROOT=$PWD
 CI=${CI:-false}
 export CARGO_TERM_COLOR=${CARGO_TERM_COLOR:-never}
+# A clean CI build gains nothing from incremental caches, which would double the debug
+# target's size on disk.
+if [ "$CI" = true ]; then export CARGO_INCREMENTAL=${CARGO_INCREMENTAL:-0}; fi
 
 step() { printf '\n==> %s\n' "$*"; }
 fail() { printf 'error: %s\n' "$*" >&2; exit 1; }
@@ -23,6 +26,13 @@ need_apt() { # need_apt COMMAND PACKAGE...
 }
 
 step "tools"
+# The whole run needs about 4 GB under target/ and fuzz/target/; say so up front rather than
+# fail half-way with "No space left on device".
+free_kb=$(df -Pk . | awk 'NR==2 {print $4}')
+if [ -n "$free_kb" ] && [ "$free_kb" -lt 4500000 ]; then
+    printf 'warning: only %s MB free on this disk; the full test run needs about 4 GB\n' \
+        "$((free_kb / 1024))" >&2
+fi
 command -v cargo >/dev/null || fail "cargo is missing (install Rust with rustup)"
 need_apt g++ g++
 need_apt octave-cli octave liboctave-dev
@@ -51,3 +61,4 @@ for extra in tests/cpp/run.sh matlab/tests/run.sh fuzz/smoke.sh; do
 done
 
 step "all tests passed"
+du -sh target fuzz/target 2>/dev/null || true
