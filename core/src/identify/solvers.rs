@@ -276,14 +276,14 @@ enum GramSel {
 }
 
 /// Cholesky factor of the (optionally column-scaled, optionally damped) Gram matrix of the
-/// selected columns into `ws.mat` (`m` columns, see [`GramSel`]).
+/// selected columns into `ws.mat` (`m` columns, see [`GramSel`]), zero below the diagonal.
+/// The selected matrix is built in `ws.mat` and factored there: no second p×p copy.
 fn factor_gram<const P: usize>(ws: &mut Workspace<P>, m: usize, how: GramSel) -> Result<()> {
     let Workspace {
         gram,
         free,
         colscale,
         row,
-        v,
         mat,
         ..
     } = ws;
@@ -293,6 +293,7 @@ fn factor_gram<const P: usize>(ws: &mut Workspace<P>, m: usize, how: GramSel) ->
         _ => a,
     };
     for a in 0..m {
+        mat[a][..a].fill(0.0);
         for b in a..m {
             let (i, j) = (col(a).min(col(b)), col(a).max(col(b)));
             let mut x = g[i][j];
@@ -301,10 +302,10 @@ fn factor_gram<const P: usize>(ws: &mut Workspace<P>, m: usize, how: GramSel) ->
                 GramSel::FreeDamped(lambda) if a == b => x += lambda * row[a] * row[a],
                 _ => {}
             }
-            v[a][b] = x;
+            mat[a][b] = x;
         }
     }
-    crate::linalg::gram::cholesky_upper(v, m, 1e-14, mat)
+    crate::linalg::gram::cholesky_upper_in_place(mat, m, 1e-14)
 }
 
 /// Solves `RᵀR·x = rhs` with `R = mat` (from [`factor_gram`]) in place in `x`.

@@ -76,7 +76,8 @@ impl<const P: usize> GramAccumulator<P> {
     /// [`add_row_weighted`](Self::add_row_weighted) calls, in a third of the memory traffic.
     /// Only `a[r][..n]` is read.
     pub fn add_rows6(&mut self, a: &[[f64; P]; 6], b: &[f64; 6], w: &[f64; 6]) -> Result<()> {
-        let n = self.n;
+        // `reset` keeps n <= P; saying so lets the compiler drop every bounds check below.
+        let n = self.n.min(P);
         let finite = super::util::all_finite(a.iter().flat_map(|r| r[..n].iter()))
             && super::util::all_finite(b.iter().chain(w.iter()));
         if !finite || w.iter().any(|&v| v < 0.0) {
@@ -89,7 +90,8 @@ impl<const P: usize> GramAccumulator<P> {
             });
         }
         let [a0, a1, a2, a3, a4, a5] = a;
-        for i in 0..n {
+        let rows = self.g.iter_mut().zip(self.atb.iter_mut()).take(n);
+        for (i, (grow, atb)) in rows.enumerate() {
             let c = [
                 w[0] * a0[i],
                 w[1] * a1[i],
@@ -98,27 +100,19 @@ impl<const P: usize> GramAccumulator<P> {
                 w[4] * a4[i],
                 w[5] * a5[i],
             ];
-            self.atb[i] += c.iter().zip(b.iter()).map(|(x, y)| x * y).sum::<f64>();
-            let row = &mut self.g[i][i..n];
+            *atb += c.iter().zip(b.iter()).map(|(x, y)| x * y).sum::<f64>();
+            if c.iter().all(|&v| v == 0.0) {
+                // A structurally zero column of this pose (e.g. a parameter beyond the
+                // joints it moves): nothing to add.
+                continue;
+            }
+            let row = &mut grow[i..n];
             if c[3] == 0.0 && c[4] == 0.0 && c[5] == 0.0 {
                 // Length columns have no rotation part: three terms suffice.
-                if c[0] == 0.0 && c[1] == 0.0 && c[2] == 0.0 {
-                    continue;
-                }
-                for (k, g) in row.iter_mut().enumerate() {
-                    let j = i + k;
-                    *g += c[0] * a0[j] + c[1] * a1[j] + c[2] * a2[j];
-                }
+                fold3(row, &c, [&a0[i..n], &a1[i..n], &a2[i..n]]);
             } else {
-                for (k, g) in row.iter_mut().enumerate() {
-                    let j = i + k;
-                    *g += c[0] * a0[j]
-                        + c[1] * a1[j]
-                        + c[2] * a2[j]
-                        + c[3] * a3[j]
-                        + c[4] * a4[j]
-                        + c[5] * a5[j];
-                }
+                let rot = [&a3[i..n], &a4[i..n], &a5[i..n]];
+                fold6(row, &c, [&a0[i..n], &a1[i..n], &a2[i..n]], rot);
             }
         }
         self.btb += (0..6).map(|r| w[r] * b[r] * b[r]).sum::<f64>();
@@ -146,6 +140,40 @@ impl<const P: usize> GramAccumulator<P> {
     }
 }
 
+/// `row[j] += Σ_r c[r]·a[r][j]` over the three position rows. The slices are cut to one
+/// length first, so the loop has no bounds checks and vectorises.
+#[inline]
+fn fold3(row: &mut [f64], c: &[f64; 6], a: [&[f64]; 3]) {
+    let m = row.len();
+    let (Some(a0), Some(a1), Some(a2)) = (a[0].get(..m), a[1].get(..m), a[2].get(..m)) else {
+        return;
+    };
+    for k in 0..m {
+        row[k] += c[0] * a0[k] + c[1] * a1[k] + c[2] * a2[k];
+    }
+}
+
+/// As [`fold3`] over all six rows of a pose (`p`: position rows, `r`: rotation rows).
+#[inline]
+fn fold6(row: &mut [f64], c: &[f64; 6], p: [&[f64]; 3], r: [&[f64]; 3]) {
+    let m = row.len();
+    let ([b0, b1, b2], [b3, b4, b5]) = (p, r);
+    let (Some(b0), Some(b1), Some(b2), Some(b3), Some(b4), Some(b5)) = (
+        b0.get(..m),
+        b1.get(..m),
+        b2.get(..m),
+        b3.get(..m),
+        b4.get(..m),
+        b5.get(..m),
+    ) else {
+        return;
+    };
+    for k in 0..m {
+        row[k] +=
+            c[0] * b0[k] + c[1] * b1[k] + c[2] * b2[k] + c[3] * b3[k] + c[4] * b4[k] + c[5] * b5[k];
+    }
+}
+
 impl<const P: usize> Default for GramAccumulator<P> {
     fn default() -> Self {
         Self::new()
@@ -162,17 +190,39 @@ pub fn cholesky_upper<const P: usize>(
     r: &mut [[f64; P]; P],
 ) -> Result<()> {
     check_capacity::<P>(n)?;
-    let dmax = (0..n).map(|i| a[i][i]).fold(0.0, f64::max);
-    for i in 0..n {
-        for j in 0..n {
-            r[i][j] = if j >= i { a[i][j] } else { 0.0 };
-        }
+    for (i, (ri, ai)) in r.iter_mut().zip(a.iter()).take(n).enumerate() {
+        ri[..i].fill(0.0);
+        ri[i..n].copy_from_slice(&ai[i..n]);
     }
+    cholesky_upper_in_place(r, n, rel_tol)
+}
+
+/// [`cholesky_upper`] overwriting its input: the upper triangle of the leading `n`×`n`
+/// block of `r` becomes the factor (the strict lower triangle is neither read nor
+/// written), so a caller that builds the matrix in its final place needs no copy.
+///
+/// Right-looking (outer-product) order: after row `k` is final, its outer product is
+/// subtracted from the trailing rows, each a contiguous run in row-major storage, so the
+/// inner loop has no dependent chain of additions and vectorises.
+pub fn cholesky_upper_in_place<const P: usize>(
+    r: &mut [[f64; P]; P],
+    n: usize,
+    rel_tol: f64,
+) -> Result<()> {
+    check_capacity::<P>(n)?;
+    let n = n.min(P);
+    let dmax = r
+        .iter()
+        .take(n)
+        .enumerate()
+        .map(|(i, ri)| ri[i])
+        .fold(0.0, f64::max);
     for k in 0..n {
-        let mut d = r[k][k];
-        for i in 0..k {
-            d -= r[i][k] * r[i][k];
-        }
+        let (head, tail) = r.split_at_mut(k + 1);
+        let Some(rk) = head.last_mut() else {
+            break;
+        };
+        let d = rk[k];
         if d.is_nan() || d <= rel_tol * dmax || !d.is_finite() {
             return Err(Error::RankDeficient {
                 rank: k,
@@ -180,13 +230,15 @@ pub fn cholesky_upper<const P: usize>(
             });
         }
         let dk = libm::sqrt(d);
-        r[k][k] = dk;
-        for j in (k + 1)..n {
-            let mut s = r[k][j];
-            for i in 0..k {
-                s -= r[i][k] * r[i][j];
+        rk[k] = dk;
+        for x in &mut rk[k + 1..n] {
+            *x /= dk;
+        }
+        for (i, ri) in (k + 1..n).zip(tail.iter_mut()) {
+            let f = rk[i];
+            for (x, &y) in ri[i..n].iter_mut().zip(rk[i..n].iter()) {
+                *x -= f * y;
             }
-            r[k][j] = s / dk;
         }
     }
     Ok(())
