@@ -143,7 +143,7 @@ impl<const P: usize> LsqAccumulator<P> {
     /// rows, `qtb[k]` and `beta`. The norm is taken on entries scaled by their largest
     /// magnitude, so no square can overflow or underflow.
     fn reflect_column(&mut self, rows: &mut [[f64; P]; 6], beta: &mut [f64; 6], k: usize) {
-        let n = self.n;
+        let n = self.n.min(P);
         let (Some(rk), Some(qk)) = (self.r.get_mut(k), self.qtb.get_mut(k)) else {
             return;
         };
@@ -185,7 +185,28 @@ impl<const P: usize> LsqAccumulator<P> {
         // s_j = τ·(R[k][j] + Σ_i v_i·rows[i][j]), then R[k][j] −= s_j, rows[i][j] −= s_j·v_i,
         // all six rows in one pass per column.
         let [a0, a1, a2, a3, a4, a5] = rows;
-        for j in (k + 1)..n {
+        let (Some(rk), Some(a0), Some(a1), Some(a2), Some(a3), Some(a4), Some(a5)) = (
+            rk.get_mut(k + 1..n),
+            a0.get_mut(k + 1..n),
+            a1.get_mut(k + 1..n),
+            a2.get_mut(k + 1..n),
+            a3.get_mut(k + 1..n),
+            a4.get_mut(k + 1..n),
+            a5.get_mut(k + 1..n),
+        ) else {
+            return;
+        };
+        // Equal lengths, known to the compiler: no bounds checks, the loop vectorises.
+        let len = rk.len();
+        let (a0, a1, a2, a3, a4, a5) = (
+            &mut a0[..len],
+            &mut a1[..len],
+            &mut a2[..len],
+            &mut a3[..len],
+            &mut a4[..len],
+            &mut a5[..len],
+        );
+        for j in 0..len {
             let s = tau
                 * (rk[j]
                     + v[0] * a0[j]
