@@ -126,6 +126,18 @@ pub fn jacobi_svd<const P: usize>(
     }
 }
 
+/// The pair test `|γ| <= tol·√α·√β` of the values-only sweep, squared when no product can
+/// underflow (the square roots, not the vector work, dominate a pair of short rows).
+#[inline]
+fn orthogonal(gamma: f64, alpha: f64, beta: f64, tol: f64) -> bool {
+    let ab = alpha * beta;
+    if ab > 1e-250 && gamma * gamma > 1e-280 {
+        gamma * gamma <= (tol * tol) * ab
+    } else {
+        gamma.abs() <= tol * libm::sqrt(alpha) * libm::sqrt(beta)
+    }
+}
+
 /// Singular values only (sorted descending into `sigma[0..n]`) of the leading `n`×`n`
 /// block of `a`, which is destroyed.
 ///
@@ -173,7 +185,7 @@ pub fn jacobi_singular_values<const P: usize>(
                 if gamma == 0.0
                     || alpha == 0.0
                     || beta == 0.0
-                    || libm::fabs(gamma) <= tol * libm::sqrt(alpha) * libm::sqrt(beta)
+                    || orthogonal(gamma, alpha, beta, tol)
                 {
                     continue;
                 }
@@ -206,21 +218,42 @@ pub fn jacobi_singular_values<const P: usize>(
 }
 
 /// Rutishauser's rotation `(c, s, t = s/c)` that orthogonalises two vectors of squared
-/// norms `alpha`, `beta` and inner product `gamma != 0`. Plain square roots instead of
-/// `hypot` (the pair's scalar work, not its two vector passes, dominates for small `n`):
-/// `1 + ζ²` cannot overflow below `|ζ| = 1e150`, beyond which `t = 1/(2ζ)` to rounding,
-/// and `|t| <= 1`.
+/// norms `alpha`, `beta` and inner product `gamma != 0`:
+/// `t = sign(ζ)/(|ζ| + √(1 + ζ²))`, `ζ = (β − α)/(2γ)`, `c = 1/√(1 + t²)`.
+///
+/// Why this form: for short rows the pair's chain of dependent divisions and square roots,
+/// not its two vector passes, sets the cost. With `d = β − α`, `g = 2γ`, `r = √(d² + g²)`
+/// and `u = |d| + r`, the same rotation is `t = ±|g|/u`, `c = u/w`, `s = ±|g|/w` with
+/// `w = √(u² + g²) = √(2ru)`: two dependent square roots and one division instead of three
+/// divisions and two square roots (`t` comes off the critical path). Outside the range in
+/// which `d² + g²` can neither overflow nor underflow, the textbook form in `ζ`.
 #[inline]
 fn jacobi_rotation(alpha: f64, beta: f64, gamma: f64) -> (f64, f64, f64) {
-    let zeta = (beta - alpha) / (2.0 * gamma);
-    let t = if libm::fabs(zeta) < 1e150 {
-        libm::copysign(1.0, zeta) / (libm::fabs(zeta) + libm::sqrt(1.0 + zeta * zeta))
+    let d = beta - alpha;
+    let g = 2.0 * gamma;
+    let m = d.abs().max(g.abs());
+    if m > 1e-150 && m < 1e150 {
+        let r = libm::sqrt(d * d + g * g);
+        let u = d.abs() + r;
+        let w = libm::sqrt(2.0 * r * u);
+        // sign(ζ) = sign(d)·sign(g), with d = +0 counted positive as ζ = +0/g would be.
+        let ag = if (d < 0.0) == (g < 0.0) {
+            g.abs()
+        } else {
+            -g.abs()
+        };
+        return (u / w, ag / w, ag / u);
+    }
+    let zeta = d / g;
+    let t = if zeta.abs() < 1e150 {
+        zeta.signum() / (zeta.abs() + libm::sqrt(1.0 + zeta * zeta))
     } else {
         0.5 / zeta
     };
     let c = 1.0 / libm::sqrt(1.0 + t * t);
     (c, c * t, t)
 }
+
 /// `Σⱼ a[p][j]·a[q][j]` over the leading `n` columns.
 fn row_dot<const P: usize>(a: &[[f64; P]; P], n: usize, p: usize, q: usize) -> f64 {
     super::util::dot(&a[p][..n], &a[q][..n])
