@@ -140,8 +140,7 @@ impl<const P: usize> LsqAccumulator<P> {
     /// Zeroes column `k` of `rows` (columns before `k` are zero already) against `R[k][k]`
     /// with the Householder reflection that makes the new diagonal `μ = |(R[k][k], rows[·][k])|`
     /// (LAPACK `dlarfgp`'s non-negative form), applied to the rest of row `k` of `R`, the
-    /// rows, `qtb[k]` and `beta`. The norm is taken on entries scaled by their largest
-    /// magnitude, so no square can overflow or underflow.
+    /// rows, `qtb[k]` and `beta` (see [`reflector6`]).
     fn reflect_column(&mut self, rows: &mut [[f64; P]; 6], beta: &mut [f64; 6], k: usize) {
         let n = self.n.min(P);
         let (Some(rk), Some(qk)) = (self.r.get_mut(k), self.qtb.get_mut(k)) else {
@@ -154,28 +153,9 @@ impl<const P: usize> LsqAccumulator<P> {
         for (xi, row) in x.iter_mut().zip(rows.iter()) {
             *xi = row.get(k).copied().unwrap_or(0.0);
         }
-        let m = x.iter().fold(libm::fabs(x0), |m, v| m.max(libm::fabs(*v)));
-        if x.iter().all(|&v| v == 0.0) || m == 0.0 {
+        let Some((mu, tau, v)) = reflector6(x0, &x) else {
             return;
-        }
-        let inv = 1.0 / m;
-        let sigma: f64 = x.iter().map(|v| (v * inv) * (v * inv)).sum();
-        let mu = m * libm::sqrt((x0 * inv) * (x0 * inv) + sigma);
-        // v0 = x0 − μ without cancellation when x0 > 0.
-        let v0 = if x0 > 0.0 {
-            -(m * sigma) * (m / (x0 + mu))
-        } else {
-            x0 - mu
         };
-        if v0 == 0.0 {
-            // The rows' part underflowed against R[k][k]: nothing to fold to rounding.
-            return;
-        }
-        let tau = -v0 / mu;
-        let mut v = [0.0; 6];
-        for (vi, xi) in v.iter_mut().zip(x.iter()) {
-            *vi = xi / v0;
-        }
         rk[k] = mu;
         for row in rows.iter_mut() {
             if let Some(e) = row.get_mut(k) {
@@ -260,6 +240,53 @@ impl<const P: usize> Default for LsqAccumulator<P> {
     fn default() -> Self {
         Self::new()
     }
+}
+
+/// The reflection of [`LsqAccumulator::add_rows6`] for column `k`: from the diagonal entry
+/// `x0` and the six row entries `x` (not all zero), `(μ, τ, v)` with `μ = |(x0, x)| >= 0`,
+/// `v = x/v₀`, `v₀ = x0 − μ` (computed without cancellation when `x0 > 0`), `τ = −v₀/μ`;
+/// `None` when there is nothing to fold (all zero, or the rows' part underflowed against
+/// `x0`).
+///
+/// Why two paths: a pose folds one reflection per column, and its chain of dependent
+/// divisions and square roots, not the vector update, sets the cost of short rows. When
+/// no square can overflow or underflow (the normal case) the norm is taken directly and
+/// `1/v₀ = −(x0 + μ)/Σx²` comes with one division that runs beside the square root;
+/// otherwise the entries are first scaled by their largest magnitude.
+#[inline]
+fn reflector6(x0: f64, x: &[f64; 6]) -> Option<(f64, f64, [f64; 6])> {
+    if x.iter().all(|&v| v == 0.0) {
+        return None;
+    }
+    let m = x.iter().fold(x0.abs(), |m, v| m.max(v.abs()));
+    let tiny = x.iter().all(|v| v.abs() < 1e-100);
+    if m < 1e100 && !tiny {
+        let sigma =
+            (x[0] * x[0] + x[1] * x[1]) + (x[2] * x[2] + x[3] * x[3]) + (x[4] * x[4] + x[5] * x[5]);
+        let mu = libm::sqrt(x0 * x0 + sigma);
+        let (tau, inv_v0) = if x0 > 0.0 {
+            let p = x0 + mu;
+            (sigma / (p * mu), -p / sigma)
+        } else {
+            let v0 = x0 - mu;
+            (-v0 / mu, 1.0 / v0)
+        };
+        return Some((mu, tau, x.map(|xi| xi * inv_v0)));
+    }
+    // Scaled by the largest magnitude: no square can overflow or underflow.
+    let inv = 1.0 / m;
+    let sigma: f64 = x.iter().map(|v| (v * inv) * (v * inv)).sum();
+    let mu = m * libm::sqrt((x0 * inv) * (x0 * inv) + sigma);
+    let v0 = if x0 > 0.0 {
+        -(m * sigma) * (m / (x0 + mu))
+    } else {
+        x0 - mu
+    };
+    if v0 == 0.0 {
+        // The rows' part underflowed against x0: nothing to fold to rounding.
+        return None;
+    }
+    Some((mu, -v0 / mu, x.map(|xi| xi / v0)))
 }
 
 #[cfg(test)]
