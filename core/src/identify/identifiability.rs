@@ -364,10 +364,13 @@ fn greedy<const P: usize>(
             };
         }
         if norm > 0.0 {
-            // Two passes of modified Gram–Schmidt for a stable residual.
+            // Two passes of modified Gram–Schmidt for a stable residual. Column k of the
+            // triangular R, and every basis vector built from columns before it, vanish
+            // below row k: only the leading k + 1 entries take part.
+            let len = (k + 1).min(n);
             for _ in 0..2 {
                 for b in 0..n_basis {
-                    let (q, t) = (&ws.mat[b][..n], &mut ws.tmp[..n]);
+                    let (q, t) = (&ws.mat[b][..len], &mut ws.tmp[..len]);
                     let d = dot(q, t);
                     for (ti, &qi) in t.iter_mut().zip(q.iter()) {
                         *ti -= d * qi;
