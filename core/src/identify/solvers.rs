@@ -162,11 +162,12 @@ pub(crate) fn identify_into<const N: usize, const P: usize>(
     }
     out.algorithm = opts.algorithm;
     out.initial = residual_stats(&out.robot, data, opts)?;
-    out.iterations = match opts.algorithm {
+    let finish = match opts.algorithm {
         Algorithm::Ols => gauss_newton(&mut out.robot, data, opts, n, ws)?,
         Algorithm::Opt2 => levenberg_marquardt(&mut out.robot, data, opts, n, ws)?,
         Algorithm::Opt1 => bounded(&mut out.robot, data, opts, n, ws)?,
     };
+    out.iterations = finish.iterations;
     out.fitted = residual_stats(&out.robot, data, opts)?;
     out.sigma2 = 0.0;
     out.std_errors = [0.0; MAX_MODEL_PARAMS];
@@ -182,7 +183,7 @@ pub(crate) fn identify_into<const N: usize, const P: usize>(
         }
     }
     if opts.covariance {
-        covariance(data, opts, n, rows, ws, out)?;
+        covariance(data, opts, n, rows, finish.gram_current, ws, out)?;
     }
     Ok(())
 }
@@ -314,6 +315,26 @@ fn solve_normal<const P: usize>(mat: &[[f64; P]; P], n: usize, x: &mut [f64]) ->
     solve_upper(mat, n, x)
 }
 
+/// How a solver ended.
+#[derive(Clone, Copy)]
+struct Finish {
+    /// Iterations used.
+    iterations: u32,
+    /// Whether `ws.gram` holds the unit-scaled normal equations (and in `btb` the cost) of
+    /// the returned model: then the covariance needs no further pass over the data.
+    gram_current: bool,
+}
+
+impl Finish {
+    /// Ended at a model whose normal equations are in `ws.gram`.
+    const fn current(iterations: u32) -> Self {
+        Finish {
+            iterations,
+            gram_current: true,
+        }
+    }
+}
+
 /// OLS: Gauss–Newton with the minimum-norm least-squares step (as `lsqminnorm`) on
 /// unit-scaled columns, halving the step up to 30 times when the cost rises. The step comes
 /// from the Cholesky factor of the scaled normal equations — for the full-rank identifiable
@@ -330,7 +351,7 @@ fn gauss_newton<const N: usize, const P: usize>(
     opts: &IdentifyOptions<'_>,
     n: usize,
     ws: &mut Workspace<P>,
-) -> Result<u32> {
+) -> Result<Finish> {
     // One trial model, equal to `robot` except for the fitted parameters being tried.
     let mut trial = *robot;
     unit_scale(ws, n);
@@ -338,7 +359,7 @@ fn gauss_newton<const N: usize, const P: usize>(
     for it in 0..opts.max_iterations {
         get_x(robot, n, ws)?;
         if c <= opts.abs_cost_tol {
-            return Ok(it);
+            return Ok(Finish::current(it));
         }
         for k in 0..n {
             let d = sqrt(ws.gram.gram()[k][k]);
@@ -389,11 +410,17 @@ fn gauss_newton<const N: usize, const P: usize>(
         }
         let Some(c2) = accepted else {
             // No decrease along the Gauss–Newton direction: at a minimum to rounding.
-            return Ok(it);
+            return Ok(Finish {
+                iterations: it,
+                gram_current: last,
+            });
         };
         *robot = trial;
         if dx <= opts.xtol * (xn + opts.xtol) || (c - c2) <= opts.ftol * c {
-            return Ok(it + 1);
+            return Ok(Finish {
+                iterations: it + 1,
+                gram_current: !last,
+            });
         }
         c = c2;
     }
@@ -410,7 +437,7 @@ fn levenberg_marquardt<const N: usize, const P: usize>(
     opts: &IdentifyOptions<'_>,
     n: usize,
     ws: &mut Workspace<P>,
-) -> Result<u32> {
+) -> Result<Finish> {
     const FACTOR: f64 = 100.0;
     let mut delta = 0.0;
     let mut lambda = 0.0;
@@ -423,7 +450,7 @@ fn levenberg_marquardt<const N: usize, const P: usize>(
         unit_scale(ws, n);
         let fnorm2 = accumulate_gram(robot, data, opts, n, ws)?;
         if fnorm2 <= opts.abs_cost_tol {
-            return Ok(it);
+            return Ok(Finish::current(it));
         }
         if factor_gram(ws, n, GramSel::All).is_ok() {
             // qtb = R⁻ᵀ·Jᵀe, so that RᵀR x = Rᵀ qtb is the Gauss–Newton system.
@@ -512,7 +539,10 @@ fn levenberg_marquardt<const N: usize, const P: usize>(
                 || delta <= opts.xtol * xnorm_new
                 || fnorm1 * fnorm1 <= opts.abs_cost_tol
             {
-                return Ok(it + 1);
+                return Ok(Finish {
+                    iterations: it + 1,
+                    gram_current: !accepted,
+                });
             }
             if accepted {
                 break;
@@ -536,7 +566,7 @@ fn bounded<const N: usize, const P: usize>(
     opts: &IdentifyOptions<'_>,
     n: usize,
     ws: &mut Workspace<P>,
-) -> Result<u32> {
+) -> Result<Finish> {
     let Some(b) = opts.bounds else {
         return Err(Error::InvalidParameter {
             index: 0,
@@ -561,7 +591,7 @@ fn bounded<const N: usize, const P: usize>(
         unit_scale(ws, n);
         let c = accumulate_gram(robot, data, opts, n, ws)?;
         if c <= opts.abs_cost_tol {
-            return Ok(it);
+            return Ok(Finish::current(it));
         }
         // Descent direction of the cost along each parameter: Jᵀe.
         let mut nf = 0;
@@ -577,7 +607,7 @@ fn bounded<const N: usize, const P: usize>(
             }
         }
         if nf == 0 {
-            return Ok(it);
+            return Ok(Finish::current(it));
         }
         let mut improved = false;
         for _ in 0..40 {
@@ -618,7 +648,10 @@ fn bounded<const N: usize, const P: usize>(
                     lambda = (lambda / 3.0).max(1e-15);
                     improved = true;
                     if dx <= opts.xtol * (xn + opts.xtol) || (c - c2) <= opts.ftol * c {
-                        return Ok(it + 1);
+                        return Ok(Finish {
+                            iterations: it + 1,
+                            gram_current: false,
+                        });
                     }
                     break;
                 }
@@ -630,7 +663,7 @@ fn bounded<const N: usize, const P: usize>(
         }
         if !improved {
             // No descent inside the box: a constrained minimum to rounding.
-            return Ok(it);
+            return Ok(Finish::current(it));
         }
     }
     Err(Error::NotConverged {
@@ -638,49 +671,56 @@ fn bounded<const N: usize, const P: usize>(
     })
 }
 
-/// σ², standard errors and strong correlations at the fitted model.
+/// σ², standard errors and strong correlations at the fitted model. With `gram_current`
+/// (see [`Finish`]) the normal equations the solver left are used as they are; otherwise
+/// they are accumulated at the fitted model.
 fn covariance<const N: usize, const P: usize>(
     data: &[Measurement<N>],
     opts: &IdentifyOptions<'_>,
     n: usize,
     rows: usize,
+    gram_current: bool,
     ws: &mut Workspace<P>,
     out: &mut Identification<N>,
 ) -> Result<()> {
     let robot = &out.robot;
     unit_scale(ws, n);
-    let c = accumulate_gram(robot, data, opts, n, ws)?;
+    // `btb` is the cost accumulated the same way, term for term, as `accumulate_gram`'s.
+    let c = if gram_current && ws.gram.n() == n {
+        ws.gram.btb()
+    } else {
+        accumulate_gram(robot, data, opts, n, ws)?
+    };
     out.sigma2 = if rows > n { c / (rows - n) as f64 } else { 0.0 };
     // Covariance (RᵀR)⁻¹ from the normal equations (2–3 digits suffice for standard
-    // errors); the backward-stable Givens factor when they are numerically singular.
-    if factor_gram(ws, n, GramSel::All).is_err() {
+    // errors); the backward-stable Givens factor when they are numerically singular. The
+    // inverse goes to `ws.v`, read straight from the factor.
+    let inverted = if factor_gram(ws, n, GramSel::All).is_err() {
         accumulate(robot, data, opts, n, ws)?;
-        for i in 0..n {
-            ws.v[i] = ws.lsq.r()[i];
-        }
+        let Workspace { lsq, v, .. } = ws;
+        upper_inverse_gram(lsq.r(), n, v)
     } else {
-        for i in 0..n {
-            ws.v[i] = ws.mat[i];
-        }
-    }
-    let Workspace { v, mat, .. } = ws;
-    if upper_inverse_gram(v, n, mat).is_err() {
+        let Workspace { mat, v, .. } = ws;
+        upper_inverse_gram(mat, n, v)
+    };
+    if inverted.is_err() {
         // Identifiable at the start but singular at the optimum: report no errors.
         return Ok(());
     }
+    let cov = &ws.v;
     for k in 0..n {
-        let var = (out.sigma2 * ws.mat[k][k]).max(0.0);
+        let var = (out.sigma2 * cov[k][k]).max(0.0);
         if let Some(s) = out.std_errors.get_mut(ws.cols[k]) {
             *s = sqrt(var);
         }
     }
     for a in 0..n {
         for b in (a + 1)..n {
-            let d = sqrt(ws.mat[a][a] * ws.mat[b][b]);
+            let d = sqrt(cov[a][a] * cov[b][b]);
             if d <= 0.0 {
                 continue;
             }
-            let rho = ws.mat[a][b] / d;
+            let rho = cov[a][b] / d;
             if rho.abs() > CORRELATION_REPORT_THRESHOLD {
                 if let Some(slot) = out.correlated.get_mut(out.n_correlated) {
                     *slot = Correlation {

@@ -120,15 +120,26 @@ pub fn upper_inverse_gram<const P: usize>(
     check_capacity::<P>(n)?;
     check_finite_block(r, n, true)?;
     check_diagonal(r, n)?;
-    // X = R⁻¹, column by column: X[j][j] = 1/R[j][j], X[i][j] = -Σ_{k=i+1..=j} R[i][k] X[k][j] / R[i][i].
-    for j in 0..n {
-        out[j][j] = 1.0 / r[j][j];
-        for i in (0..j).rev() {
-            let mut sum = 0.0;
-            for k in i + 1..=j {
-                sum += r[i][k] * out[k][j];
+    // X = R⁻¹, row by row from the bottom (R·X = I): X[i] = (e_i − Σ_{k>i} R[i][k]·X[k]) /
+    // R[i][i]. Each step is an update of a contiguous row (it vectorises, no dependent
+    // chain of additions), and every X[i][j] gets its terms in ascending k as in the
+    // textbook column recurrence, so the result is the same.
+    let n = n.min(P);
+    for i in (0..n).rev() {
+        let (head, tail) = out.split_at_mut(i + 1);
+        let (Some(xi), Some(ri)) = (head.last_mut(), r.get(i)) else {
+            continue;
+        };
+        xi[..n].fill(0.0);
+        for (k, xk) in (i + 1..n).zip(tail.iter()) {
+            let f = ri[k];
+            for (x, &y) in xi[k..n].iter_mut().zip(xk[k..n].iter()) {
+                *x -= f * y;
             }
-            out[i][j] = -sum / r[i][i];
+        }
+        xi[i] = 1.0;
+        for x in &mut xi[i..n] {
+            *x /= ri[i];
         }
     }
     // C = X Xᵀ in place, row by row: C[i][j] (j >= i) only needs X[i][k], X[j][k] for k >= j,
@@ -136,11 +147,7 @@ pub fn upper_inverse_gram<const P: usize>(
     for i in 0..n {
         for j in i..n {
             let (xi, xj) = (&out[i], &out[j]);
-            let sum: f64 = xi[j..n]
-                .iter()
-                .zip(xj[j..n].iter())
-                .map(|(p, q)| p * q)
-                .sum();
+            let sum = super::util::dot(&xi[j..n], &xj[j..n]);
             if !sum.is_finite() {
                 return Err(overflow(n));
             }
