@@ -18,8 +18,8 @@
 use super::data::{ComponentMask, Measurement, add_rows};
 use super::{IdentifyOptions, MAX_MODEL_PARAMS, Workspace};
 use crate::error::{Error, ParamIndex, Result};
+use crate::linalg::bidiag::singular_values;
 use crate::linalg::dot;
-use crate::linalg::svd::jacobi_singular_values;
 use crate::math::sqrt;
 use crate::model::{JointState, Robot};
 use crate::params::ParamSet;
@@ -208,8 +208,8 @@ pub(crate) fn analyze_into<const N: usize, const P: usize>(
         super::data::accumulate(robot, data, opts, n_id, ws)?;
     }
     copy_r_unit_scaled(ws, n_id);
-    let Workspace { mat, sv, .. } = ws;
-    jacobi_singular_values(mat, n_id, sv)?;
+    let Workspace { mat, sv, tmp, .. } = ws;
+    singular_values(mat, n_id, sv, tmp)?;
     ws.n_sv = n_id;
     if n_id > 0 {
         let (smax, smin) = (ws.sv[0], ws.sv[n_id - 1]);

@@ -18,6 +18,7 @@
 //! - Large structs are valid when all-zero (so they can be `static` or `Box::new_zeroed`)
 //!   and are re-initialised in place with `reset`.
 
+pub mod bidiag;
 pub mod gram;
 pub mod lm;
 pub mod lsq;
