@@ -347,6 +347,10 @@ fn greedy<const P: usize>(
 ) -> Result<ParamSet> {
     let mut kept = ParamSet::new();
     let mut n_basis = 0;
+    // While every column so far is kept, the basis is ±e_0 … ±e_{k−1} (R is triangular
+    // with a non-zero diagonal there): Gram–Schmidt against it only zeroes the leading
+    // entries, exactly. `prefix` counts these implicit basis vectors.
+    let mut prefix = 0;
     let longest = (0..n).map(|k| column_norm(ws, k)).fold(0.0, f64::max);
     for k in 0..n {
         let norm = column_norm(ws, k);
@@ -368,8 +372,9 @@ fn greedy<const P: usize>(
             // triangular R, and every basis vector built from columns before it, vanish
             // below row k: only the leading k + 1 entries take part.
             let len = (k + 1).min(n);
+            ws.tmp[..prefix.min(len)].fill(0.0);
             for _ in 0..2 {
-                for b in 0..n_basis {
+                for b in prefix..n_basis {
                     let (q, t) = (&ws.mat[b][..len], &mut ws.tmp[..len]);
                     let d = dot(q, t);
                     for (ti, &qi) in t.iter_mut().zip(q.iter()) {
@@ -382,6 +387,10 @@ fn greedy<const P: usize>(
         if norm > 0.0 && res >= tol {
             for i in 0..n {
                 ws.mat[n_basis][i] = ws.tmp[i] / res;
+            }
+            if prefix == k {
+                // Columns 0..=k all kept: this basis vector is ±e_k.
+                prefix += 1;
             }
             n_basis += 1;
             kept.insert(k)?;
