@@ -278,19 +278,27 @@ pub(crate) fn add_rows<const N: usize, const P: usize>(
     } else {
         [0.0; 6]
     };
-    // The pose's six rows at once (unmeasured ones with weight 0).
+    // The pose's six rows at once; an unmeasured row gets weight 0 (and zero entries).
     let mut c = 0.0;
     let mut rows = [[0.0; P]; 6];
     let mut wk = [0.0; 6];
+    let mut on = [false; 6];
     for k in 0..6 {
         if !m.mask.has(k) {
             continue;
         }
         wk[k] = m.weight * weight(opts, k);
-        for (j, &col) in cols.iter().enumerate() {
-            rows[k][j] = jac.get(col).map_or(0.0, |jc| jc[k]) * ws.colscale[j];
-        }
+        on[k] = true;
         c += wk[k] * e[k] * e[k];
+    }
+    // Column by column: one Jacobian column (six contiguous values) per parameter.
+    for (j, (&col, &scale)) in cols.iter().zip(ws.colscale.iter()).enumerate() {
+        let jc = jac.get(col).copied().unwrap_or([0.0; 6]);
+        for (k, row) in rows.iter_mut().enumerate() {
+            if let Some(x) = row.get_mut(j) {
+                *x = if on[k] { jc[k] * scale } else { 0.0 };
+            }
+        }
     }
     if ws.to_gram {
         ws.gram.add_rows6(&rows, &e, &wk)?;

@@ -231,8 +231,10 @@ pub fn cholesky_upper_in_place<const P: usize>(
         }
         let dk = libm::sqrt(d);
         rk[k] = dk;
+        // One division per pivot, not per entry (divisions are the slow scalar step here).
+        let inv = 1.0 / dk;
         for x in &mut rk[k + 1..n] {
-            *x /= dk;
+            *x *= inv;
         }
         for (i, ri) in (k + 1..n).zip(tail.iter_mut()) {
             let f = rk[i];
