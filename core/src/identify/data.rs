@@ -237,11 +237,19 @@ pub(crate) fn accumulate_gram<const N: usize, const P: usize>(
     ws.gram.reset(n_cols)?;
     ws.to_gram = true;
     let mut c = 0.0;
+    let mut folded = Ok(());
     for m in data.iter().filter(|m| m.weight > 0.0) {
-        c += add_rows(robot, m, true, opts, n_cols, ws)?;
+        match add_rows(robot, m, true, opts, n_cols, ws) {
+            Ok(v) => c += v,
+            Err(e) => {
+                folded = Err(e);
+                break;
+            }
+        }
     }
+    // Also on an error: a later fold must not land in `ws.gram` by accident.
     ws.to_gram = false;
-    Ok(c)
+    folded.map(|()| c)
 }
 
 /// Folds the rows of one pose (weighted by its weight) into `ws.lsq` or `ws.gram`; with

@@ -250,6 +250,7 @@ pub(crate) fn structural_step<const N: usize, const P: usize>(
     }
     load_cols(ws, requested.iter());
     ws.lsq.reset(p)?;
+    ws.to_gram = false;
     // Rows (6 per sample) outnumber the parameters about twice over: generic enough.
     let samples = 8 + p as u32 / 3;
     let limits = robot.limits();
