@@ -109,6 +109,10 @@ fn bidiagonalise<const P: usize>(
 /// Zeroes column `k` below the diagonal (rows `k..n`, columns `k..n`); `d[k] = β`. The
 /// reflector's vector is kept in column `k` itself, below the diagonal.
 fn left_reflection<const P: usize>(a: &mut [[f64; P]; P], n: usize, k: usize, d: &mut [f64; P]) {
+    let n = n.min(P);
+    if k >= n {
+        return;
+    }
     let (head, tail) = a.split_at_mut(k + 1);
     let (Some(rk), Some(dk)) = (head.last_mut(), d.get_mut(k)) else {
         return;
@@ -151,6 +155,7 @@ fn left_reflection<const P: usize>(a: &mut [[f64; P]; P], n: usize, k: usize, d:
 /// Zeroes row `k` right of the superdiagonal (columns `k + 1..n`, rows `k + 1..n`) and
 /// returns the superdiagonal entry (0 for the last row).
 fn right_reflection<const P: usize>(a: &mut [[f64; P]; P], n: usize, k: usize) -> f64 {
+    let n = n.min(P);
     if k + 1 >= n {
         return 0.0;
     }
