@@ -124,7 +124,20 @@ pub(crate) fn scale_exponent<const P: usize>(a: &[[f64; P]; P], n: usize) -> Opt
 }
 
 /// Multiplies the leading block by `2^e` (exact unless entries become subnormal).
+///
+/// When `2^e` is itself a normal number (|e| <= 1022, every practical case) this is one
+/// multiplication per entry, the very operation `scalbn` performs then, without a call
+/// per entry; otherwise `scalbn` entry by entry.
 pub(crate) fn scale_block<const P: usize>(a: &mut [[f64; P]; P], n: usize, e: i32) {
+    if (-1022..=1022).contains(&e) {
+        let f = libm::scalbn(1.0, e);
+        for row in a.iter_mut().take(n) {
+            for v in row.iter_mut().take(n) {
+                *v *= f;
+            }
+        }
+        return;
+    }
     for row in a.iter_mut().take(n) {
         for v in row.iter_mut().take(n) {
             *v = libm::scalbn(*v, e);
