@@ -156,9 +156,10 @@ pub struct IdentifyOptions<'a> {
     /// Fit the identifiable subset even when the data leave some generically identifiable
     /// parameters undetermined (otherwise that is [`crate::Error::RankDeficient`]).
     pub allow_data_deficiency: bool,
-    /// Compute σ², standard errors and correlations of the result (one more Jacobian pass
-    /// and a p×p inverse). Off, they are reported as 0 / none: for repeated fits that only
-    /// need the parameters, e.g. a Monte-Carlo study.
+    /// Compute σ², standard errors and correlations of the result (a p×p inverse, and one
+    /// more Jacobian pass unless the solver ended holding the normal equations of the
+    /// fitted model). Off, they are reported as 0 / none: for repeated fits that only need
+    /// the parameters, e.g. a Monte-Carlo study.
     pub covariance: bool,
 }
 
