@@ -350,8 +350,13 @@ pub fn residual_stats<const N: usize>(
     let (mut np, mut nr, mut sp, mut sr) = (0usize, 0usize, 0.0, 0.0);
     for m in data.iter().filter(|m| m.weight > 0.0) {
         let t = m.model_pose(robot)?;
-        let e = pose_error(&m.pose, &t, opts.orientation);
         let ex = pose_error(&m.pose, &t, OrientationError::Exact);
+        // The cost's form is usually the exact one too: one rotation log then.
+        let e = if opts.orientation == OrientationError::Exact {
+            ex
+        } else {
+            pose_error(&m.pose, &t, opts.orientation)
+        };
         for k in 0..6 {
             if m.mask.has(k) {
                 s.rows += 1;
