@@ -226,6 +226,24 @@ pub(crate) fn accumulate<const N: usize, const P: usize>(
     Ok(c)
 }
 
+/// As [`accumulate`] with a zero right-hand side: only the triangular factor of the
+/// Jacobian, which is all the identifiability analysis reads (it does not depend on the
+/// right-hand side), without a pose error per measurement.
+pub(crate) fn accumulate_jacobian<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    opts: &IdentifyOptions<'_>,
+    n_cols: usize,
+    ws: &mut Workspace<P>,
+) -> Result<()> {
+    ws.lsq.reset(n_cols)?;
+    ws.to_gram = false;
+    for m in data.iter().filter(|m| m.weight > 0.0) {
+        add_rows(robot, m, false, opts, n_cols, ws)?;
+    }
+    Ok(())
+}
+
 /// As [`accumulate`], into the normal equations `ws.gram` (the fast path of the iterations).
 pub(crate) fn accumulate_gram<const N: usize, const P: usize>(
     robot: &Robot<N>,

@@ -183,7 +183,7 @@ pub(crate) fn analyze_into<const N: usize, const P: usize>(
         ws.cols[k] = ws.free[k];
         ws.colscale[k] = 1.0;
     }
-    super::data::accumulate(robot, data, opts, n_struct, ws)?;
+    super::data::accumulate_jacobian(robot, data, opts, n_struct, ws)?;
     let kept = greedy(ws, n_struct, opts.rank_tol, &mut out.partner)?;
     let mut n_id = 0;
     for k in 0..n_struct {
@@ -205,7 +205,7 @@ pub(crate) fn analyze_into<const N: usize, const P: usize>(
         ws.colscale[k] = 1.0;
     }
     if n_id < n_struct {
-        super::data::accumulate(robot, data, opts, n_id, ws)?;
+        super::data::accumulate_jacobian(robot, data, opts, n_id, ws)?;
     }
     copy_r_unit_scaled(ws, n_id);
     let Workspace { mat, sv, tmp, .. } = ws;
