@@ -274,7 +274,11 @@ pub fn residual_stats<const N: usize>(
     for m in data.iter().filter(|m| m.weight > 0.0) {
         let t = robot.fk(&m.state)?;
         let e = pose_error(&m.pose, &t, opts.orientation);
-        let ex = pose_error(&m.pose, &t, OrientationError::Exact);
+        let ex = if opts.orientation == OrientationError::Exact {
+            e
+        } else {
+            pose_error(&m.pose, &t, OrientationError::Exact)
+        };
         for k in 0..6 {
             if m.mask.has(k) {
                 s.rows += 1;
