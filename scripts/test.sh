@@ -27,6 +27,7 @@ command -v cargo >/dev/null || fail "cargo is missing (install Rust with rustup)
 need_apt g++ g++
 need_apt octave-cli octave liboctave-dev
 need_apt mkoctfile liboctave-dev
+need_apt gnuplot gnuplot-nox   # Octave's headless figures
 if ! rustup target list --installed 2>/dev/null | grep -q thumbv7em-none-eabihf; then
     rustup target add thumbv7em-none-eabihf || fail "cannot add the thumbv7em-none-eabihf target"
 fi

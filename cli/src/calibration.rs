@@ -141,6 +141,45 @@ pub enum Failure {
     },
 }
 
+/// `start` with base and tool frames estimated from `data` (`kincal::frames`), and a note
+/// saying how far they moved and how well the nominal geometry then fits.
+pub fn init_frames<const N: usize>(
+    start: &Robot<N>,
+    data: &[Measurement<N>],
+    source: &str,
+) -> Result<(Robot<N>, String), crate::error::CliError> {
+    let est = kincal::frames::estimate_frames(start, data).map_err(|e| {
+        crate::error::CliError::numeric(format!(
+            "{source}: cannot estimate the base and tool frames from these poses: {e}"
+        ))
+    })?;
+    let moved = |t: &kincal::Transform| {
+        let v = kincal::pose::pose_to_vector6(t);
+        (
+            (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt() * 1e3,
+            (v[3] * v[3] + v[4] * v[4] + v[5] * v[5])
+                .sqrt()
+                .to_degrees(),
+        )
+    };
+    let (bp, br) = moved(&est.base_change);
+    let (tp, tr) = moved(&est.tool_change);
+    let mut note = format!(
+        "kincal: frames estimated from the data: base moved {bp:.1} mm / {br:.2}°, tool {tp:.1} mm / {tr:.2}°{}; \
+         nominal geometry with them: RMS {:.3} mm",
+        if est.tool_rotation_estimated {
+            ""
+        } else {
+            " (tool rotation not seen by single-point positions: kept)"
+        },
+        est.rms_pos_m * 1e3
+    );
+    if est.rms_rot_rad > 0.0 {
+        note.push_str(&format!(", {:.3}°", est.rms_rot_rad.to_degrees()));
+    }
+    Ok((est.robot, note))
+}
+
 /// Analysis, then every algorithm of `settings` in parallel.
 pub fn calibrate<const N: usize>(
     start: &Robot<N>,

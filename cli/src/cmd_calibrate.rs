@@ -38,8 +38,20 @@ use w = 1/σ², which makes the residual variance σ² printed in the report ≈
 noise is right. Only the ratio of the two weights changes the estimate.
 
 DATA: measurement CSV (see spec/measurements.md): q1..qN [rad, or _deg], x,y,z [m, or _mm]
-and an orientation (roll,pitch,yaw or qw,qx,qy,qz); position-only data identify from the
-position rows alone. Units in the model file are SI (m, rad).
+and an orientation (roll,pitch,yaw or qw,qx,qy,qz); position-only data (motion-capture
+markers, laser-tracker reflectors) identify from the position rows alone, and the
+identifiability report then shows what they cannot determine (e.g. the tool rotation, and
+link parameters that only turn the end effector about the measured point). Several points
+on one body: one row per point, with point_x, point_y, point_z [m, or _mm] giving the
+point's position in the tool frame (known by design); the rows measure T_e^b·Trans(point),
+so the points share one tool frame and together determine its rotation. Units in the model
+file are SI (m, rad).
+
+Unknown base and tool frames (a camera on the wrist observing a board, a tracker set up
+anywhere): --effects base_frame,tool_frame identifies them with the geometry, starting from
+the ROBOT's frames; when those are far off (more than a few cm or degrees), --init-frames
+first estimates both frames from the data with the nominal geometry (hand-eye equation for
+full poses, alternating rigid fits for positions; kincal::frames) and starts from there.
 
 Exit status: 0 success, 2 usage, 3 bad input (file:line, column and reason), 4 numerical
 failure (rank too low, no convergence).";
@@ -97,6 +109,9 @@ pub struct Args {
     /// Iteration limit of each algorithm
     #[arg(long, value_name = "N", default_value_t = 200)]
     pub max_iterations: u32,
+    /// Estimate the base and tool frames from the data (nominal geometry) before identifying
+    #[arg(long)]
+    pub init_frames: bool,
 }
 
 impl Args {
@@ -150,6 +165,15 @@ fn calibrate<const N: usize>(start: &Robot<N>, name: &str, args: &Args) -> Resul
         },
     )?;
     let meas = data::measurements::<N>(&set)?;
+    let initial;
+    let start = if args.init_frames {
+        let (r, note) = calibration::init_frames(start, &meas, &set.source)?;
+        eprintln!("{note}");
+        initial = r;
+        &initial
+    } else {
+        start
+    };
     let rows: usize = meas
         .iter()
         .map(|m| (0..6).filter(|&k| m.mask.has(k)).count())

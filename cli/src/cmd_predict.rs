@@ -14,7 +14,8 @@ pub const LONG_ABOUT: &str = "\
 Computes the model's end-effector pose T_e^b (forward kinematics, effects included) for the
 joint readings of every row of DATA. Pose columns of DATA, if any, are ignored; a file with
 joint columns only is enough (plus s1..sN / temp_c when the model has backlash / thermal
-effects).
+effects). A row with point_x, point_y, point_z (a measured point in the tool frame, see
+`kincal help calibrate`) predicts that point: T_e^b·Trans(point).
 
 POSES.csv has one row per DATA row: pose_id (if DATA has it), q1..qN [rad], x,y,z [m] and
 the unit quaternion qw,qx,qy,qz (qw >= 0) of the orientation, every number with full
@@ -77,8 +78,12 @@ fn predict<const N: usize>(
         .iter()
         .enumerate()
         .map(|(i, row)| {
-            let t = robot
-                .fk(&data::joint_state::<N>(row))
+            // A row naming a measured point (point_x/y/z) predicts that point's frame.
+            let mut m = kincal::identify::Measurement::new([0.0; N], kincal::Transform::identity());
+            m.state = data::joint_state::<N>(row);
+            m.point = row.point_m;
+            let t = m
+                .model_pose(robot)
                 .map_err(|e| core_error(e, &set.source, |_| data::line_of(&set, i)))?;
             let p = t.translation.vector;
             Ok(PoseRow {

@@ -97,7 +97,7 @@ pub fn evaluate<const N: usize>(
         .iter()
         .enumerate()
         .map(|(i, m)| {
-            let t = robot.fk(&m.state).map_err(|e| (i, e))?;
+            let t = m.model_pose(robot).map_err(|e| (i, e))?;
             let mut e = PoseErrors::between(&m.pose, &t);
             if !m.mask.has_orientation() {
                 e.rot_rad = [0.0; 3];

@@ -121,7 +121,8 @@ pub fn measured_pose(
     }))
 }
 
-/// Every row as a core measurement (the set must have positions).
+/// Every row as a core measurement (the set must have positions); `point_x/y/z` become
+/// [`Measurement::point`].
 pub fn measurements<const N: usize>(set: &MeasurementSet) -> Result<Vec<Measurement<N>>, CliError> {
     set.rows
         .iter()
@@ -137,6 +138,7 @@ pub fn measurements<const N: usize>(set: &MeasurementSet) -> Result<Vec<Measurem
                 pose,
                 mask,
                 weight: 1.0,
+                point: row.point_m,
             })
         })
         .collect()

@@ -80,6 +80,7 @@ impl<const N: usize> Design<N> {
 }
 
 /// A candidate pool with its Jacobian blocks and positions.
+#[derive(Debug)]
 pub struct OwnedPool<const N: usize> {
     pub q: Vec<[f64; N]>,
     pub blocks: Vec<PoseBlock<P>>,

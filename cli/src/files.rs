@@ -64,7 +64,7 @@ fn same_inode(_a: &Path, _b: &Path) -> bool {
 
 /// True if writing `output` would replace `input`. A symlink at `output` is resolved, so a
 /// link pointing at an input counts as that input.
-fn is_same_file(output: &Path, input: &Path) -> bool {
+pub fn is_same_file(output: &Path, input: &Path) -> bool {
     if let (Some(o), Some(i)) = (resolve(output), resolve(input))
         && o == i
     {

@@ -1,37 +1,9 @@
 //! `kincal`: the command-line tool of the kincal calibration toolkit (spec/cli.md).
 
-mod args;
-mod calibration;
-mod cmd_calibrate;
-mod cmd_demo;
-mod cmd_design_tool;
-mod cmd_evaluate;
-mod cmd_predict;
-mod cmd_select;
-mod cmd_validate;
-mod data;
-mod design_args;
-mod designs;
-mod error;
-// Tested modules whose API is wider than the commands use so far.
-#[allow(dead_code)]
-mod files;
-#[allow(dead_code)]
-mod measurements;
-mod model_file;
-mod plot;
-mod progress;
-mod report;
-mod robot_arg;
-#[allow(dead_code)]
-mod robot_file;
-mod study;
-mod study_plot;
-mod tool_file;
-mod units;
-// URDF import serves ROBOT arguments; the export has no command yet.
-#[allow(dead_code)]
-mod urdf;
+use kincal_cli::{
+    cmd_calibrate, cmd_crossval, cmd_demo, cmd_design_tool, cmd_diagnose, cmd_evaluate, cmd_import,
+    cmd_markers, cmd_predict, cmd_select, cmd_validate,
+};
 
 use std::process::ExitCode;
 
@@ -80,6 +52,20 @@ enum Command {
     /// Monte-Carlo comparison of data-acquisition designs on the same random robots
     #[command(long_about = cmd_evaluate::LONG_ABOUT, after_help = cmd_evaluate::EXAMPLE)]
     EvaluateDesigns(Box<cmd_evaluate::Args>),
+    /// The sim-to-real diagnosis: where the residual lies, which effect causes it, how far
+    /// it shrinks
+    #[command(long_about = cmd_diagnose::LONG_ABOUT, after_help = cmd_diagnose::EXAMPLE)]
+    Diagnose(cmd_diagnose::Args),
+    /// Held-out residuals of the nominal and the calibrated model (k-fold by pose_id), noise
+    /// floor, outliers
+    #[command(long_about = cmd_crossval::LONG_ABOUT, after_help = cmd_crossval::EXAMPLE)]
+    Crossval(cmd_crossval::Args),
+    /// Motion-capture marker export + marker design + joint readings -> measurement CSV
+    #[command(long_about = cmd_markers::LONG_ABOUT, after_help = cmd_markers::EXAMPLE)]
+    Markers(cmd_markers::Args),
+    /// A public real-robot data set, read as published, as measurement CSV and robot file
+    #[command(name = "import-dataset", long_about = cmd_import::LONG_ABOUT, after_help = cmd_import::EXAMPLE)]
+    ImportDataset(cmd_import::Args),
 }
 
 fn main() -> ExitCode {
@@ -92,6 +78,10 @@ fn main() -> ExitCode {
         Command::SelectPoses(a) => cmd_select::run(a),
         Command::DesignTool(a) => cmd_design_tool::run(a),
         Command::EvaluateDesigns(a) => cmd_evaluate::run(a),
+        Command::Diagnose(a) => cmd_diagnose::run(a),
+        Command::ImportDataset(a) => cmd_import::run(a),
+        Command::Crossval(a) => cmd_crossval::run(a),
+        Command::Markers(a) => cmd_markers::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

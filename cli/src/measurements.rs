@@ -92,6 +92,9 @@ pub struct MeasurementRow {
     /// End-effector origin in the base frame, metres.
     pub position_m: Option<[f64; 3]>,
     pub orientation: Option<Orientation>,
+    /// The measured point's position in the tool frame [m] (`point_x/y/z`): the row
+    /// measures that point of the end effector rather than the tool-frame origin.
+    pub point_m: Option<[f64; 3]>,
     /// s1..sN, each -1, 0 or 1.
     pub approach: Option<Vec<i8>>,
     /// Arm temperature, °C.
@@ -113,6 +116,8 @@ pub struct MeasurementSet {
     pub extra_columns: Vec<String>,
     pub orientation_form: Option<OrientationForm>,
     pub has_position: bool,
+    /// The file has the `point_x, point_y, point_z` columns.
+    pub has_point: bool,
     pub has_approach: bool,
     pub has_temperature: bool,
     /// Lower-case hex SHA-256 of the file's bytes.
@@ -365,6 +370,7 @@ enum Kind {
     PoseId,
     Joint(usize),
     Pos(usize),
+    Point(usize),
     Rpy(usize),
     Quat(usize),
     Approach(usize),
@@ -380,11 +386,13 @@ struct Column {
 }
 
 const POS_NAMES: [&str; 3] = ["x", "y", "z"];
+const POINT_NAMES: [&str; 3] = ["point_x", "point_y", "point_z"];
 const RPY_NAMES: [&str; 3] = ["roll", "pitch", "yaw"];
 const QUAT_NAMES: [&str; 4] = ["qw", "qx", "qy", "qz"];
 
-const KNOWN_COLUMNS: &str = "expected q1..qN, x/y/z, roll/pitch/yaw, qw/qx/qy/qz, pose_id, \
-                             s1..sN, temp_c, or a user column prefixed with extra_";
+const KNOWN_COLUMNS: &str = "expected q1..qN, x/y/z, roll/pitch/yaw, qw/qx/qy/qz, \
+                             point_x/point_y/point_z, pose_id, s1..sN, temp_c, or a user \
+                             column prefixed with extra_";
 
 /// Parses `k` in `q<k>` / `s<k>`: decimal, no sign, no leading zero.
 fn index_suffix(s: &str) -> Option<usize> {
@@ -418,6 +426,14 @@ fn classify(name: &str) -> Result<(Kind, Unit), String> {
             "'{base}' is an angle: expected no unit suffix, _rad or _deg"
         )),
     };
+    if let Some(i) = POINT_NAMES.iter().position(|&n| n == base) {
+        return match unit {
+            Unit::None | Unit::M | Unit::Mm => Ok((Kind::Point(i), unit)),
+            _ => Err(format!(
+                "'{base}' is a length: expected no unit suffix, _m or _mm"
+            )),
+        };
+    }
     if let Some(i) = POS_NAMES.iter().position(|&n| n == base) {
         return match unit {
             Unit::None | Unit::M | Unit::Mm => Ok((Kind::Pos(i), unit)),
@@ -456,6 +472,7 @@ struct Layout {
     columns: Vec<Column>,
     joint_cols: Vec<usize>,
     pos_cols: Option<[usize; 3]>,
+    point_cols: Option<[usize; 3]>,
     rpy_cols: Option<[usize; 3]>,
     quat_cols: Option<[usize; 4]>,
     approach_cols: Option<Vec<usize>>,
@@ -563,6 +580,16 @@ impl<'a> Parser<'a> {
                 .map_err(|e| self.io_err(Some(at), e))?;
             let content = raw.strip_suffix(b"\n").unwrap_or(&raw);
             let content = content.strip_suffix(b"\r").unwrap_or(content);
+            if content.contains(&b'\r') {
+                // A lone CR would end the line for the CSV records but not here, and the
+                // comment could not be written back (found by fuzzing).
+                return Err(self.err(
+                    Some(at),
+                    None,
+                    "comment line contains a carriage return (CR) before its end: expected \
+                     one line ending in LF or CR LF",
+                ));
+            }
             match std::str::from_utf8(&content[1..]) {
                 Ok(c) => comments.push(c.to_string()),
                 Err(e) => {
@@ -641,6 +668,7 @@ impl<'a> Parser<'a> {
                 None
             },
             has_position: layout.pos_cols.is_some(),
+            has_point: layout.point_cols.is_some(),
             has_approach: layout.approach_cols.is_some(),
             has_temperature: layout.temp_col.is_some(),
             sha256,
@@ -655,6 +683,7 @@ impl<'a> Parser<'a> {
         let mut columns: Vec<Column> = Vec::with_capacity(header.len());
         let mut joints: Vec<Option<usize>> = vec![None; n];
         let mut pos: [Option<usize>; 3] = [None; 3];
+        let mut point: [Option<usize>; 3] = [None; 3];
         let mut rpy: [Option<usize>; 3] = [None; 3];
         let mut quat: [Option<usize>; 4] = [None; 4];
         let mut approach: Vec<Option<usize>> = vec![None; n];
@@ -680,6 +709,7 @@ impl<'a> Parser<'a> {
                 Kind::PoseId => &mut pose_id,
                 Kind::Temp => &mut temp,
                 Kind::Pos(a) => &mut pos[a],
+                Kind::Point(a) => &mut point[a],
                 Kind::Rpy(a) => &mut rpy[a],
                 Kind::Quat(a) => &mut quat[a],
                 Kind::Joint(k) => {
@@ -776,6 +806,12 @@ impl<'a> Parser<'a> {
                 "missing column: position columns x, y, z come together".into(),
             )
         })?;
+        let point_cols = group(point, &POINT_NAMES).map_err(|missing| {
+            at(
+                &missing,
+                "missing column: point columns point_x, point_y, point_z come together".into(),
+            )
+        })?;
         let rpy_cols = group(rpy, &RPY_NAMES).map_err(|missing| {
             at(
                 &missing,
@@ -798,6 +834,15 @@ impl<'a> Parser<'a> {
             ));
         }
         if pos_cols.is_none() {
+            if let Some(c) = point_cols.map(|p| p[0]) {
+                return Err(at(
+                    "x",
+                    format!(
+                        "missing column: a measured point ('{}') needs its measured position (x, y, z)",
+                        columns[c].name
+                    ),
+                ));
+            }
             if let Some(c) = rpy_cols.map(|r| r[0]).or(quat_cols.map(|q| q[0])) {
                 return Err(at(
                     "x",
@@ -838,6 +883,7 @@ impl<'a> Parser<'a> {
             columns,
             joint_cols,
             pos_cols,
+            point_cols,
             rpy_cols,
             quat_cols,
             approach_cols,
@@ -932,6 +978,11 @@ impl<'a> Parser<'a> {
             None => None,
         };
 
+        let point_m = match layout.point_cols {
+            Some(p) => Some([num(p[0])?, num(p[1])?, num(p[2])?]),
+            None => None,
+        };
+
         let orientation = if let Some(r) = layout.rpy_cols {
             Some(Orientation::Rpy {
                 roll_rad: num(r[0])?,
@@ -1008,6 +1059,7 @@ impl<'a> Parser<'a> {
             q_rad,
             position_m,
             orientation,
+            point_m,
             approach,
             temp_c,
             extras,
@@ -1119,8 +1171,8 @@ pub fn write_poses_csv(
 
 /// Writes a whole measurement set so that it reads back identically (apart from `line`
 /// numbers, `source` and `sha256`): comments, `pose_id`, `q1..qN` [rad], `x,y,z` [m],
-/// orientation in the set's form (`roll,pitch,yaw` [rad] or `qw,qx,qy,qz`), `s1..sN`,
-/// `temp_c`, then the `extra_` columns.
+/// orientation in the set's form (`roll,pitch,yaw` [rad] or `qw,qx,qy,qz`),
+/// `point_x,point_y,point_z` [m], `s1..sN`, `temp_c`, then the `extra_` columns.
 pub fn write_measurements_csv(mut out: impl Write, set: &MeasurementSet) -> io::Result<()> {
     let n = set.n_joints;
     for c in &set.comments {
@@ -1152,6 +1204,9 @@ pub fn write_measurements_csv(mut out: impl Write, set: &MeasurementSet) -> io::
             header.extend(QUAT_NAMES.iter().map(|s| s.to_string()))
         }
         None => {}
+    }
+    if set.has_point {
+        header.extend(POINT_NAMES.iter().map(|s| s.to_string()));
     }
     if set.has_approach {
         header.extend((1..=n).map(|k| format!("s{k}")));
@@ -1210,6 +1265,15 @@ pub fn write_measurements_csv(mut out: impl Write, set: &MeasurementSet) -> io::
             }
             (None, None) => {}
             _ => return Err(bad("orientation does not match orientation_form")),
+        }
+        match (r.point_m, set.has_point) {
+            (Some(p), true) => {
+                for (a, &v) in p.iter().enumerate() {
+                    rec.push(finite(v, i, POINT_NAMES[a])?);
+                }
+            }
+            (None, false) => {}
+            _ => return Err(bad("point does not match has_point")),
         }
         match (&r.approach, set.has_approach) {
             (Some(s), true) if s.len() == n => {
@@ -1270,6 +1334,52 @@ mod tests {
             e.reason.contains(words),
             "reason {:?} lacks {words:?}",
             e.reason
+        );
+    }
+
+    /// Regression (fuzz/measurements_csv): a comment holding a lone CR was accepted but
+    /// could not be written back; it is now refused with its line.
+    #[test]
+    fn comment_with_a_lone_carriage_return_is_refused() {
+        let text = "#\rh\nq1,q2,q3,q4,q5,q6,x,y,z\n6,9,6,3,6,1,6,6,6";
+        rejects(text, &opts(6), Some(1), None, "carriage return");
+        // CR LF line ends stay fine.
+        let m = parse("# a\r\n# b\r\nq1\r\n0.5\r\n", 1).unwrap();
+        assert_eq!(m.comments, vec![" a", " b"]);
+    }
+
+    #[test]
+    fn point_columns_read_write_and_refusals() {
+        let text = "q1,q2,x,y,z,point_x_mm,point_y_mm,point_z_mm\n0.1,0.2,1,2,3,10,-20,30\n";
+        let set = parse(text, 2).expect("parse");
+        assert!(set.has_point);
+        assert_eq!(set.rows[0].point_m, Some([0.01, -0.02, 0.03]));
+        assert!(set.rows[0].orientation.is_none());
+        let mut out = Vec::new();
+        write_measurements_csv(&mut out, &set).expect("write");
+        let back = parse(std::str::from_utf8(&out).unwrap(), 2).expect("reparse");
+        assert_eq!(back.rows[0].point_m, set.rows[0].point_m);
+        let o = opts(2);
+        rejects(
+            "q1,q2,x,y,z,point_x,point_y\n0,0,1,2,3,0,0\n",
+            &o,
+            Some(1),
+            Some("point_z"),
+            "come together",
+        );
+        rejects(
+            "q1,q2,point_x,point_y,point_z\n0,0,1,2,3\n",
+            &o,
+            Some(1),
+            Some("x"),
+            "needs its measured position",
+        );
+        rejects(
+            "q1,q2,x,y,z,point_x_deg,point_y,point_z\n0,0,1,2,3,0,0,0\n",
+            &o,
+            Some(1),
+            Some("point_x_deg"),
+            "is a length",
         );
     }
 
@@ -2070,6 +2180,7 @@ mod tests {
                     pitch_rad: g.any(),
                     yaw_rad: g.any(),
                 }),
+                point_m: None,
                 approach: Some(vec![-1, 0, 1]),
                 temp_c: Some(g.any()),
                 extras: vec![format!("a,\"b\" {i}"), String::new()],
@@ -2083,6 +2194,7 @@ mod tests {
             extra_columns: vec!["extra_note".into(), "extra_empty".into()],
             orientation_form: Some(OrientationForm::Rpy),
             has_position: true,
+            has_point: false,
             has_approach: true,
             has_temperature: true,
             sha256: String::new(),

@@ -198,6 +198,10 @@ pub struct StatsJson {
 pub struct ResultJson {
     pub algorithm: String,
     pub iterations: u32,
+    /// Run time [s]: shown on screen, never written, so that identical inputs give
+    /// bit-identical model files whatever the machine load or thread count (older files that
+    /// carry it still read).
+    #[serde(default, skip_serializing)]
     pub seconds: f64,
     /// Residual variance cost/(rows − fitted).
     pub sigma2: f64,
@@ -261,6 +265,7 @@ fn finite_or_none(v: f64) -> Option<f64> {
 }
 
 /// Per-parameter calibration status used when describing a robot.
+#[derive(Debug)]
 pub struct ParamInfo<'a> {
     pub analysis: &'a Identifiability,
     pub std_errors: &'a [f64],

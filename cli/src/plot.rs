@@ -206,3 +206,83 @@ pub fn write_error_figure(
     crate::files::write_atomic(path, inputs, |w| w.write_all(svg.as_bytes()))?;
     Ok(())
 }
+
+/// Held-out errors of two models per pose on one scale: |e_p| [mm] above, |e_φ| [deg]
+/// below (when measured); nominal grey, calibrated blue.
+pub fn heldout_svg(
+    title: &str,
+    nominal: &[PoseErrors],
+    calibrated: &[PoseErrors],
+    with_orientation: bool,
+) -> Res<String> {
+    let n = nominal.len();
+    let panels = if with_orientation { 2 } else { 1 };
+    let (w, h) = (900u32, TITLE_H + panels * 320);
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let body = root.titled(title, ("sans-serif", 22))?;
+        let parts = body.split_evenly((panels as usize, 1));
+        type Row<'a> = (&'a str, &'a dyn Fn(&PoseErrors) -> f64);
+        let rows: [Row<'_>; 2] = [
+            ("held-out |e_p| [mm]", &|e: &PoseErrors| e.pos_norm_m * 1e3),
+            ("held-out |e_φ| [deg]", &|e: &PoseErrors| {
+                e.rot_norm_rad.to_degrees()
+            }),
+        ];
+        for (area, (label, value)) in parts.iter().zip(rows.iter()) {
+            let top = nominal
+                .iter()
+                .chain(calibrated)
+                .map(value)
+                .fold(0.0f64, f64::max);
+            let hi = if top > 0.0 { top * 1.15 } else { 1e-9 };
+            let mut chart = ChartBuilder::on(area)
+                .margin(12)
+                .x_label_area_size(36)
+                .y_label_area_size(70)
+                .build_cartesian_2d(0.5f64..(n as f64 + 0.5), 0.0..hi)?;
+            let y_fmt = |v: &f64| tick(*v, hi);
+            chart
+                .configure_mesh()
+                .x_desc("pose (file order)")
+                .y_desc(*label)
+                .y_label_formatter(&y_fmt)
+                .x_labels(n.clamp(2, 12))
+                .x_label_formatter(&|v: &f64| format!("{}", v.round() as i64))
+                .label_style(("sans-serif", 12))
+                .light_line_style(RGBColor(240, 240, 240))
+                .draw()?;
+            for (k, (name, data)) in [("nominal", nominal), ("calibrated", calibrated)]
+                .iter()
+                .enumerate()
+            {
+                let colour = COLOURS[k];
+                let pts: Vec<(f64, f64)> = data
+                    .iter()
+                    .enumerate()
+                    .map(|(i, e)| ((i + 1) as f64, value(e)))
+                    .collect();
+                chart
+                    .draw_series(PointSeries::of_element(
+                        pts.clone(),
+                        3,
+                        colour.filled(),
+                        &|c, s, st| EmptyElement::at(c) + Circle::new((0, 0), s, st),
+                    ))?
+                    .label(*name)
+                    .legend(move |(x, y)| Circle::new((x + 8, y), 4, colour.filled()));
+                chart.draw_series(LineSeries::new(pts, colour.stroke_width(1)))?;
+            }
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(RGBColor(200, 200, 200))
+                .label_font(("sans-serif", 14))
+                .draw()?;
+        }
+        root.present()?;
+    }
+    Ok(svg)
+}

@@ -527,7 +527,8 @@ pub fn write_robot_description(desc: &RobotDescription) -> String {
     with_any_robot!(&desc.robot, r => write_generic(&desc.name, &desc.joint_names, r))
 }
 
-fn write_generic<const N: usize>(name: &str, joint_names: &[String], r: &Robot<N>) -> String {
+/// [`write_robot_description`] for a robot of known joint count.
+pub fn write_generic<const N: usize>(name: &str, joint_names: &[String], r: &Robot<N>) -> String {
     let mut s = String::new();
     s.push_str(&format!("name = {}\n", toml_str(name)));
     for (key, f) in [("base", r.base()), ("tool", r.tool())] {

@@ -36,6 +36,9 @@ pub enum Quantity {
     ApproachDirection,
     /// Arm temperature in °C (thermal effect).
     Temperature,
+    /// The measurement noise: neither stated nor estimable from repeated measurements
+    /// (diagnosis).
+    NoiseFloor,
 }
 
 /// Everything that can go wrong in the core.

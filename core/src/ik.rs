@@ -188,7 +188,9 @@ fn descend<const N: usize>(
     let limits = robot.limits();
     let clamp = |q: &mut [f64; N]| {
         for (v, l) in q.iter_mut().zip(limits.iter()) {
-            *v = v.clamp(l.lower, l.upper);
+            // Not `clamp`: its `lower <= upper` assertion is a panic path the compiler cannot
+            // remove (the limits were validated when the robot was built).
+            *v = v.max(l.lower).min(l.upper);
         }
     };
     clamp(&mut state.q);

@@ -40,6 +40,20 @@ impl<const N: usize> Default for Frames<N> {
     }
 }
 
+/// Refuses a pose that overflowed: finite but absurd parameters or readings (lengths of
+/// 1e200 m, say) can make FK non-finite, and a NaN pose must never pass as a result (found by
+/// fuzzing the C ABI). [`Error::NonFinite`] names the position or the orientation.
+fn check_pose(t: &Transform) -> Result<()> {
+    crate::error::check_finite(
+        t.translation.vector.as_slice(),
+        crate::error::Quantity::Position,
+    )?;
+    crate::error::check_finite(
+        t.rotation.matrix().as_slice(),
+        crate::error::Quantity::Orientation,
+    )
+}
+
 /// FK of a geometry at angles `angles` (q + Δθ, without θ0), lengths times `scale`.
 /// `on_link(i, x_mid, R_i, p_i)` sees each link's intermediate x axis (after `Rz·Tz·Tx`,
 /// before `Rx(α)·Ry(β)`) and its frame.
@@ -115,7 +129,9 @@ impl<const N: usize> Robot<N> {
     pub fn fk(&self, state: &JointState<N>) -> Result<Transform> {
         let angles = self.joint_angles(state)?;
         let scale = self.length_scale(state)?;
-        Ok(chain(&self.geom, &angles, scale, |_, _, _, _| {}))
+        let t = chain(&self.geom, &angles, scale, |_, _, _, _| {});
+        check_pose(&t)?;
+        Ok(t)
     }
 
     /// End-effector pose of the geometric model from precomputed `[sin q_j, cos q_j]` of the
@@ -153,7 +169,7 @@ impl<const N: usize> Robot<N> {
         let angles = self.joint_angles(state)?;
         let scale = self.length_scale(state)?;
         self.frames_at(&angles, scale, frames);
-        Ok(())
+        check_pose(&frames.t_base_ee)
     }
 
     fn frames_at(&self, angles: &[f64; N], scale: f64, frames: &mut Frames<N>) {
@@ -249,11 +265,15 @@ impl<const N: usize> Robot<N> {
             let yi = f.t_base_link[i].rotation.matrix().column(1).into_owned();
             let xm = f.x_mid[i];
             let idx = |k: LinkParam| ParamId::Link { link: i, kind: k }.index(N).0;
-            jac[idx(LinkParam::Theta0)] = col(z_prev.cross(&(pe - p_prev)), z_prev);
-            jac[idx(LinkParam::D)] = col(z_prev * scale, zero);
-            jac[idx(LinkParam::A)] = col(xm * scale, zero);
-            jac[idx(LinkParam::Alpha)] = col(xm.cross(&(pe - pi)), xm);
-            jac[idx(LinkParam::Beta)] = col(yi.cross(&(pe - pi)), yi);
+            put(
+                jac,
+                idx(LinkParam::Theta0),
+                col(z_prev.cross(&(pe - p_prev)), z_prev),
+            );
+            put(jac, idx(LinkParam::D), col(z_prev * scale, zero));
+            put(jac, idx(LinkParam::A), col(xm * scale, zero));
+            put(jac, idx(LinkParam::Alpha), col(xm.cross(&(pe - pi)), xm));
+            put(jac, idx(LinkParam::Beta), col(yi.cross(&(pe - pi)), yi));
         }
         if links_only {
             return Ok(f.t_base_ee);
@@ -291,12 +311,13 @@ impl<const N: usize> Robot<N> {
                 let wt = r_e * jr_tool.column(ax);
                 (col(w.cross(&(pe - base_p)), w), col(zero, wt))
             };
-            jac[ParamId::Base(k).index(N).0] = b;
-            jac[ParamId::Tool(k).index(N).0] = t;
+            put(jac, ParamId::Base(k).index(N).0, b);
+            put(jac, ParamId::Tool(k).index(N).0, t);
         }
         if full {
             self.effect_columns(state, scale, jac);
         }
+        check_pose(&f.t_base_ee)?;
         Ok(f.t_base_ee)
     }
 
@@ -307,35 +328,52 @@ impl<const N: usize> Robot<N> {
         let scaled = |c: JacobianColumn, f: f64| c.map(|v| v * f);
         let mut thermal = [0.0; 6];
         for j in 0..N {
-            let th = jac[ParamId::Link {
-                link: j,
-                kind: LinkParam::Theta0,
-            }
-            .index(N)
-            .0];
+            let th = col_at(
+                jac,
+                ParamId::Link {
+                    link: j,
+                    kind: LinkParam::Theta0,
+                }
+                .index(N)
+                .0,
+            );
             let q = state.q[j];
             let (s1, c1) = crate::math::sin_cos(q);
             let terms = [s1, c1, 2.0 * s1 * c1, c1 * c1 - s1 * s1];
-            jac[ParamId::Compliance(j).index(N).0] = scaled(th, tau[j]);
-            jac[ParamId::Scale(j).index(N).0] = scaled(th, q);
+            put(jac, ParamId::Compliance(j).index(N).0, scaled(th, tau[j]));
+            put(jac, ParamId::Scale(j).index(N).0, scaled(th, q));
             for t in CyclicTerm::ALL {
-                jac[ParamId::Cyclic(j, t).index(N).0] = scaled(th, terms[t as usize]);
+                put(
+                    jac,
+                    ParamId::Cyclic(j, t).index(N).0,
+                    scaled(th, terms[t as usize]),
+                );
             }
-            jac[ParamId::Backlash(j).index(N).0] = scaled(th, approach[j]);
+            put(
+                jac,
+                ParamId::Backlash(j).index(N).0,
+                scaled(th, approach[j]),
+            );
             // The d and a columns carry the factor `scale`; ∂/∂(scaled length) = col/scale.
             let l = &self.geom.links[j];
-            let dcol = jac[ParamId::Link {
-                link: j,
-                kind: LinkParam::D,
-            }
-            .index(N)
-            .0];
-            let acol = jac[ParamId::Link {
-                link: j,
-                kind: LinkParam::A,
-            }
-            .index(N)
-            .0];
+            let dcol = col_at(
+                jac,
+                ParamId::Link {
+                    link: j,
+                    kind: LinkParam::D,
+                }
+                .index(N)
+                .0,
+            );
+            let acol = col_at(
+                jac,
+                ParamId::Link {
+                    link: j,
+                    kind: LinkParam::A,
+                }
+                .index(N)
+                .0,
+            );
             for r in 0..6 {
                 thermal[r] += (l.d * dcol[r] + l.a * acol[r]) / scale;
             }
@@ -343,6 +381,21 @@ impl<const N: usize> Robot<N> {
         let dt = state
             .temp_c
             .map_or(0.0, |t| t - crate::model::THERMAL_REFERENCE_C);
-        jac[ParamId::Thermal.index(N).0] = scaled(thermal, dt);
+        put(jac, ParamId::Thermal.index(N).0, scaled(thermal, dt));
     }
+}
+
+/// Writes column `i`. The caller checked `jac.len()`; `get_mut` rather than indexing keeps a
+/// bounds check the compiler cannot elide (and its panic path) out of the panic-free build.
+#[inline(always)]
+fn put(jac: &mut [JacobianColumn], i: usize, column: JacobianColumn) {
+    if let Some(slot) = jac.get_mut(i) {
+        *slot = column;
+    }
+}
+
+/// Reads column `i` (zero out of range, which the length check excludes), see [`put`].
+#[inline(always)]
+fn col_at(jac: &[JacobianColumn], i: usize) -> JacobianColumn {
+    jac.get(i).copied().unwrap_or([0.0; 6])
 }

@@ -15,8 +15,10 @@ extern crate std;
 pub mod any;
 pub mod aria;
 pub mod axis_chain;
+pub mod diagnosis;
 pub mod effects;
 pub mod error;
+pub mod frames;
 pub mod identify;
 pub mod ik;
 pub mod kinematics;
@@ -30,6 +32,7 @@ pub mod pose;
 pub mod registration;
 pub mod rng;
 pub mod selection;
+pub mod sim;
 pub mod validation;
 
 pub use effects::{Effect, EffectSet};

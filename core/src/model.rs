@@ -644,6 +644,8 @@ impl<const N: usize> Robot<N> {
             }
             out[j] = q + dtheta;
         }
+        // Finite but absurd effect parameters can overflow (fuzzing): never pass NaN on.
+        check_finite(&out, Quantity::Parameter)?;
         Ok(out)
     }
 

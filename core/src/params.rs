@@ -239,7 +239,9 @@ impl ParamId {
                 .find(|k| k.name() == rest)
                 .map(|&k| ParamId::Tool(k));
         }
-        let (stem, num) = label.rsplit_once('_')?;
+        // Not `rsplit_once`: its memrchr keeps slice-index panic paths in the no_std build.
+        let split = label.bytes().rposition(|b| b == b'_')?;
+        let (stem, num) = (label.get(..split)?, label.get(split + 1..)?);
         let j: usize = num.parse().ok()?;
         if j == 0 || j > n || num.starts_with('0') {
             return None;

@@ -34,9 +34,11 @@
 //! fit of all visible markers leaves any marker inconsistent, every subset of 1, then 2, …
 //! up to [`RegistrationOptions::max_outliers`] markers is excluded in turn (keeping at least
 //! 3) and the smallest exclusion after which all remaining markers are consistent is taken
-//! (ties: smallest Σ(|r_j|/σ_j)²). Excluded markers are then named: two whose measured
-//! positions each match the other's predicted position within their thresholds are
-//! [`MarkerStatus::Swapped`]; any other is [`MarkerStatus::Moved`]. Masked markers are
+//! (ties: smallest Σ(|r_j|/σ_j)²). Excluded markers are then named: two for which
+//! exchanging their measured positions gives a consistent fit with both of them used are
+//! [`MarkerStatus::Swapped`] (a direct test of the swap; comparing each with the other's
+//! predicted position would also charge the prediction error of a fit on fewer markers);
+//! any other is [`MarkerStatus::Moved`]. Masked markers are
 //! [`MarkerStatus::Missing`] (their measured values are ignored, NaN allowed). When no
 //! exclusion explains the data, the all-visible fit is returned with
 //! [`Registration::consistent`] false and the inconsistent markers marked
@@ -349,6 +351,15 @@ pub fn weighted_rigid_fit(
     if rank < 2 {
         return Err(Error::RankDeficient { rank, required: 2 });
     }
+    let r = rotation_from_correlation(&s)?;
+    Ok(transform(r, cb - r * ca))
+}
+
+/// The proper rotation `R` maximising `Σ w·bᵀ·R·a` given the correlation
+/// `s = Σ w·a·bᵀ` (Horn's quaternion method, see the module docs). Fails with
+/// [`Error::RankDeficient`] when the best rotation is not unique (top two eigenvalues of
+/// Horn's matrix equal).
+pub(crate) fn rotation_from_correlation(s: &Matrix3<f64>) -> Result<Matrix3<f64>> {
     let (sxx, sxy, sxz) = (s[(0, 0)], s[(0, 1)], s[(0, 2)]);
     let (syx, syy, syz) = (s[(1, 0)], s[(1, 1)], s[(1, 2)]);
     let (szx, szy, szz) = (s[(2, 0)], s[(2, 1)], s[(2, 2)]);
@@ -371,8 +382,7 @@ pub fn weighted_rigid_fit(
     }
     let k = order[0];
     let q = [vecs[0][k], vecs[1][k], vecs[2][k], vecs[3][k]];
-    let r = quaternion_to_matrix(&q)?;
-    Ok(transform(r, cb - r * ca))
+    quaternion_to_matrix(&q)
 }
 
 fn check_inputs(markers: &Markers<'_>, opts: &RegistrationOptions) -> Result<usize> {
@@ -465,7 +475,7 @@ pub fn register(markers: &Markers<'_>, opts: &RegistrationOptions) -> Result<Reg
     let d = design.get(..n).unwrap_or(&[]);
     let m = measured.get(..n).unwrap_or(&[]);
     // Score of a fit: (all used consistent, Σ (|r|/σ_j)²).
-    let score = |t: &Transform, w: &[f64; MAX_MARKERS]| {
+    let score_of = |t: &Transform, w: &[f64; MAX_MARKERS], measured: &[[f64; 3]]| {
         let mut ok = true;
         let mut chi = 0.0;
         for j in 0..n {
@@ -479,6 +489,7 @@ pub fn register(markers: &Markers<'_>, opts: &RegistrationOptions) -> Result<Reg
         }
         (ok, chi)
     };
+    let score = |t: &Transform, w: &[f64; MAX_MARKERS]| score_of(t, w, measured);
     let t_all = weighted_rigid_fit(d, m, w_all.get(..n).unwrap_or(&[]), opts.sigma_m)?;
     let (ok_all, _) = score(&t_all, &w_all);
     let mut best: Option<(Transform, [f64; MAX_MARKERS], f64)> = None;
@@ -554,7 +565,8 @@ pub fn register(markers: &Markers<'_>, opts: &RegistrationOptions) -> Result<Reg
             MarkerStatus::Moved
         };
     }
-    // Name swaps among the excluded markers.
+    // Name swaps among the excluded markers: a pair is swapped when exchanging their two
+    // measured positions gives a fit with both of them back in, all markers consistent.
     for j in 0..n {
         if fits[j].status != MarkerStatus::Moved {
             continue;
@@ -563,10 +575,15 @@ pub fn register(markers: &Markers<'_>, opts: &RegistrationOptions) -> Result<Reg
             if fits[k].status != MarkerStatus::Moved {
                 continue;
             }
-            let mj = v3(&measured[j]);
-            let mk = v3(&measured[k]);
-            if (mj - v3(&fits[k].predicted_m)).norm() <= thr[j]
-                && (mk - v3(&fits[j].predicted_m)).norm() <= thr[k]
+            let mut m2 = [[0.0; 3]; MAX_MARKERS];
+            m2[..n].copy_from_slice(m);
+            m2.swap(j, k);
+            let mut w2 = w_used;
+            w2[j] = weight(j);
+            w2[k] = weight(k);
+            let m2 = m2.get(..n).unwrap_or(&[]);
+            if let Ok(t2) = weighted_rigid_fit(d, m2, w2.get(..n).unwrap_or(&[]), opts.sigma_m)
+                && score_of(&t2, &w2, m2).0
             {
                 fits[j].status = MarkerStatus::Swapped { with: k };
                 fits[k].status = MarkerStatus::Swapped { with: j };

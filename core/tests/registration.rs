@@ -383,3 +383,39 @@ fn end_effector_pose_in_base() {
     .unwrap_err();
     assert_eq!(err.0, MarkerBody::Probe);
 }
+
+/// A swap in a five-marker probe leaves three markers for the fit, whose prediction of the
+/// swapped markers is itself off by several σ: the swap must still be named (the direct
+/// test: exchanging the two measurements makes the fit consistent), and the pose recovered.
+#[test]
+fn swapped_pair_in_a_five_marker_probe_is_named() {
+    let probe5 = [PROBE[0], PROBE[1], PROBE[2], PROBE[3], PROBE[4]];
+    let mut rng = Rng(99);
+    let sigma = 5e-5;
+    for case in 0..40 {
+        let t = rng.transform();
+        let mut m = noisy(&mut rng, &t, &probe5, sigma);
+        m.swap(1, 3);
+        let reg = register(&Markers::new(&probe5, &m), &RegistrationOptions::new(sigma))
+            .expect("register");
+        let st: Vec<MarkerStatus> = reg.markers().iter().map(|f| f.status).collect();
+        use MarkerStatus::*;
+        assert_eq!(
+            st,
+            vec![
+                Inlier,
+                Swapped { with: 3 },
+                Inlier,
+                Swapped { with: 1 },
+                Inlier
+            ],
+            "case {case}"
+        );
+        let e = kincal::pose::pose_error(&reg.t_mocap_body, &t, kincal::OrientationError::Exact);
+        let (dp, dr) = (
+            Vector3::new(e[0], e[1], e[2]).norm(),
+            Vector3::new(e[3], e[4], e[5]).norm(),
+        );
+        assert!(dp < 1e-3 && dr < 1e-2, "case {case}: {dp:e} m, {dr:e} rad");
+    }
+}

@@ -2,6 +2,7 @@
 
 use super::{IdentifyOptions, Workspace};
 use crate::error::{Error, Quantity, Result, check_finite};
+use crate::kinematics::JacobianColumn;
 use crate::model::{JointState, Robot};
 use crate::pose::{OrientationError, PoseError, Transform, pose_error};
 
@@ -34,7 +35,8 @@ impl ComponentMask {
 }
 
 /// One measured pose: joint state (readings and auxiliary data) and the measured
-/// end-effector pose `T_e^b` in the base frame.
+/// end-effector pose `T_e^b` in the base frame — or, with [`Measurement::point`], the pose of
+/// a point on the end effector at a known position in the tool frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Measurement<const N: usize> {
     /// Joint readings and auxiliary data.
@@ -46,6 +48,12 @@ pub struct Measurement<const N: usize> {
     /// Weight of the pose in the fit (>= 0): 1 normally, 0 to hold it out (cross-validation),
     /// other values for robust reweighting. Multiplies the row weights.
     pub weight: f64,
+    /// The measured point's position in the tool frame [m], known by design (one of several
+    /// markers or reflectors on the end effector): the measurement is then of the frame
+    /// `T_e^b(q)·Trans(point)` — the tool frame moved to that point, not rotated — so
+    /// several points on one body share one tool frame (whose parameters, with position-only
+    /// rows, are then identifiable in rotation too). `None`: the tool frame itself.
+    pub point: Option<[f64; 3]>,
 }
 
 impl<const N: usize> Measurement<N> {
@@ -57,8 +65,68 @@ impl<const N: usize> Measurement<N> {
             pose,
             mask: ComponentMask::ALL,
             weight: 1.0,
+            point: None,
         }
     }
+
+    /// What the model predicts for this measurement: `T_e^b` at its joint state, moved to
+    /// [`Measurement::point`] when given.
+    pub fn model_pose(&self, robot: &Robot<N>) -> Result<Transform> {
+        Ok(self.at_point(robot.fk(&self.state)?))
+    }
+
+    /// [`Measurement::model_pose`] and its identification Jacobian (as
+    /// [`Robot::jacobian`]): with a point `r` (in the base frame `R_e·point`) each column's
+    /// position rows gain `Δφ × r`, the rotation rows are unchanged.
+    pub fn model_jacobian(
+        &self,
+        robot: &Robot<N>,
+        jac: &mut [JacobianColumn],
+    ) -> Result<Transform> {
+        let t = robot.jacobian(&self.state, jac)?;
+        if let Some(p) = self.point {
+            let r = t.rotation * nalgebra::Vector3::new(p[0], p[1], p[2]);
+            for c in jac.iter_mut() {
+                let w = nalgebra::Vector3::new(c[3], c[4], c[5]);
+                let d = w.cross(&r);
+                c[0] += d.x;
+                c[1] += d.y;
+                c[2] += d.z;
+            }
+        }
+        Ok(self.at_point(t))
+    }
+
+    fn at_point(&self, t: Transform) -> Transform {
+        match self.point {
+            None => t,
+            Some(p) => t * nalgebra::Translation3::new(p[0], p[1], p[2]),
+        }
+    }
+}
+
+/// Most distinct measured points ([`Measurement::point`]) the structural test of the
+/// identifiability analysis places on the end effector: four points in general position
+/// already make every rigid motion of the tool visible.
+pub(crate) const MAX_STRUCTURAL_POINTS: usize = 4;
+
+/// The distinct measured points of the poses with a positive weight (the tool-frame origin,
+/// `None`, counts as one), at most [`MAX_STRUCTURAL_POINTS`], in order of appearance.
+pub(crate) fn distinct_points<const N: usize>(
+    data: &[Measurement<N>],
+) -> ([Option<[f64; 3]>; MAX_STRUCTURAL_POINTS], usize) {
+    let mut out = [None; MAX_STRUCTURAL_POINTS];
+    let mut n = 0;
+    for m in data.iter().filter(|m| m.weight > 0.0) {
+        if n == MAX_STRUCTURAL_POINTS {
+            break;
+        }
+        if !out[..n].contains(&m.point) {
+            out[n] = m.point;
+            n += 1;
+        }
+    }
+    (out, n)
 }
 
 /// Checks every measurement: finite numbers, valid masks. Errors carry the pose index.
@@ -69,6 +137,14 @@ pub(crate) fn validate<const N: usize>(data: &[Measurement<N>]) -> Result<()> {
             other => other,
         })?;
         if check_finite(m.pose.translation.vector.as_slice(), Quantity::Position).is_err() {
+            return Err(Error::NonFinite {
+                what: Quantity::Position,
+                index: l,
+            });
+        }
+        if m.point
+            .is_some_and(|p| check_finite(&p, Quantity::Position).is_err())
+        {
             return Err(Error::NonFinite {
                 what: Quantity::Position,
                 index: l,
@@ -101,7 +177,7 @@ pub(crate) fn residual<const N: usize>(
     m: &Measurement<N>,
     form: OrientationError,
 ) -> Result<PoseError> {
-    let t = robot.fk(&m.state)?;
+    let t = m.model_pose(robot)?;
     Ok(pose_error(&m.pose, &t, form))
 }
 
@@ -196,7 +272,7 @@ pub(crate) fn add_rows<const N: usize, const P: usize>(
         needed: n_jac,
         capacity: super::MAX_MODEL_PARAMS,
     })?;
-    let t = robot.jacobian(&m.state, jac)?;
+    let t = m.model_jacobian(robot, jac)?;
     let e = if with_rhs {
         pose_error(&m.pose, &t, opts.orientation)
     } else {
@@ -272,7 +348,7 @@ pub fn residual_stats<const N: usize>(
     };
     let (mut np, mut nr, mut sp, mut sr) = (0usize, 0usize, 0.0, 0.0);
     for m in data.iter().filter(|m| m.weight > 0.0) {
-        let t = robot.fk(&m.state)?;
+        let t = m.model_pose(robot)?;
         let e = pose_error(&m.pose, &t, opts.orientation);
         let ex = if opts.orientation == OrientationError::Exact {
             e

@@ -72,13 +72,58 @@ fn halton(index: u32, base: u32) -> f64 {
 }
 
 /// Runs the analysis for `opts.requested` on `data` at `robot`'s current parameters. The
-/// singular values of the identifiable set are left in the workspace.
+/// singular values of the identifiable set are left in the workspace. Data without a pose
+/// of positive weight is [`Error::TooFewData`] (0 rows found, one per requested parameter
+/// needed at least).
 pub fn analyze<const N: usize, const P: usize>(
     robot: &Robot<N>,
     data: &[Measurement<N>],
     opts: &IdentifyOptions<'_>,
     ws: &mut Workspace<P>,
 ) -> Result<Identifiability> {
+    let mut out = Identifiability::empty(opts.requested);
+    analyze_into(robot, data, opts, ws, &mut out)?;
+    Ok(out)
+}
+
+impl Identifiability {
+    /// Nothing identified yet of `requested`.
+    pub(crate) const fn empty(requested: ParamSet) -> Self {
+        Identifiability {
+            requested,
+            identifiable: ParamSet::new(),
+            structural: ParamSet::new(),
+            data_deficient: ParamSet::new(),
+            rank: 0,
+            condition_number: f64::INFINITY,
+            partner: [None; MAX_MODEL_PARAMS],
+        }
+    }
+}
+
+impl Identifiability {
+    /// [`Identifiability::empty`] in place (no temporary of this size on the stack).
+    fn reset(&mut self, requested: ParamSet) {
+        self.requested = requested;
+        self.identifiable = ParamSet::new();
+        self.structural = ParamSet::new();
+        self.data_deficient = ParamSet::new();
+        self.rank = 0;
+        self.condition_number = f64::INFINITY;
+        for p in self.partner.iter_mut() {
+            *p = None;
+        }
+    }
+}
+
+/// [`analyze`] into the caller's `out` (so that callers keep one copy on the stack).
+pub(crate) fn analyze_into<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    opts: &IdentifyOptions<'_>,
+    ws: &mut Workspace<P>,
+    out: &mut Identifiability,
+) -> Result<()> {
     super::data::validate(data)?;
     let requested = opts.requested;
     let p = requested.len();
@@ -107,62 +152,30 @@ pub fn analyze<const N: usize, const P: usize>(
         any_approach |= m.state.approach.is_some();
         any_temp |= m.state.temp_c.is_some();
     }
+    if union == 0 {
+        // No pose in the fit: nothing can be said, not even which parameters are
+        // structurally redundant (that depends on the measured components).
+        return Err(Error::TooFewData {
+            found: 0,
+            needed: p,
+        });
+    }
     let mask = ComponentMask(union);
-    let mut out = Identifiability {
-        requested,
-        identifiable: ParamSet::new(),
-        structural: ParamSet::new(),
-        data_deficient: ParamSet::new(),
-        rank: 0,
-        condition_number: f64::INFINITY,
-        partner: [None; MAX_MODEL_PARAMS],
-    };
+    let (points, n_points) = super::data::distinct_points(data);
+    out.reset(requested);
 
     // 1. Structural: generic configurations.
-    load_cols(ws, requested.iter());
-    ws.lsq.reset(p)?;
-    // Rows (6 per sample) outnumber the parameters about twice over: generic enough.
-    let samples = 8 + p as u32 / 3;
-    let limits = robot.limits();
-    for s in 1..=samples {
-        let mut st = JointState::new([0.0; N]);
-        for j in 0..N {
-            let lo = limits[j].lower.max(-core::f64::consts::PI);
-            let hi = limits[j].upper.min(core::f64::consts::PI);
-            st.q[j] = lo + halton(s, PRIMES[j % PRIMES.len()]) * (hi - lo);
-        }
-        if any_approach {
-            let mut a = [0.0; N];
-            for (j, v) in a.iter_mut().enumerate() {
-                *v = if halton(s, PRIMES[(j + N) % PRIMES.len()]) < 0.5 {
-                    -1.0
-                } else {
-                    1.0
-                };
-            }
-            st.approach = Some(a);
-        }
-        if any_temp {
-            st.temp_c = Some(40.0 * halton(s, 41));
-        }
-        let m = Measurement {
-            state: st,
-            pose: crate::pose::Transform::identity(),
-            mask,
-            weight: 1.0,
-        };
-        add_rows(robot, &m, false, opts, p, ws)?;
-    }
-    let kept = greedy(ws, p, STRUCTURAL_TOL, &mut out.partner)?;
-    let mut n_struct = 0;
-    for (k, &col) in ws.cols.iter().take(p).enumerate() {
-        if kept.contains(k) {
-            ws.free[n_struct] = col;
-            n_struct += 1;
-        } else {
-            out.structural.insert(col)?;
-        }
-    }
+    let n_struct = structural_step(
+        robot,
+        mask,
+        &points[..n_points],
+        any_approach,
+        any_temp,
+        opts,
+        ws,
+        &mut out.structural,
+        &mut out.partner,
+    )?;
 
     // 2. Data: the structurally identifiable columns on the given poses.
     for k in 0..n_struct {
@@ -207,7 +220,89 @@ pub fn analyze<const N: usize, const P: usize>(
             f64::INFINITY
         };
     }
-    Ok(out)
+    Ok(())
+}
+
+/// Which of `opts.requested` are structurally redundant (step 1 of [`analyze`]): the
+/// greedy test on generic configurations with the measured components `mask` of each of the
+/// measured `points` (see [`Measurement::point`]; empty: the tool-frame origin) and, when
+/// `any_approach`/`any_temp`, random approach directions and temperatures. Redundant
+/// parameters go to `structural` with their partner; the kept ones are left in
+/// `ws.free[..k]` (flat indices, priority order) and `k` is returned.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn structural_step<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    mask: ComponentMask,
+    points: &[Option<[f64; 3]>],
+    any_approach: bool,
+    any_temp: bool,
+    opts: &IdentifyOptions<'_>,
+    ws: &mut Workspace<P>,
+    structural: &mut ParamSet,
+    partner: &mut [Option<Partner>; MAX_MODEL_PARAMS],
+) -> Result<usize> {
+    let requested = opts.requested;
+    let p = requested.len();
+    if p > P {
+        return Err(Error::CapacityExceeded {
+            needed: p,
+            capacity: P,
+        });
+    }
+    load_cols(ws, requested.iter());
+    ws.lsq.reset(p)?;
+    // Rows (6 per sample) outnumber the parameters about twice over: generic enough.
+    let samples = 8 + p as u32 / 3;
+    let limits = robot.limits();
+    for s in 1..=samples {
+        let mut st = JointState::new([0.0; N]);
+        for j in 0..N {
+            let lo = limits[j].lower.max(-core::f64::consts::PI);
+            let hi = limits[j].upper.min(core::f64::consts::PI);
+            st.q[j] = lo + halton(s, PRIMES[j % PRIMES.len()]) * (hi - lo);
+        }
+        if any_approach {
+            let mut a = [0.0; N];
+            for (j, v) in a.iter_mut().enumerate() {
+                *v = if halton(s, PRIMES[(j + N) % PRIMES.len()]) < 0.5 {
+                    -1.0
+                } else {
+                    1.0
+                };
+            }
+            st.approach = Some(a);
+        }
+        if any_temp {
+            st.temp_c = Some(40.0 * halton(s, 41));
+        }
+        let origin = [None];
+        let points = if points.is_empty() {
+            &origin[..]
+        } else {
+            points
+        };
+        for &point in points {
+            let m = Measurement {
+                state: st,
+                pose: crate::pose::Transform::identity(),
+                mask,
+                weight: 1.0,
+                point,
+            };
+            add_rows(robot, &m, false, opts, p, ws)?;
+        }
+    }
+    let kept = greedy(ws, p, STRUCTURAL_TOL, partner)?;
+    let mut n_struct = 0;
+    for (k, &col) in ws.cols.iter().take(p).enumerate() {
+        if kept.contains(k) {
+            ws.free[n_struct] = col;
+            n_struct += 1;
+        } else {
+            structural.insert(col)?;
+        }
+    }
+    Ok(n_struct)
 }
 
 fn load_cols<const P: usize>(ws: &mut Workspace<P>, cols: impl Iterator<Item = usize>) {

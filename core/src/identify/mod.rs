@@ -1,5 +1,6 @@
 //! Parameter identification (Sections 3.2–4.1): the identifiability analysis, the paper's
-//! three algorithms (OLS, OPT1, OPT2), and parameter covariance.
+//! three algorithms (OLS, OPT1, OPT2), parameter covariance, and robust identification with
+//! a residual test that names suspect poses ([`robust`]).
 //!
 //! Memory: everything of size p×p (p = fitted parameters, at most the workspace capacity
 //! `P`) lives in a caller-provided [`Workspace`]; the data are a caller slice, folded pose
@@ -13,12 +14,19 @@
 
 mod data;
 mod identifiability;
+pub mod robust;
 mod solvers;
 mod workspace;
 
 pub use data::{ComponentMask, Measurement, ResidualStats, residual_stats};
-pub use identifiability::{Identifiability, analyze};
+pub(crate) use data::{distinct_points, validate as validate_data};
+pub(crate) use identifiability::structural_step;
+pub use identifiability::{Identifiability, Partner, analyze};
+pub use robust::{
+    Loss, PoseResidual, RobustIdentification, RobustOptions, identify_robust, residual_test,
+};
 pub use solvers::{identify, identify_with_analysis};
+pub(crate) use solvers::{identify_in_place, identify_into};
 pub use workspace::Workspace;
 
 use crate::error::ParamIndex;

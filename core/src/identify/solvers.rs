@@ -1,10 +1,11 @@
 //! The three identification algorithms on the identifiable parameter set, and the
 //! parameter covariance of the result.
 
-use super::data::{accumulate, accumulate_gram, cost, residual_stats, validate};
+use super::data::{ResidualStats, accumulate, accumulate_gram, cost, residual_stats, validate};
+use super::identifiability::analyze_into;
 use super::{
     Algorithm, CORRELATION_REPORT_THRESHOLD, Correlation, Identification, IdentifyOptions,
-    MAX_CORRELATED_PAIRS, MAX_MODEL_PARAMS, Workspace, analyze,
+    MAX_CORRELATED_PAIRS, MAX_MODEL_PARAMS, Workspace,
 };
 use crate::effects::Effect;
 use crate::error::{Error, ParamIndex, Quantity, Result, check_finite};
@@ -28,7 +29,30 @@ pub fn identify<const N: usize, const P: usize>(
     opts: &IdentifyOptions<'_>,
     ws: &mut Workspace<P>,
 ) -> Result<Identification<N>> {
+    let mut out = Identification::start(robot, opts.algorithm, None);
+    identify_in_place(robot, data, opts, ws, &mut out)?;
+    Ok(out)
+}
+
+/// [`identify`] into the caller's `out` (every field is overwritten), so that a caller
+/// holding its result in its own memory does not get a second copy on the stack.
+pub(crate) fn identify_in_place<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    opts: &IdentifyOptions<'_>,
+    ws: &mut Workspace<P>,
+    out: &mut Identification<N>,
+) -> Result<()> {
     validate(data)?;
+    check_identify_options(opts)?;
+    check_inputs(data, opts)?;
+    out.robot = *robot;
+    analyze_into(robot, data, opts, ws, &mut out.analysis)?;
+    identify_into(data, opts, ws, out)
+}
+
+/// Checks the numeric options of [`identify`].
+pub(crate) fn check_identify_options(opts: &IdentifyOptions<'_>) -> Result<()> {
     check_finite(
         &[
             opts.xtol,
@@ -46,12 +70,10 @@ pub fn identify<const N: usize, const P: usize>(
             value: opts.weight_pos.min(opts.weight_rot),
         });
     }
-    check_inputs(data, opts)?;
-    let analysis = analyze(robot, data, opts, ws)?;
-    identify_with_analysis(robot, data, opts, &analysis, ws)
+    Ok(())
 }
 
-/// As [`identify`] with the identifiability analysis already done (by [`analyze`] on the
+/// As [`identify`] with the identifiability analysis already done (by [`analyze`](super::analyze) on the
 /// same kind of data: same requested parameters, components and auxiliary inputs), e.g.
 /// once per design in a Monte-Carlo study. Only `analysis.identifiable` is fitted.
 pub fn identify_with_analysis<const N: usize, const P: usize>(
@@ -61,9 +83,56 @@ pub fn identify_with_analysis<const N: usize, const P: usize>(
     analysis: &super::Identifiability,
     ws: &mut Workspace<P>,
 ) -> Result<Identification<N>> {
+    let mut out = Identification::start(robot, opts.algorithm, Some(analysis));
+    identify_into(data, opts, ws, &mut out)?;
+    Ok(out)
+}
+
+impl<const N: usize> Identification<N> {
+    /// A result not yet fitted: `robot` as the starting model, `analysis` as the
+    /// identifiable set (none yet: to be filled by the analysis).
+    pub(crate) fn start(
+        robot: &Robot<N>,
+        algorithm: Algorithm,
+        analysis: Option<&super::Identifiability>,
+    ) -> Self {
+        let mut out = Identification {
+            robot: *robot,
+            algorithm,
+            analysis: super::Identifiability::empty(ParamSet::new()),
+            iterations: 0,
+            initial: ResidualStats::default(),
+            fitted: ResidualStats::default(),
+            sigma2: 0.0,
+            std_errors: [0.0; MAX_MODEL_PARAMS],
+            at_bound: ParamSet::new(),
+            correlated: [Correlation {
+                a: ParamIndex(0),
+                b: ParamIndex(0),
+                rho: 0.0,
+            }; MAX_CORRELATED_PAIRS],
+            n_correlated: 0,
+        };
+        if let Some(a) = analysis {
+            out.analysis = *a;
+        }
+        out
+    }
+}
+
+/// [`identify_with_analysis`] in place: fits `out.analysis.identifiable` starting from
+/// `out.robot` and fills the rest of `out`. Works in the caller's memory, so that a loop of
+/// fits (robust reweighting, diagnosis) keeps one result, not one per call level, on the
+/// stack.
+pub(crate) fn identify_into<const N: usize, const P: usize>(
+    data: &[Measurement<N>],
+    opts: &IdentifyOptions<'_>,
+    ws: &mut Workspace<P>,
+    out: &mut Identification<N>,
+) -> Result<()> {
     validate(data)?;
     check_inputs(data, opts)?;
-    let analysis = *analysis;
+    let analysis = &out.analysis;
     let n = analysis.rank;
     if n > P || analysis.identifiable.len() != n {
         return Err(Error::CapacityExceeded {
@@ -88,53 +157,43 @@ pub fn identify_with_analysis<const N: usize, const P: usize>(
             needed: n,
         });
     }
-    let initial = residual_stats(robot, data, opts)?;
-    let mut fit = *robot;
     for (k, i) in analysis.identifiable.iter().enumerate() {
         ws.cols[k] = i;
     }
-    let iterations = match opts.algorithm {
-        Algorithm::Ols => gauss_newton(&mut fit, data, opts, n, ws)?,
-        Algorithm::Opt2 => levenberg_marquardt(&mut fit, data, opts, n, ws)?,
-        Algorithm::Opt1 => bounded(&mut fit, data, opts, n, ws)?,
+    out.algorithm = opts.algorithm;
+    out.initial = residual_stats(&out.robot, data, opts)?;
+    out.iterations = match opts.algorithm {
+        Algorithm::Ols => gauss_newton(&mut out.robot, data, opts, n, ws)?,
+        Algorithm::Opt2 => levenberg_marquardt(&mut out.robot, data, opts, n, ws)?,
+        Algorithm::Opt1 => bounded(&mut out.robot, data, opts, n, ws)?,
     };
-    let fitted = residual_stats(&fit, data, opts)?;
-    let mut out = Identification {
-        robot: fit,
-        algorithm: opts.algorithm,
-        analysis,
-        iterations,
-        initial,
-        fitted,
-        sigma2: 0.0,
-        std_errors: [0.0; MAX_MODEL_PARAMS],
-        at_bound: ParamSet::new(),
-        correlated: [Correlation {
-            a: ParamIndex(0),
-            b: ParamIndex(0),
-            rho: 0.0,
-        }; MAX_CORRELATED_PAIRS],
-        n_correlated: 0,
-    };
+    out.fitted = residual_stats(&out.robot, data, opts)?;
+    out.sigma2 = 0.0;
+    out.std_errors = [0.0; MAX_MODEL_PARAMS];
+    out.at_bound = ParamSet::new();
+    out.n_correlated = 0;
     if let (Algorithm::Opt1, Some(b)) = (opts.algorithm, opts.bounds) {
         for k in 0..n {
             let i = ws.cols[k];
-            let v = fit.param(ParamIndex(i))?;
+            let v = out.robot.param(ParamIndex(i))?;
             if v <= b.lower[i] || v >= b.upper[i] {
                 out.at_bound.insert(i)?;
             }
         }
     }
     if opts.covariance {
-        covariance(&fit, data, opts, n, rows, ws, &mut out)?;
+        covariance(data, opts, n, rows, ws, out)?;
     }
-    Ok(out)
+    Ok(())
 }
 
 use super::data::Measurement;
 
 /// Refuses effects whose inputs the data lack.
-fn check_inputs<const N: usize>(data: &[Measurement<N>], opts: &IdentifyOptions<'_>) -> Result<()> {
+pub(crate) fn check_inputs<const N: usize>(
+    data: &[Measurement<N>],
+    opts: &IdentifyOptions<'_>,
+) -> Result<()> {
     let has = |e: Effect| {
         opts.requested
             .iter()
@@ -170,24 +229,24 @@ fn get_x<const N: usize, const P: usize>(
     Ok(())
 }
 
-/// `robot` with the fitted parameters set to `x + step` (clipped to `bounds` when given, so
-/// a parameter moved onto a bound sits exactly on it).
+/// Sets the fitted parameters of `trial` to `x + step` (clipped to `bounds` when given, so
+/// a parameter moved onto a bound sits exactly on it). `trial` must otherwise equal the
+/// current model (the solvers keep one trial model and overwrite only these parameters).
 fn apply<const N: usize, const P: usize>(
-    robot: &Robot<N>,
+    trial: &mut Robot<N>,
     n: usize,
     ws: &Workspace<P>,
     bounds: Option<&super::Bounds>,
-) -> Result<Robot<N>> {
-    let mut r = *robot;
+) -> Result<()> {
     for k in 0..n {
         let i = ws.cols[k];
         let mut v = ws.x[k] + ws.step[k];
         if let Some(b) = bounds {
             v = v.clamp(b.lower[i], b.upper[i]);
         }
-        r.set_param(ParamIndex(i), v)?;
+        trial.set_param(ParamIndex(i), v)?;
     }
-    Ok(r)
+    Ok(())
 }
 
 fn unit_scale<const P: usize>(ws: &mut Workspace<P>, n: usize) {
@@ -204,36 +263,54 @@ fn scaled_norm<const P: usize>(ws: &Workspace<P>, n: usize, v: &[f64; P]) -> f64
     )
 }
 
-/// Cholesky factor of the (optionally damped, optionally column-scaled) Gram matrix of the
-/// columns `sel` into `ws.mat`: `A = D⁻¹·G[sel,sel]·D⁻¹ + λ·E²` with `D = scale`.
-fn factor_gram<const P: usize>(
-    ws: &mut Workspace<P>,
-    sel: &[usize],
-    inv_scale: Option<&[f64]>,
-    damping: Option<(f64, &[f64])>,
-) -> Result<()> {
-    let m = sel.len();
-    let g = ws.gram.gram();
-    for a in 0..m {
-        for b in a..m {
-            let (i, j) = (sel[a].min(sel[b]), sel[a].max(sel[b]));
-            let mut v = g[i][j];
-            if let Some(s) = inv_scale {
-                v *= s[a] * s[b];
-            }
-            if let (true, Some((lambda, d))) = (a == b, damping) {
-                v += lambda * d[a] * d[a];
-            }
-            ws.v[a][b] = v;
-        }
-    }
-    crate::linalg::gram::cholesky_upper(&ws.v, m, 1e-14, &mut ws.mat)
+/// Which Gram columns [`factor_gram`] takes and how it scales them; every array is read
+/// from the workspace, so nothing of size P is copied onto the stack.
+#[derive(Clone, Copy)]
+enum GramSel {
+    /// Columns `0..m`, unscaled, undamped.
+    All,
+    /// Columns `0..m` scaled by `ws.colscale` (`D⁻¹·G·D⁻¹`).
+    AllScaled,
+    /// Columns `ws.free[..m]`, damped by `λ·ws.row[f]²` (the scale of free column f).
+    FreeDamped(f64),
 }
 
-/// Solves `RᵀR·x = rhs` with `R = ws.mat` in place in `x`.
-fn solve_normal<const P: usize>(ws: &Workspace<P>, n: usize, x: &mut [f64]) -> Result<()> {
-    solve_upper_transpose(&ws.mat, n, x)?;
-    solve_upper(&ws.mat, n, x)
+/// Cholesky factor of the (optionally column-scaled, optionally damped) Gram matrix of the
+/// selected columns into `ws.mat` (`m` columns, see [`GramSel`]).
+fn factor_gram<const P: usize>(ws: &mut Workspace<P>, m: usize, how: GramSel) -> Result<()> {
+    let Workspace {
+        gram,
+        free,
+        colscale,
+        row,
+        v,
+        mat,
+        ..
+    } = ws;
+    let g = gram.gram();
+    let col = |a: usize| match how {
+        GramSel::FreeDamped(_) => free[a],
+        _ => a,
+    };
+    for a in 0..m {
+        for b in a..m {
+            let (i, j) = (col(a).min(col(b)), col(a).max(col(b)));
+            let mut x = g[i][j];
+            match how {
+                GramSel::AllScaled => x *= colscale[a] * colscale[b],
+                GramSel::FreeDamped(lambda) if a == b => x += lambda * row[a] * row[a],
+                _ => {}
+            }
+            v[a][b] = x;
+        }
+    }
+    crate::linalg::gram::cholesky_upper(v, m, 1e-14, mat)
+}
+
+/// Solves `RᵀR·x = rhs` with `R = mat` (from [`factor_gram`]) in place in `x`.
+fn solve_normal<const P: usize>(mat: &[[f64; P]; P], n: usize, x: &mut [f64]) -> Result<()> {
+    solve_upper_transpose(mat, n, x)?;
+    solve_upper(mat, n, x)
 }
 
 /// OLS: Gauss–Newton with the minimum-norm least-squares step (as `lsqminnorm`) on
@@ -253,6 +330,8 @@ fn gauss_newton<const N: usize, const P: usize>(
     n: usize,
     ws: &mut Workspace<P>,
 ) -> Result<u32> {
+    // One trial model, equal to `robot` except for the fitted parameters being tried.
+    let mut trial = *robot;
     unit_scale(ws, n);
     let mut c = accumulate_gram(robot, data, opts, n, ws)?;
     for it in 0..opts.max_iterations {
@@ -264,16 +343,19 @@ fn gauss_newton<const N: usize, const P: usize>(
             let d = sqrt(ws.gram.gram()[k][k]);
             ws.diag[k] = if d > 0.0 { d } else { 1.0 };
             ws.colscale[k] = 1.0 / ws.diag[k];
-            ws.free[k] = k;
         }
-        let (sel, inv) = (ws.free, ws.colscale);
-        if factor_gram(ws, &sel[..n], Some(&inv[..n]), None).is_ok() {
+        if factor_gram(ws, n, GramSel::AllScaled).is_ok() {
+            let Workspace {
+                gram,
+                colscale,
+                step,
+                mat,
+                ..
+            } = ws;
             for k in 0..n {
-                ws.step[k] = ws.gram.atb()[k] * ws.colscale[k];
+                step[k] = gram.atb()[k] * colscale[k];
             }
-            let mut z = ws.step;
-            solve_normal(ws, n, &mut z[..n])?;
-            ws.step = z;
+            solve_normal(mat, n, &mut step[..n])?;
         } else {
             accumulate(robot, data, opts, n, ws)?;
             let Workspace { lsq, step, svd, .. } = ws;
@@ -290,21 +372,21 @@ fn gauss_newton<const N: usize, const P: usize>(
         let last = dx <= opts.xtol * (xn + opts.xtol);
         let mut accepted = None;
         for _ in 0..30 {
-            let trial = apply(robot, n, ws, None)?;
+            apply(&mut trial, n, ws, None)?;
             let c2 = if last {
                 cost(&trial, data, opts)?
             } else {
                 accumulate_gram(&trial, data, opts, n, ws)?
             };
             if c2 <= c {
-                accepted = Some((trial, c2));
+                accepted = Some(c2);
                 break;
             }
             for k in 0..n {
                 ws.step[k] *= 0.5;
             }
         }
-        let Some((trial, c2)) = accepted else {
+        let Some(c2) = accepted else {
             // No decrease along the Gauss–Newton direction: at a minimum to rounding.
             return Ok(it);
         };
@@ -333,8 +415,8 @@ fn levenberg_marquardt<const N: usize, const P: usize>(
     let mut lambda = 0.0;
     for k in 0..n {
         ws.diag[k] = 0.0;
-        ws.free[k] = k;
     }
+    let mut trial = *robot;
     for it in 0..opts.max_iterations {
         get_x(robot, n, ws)?;
         unit_scale(ws, n);
@@ -342,19 +424,17 @@ fn levenberg_marquardt<const N: usize, const P: usize>(
         if fnorm2 <= opts.abs_cost_tol {
             return Ok(it);
         }
-        let sel = ws.free;
-        if factor_gram(ws, &sel[..n], None, None).is_ok() {
+        if factor_gram(ws, n, GramSel::All).is_ok() {
             // qtb = R⁻ᵀ·Jᵀe, so that RᵀR x = Rᵀ qtb is the Gauss–Newton system.
-            let mut q = *ws.gram.atb();
-            solve_upper_transpose(&ws.mat, n, &mut q[..n])?;
-            ws.tmp = q;
+            let Workspace { gram, tmp, mat, .. } = ws;
+            tmp.copy_from_slice(gram.atb());
+            solve_upper_transpose(mat, n, &mut tmp[..n])?;
         } else {
             accumulate(robot, data, opts, n, ws)?;
             // Row by row: a whole P×P copy would land on the stack.
-            for i in 0..n {
-                ws.mat[i] = ws.lsq.r()[i];
-            }
-            ws.tmp = *ws.lsq.qtb();
+            let Workspace { lsq, tmp, mat, .. } = ws;
+            mat[..n].copy_from_slice(&lsq.r()[..n]);
+            tmp.copy_from_slice(lsq.qtb());
         }
         // MINPACK scaling: D_k = max over iterations of the column norms.
         for k in 0..n {
@@ -389,7 +469,7 @@ fn levenberg_marquardt<const N: usize, const P: usize>(
             if it == 0 {
                 delta = delta.min(pnorm);
             }
-            let trial = apply(robot, n, ws, None)?;
+            apply(&mut trial, n, ws, None)?;
             let fnorm1 = sqrt(cost(&trial, data, opts)?);
             let actred = if 0.1 * fnorm1 < fnorm {
                 1.0 - (fnorm1 / fnorm) * (fnorm1 / fnorm)
@@ -474,6 +554,7 @@ fn bounded<const N: usize, const P: usize>(
         }
     }
     let mut lambda = 1e-3;
+    let mut trial = *robot;
     for it in 0..opts.max_iterations {
         get_x(robot, n, ws)?;
         unit_scale(ws, n);
@@ -499,27 +580,35 @@ fn bounded<const N: usize, const P: usize>(
         }
         let mut improved = false;
         for _ in 0..40 {
-            let sel = ws.free;
             for f in 0..nf {
-                ws.row[f] = ws.diag[sel[f]];
+                ws.row[f] = ws.diag[ws.free[f]];
             }
-            let d = ws.row;
-            if factor_gram(ws, &sel[..nf], None, Some((lambda, &d[..nf]))).is_ok() {
-                let mut z = [0.0; P];
+            if factor_gram(ws, nf, GramSel::FreeDamped(lambda)).is_ok() {
+                // The damped step of the free parameters, in `tmp`.
+                let Workspace {
+                    gram,
+                    free,
+                    tmp,
+                    mat,
+                    step,
+                    x,
+                    cols,
+                    ..
+                } = &mut *ws;
                 for f in 0..nf {
-                    z[f] = ws.gram.atb()[sel[f]];
+                    tmp[f] = gram.atb()[free[f]];
                 }
-                solve_normal(ws, nf, &mut z[..nf])?;
+                solve_normal(mat, nf, &mut tmp[..nf])?;
                 for k in 0..n {
-                    ws.step[k] = 0.0;
+                    step[k] = 0.0;
                 }
                 for f in 0..nf {
-                    let k = sel[f];
-                    let i = ws.cols[k];
-                    let target = (ws.x[k] + z[f]).clamp(b.lower[i], b.upper[i]);
-                    ws.step[k] = target - ws.x[k];
+                    let k = free[f];
+                    let i = cols[k];
+                    let target = (x[k] + tmp[f]).clamp(b.lower[i], b.upper[i]);
+                    step[k] = target - x[k];
                 }
-                let trial = apply(robot, n, ws, Some(b))?;
+                apply(&mut trial, n, ws, Some(b))?;
                 let c2 = cost(&trial, data, opts)?;
                 if c2 < c {
                     let dx = scaled_norm(ws, n, &ws.step);
@@ -550,7 +639,6 @@ fn bounded<const N: usize, const P: usize>(
 
 /// σ², standard errors and strong correlations at the fitted model.
 fn covariance<const N: usize, const P: usize>(
-    robot: &Robot<N>,
     data: &[Measurement<N>],
     opts: &IdentifyOptions<'_>,
     n: usize,
@@ -558,16 +646,13 @@ fn covariance<const N: usize, const P: usize>(
     ws: &mut Workspace<P>,
     out: &mut Identification<N>,
 ) -> Result<()> {
+    let robot = &out.robot;
     unit_scale(ws, n);
     let c = accumulate_gram(robot, data, opts, n, ws)?;
     out.sigma2 = if rows > n { c / (rows - n) as f64 } else { 0.0 };
-    for k in 0..n {
-        ws.free[k] = k;
-    }
-    let sel = ws.free;
     // Covariance (RᵀR)⁻¹ from the normal equations (2–3 digits suffice for standard
     // errors); the backward-stable Givens factor when they are numerically singular.
-    if factor_gram(ws, &sel[..n], None, None).is_err() {
+    if factor_gram(ws, n, GramSel::All).is_err() {
         accumulate(robot, data, opts, n, ws)?;
         for i in 0..n {
             ws.v[i] = ws.lsq.r()[i];

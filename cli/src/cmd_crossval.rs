@@ -1,0 +1,930 @@
+//! `kincal crossval DATA --robot ROBOT [--effects E1,E2] [--init-frames] [--folds K]`:
+//! held-out residuals of the nominal geometry and of the calibrated model (k-fold
+//! cross-validation by pose_id), the noise floor (repeats, or an upper bound from the
+//! residuals), and the outliers a robust fit names. Every number comes from the core:
+//! `frames::estimate_frames`, `identify::identify`, `identify::identify_robust`.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use kincal::identify::{
+    Algorithm, Identifiability, IdentifyOptions, Loss, Measurement, PoseResidual, RobustOptions,
+    identify, identify_robust,
+};
+use kincal::validation::PoseErrors;
+use kincal::{Effect, EffectSet, ParamSet, Robot};
+use rayon::prelude::*;
+use serde_json::{Value, json};
+
+use crate::args::{parse_effect, positive};
+use crate::calibration::new_workspace;
+use crate::data::{self, DataOptions};
+use crate::error::CliError;
+use crate::measurements::MeasurementSet;
+use crate::robot_arg;
+
+pub const LONG_ABOUT: &str = "\
+Cross-validates a calibration on held-out poses. The poses are dealt to K folds (rows
+sharing a pose_id stay together; seeded, so reruns give the same folds); each fold is
+predicted by models fitted on the other folds:
+
+  nominal     the ROBOT's geometry, with only the base/tool frame parameters among --effects
+              fitted (base_frame, tool_frame; none: the ROBOT as it is),
+  calibrated  the geometric parameters plus every effect of --effects (as `calibrate`).
+
+With --init-frames both start, in every fold, from frames estimated on that fold's training
+poses (kincal::frames: hand-eye equation for full poses, rigid fits for positions), so a set
+whose base and tool frames are unknown needs no hand-made starting values. Fits use OLS
+(Gauss-Newton), falling back to OPT2 (Levenberg-Marquardt) if OLS does not converge, and fit
+the identifiable subset when a fold leaves parameters undetermined (reported per fold).
+
+Weighting: Σ w_pos·|Δp|² + w_rot·|Δφ|². --sigma-pos-mm/--sigma-rot-deg state the noise
+(w = 1/σ²); --unit-weights uses 1 and 1 (the paper's); by default the weights are 1/σ²
+with σ the per-axis RMS residual of the calibrated model on all poses, iterated to a fixed
+point and corrected for the fitted parameters (so neither kind of row dominates by its unit).
+
+Also printed (and in --json): the noise floor — the pooled scatter of repeated pose_ids
+when the data have them, else an upper bound: the calibrated model's dof-corrected residual
+per axis, which contains whatever the model does not explain; the robust fit (Cauchy IRLS on
+all poses, core identify_robust) and the poses its residual test names as outliers (d² above
+the 99.99 % χ² quantile); the identifiability of the calibrated model on all poses.
+
+--plot FILE.svg draws the held-out |e_p| (and |e_φ|) of every pose for both models on one
+scale. --robot-out ROBOT.toml writes the ROBOT's nominal geometry with the base and tool
+frames of the calibrated fit on all poses (a starting model for `kincal diagnose`, whose
+baseline fits the geometry but not the frames).";
+
+pub const EXAMPLE: &str = "\
+Example:
+  kincal crossval ur10e.csv --robot ur10e.toml --effects base_frame,tool_frame \\
+      --init-frames --folds 5 --json ur10e-cv.json --plot ur10e-cv.svg";
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    /// Measurement CSV: joint readings and measured poses
+    #[arg(value_name = "DATA")]
+    pub data: PathBuf,
+    /// Built-in robot name (aria) or robot description file: the nominal model
+    #[arg(long, value_name = "ROBOT")]
+    pub robot: String,
+    /// Effects to identify with the geometry (comma-separated names of spec/effects.md)
+    #[arg(long, value_name = "E1,E2", value_delimiter = ',', value_parser = parse_effect)]
+    pub effects: Vec<Effect>,
+    /// Estimate the base and tool frames from each fold's training poses first
+    #[arg(long)]
+    pub init_frames: bool,
+    /// Number of folds (2 or more; at most the number of pose groups)
+    #[arg(long, value_name = "K", default_value_t = 5)]
+    pub folds: usize,
+    /// Seed of the fold assignment
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub seed: u64,
+    /// Geometric parameter kinds to identify in the calibrated model (theta0, d, a, alpha;
+    /// d stands for d or β, whichever the link identifies)
+    #[arg(long, value_name = "K1,K2", value_delimiter = ',', default_value = "theta0,d,a,alpha", value_parser = ["theta0", "d", "a", "alpha"])]
+    pub geometry: Vec<String>,
+    /// Instrument position noise, 1σ per axis [mm]: weight 1/σ²
+    #[arg(long, value_name = "S", value_parser = positive, requires = "sigma_rot_deg", conflicts_with = "unit_weights")]
+    pub sigma_pos_mm: Option<f64>,
+    /// Instrument orientation noise, 1σ per axis [deg]: weight 1/σ²
+    #[arg(long, value_name = "S", value_parser = positive, requires = "sigma_pos_mm")]
+    pub sigma_rot_deg: Option<f64>,
+    /// Weights 1 per m² and 1 per rad² (the paper's) instead of residual-based ones
+    #[arg(long)]
+    pub unit_weights: bool,
+    /// Fit every model robustly (Cauchy IRLS, core identify_robust) instead of by least
+    /// squares; held-out errors are still reported for every pose
+    #[arg(long)]
+    pub robust: bool,
+    /// Accept joint readings outside the robot's joint limits
+    #[arg(long)]
+    pub allow_out_of_limits: bool,
+    /// Iteration limit of each fit
+    #[arg(long, value_name = "N", default_value_t = 200)]
+    pub max_iterations: u32,
+    /// Write the numbers as JSON
+    #[arg(long, value_name = "FILE.json")]
+    pub json: Option<PathBuf>,
+    /// Draw the held-out errors per pose (SVG)
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<PathBuf>,
+    /// Write the nominal geometry with the calibrated frames as a robot description
+    #[arg(long, value_name = "ROBOT.toml")]
+    pub robot_out: Option<PathBuf>,
+}
+
+/// A fold's held-out errors (pose, nominal, calibrated), data-deficient parameter count and
+/// the algorithm that fitted it.
+type FoldResult = Result<(Vec<(usize, PoseErrors, PoseErrors)>, usize, &'static str), String>;
+
+/// Residual-based weighting: rounds of the fixed point.
+const WEIGHT_ROUNDS: usize = 4;
+
+pub fn run(args: &Args) -> Result<(), CliError> {
+    if args.folds < 2 {
+        return Err(CliError::usage("--folds must be 2 or more"));
+    }
+    let outputs: Vec<&PathBuf> = [&args.json, &args.plot, &args.robot_out]
+        .into_iter()
+        .flatten()
+        .collect();
+    for (i, a) in outputs.iter().enumerate() {
+        if outputs[i + 1..]
+            .iter()
+            .any(|b| crate::files::is_same_file(a, b) || a == b)
+        {
+            return Err(CliError::usage(format!(
+                "{} is named by two outputs",
+                a.display()
+            )));
+        }
+    }
+    let spec = robot_arg::resolve_robot(&args.robot)?;
+    kincal::with_any_robot!(&spec.robot, r => crossval(r, &spec.name, args))
+}
+
+/// How the rows are weighted.
+#[derive(Debug, Clone, Copy)]
+struct Weights {
+    pos: f64,
+    rot: f64,
+    mode: &'static str,
+}
+
+/// One fitted model and how it was fitted.
+struct Fit<const N: usize> {
+    robot: Robot<N>,
+    analysis: Option<Identifiability>,
+    algorithm: &'static str,
+}
+
+fn frames_only(effects: EffectSet, n: usize) -> ParamSet {
+    let mut frames = EffectSet::NONE;
+    for e in [Effect::BaseFrame, Effect::ToolFrame] {
+        if effects.contains(e) {
+            frames = frames.with(e);
+        }
+    }
+    frames.params(n)
+}
+
+/// The geometric parameters of the kinds named (`d` = the link's length parameter, d or β).
+fn geometry_subset<const N: usize>(robot: &Robot<N>, kinds: &[String]) -> ParamSet {
+    use kincal::params::LinkParam;
+    let mut out = ParamSet::new();
+    for i in robot.geometric_param_set().iter() {
+        if let Ok(kincal::ParamId::Link { kind, .. }) =
+            kincal::ParamId::from_index(kincal::ParamIndex(i), N)
+        {
+            let name = match kind {
+                LinkParam::Theta0 => "theta0",
+                LinkParam::D | LinkParam::Beta => "d",
+                LinkParam::A => "a",
+                LinkParam::Alpha => "alpha",
+            };
+            if kinds.iter().any(|k| k == name) {
+                // Indices come from the robot's own set.
+                let _ = out.insert(i);
+            }
+        }
+    }
+    out
+}
+
+/// How every model is fitted.
+#[derive(Debug, Clone, Copy)]
+struct How {
+    w: Weights,
+    init_frames: bool,
+    robust: bool,
+    max_iterations: u32,
+}
+
+/// Fits `requested` on the poses of `data` with a positive weight.
+fn fit<const N: usize>(
+    start: &Robot<N>,
+    data: &[Measurement<N>],
+    requested: ParamSet,
+    how: How,
+) -> Result<Fit<N>, String> {
+    let (w, init_frames, max_iterations) = (how.w, how.init_frames, how.max_iterations);
+    let start = if init_frames {
+        kincal::frames::estimate_frames(start, data)
+            .map_err(|e| format!("frame estimate: {e}"))?
+            .robot
+    } else {
+        *start
+    };
+    if requested.is_empty() {
+        return Ok(Fit {
+            robot: start,
+            analysis: None,
+            algorithm: "none",
+        });
+    }
+    let mut ws = new_workspace();
+    let mut last = String::new();
+    for algorithm in [Algorithm::Ols, Algorithm::Opt2] {
+        let mut o = IdentifyOptions::new(algorithm, requested);
+        o.weight_pos = w.pos;
+        o.weight_rot = w.rot;
+        o.allow_data_deficiency = true;
+        o.max_iterations = max_iterations;
+        let result = if how.robust {
+            let mut d = data.to_vec();
+            let mut report = vec![PoseResidual::default(); d.len()];
+            identify_robust(
+                &start,
+                &mut d,
+                &o,
+                &RobustOptions::new(Loss::Cauchy),
+                &mut report,
+                &mut ws,
+            )
+            .map(|r| r.fit)
+        } else {
+            identify(&start, data, &o, &mut ws)
+        };
+        match result {
+            Ok(id) => {
+                return Ok(Fit {
+                    robot: id.robot,
+                    analysis: Some(id.analysis),
+                    algorithm: algorithm.name(),
+                });
+            }
+            Err(e @ kincal::Error::NotConverged { .. }) => last = e.to_string(),
+            Err(e) => return Err(e.to_string()),
+        }
+    }
+    Err(last)
+}
+
+/// Errors of `robot` on pose `m` (rotation zero without a measured orientation).
+fn errors<const N: usize>(robot: &Robot<N>, m: &Measurement<N>) -> Result<PoseErrors, String> {
+    let t = m.model_pose(robot).map_err(|e| e.to_string())?;
+    let mut e = PoseErrors::between(&m.pose, &t);
+    if !m.mask.has_orientation() {
+        e.rot_rad = [0.0; 3];
+        e.rot_norm_rad = 0.0;
+    }
+    if !m.mask.has_position() {
+        e.pos_m = [0.0; 3];
+        e.pos_norm_m = 0.0;
+    }
+    Ok(e)
+}
+
+/// RMS and max of |e_p| [mm] and |e_φ| [deg] over the poses that measure them.
+#[derive(Debug, Clone, Copy, Default)]
+struct Summary {
+    rms_pos_mm: f64,
+    max_pos_mm: f64,
+    rms_rot_deg: f64,
+    max_rot_deg: f64,
+}
+
+fn summarize<const N: usize>(
+    meas: &[Measurement<N>],
+    e: &[PoseErrors],
+    keep: impl Fn(usize) -> bool,
+) -> Summary {
+    let (mut sp, mut np, mut sr, mut nr) = (0.0, 0usize, 0.0, 0usize);
+    let mut s = Summary::default();
+    for (i, (m, e)) in meas.iter().zip(e).enumerate() {
+        if !keep(i) {
+            continue;
+        }
+        if m.mask.has_position() {
+            sp += e.pos_norm_m * e.pos_norm_m;
+            np += 1;
+            s.max_pos_mm = s.max_pos_mm.max(e.pos_norm_m * 1e3);
+        }
+        if m.mask.has_orientation() {
+            sr += e.rot_norm_rad * e.rot_norm_rad;
+            nr += 1;
+            s.max_rot_deg = s.max_rot_deg.max(e.rot_norm_rad.to_degrees());
+        }
+    }
+    if np > 0 {
+        s.rms_pos_mm = (sp / np as f64).sqrt() * 1e3;
+    }
+    if nr > 0 {
+        s.rms_rot_deg = (sr / nr as f64).sqrt().to_degrees();
+    }
+    s
+}
+
+fn summary_json(s: &Summary, orientation: bool) -> Value {
+    let mut v = json!({"rms_pos_mm": s.rms_pos_mm, "max_pos_mm": s.max_pos_mm});
+    if orientation {
+        v["rms_rot_deg"] = json!(s.rms_rot_deg);
+        v["max_rot_deg"] = json!(s.max_rot_deg);
+    }
+    v
+}
+
+/// Per-axis residual σ of `robot` on `data`: (σ_pos [m], σ_rot [rad]), corrected by
+/// `rows / (rows − p)`; 0 where the data have no such rows.
+fn residual_sigma<const N: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    p: usize,
+) -> Result<(f64, f64, usize, usize), String> {
+    let (mut sp, mut np, mut sr, mut nr) = (0.0, 0usize, 0.0, 0usize);
+    for m in data {
+        let e = errors(robot, m)?;
+        if m.mask.has_position() {
+            sp += e.pos_norm_m * e.pos_norm_m;
+            np += 3;
+        }
+        if m.mask.has_orientation() {
+            sr += e.rot_norm_rad * e.rot_norm_rad;
+            nr += 3;
+        }
+    }
+    let rows = np + nr;
+    let corr = if rows > p {
+        rows as f64 / (rows - p) as f64
+    } else {
+        f64::INFINITY
+    };
+    let s = |ss: f64, n: usize| {
+        if n > 0 {
+            (ss / n as f64 * corr).sqrt()
+        } else {
+            0.0
+        }
+    };
+    Ok((s(sp, np), s(sr, nr), np, nr))
+}
+
+/// Folds by pose group: groups in order of first appearance, shuffled with `seed`, dealt
+/// round-robin.
+fn assign_folds(
+    set: &MeasurementSet,
+    k: usize,
+    seed: u64,
+) -> Result<(Vec<usize>, usize), CliError> {
+    let mut labels: Vec<String> = Vec::new();
+    let mut group_of = Vec::with_capacity(set.rows.len());
+    for (i, r) in set.rows.iter().enumerate() {
+        let label = r.pose_id.clone().unwrap_or_else(|| format!("#row{i}"));
+        let g = match labels.iter().position(|l| *l == label) {
+            Some(g) => g,
+            None => {
+                labels.push(label);
+                labels.len() - 1
+            }
+        };
+        group_of.push(g);
+    }
+    let n_groups = labels.len();
+    if n_groups < k {
+        return Err(CliError::usage(format!(
+            "{}: {n_groups} pose groups, fewer than --folds {k}",
+            set.source
+        )));
+    }
+    let mut order: Vec<usize> = (0..n_groups).collect();
+    let mut rng = kincal::rng::SplitMix64::new(seed);
+    for i in (1..n_groups).rev() {
+        let j = rng.below(i + 1);
+        order.swap(i, j);
+    }
+    let mut fold_of_group = vec![0; n_groups];
+    for (pos, &g) in order.iter().enumerate() {
+        fold_of_group[g] = pos % k;
+    }
+    Ok((
+        group_of.iter().map(|&g| fold_of_group[g]).collect(),
+        n_groups,
+    ))
+}
+
+/// Noise floor from repeated pose_ids: pooled per-axis scatter of the residuals within
+/// groups, `(σ_pos [m], σ_rot [rad], dof_pos, dof_rot)`; `None` without repeats.
+fn repeat_noise<const N: usize>(
+    robot: &Robot<N>,
+    set: &MeasurementSet,
+    meas: &[Measurement<N>],
+) -> Result<Option<(f64, f64, usize, usize)>, String> {
+    let mut groups: Vec<(String, Vec<usize>)> = Vec::new();
+    for (i, r) in set.rows.iter().enumerate() {
+        let Some(id) = &r.pose_id else {
+            return Ok(None);
+        };
+        match groups.iter_mut().find(|(g, _)| g == id) {
+            Some((_, v)) => v.push(i),
+            None => groups.push((id.clone(), vec![i])),
+        }
+    }
+    let (mut sp, mut dp, mut sr, mut dr) = (0.0, 0usize, 0.0, 0usize);
+    for (_, rows) in groups.iter().filter(|(_, v)| v.len() >= 2) {
+        let es: Vec<PoseErrors> = rows
+            .iter()
+            .map(|&i| errors(robot, &meas[i]))
+            .collect::<Result<_, _>>()?;
+        for (kind, ss, dof) in [(0, &mut sp, &mut dp), (1, &mut sr, &mut dr)] {
+            let has = |i: usize| {
+                if kind == 0 {
+                    meas[i].mask.has_position()
+                } else {
+                    meas[i].mask.has_orientation()
+                }
+            };
+            let idx: Vec<usize> = (0..rows.len()).filter(|&j| has(rows[j])).collect();
+            if idx.len() < 2 {
+                continue;
+            }
+            let v = |j: usize| {
+                if kind == 0 {
+                    es[j].pos_m
+                } else {
+                    es[j].rot_rad
+                }
+            };
+            let mut mean = [0.0; 3];
+            for &j in &idx {
+                for (m, x) in mean.iter_mut().zip(v(j)) {
+                    *m += x / idx.len() as f64;
+                }
+            }
+            for &j in &idx {
+                for (m, x) in mean.iter().zip(v(j)) {
+                    *ss += (x - m).powi(2);
+                }
+            }
+            *dof += 3 * (idx.len() - 1);
+        }
+    }
+    if dp + dr == 0 {
+        return Ok(None);
+    }
+    let s = |ss: f64, d: usize| if d > 0 { (ss / d as f64).sqrt() } else { 0.0 };
+    Ok(Some((s(sp, dp), s(sr, dr), dp, dr)))
+}
+
+fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Result<(), CliError> {
+    let effects = args.effects.iter().fold(EffectSet::NONE, |a, &e| a.with(e));
+    let set = data::read(
+        &args.data,
+        nominal,
+        effects,
+        DataOptions {
+            require_pose: true,
+            allow_out_of_limits: args.allow_out_of_limits,
+        },
+    )?;
+    let meas = data::measurements::<N>(&set)?;
+    let orientation = meas.iter().any(|m| m.mask.has_orientation());
+    let (fold_of, n_groups) = assign_folds(&set, args.folds, args.seed)?;
+    let req_nom = frames_only(effects, N);
+    let req_cal = geometry_subset(nominal, &args.geometry).union(&effects.params(N));
+    let fail = |what: &str, e: String| CliError::numeric(format!("{}: {what}: {e}", set.source));
+
+    // Weights.
+    let mut w = match (args.sigma_pos_mm, args.sigma_rot_deg, args.unit_weights) {
+        (Some(sp), Some(sr), _) => Weights {
+            pos: 1.0 / (sp * 1e-3).powi(2),
+            rot: 1.0 / sr.to_radians().powi(2),
+            mode: "stated",
+        },
+        (_, _, true) => Weights {
+            pos: 1.0,
+            rot: 1.0,
+            mode: "unit",
+        },
+        _ => Weights {
+            pos: 1.0,
+            rot: 1.0,
+            mode: "residual",
+        },
+    };
+    let how = |w: Weights| How {
+        w,
+        init_frames: args.init_frames,
+        robust: args.robust,
+        max_iterations: args.max_iterations,
+    };
+    let mut all =
+        fit(nominal, &meas, req_cal, how(w)).map_err(|e| fail("calibration on all poses", e))?;
+    let p_fit = |f: &Fit<N>| f.analysis.as_ref().map_or(0, |a| a.identifiable.len());
+    // Residual-based weights matter only when both kinds of rows are measured.
+    let both = orientation && meas.iter().any(|m| m.mask.has_position());
+    if w.mode == "residual" && !both {
+        w.mode = "residual (one kind of rows: weights immaterial)";
+    }
+    if w.mode == "residual" {
+        for _ in 0..WEIGHT_ROUNDS {
+            let (sp, sr, _, nr) =
+                residual_sigma(&all.robot, &meas, p_fit(&all)).map_err(|e| fail("residuals", e))?;
+            if !(sp > 0.0 && sp.is_finite()) {
+                break;
+            }
+            w.pos = 1.0 / (sp * sp);
+            w.rot = if nr > 0 && sr > 0.0 && sr.is_finite() {
+                1.0 / (sr * sr)
+            } else {
+                1.0
+            };
+            all = fit(nominal, &meas, req_cal, how(w))
+                .map_err(|e| fail("calibration on all poses", e))?;
+        }
+    }
+    let (sig_p, sig_r, _, _) =
+        residual_sigma(&all.robot, &meas, p_fit(&all)).map_err(|e| fail("residuals", e))?;
+    let nom_all =
+        fit(nominal, &meas, req_nom, how(w)).map_err(|e| fail("nominal fit on all poses", e))?;
+
+    // Folds.
+    let pb = crate::progress::spinner(format!("cross-validating ({} folds)", args.folds));
+    let folds: Vec<FoldResult> = (0..args.folds)
+        .into_par_iter()
+        .map(|k| {
+            let train: Vec<Measurement<N>> = meas
+                .iter()
+                .zip(&fold_of)
+                .map(|(m, &f)| Measurement {
+                    weight: if f == k { 0.0 } else { m.weight },
+                    ..*m
+                })
+                .collect();
+            let a = fit(nominal, &train, req_nom, how(w))
+                .map_err(|e| format!("fold {}: nominal: {e}", k + 1))?;
+            let b = fit(nominal, &train, req_cal, how(w))
+                .map_err(|e| format!("fold {}: calibrated: {e}", k + 1))?;
+            let deficient = b.analysis.as_ref().map_or(0, |x| x.data_deficient.len());
+            let mut out = Vec::new();
+            for (i, m) in meas.iter().enumerate() {
+                if fold_of[i] == k {
+                    out.push((i, errors(&a.robot, m)?, errors(&b.robot, m)?));
+                }
+            }
+            Ok((out, deficient, b.algorithm))
+        })
+        .collect();
+    pb.finish_and_clear();
+    let mut held_nom = vec![PoseErrors::default(); meas.len()];
+    let mut held_cal = vec![PoseErrors::default(); meas.len()];
+    let mut fold_info = Vec::new();
+    for (k, f) in folds.into_iter().enumerate() {
+        let (rows, deficient, algorithm) = f.map_err(|e| fail("cross-validation", e))?;
+        for &(i, a, b) in &rows {
+            held_nom[i] = a;
+            held_cal[i] = b;
+        }
+        fold_info.push((k, rows.len(), deficient, algorithm));
+    }
+    let all_poses = |_: usize| true;
+    let s_nom = summarize(&meas, &held_nom, all_poses);
+    let s_cal = summarize(&meas, &held_cal, all_poses);
+    let in_cal: Vec<PoseErrors> = meas
+        .iter()
+        .map(|m| errors(&all.robot, m))
+        .collect::<Result<_, _>>()
+        .map_err(|e| fail("residuals", e))?;
+    let in_nom: Vec<PoseErrors> = meas
+        .iter()
+        .map(|m| errors(&nom_all.robot, m))
+        .collect::<Result<_, _>>()
+        .map_err(|e| fail("residuals", e))?;
+    let s_in_cal = summarize(&meas, &in_cal, all_poses);
+    let s_in_nom = summarize(&meas, &in_nom, all_poses);
+
+    // Noise floor.
+    let repeats = repeat_noise(&all.robot, &set, &meas).map_err(|e| fail("noise floor", e))?;
+
+    // Robust fit and outliers (Cauchy IRLS from the calibrated start).
+    let robust_start = if args.init_frames {
+        kincal::frames::estimate_frames(nominal, &meas)
+            .map_err(|e| fail("frame estimate", e.to_string()))?
+            .robot
+    } else {
+        *nominal
+    };
+    let mut rdata = meas.clone();
+    let mut report = vec![PoseResidual::default(); meas.len()];
+    let mut o = IdentifyOptions::new(Algorithm::Ols, req_cal);
+    o.weight_pos = w.pos;
+    o.weight_rot = w.rot;
+    o.allow_data_deficiency = true;
+    o.max_iterations = args.max_iterations;
+    let mut ws = new_workspace();
+    let robust = identify_robust(
+        &robust_start,
+        &mut rdata,
+        &o,
+        &RobustOptions::new(Loss::Cauchy),
+        &mut report,
+        &mut ws,
+    );
+
+    // Report.
+    let analysis = all.analysis.as_ref();
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "Cross-validation of '{name}' on {}: {} poses in {n_groups} pose groups, {} folds (seed {}), {}",
+        set.source,
+        meas.len(),
+        args.folds,
+        args.seed,
+        if orientation {
+            "full poses"
+        } else {
+            "positions only"
+        }
+    );
+    let eff_names: Vec<&str> = effects.iter().map(|e| e.name()).collect();
+    let _ = writeln!(
+        s,
+        "Models: nominal = ROBOT geometry{}; calibrated = geometry ({}){}{}",
+        if req_nom.is_empty() {
+            String::new()
+        } else {
+            " with fitted frames".to_string()
+        },
+        args.geometry.join(", "),
+        if eff_names.is_empty() {
+            String::new()
+        } else {
+            format!(" + {}", eff_names.join(", "))
+        },
+        if args.init_frames {
+            "; frames estimated from the training poses first (--init-frames)"
+        } else {
+            ""
+        }
+    );
+    if args.robust {
+        s.push_str("Fits: robust (Cauchy IRLS) in every fold and on all poses\n");
+    }
+    let _ = writeln!(
+        s,
+        "Weighting ({}): {:.4e} per m², {:.4e} per rad²{}",
+        w.mode,
+        w.pos,
+        w.rot,
+        match w.mode {
+            "residual" => format!(
+                " (σ = {:.4} mm, {:.4}° per axis)",
+                1e3 / w.pos.sqrt(),
+                (1.0 / w.rot.sqrt()).to_degrees()
+            ),
+            _ => String::new(),
+        }
+    );
+    if let Some(a) = analysis {
+        let _ = writeln!(
+            s,
+            "Calibrated model on all poses: {} of {} requested parameters identified (rank {}, condition {:.3e}), {} structurally redundant, {} data-deficient",
+            a.identifiable.len(),
+            a.requested.len(),
+            a.rank,
+            a.condition_number,
+            a.structural.len(),
+            a.data_deficient.len()
+        );
+    }
+    s.push('\n');
+    let mut t = crate::report::Table::new(&[
+        "model",
+        "RMS e_p [mm]",
+        "max e_p [mm]",
+        "RMS e_φ [deg]",
+        "max e_φ [deg]",
+    ]);
+    let line = |label: &str, x: &Summary| {
+        vec![
+            label.to_string(),
+            format!("{:.4}", x.rms_pos_mm),
+            format!("{:.4}", x.max_pos_mm),
+            if orientation {
+                format!("{:.4}", x.rms_rot_deg)
+            } else {
+                "-".into()
+            },
+            if orientation {
+                format!("{:.4}", x.max_rot_deg)
+            } else {
+                "-".into()
+            },
+        ]
+    };
+    t.row(line("nominal, held-out", &s_nom));
+    t.row(line("calibrated, held-out", &s_cal));
+    t.row(line("nominal, in-sample", &s_in_nom));
+    t.row(line("calibrated, in-sample", &s_in_cal));
+    s.push_str("Residuals (held-out: each pose predicted by the fit of the other folds):\n");
+    s.push_str(&t.render("  "));
+    let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { f64::INFINITY };
+    let _ = writeln!(
+        s,
+        "  held-out RMS position: {:.3} mm -> {:.3} mm ({:.2}x lower){}",
+        s_nom.rms_pos_mm,
+        s_cal.rms_pos_mm,
+        ratio(s_nom.rms_pos_mm, s_cal.rms_pos_mm),
+        if orientation {
+            format!(
+                "; orientation {:.4}° -> {:.4}° ({:.2}x)",
+                s_nom.rms_rot_deg,
+                s_cal.rms_rot_deg,
+                ratio(s_nom.rms_rot_deg, s_cal.rms_rot_deg)
+            )
+        } else {
+            String::new()
+        }
+    );
+    let mut ft = crate::report::Table::new(&[
+        "fold",
+        "poses",
+        "nominal e_p [mm]",
+        "calibrated e_p [mm]",
+        "data-deficient",
+        "algorithm",
+    ]);
+    let mut folds_json = Vec::new();
+    for &(k, n, deficient, algorithm) in &fold_info {
+        let keep = |i: usize| fold_of[i] == k;
+        let (a, b) = (
+            summarize(&meas, &held_nom, keep),
+            summarize(&meas, &held_cal, keep),
+        );
+        ft.row(vec![
+            format!("{}", k + 1),
+            n.to_string(),
+            format!("{:.4}", a.rms_pos_mm),
+            format!("{:.4}", b.rms_pos_mm),
+            deficient.to_string(),
+            algorithm.to_uppercase(),
+        ]);
+        folds_json.push(json!({
+            "fold": k + 1, "poses": n, "data_deficient": deficient, "algorithm": algorithm,
+            "nominal": summary_json(&a, orientation), "calibrated": summary_json(&b, orientation),
+        }));
+    }
+    s.push_str("Per fold (RMS):\n");
+    s.push_str(&ft.render("  "));
+    s.push('\n');
+    let noise_json = match repeats {
+        Some((sp, sr, dp, dr)) => {
+            let _ = writeln!(
+                s,
+                "Noise floor (repeated pose_ids, pooled scatter): σ_pos {:.4} mm ({dp} dof){}",
+                sp * 1e3,
+                if dr > 0 {
+                    format!(", σ_rot {:.4}° ({dr} dof)", sr.to_degrees())
+                } else {
+                    String::new()
+                }
+            );
+            json!({"source": "repeats", "sigma_pos_mm": sp * 1e3, "sigma_rot_deg": sr.to_degrees(), "dof_pos": dp, "dof_rot": dr})
+        }
+        None => {
+            let _ = writeln!(
+                s,
+                "Noise floor: no repeated pose_ids; upper bound from the calibrated residual (dof-corrected): σ_pos {:.4} mm per axis (√3σ = {:.4} mm){}",
+                sig_p * 1e3,
+                3f64.sqrt() * sig_p * 1e3,
+                if orientation {
+                    format!(", σ_rot {:.4}° per axis", sig_r.to_degrees())
+                } else {
+                    String::new()
+                }
+            );
+            json!({"source": "residual_upper_bound", "sigma_pos_mm": sig_p * 1e3, "sigma_rot_deg": if orientation { json!(sig_r.to_degrees()) } else { Value::Null }})
+        }
+    };
+    let outliers_json = match &robust {
+        Ok(r) => {
+            let suspects: Vec<usize> = (0..meas.len()).filter(|&i| report[i].suspect).collect();
+            let _ = writeln!(
+                s,
+                "Robust fit (Cauchy IRLS, {} reweighted fits): robust scales σ_pos {:.4} mm{}; {} outlier(s) by the 99.99 % residual test{}",
+                r.reweights,
+                r.test.scale_pos_m * 1e3,
+                if orientation {
+                    format!(", σ_rot {:.4}°", r.test.scale_rot_rad.to_degrees())
+                } else {
+                    String::new()
+                },
+                suspects.len(),
+                if suspects.is_empty() { "" } else { ":" }
+            );
+            for &i in &suspects {
+                let row = &set.rows[i];
+                let _ = writeln!(
+                    s,
+                    "  pose {} (line {}): d = {:.2}, |e_p| {:.3} mm{}, robust weight {:.3}",
+                    row.pose_id.as_deref().unwrap_or("-"),
+                    row.line,
+                    report[i].distance,
+                    report[i].pos_m * 1e3,
+                    if orientation {
+                        format!(", |e_φ| {:.4}°", report[i].rot_rad.to_degrees())
+                    } else {
+                        String::new()
+                    },
+                    report[i].robust_weight
+                );
+            }
+            json!({
+                "loss": "cauchy", "scale_pos_mm": r.test.scale_pos_m * 1e3,
+                "scale_rot_deg": if orientation { json!(r.test.scale_rot_rad.to_degrees()) } else { Value::Null },
+                "suspects": suspects.iter().map(|&i| json!({
+                    "pose_id": set.rows[i].pose_id, "line": set.rows[i].line,
+                    "distance": report[i].distance, "pos_mm": report[i].pos_m * 1e3,
+                    "rot_deg": report[i].rot_rad.to_degrees(), "robust_weight": report[i].robust_weight,
+                })).collect::<Vec<_>>(),
+            })
+        }
+        Err(e) => {
+            let _ = writeln!(s, "Robust fit failed: {e} (no outlier test)");
+            json!({"error": e.to_string()})
+        }
+    };
+
+    // Outputs.
+    let mut inputs: Vec<&Path> = vec![&args.data];
+    let robot_path = Path::new(&args.robot);
+    if robot_path.is_file() {
+        inputs.push(robot_path);
+    }
+    if let Some(p) = &args.json {
+        let poses: Vec<Value> = (0..meas.len())
+            .map(|i| {
+                json!({
+                    "pose_id": set.rows[i].pose_id, "line": set.rows[i].line, "fold": fold_of[i] + 1,
+                    "nominal_pos_mm": held_nom[i].pos_norm_m * 1e3,
+                    "calibrated_pos_mm": held_cal[i].pos_norm_m * 1e3,
+                    "nominal_rot_deg": held_nom[i].rot_norm_rad.to_degrees(),
+                    "calibrated_rot_deg": held_cal[i].rot_norm_rad.to_degrees(),
+                })
+            })
+            .collect();
+        let doc = json!({
+            "format": "kincal-crossval", "schema_version": "1.0",
+            "data": {"path": set.source, "sha256": set.sha256, "poses": meas.len(), "groups": n_groups, "orientation": orientation},
+            "robot": name, "effects": eff_names, "geometry": args.geometry, "init_frames": args.init_frames, "robust": args.robust,
+            "folds": args.folds, "seed": args.seed,
+            "weighting": {"mode": w.mode, "weight_pos": w.pos, "weight_rot": w.rot},
+            "identifiability": analysis.map(|a| json!({
+                "requested": a.requested.len(), "identifiable": a.identifiable.len(),
+                "structurally_redundant": a.structural.iter().map(crate::report::label::<N>).collect::<Vec<_>>(),
+                "data_deficient": a.data_deficient.iter().map(crate::report::label::<N>).collect::<Vec<_>>(),
+                "rank": a.rank,
+                "condition_number": if a.condition_number.is_finite() { json!(a.condition_number) } else { Value::Null },
+            })),
+            "heldout": {"nominal": summary_json(&s_nom, orientation), "calibrated": summary_json(&s_cal, orientation)},
+            "insample": {"nominal": summary_json(&s_in_nom, orientation), "calibrated": summary_json(&s_in_cal, orientation)},
+            "per_fold": folds_json,
+            "noise_floor": noise_json,
+            "outliers": outliers_json,
+            "poses": poses,
+        });
+        let text = serde_json::to_string_pretty(&doc).map_err(|e| CliError::io(e.to_string()))?;
+        crate::files::write_atomic(p, &inputs, |w| w.write_all(text.as_bytes()))?;
+        let _ = writeln!(s, "JSON written to {}.", p.display());
+    }
+    if let Some(p) = &args.plot {
+        let svg = crate::plot::heldout_svg(
+            &format!("{name}: held-out errors per pose ({} folds)", args.folds),
+            &held_nom,
+            &held_cal,
+            orientation,
+        )
+        .map_err(|e| CliError::io(format!("{}: cannot draw the figure: {e}", p.display())))?;
+        crate::files::write_atomic(p, &inputs, |w| w.write_all(svg.as_bytes()))?;
+        let _ = writeln!(s, "Figure written to {}.", p.display());
+    }
+    if let Some(p) = &args.robot_out {
+        let (base, tool) = (all.robot.base(), all.robot.tool());
+        let start = if args.init_frames {
+            kincal::frames::estimate_frames(nominal, &meas)
+                .map_err(|e| fail("frame estimate", e.to_string()))?
+                .robot
+        } else {
+            *nominal
+        };
+        let r = start
+            .with_base(base)
+            .and_then(|r| r.with_tool(tool))
+            .map_err(|e| fail("frames", e.to_string()))?;
+        let joint_names: Vec<String> = (1..=N).map(|k| format!("joint{k}")).collect();
+        let text = format!(
+            "# {name}: nominal geometry with the base and tool frames of the calibration on all\n\
+             # poses of {} (written by kincal crossval --robot-out)\n{}",
+            set.source,
+            crate::robot_file::write_generic(&format!("{name}-frames"), &joint_names, &r)
+        );
+        crate::files::write_atomic(p, &inputs, |w| w.write_all(text.as_bytes()))?;
+        let _ = writeln!(
+            s,
+            "Robot with the calibrated frames written to {}.",
+            p.display()
+        );
+    }
+    crate::report::emit(&s);
+    Ok(())
+}

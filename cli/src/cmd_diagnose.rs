@@ -1,0 +1,1074 @@
+//! `kincal diagnose DATA --robot ROBOT [--sigma-pos-mm S] [--sigma-rot-deg S] --json
+//! REPORT.json --out MODEL`: the sim-to-real diagnosis of spec/effects.md. The core
+//! (`kincal::diagnosis`) does every computation; this module reads the data, formats the
+//! report (JSON per spec/cli.md and readable text), draws the plots and writes the model.
+
+use std::collections::HashMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use kincal::diagnosis::{
+    self, Config, DiagWorkspace, Diagnosis, ModelScore, PoseDiagnosis, QuantityKind, Status,
+};
+use kincal::identify::{Algorithm, Measurement};
+use kincal::{Effect, EffectSet, ParamId, ParamIndex, ParamSet, Robot};
+use serde::Serialize;
+
+use crate::args::{parse_effect, positive};
+use crate::calibration::{Calibration, Run, Settings, Weighting};
+use crate::data::{self, DataOptions};
+use crate::error::{CliError, core_error};
+use crate::measurements::MeasurementSet;
+use crate::model_file::{DataJson, ModelFile};
+use crate::report::{self, Table};
+
+pub const LONG_ABOUT: &str = "\
+The sim-to-real gap diagnosis (spec/effects.md): after a geometric calibration, where does
+the residual lie, which non-geometric effect causes it, and how far does it shrink when the
+model is extended by that effect?
+
+1. Noise floor: --sigma-pos-mm/--sigma-rot-deg (1σ per axis) when given; otherwise pooled
+   from rows sharing a pose_id measured under the same conditions (same approach directions
+   s1..sN, temperatures within 0.5 °C). Neither: exit 2.
+2. Geometric calibration on all rows (OLS, rows weighted by 1/σ²).
+3. Where: its residuals by axis, by octant of the data's bounding box, and their
+   correlation with each joint angle, gravity torque, approach direction and temperature.
+4. Which: every candidate effect (those whose input columns DATA has, or --candidates) alone
+   and in pairs, fitted with the geometric parameters and judged on held-out poses (k-fold
+   cross-validation, rows of one pose_id in the same fold). Structurally redundant effect
+   parameters are removed, parameters these poses cannot separate from the geometry are
+   reported (candidates with none left are 'confounded with the geometry').
+5. Decision (rank tests over pose groups, thresholds z = 3): no_gap when the geometric
+   model's held-out error is consistent with the noise floor (its expected value includes
+   the parameter-estimation error on held-out poses); a candidate is significant when it
+   beats the geometric model; the smallest significant candidate not significantly worse
+   than the best wins; same-size candidates as good are listed as confounded_with.
+   explained when it closes ≥ 80 % of the gap above the noise floor (gap_closed_fraction =
+   (B − A)/(B − √3·σ_pos), held-out RMS position before/after), partially_explained from
+   25 %, else unexplained.
+
+Writes REPORT.json (spec/cli.md fields plus details), a readable report (--report, default
+REPORT.txt next to it, also printed), three SVG plots next to REPORT.json (residual vectors
+over the working region, residual against the most correlated quantity, held-out RMS per
+candidate) and MODEL: geometric + the verdict's effects, fitted on all rows, which predict
+and validate accept.
+
+Exit status: 0 success (whatever the verdict), 2 usage (also: no noise floor), 3 bad input,
+4 numerical failure.";
+
+pub const EXAMPLE: &str = "\
+Example:
+  kincal diagnose session.csv --robot aria --json diag/REPORT.json --out diag/model.json
+  kincal diagnose session.csv --robot aria --sigma-pos-mm 0.1 --sigma-rot-deg 0.02 \\
+      --json REPORT.json --out model.json";
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    /// Measurement CSV (pose_id repeats give the noise floor; s1..sN and temp_c enable the
+    /// backlash and thermal candidates)
+    #[arg(value_name = "DATA")]
+    pub data: PathBuf,
+    /// Built-in robot name (aria) or robot description file (with its mass model)
+    #[arg(long, value_name = "ROBOT")]
+    pub robot: String,
+    /// Instrument position noise, 1σ per axis [mm] (default: from repeats)
+    #[arg(long, value_name = "S", value_parser = positive)]
+    pub sigma_pos_mm: Option<f64>,
+    /// Instrument orientation noise, 1σ per axis [deg] (default: from repeats)
+    #[arg(long, value_name = "S", value_parser = positive)]
+    pub sigma_rot_deg: Option<f64>,
+    /// The diagnosis report (JSON)
+    #[arg(long, value_name = "REPORT.json")]
+    pub json: PathBuf,
+    /// Model file to write: geometric + the verdict's effects
+    #[arg(long, value_name = "MODEL")]
+    pub out: PathBuf,
+    /// Readable report (default: REPORT.json with the extension .txt)
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+    /// Candidate effects (comma-separated; default: every effect whose inputs DATA has)
+    #[arg(long, value_name = "E1,E2", value_delimiter = ',', value_parser = parse_effect)]
+    pub candidates: Vec<Effect>,
+    /// Evaluate single effects only, not pairs
+    #[arg(long)]
+    pub no_pairs: bool,
+    /// Cross-validation folds
+    #[arg(long, value_name = "K", default_value_t = 5)]
+    pub folds: usize,
+    /// Accept joint readings outside the robot's joint limits
+    #[arg(long)]
+    pub allow_out_of_limits: bool,
+}
+
+/// Capacity of the diagnosis workspace: the union of every model's columns of the largest
+/// supported robot (15N + 7 ≤ 127 for 8 joints).
+pub const DIAG_PARAMS: usize = 128;
+
+/// A zeroed diagnosis workspace on the heap (about a megabyte).
+pub fn new_workspace() -> Box<DiagWorkspace<DIAG_PARAMS>> {
+    let b = Box::<DiagWorkspace<DIAG_PARAMS>>::new_zeroed();
+    // SAFETY: the core documents all-zero as a valid `DiagWorkspace` (numbers, counters
+    // and the identification workspace, itself valid when zeroed).
+    unsafe { b.assume_init() }
+}
+
+/// Where the outputs go.
+#[derive(Debug, Clone)]
+pub struct Outputs {
+    pub json: PathBuf,
+    pub report: PathBuf,
+    pub model: PathBuf,
+    pub plot_residuals: PathBuf,
+    pub plot_correlate: PathBuf,
+    pub plot_candidates: PathBuf,
+}
+
+impl Outputs {
+    /// Outputs named after REPORT.json (plots `<stem>_residuals.svg` … beside it).
+    pub fn new(json: &Path, report: Option<&Path>, model: &Path) -> Self {
+        let stem = json
+            .file_stem()
+            .map_or_else(|| "REPORT".into(), |s| s.to_string_lossy().into_owned());
+        let dir = json.parent().unwrap_or(Path::new(""));
+        Outputs {
+            json: json.to_path_buf(),
+            report: report.map_or_else(|| json.with_extension("txt"), Path::to_path_buf),
+            model: model.to_path_buf(),
+            plot_residuals: dir.join(format!("{stem}_residuals.svg")),
+            plot_correlate: dir.join(format!("{stem}_correlate.svg")),
+            plot_candidates: dir.join(format!("{stem}_candidates.svg")),
+        }
+    }
+}
+
+/// What a diagnosis produced (for the demo, which validates the models further).
+#[derive(Debug, Clone)]
+pub struct Outcome<const N: usize> {
+    pub diagnosis: Box<Diagnosis<N>>,
+    pub text: String,
+}
+
+pub fn run(args: &Args) -> Result<(), CliError> {
+    let spec = crate::robot_arg::resolve_robot(&args.robot)?;
+    kincal::with_any_robot!(&spec.robot, r => {
+        let out = execute(r, &spec.name, args)?;
+        report::emit(&out.text);
+        Ok(())
+    })
+}
+
+fn config(args: &Args) -> Result<Config, CliError> {
+    if args.folds < 2 {
+        return Err(CliError::usage(format!(
+            "--folds {}: at least 2 folds are needed",
+            args.folds
+        )));
+    }
+    Ok(Config {
+        sigma_pos_m: args.sigma_pos_mm.map(|s| s * 1e-3),
+        sigma_rot_rad: args.sigma_rot_deg.map(f64::to_radians),
+        folds: args.folds,
+        candidates: (!args.candidates.is_empty()).then(|| {
+            args.candidates
+                .iter()
+                .fold(EffectSet::NONE, |a, &e| a.with(e))
+        }),
+        pairs: !args.no_pairs,
+        ..Config::default()
+    })
+}
+
+/// Group ids from the `pose_id` column: equal labels share an id; rows without one get
+/// their own.
+pub fn group_ids(set: &MeasurementSet) -> Vec<u32> {
+    let mut ids: HashMap<&str, u32> = HashMap::new();
+    let mut next = 0u32;
+    set.rows
+        .iter()
+        .map(|row| {
+            next += 1;
+            match &row.pose_id {
+                Some(label) => *ids.entry(label.as_str()).or_insert(next),
+                None => next,
+            }
+        })
+        .collect()
+}
+
+/// Reads DATA, runs the diagnosis and writes every output; returns the readable report.
+pub fn execute<const N: usize>(
+    robot: &Robot<N>,
+    name: &str,
+    args: &Args,
+) -> Result<Outcome<N>, CliError> {
+    let t0 = Instant::now();
+    let cfg = config(args)?;
+    let set = data::read(
+        &args.data,
+        robot,
+        cfg.candidates.unwrap_or(EffectSet::NONE),
+        DataOptions {
+            require_pose: true,
+            allow_out_of_limits: args.allow_out_of_limits,
+        },
+    )?;
+    let meas = data::measurements::<N>(&set)?;
+    let groups = group_ids(&set);
+    let mut poses = vec![PoseDiagnosis::default(); meas.len()];
+    let mut ws = new_workspace();
+    let pb = crate::progress::spinner("diagnosing (cross-validating every candidate)");
+    let result = diagnosis::diagnose(robot, &meas, &groups, &cfg, &mut poses, &mut ws);
+    pb.finish_and_clear();
+    let d = Box::new(result.map_err(|e| match e {
+        kincal::Error::MissingInput {
+            what: kincal::Quantity::NoiseFloor,
+        } => CliError::usage(format!(
+            "{}: no noise floor: no pose_id was measured twice under the same conditions (same s1..sN, temperatures within 0.5 °C), and --sigma-pos-mm/--sigma-rot-deg are not given\n\
+             hint: state the instrument's noise (1σ per axis) with --sigma-pos-mm and --sigma-rot-deg, or repeat some poses",
+            set.source
+        )),
+        kincal::Error::TooFewData { found, needed } => CliError::input(format!(
+            "{}: {found} distinct pose_id groups, {needed} folds need at least {needed}",
+            set.source
+        )),
+        other => core_error(other, &set.source, |i| data::line_of(&set, i)),
+    })?);
+    let seconds = t0.elapsed().as_secs_f64();
+    let outputs = Outputs::new(&args.json, args.report.as_deref(), &args.out);
+    let mut inputs: Vec<&Path> = vec![&args.data];
+    let robot_path = Path::new(&args.robot);
+    if robot_path.is_file() {
+        inputs.push(robot_path);
+    }
+
+    // Everything is rendered first, then the paths are checked (never an input, never the
+    // same file twice), then each file is written atomically.
+    let rows: usize = meas
+        .iter()
+        .map(|m| (0..6).filter(|&k| m.mask.has(k)).count())
+        .sum();
+    let cal = calibration_of(robot, &d);
+    let model_text = ModelFile::from_calibration(
+        name,
+        &cal,
+        0,
+        DataJson {
+            path: args.data.display().to_string(),
+            sha256: set.sha256.clone(),
+            poses: meas.len(),
+            rows,
+        },
+        args.allow_out_of_limits,
+    )
+    .to_json();
+    let plots = crate::diagnosis_plot::render_all::<N>(&d, &meas, &poses, &outputs)?;
+    let json = report_json::<N>(&d, &meas, &set, &poses, &args.data, &outputs);
+    let json_text = serde_json::to_string_pretty(&json).unwrap_or_default() + "\n";
+    let mut text = readable::<N>(name, &set.source, &d, &meas, seconds);
+    let _ = writeln!(
+        text,
+        "\nFiles: {} (report), {} (readable), {} (model: geometric{}), plots {}",
+        outputs.json.display(),
+        outputs.report.display(),
+        outputs.model.display(),
+        d.verdict
+            .effects
+            .iter()
+            .map(|e| format!(" + {}", e.name()))
+            .collect::<String>(),
+        plots
+            .iter()
+            .map(|(p, _)| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    let mut files: Vec<(&Path, &str)> = vec![
+        (&outputs.model, &model_text),
+        (&outputs.json, &json_text),
+        (&outputs.report, &text),
+    ];
+    files.extend(plots.iter().map(|(p, svg)| (p.as_path(), svg.as_str())));
+    for (k, (path, _)) in files.iter().enumerate() {
+        if let Some(input) = inputs.iter().find(|i| crate::files::is_same_file(path, i)) {
+            return Err(CliError::usage(format!(
+                "{}: refusing to write: this is the input file '{}' (an input is never overwritten; choose another output path)",
+                path.display(),
+                input.display()
+            )));
+        }
+        if let Some((other, _)) = files[..k]
+            .iter()
+            .find(|(o, _)| crate::files::is_same_file(path, o) || o == path)
+        {
+            return Err(CliError::usage(format!(
+                "{}: two outputs name the same file ({}): give --json, --report and --out different paths",
+                path.display(),
+                other.display()
+            )));
+        }
+    }
+    for (path, content) in &files {
+        crate::files::write_atomic(path, &inputs, |w| w.write_all(content.as_bytes()))?;
+    }
+    Ok(Outcome { diagnosis: d, text })
+}
+
+/// The verdict's fit as a one-run calibration (what `calibrate --effects …` would have
+/// written for the same model), so predict and validate read it like any model file.
+fn calibration_of<const N: usize>(start: &Robot<N>, d: &Diagnosis<N>) -> Calibration<N> {
+    let mut settings = Settings::paper(vec![Algorithm::Ols]);
+    settings.effects = d.verdict.effects;
+    settings.weighting = Weighting::Sigma {
+        pos_m: d.noise.sigma_pos_m,
+        rot_rad: d.noise.sigma_rot_rad,
+    };
+    settings.allow_data_deficiency = true;
+    Calibration {
+        start: *start,
+        settings,
+        analysis: d.fit.analysis,
+        singular_values: Vec::new(),
+        runs: vec![Run {
+            ident: d.fit,
+            seconds: 0.0,
+        }],
+        consensus: None,
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// REPORT.json
+
+fn finite(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
+}
+
+fn names(set: EffectSet) -> Vec<String> {
+    set.iter().map(|e| e.name().to_string()).collect()
+}
+
+fn label<const N: usize>(i: usize) -> String {
+    ParamId::from_index(ParamIndex(i), N).map_or_else(|_| format!("#{i}"), |id| id.to_string())
+}
+
+fn labels<const N: usize>(set: &ParamSet) -> Vec<String> {
+    set.iter().map(label::<N>).collect()
+}
+
+/// The label of a correlated quantity (`q2`, `tau2`, `s2`, `temp_c`).
+pub fn quantity_label(q: QuantityKind) -> String {
+    let mut s = String::new();
+    let _ = q.write_label(&mut s);
+    s
+}
+
+/// Unit of a correlated quantity.
+pub fn quantity_unit(q: QuantityKind) -> &'static str {
+    match q {
+        QuantityKind::JointAngle(_) => "rad",
+        QuantityKind::GravityTorque(_) => "N·m",
+        QuantityKind::Approach(_) => "",
+        QuantityKind::Temperature => "°C",
+    }
+}
+
+#[derive(Serialize)]
+struct Report {
+    noise_floor: NoiseJson,
+    baseline: BaselineJson,
+    candidates: Vec<CandidateJson>,
+    verdict: VerdictJson,
+    #[serde(rename = "where")]
+    where_: WhereJson,
+    data: DataInfoJson,
+    settings: SettingsJson,
+    files: FilesJson,
+    // No run time here: it is shown on screen only, so that identical inputs give a
+    // bit-identical report whatever the machine load or thread count.
+}
+
+#[derive(Serialize)]
+struct NoiseJson {
+    pos_mm: f64,
+    rot_deg: f64,
+    /// "stated" or "repeats", per component type.
+    pos_source: &'static str,
+    rot_source: &'static str,
+    dof_pos: Option<f64>,
+    dof_rot: Option<f64>,
+    repeat_subgroups: usize,
+    /// √3·σ_pos: RMS position error of pure noise [mm].
+    rms_pos_mm: f64,
+    rms_rot_deg: f64,
+}
+
+#[derive(Serialize)]
+struct BaselineJson {
+    heldout_rms_pos_mm: f64,
+    heldout_rms_rot_deg: f64,
+    insample_rms_pos_mm: f64,
+    insample_rms_rot_deg: f64,
+    /// Held-out RMS expected at the noise floor (√3σ inflated by estimation error).
+    expected_rms_pos_mm: f64,
+    expected_rms_rot_deg: f64,
+    /// Observed over expected whitened held-out total, and its z (the gap test).
+    gap_ratio: f64,
+    gap_z: Option<f64>,
+    gap: bool,
+    fitted_params: usize,
+}
+
+#[derive(Serialize)]
+struct DroppedJson {
+    label: String,
+    aligned_with: Option<String>,
+    cosine: f64,
+}
+
+#[derive(Serialize)]
+struct CandidateJson {
+    effects: Vec<String>,
+    heldout_rms_pos_mm: f64,
+    heldout_rms_rot_deg: f64,
+    significant: bool,
+    evaluated: bool,
+    /// No effect parameter separable from the geometry on these poses.
+    confounded_with_geometry: bool,
+    improvement_z: Option<f64>,
+    z_vs_best: Option<f64>,
+    gap_closed_fraction: f64,
+    fitted_params: usize,
+    distinctness: f64,
+    least_distinct: Option<String>,
+    structurally_redundant: Vec<String>,
+    data_deficient: Vec<DroppedJson>,
+}
+
+#[derive(Serialize)]
+struct VerdictJson {
+    effects: Vec<String>,
+    status: &'static str,
+    /// Effect names of every candidate confounded with the verdict (a pair as its names).
+    confounded_with: Vec<String>,
+    /// The same, one list per confounded candidate.
+    confounded_candidates: Vec<Vec<String>>,
+    gap_closed_fraction: f64,
+    heldout_rms_pos_mm: f64,
+    heldout_rms_rot_deg: f64,
+    /// z of what remains against the noise floor.
+    remaining_gap_z: Option<f64>,
+    /// Identified effect parameters of the model (SI units) with standard errors.
+    parameters: Vec<ParamValueJson>,
+}
+
+#[derive(Serialize)]
+struct ParamValueJson {
+    label: String,
+    value: f64,
+    unit: &'static str,
+    std_error: f64,
+}
+
+#[derive(Serialize)]
+struct RegionJson {
+    min_mm: [f64; 3],
+    max_mm: [f64; 3],
+    count: usize,
+    rms_pos_mm: f64,
+    rms_rot_deg: f64,
+    mean_pos_mm: [f64; 3],
+}
+
+#[derive(Serialize)]
+struct CorrelationJson {
+    quantity: String,
+    unit: &'static str,
+    /// Pearson correlation with the residual components x, y, z, φx, φy, φz.
+    corr: [f64; 6],
+    corr_norm_pos: f64,
+    explained_pos: f64,
+    explained_rot: f64,
+    /// Share of the whitened residual (all six components) explained: the ranking.
+    explained: f64,
+}
+
+#[derive(Serialize)]
+struct PoseJson {
+    line: u64,
+    pose_id: Option<String>,
+    fold: u16,
+    residual_mm: [f64; 3],
+    residual_deg: [f64; 3],
+    heldout_geometric_mm: [f64; 3],
+    heldout_final_mm: [f64; 3],
+    heldout_geometric_norm_mm: f64,
+    heldout_final_norm_mm: f64,
+}
+
+#[derive(Serialize)]
+struct WhereJson {
+    /// Residuals of the geometric calibration (all rows).
+    rms_axis: AxisJson,
+    mean_axis: AxisJson,
+    rms_pos_mm: f64,
+    rms_rot_deg: f64,
+    bbox_min_mm: [f64; 3],
+    bbox_max_mm: [f64; 3],
+    regions: Vec<RegionJson>,
+    correlations: Vec<CorrelationJson>,
+    most_correlated: Option<String>,
+    per_pose: Vec<PoseJson>,
+}
+
+#[derive(Serialize)]
+struct AxisJson {
+    x_mm: f64,
+    y_mm: f64,
+    z_mm: f64,
+    rx_deg: f64,
+    ry_deg: f64,
+    rz_deg: f64,
+}
+
+#[derive(Serialize)]
+struct DataInfoJson {
+    path: String,
+    sha256: String,
+    rows: usize,
+    groups: usize,
+    folds: usize,
+    has_approach: bool,
+    has_temperature: bool,
+}
+
+#[derive(Serialize)]
+struct SettingsJson {
+    z_gap: f64,
+    z_significance: f64,
+    z_equivalence: f64,
+    explained_fraction: f64,
+    partial_fraction: f64,
+    pairs: bool,
+    candidates: Vec<String>,
+    paired_test: &'static str,
+}
+
+#[derive(Serialize)]
+struct FilesJson {
+    model: String,
+    report: String,
+    plots: Vec<String>,
+}
+
+fn axis(v: &[f64; 6]) -> AxisJson {
+    AxisJson {
+        x_mm: v[0] * 1e3,
+        y_mm: v[1] * 1e3,
+        z_mm: v[2] * 1e3,
+        rx_deg: v[3].to_degrees(),
+        ry_deg: v[4].to_degrees(),
+        rz_deg: v[5].to_degrees(),
+    }
+}
+
+fn mm3(v: &[f64]) -> [f64; 3] {
+    [v[0] * 1e3, v[1] * 1e3, v[2] * 1e3]
+}
+
+fn norm3(v: &[f64]) -> f64 {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+}
+
+fn candidate_json<const N: usize>(c: &ModelScore) -> CandidateJson {
+    CandidateJson {
+        effects: names(c.effects),
+        heldout_rms_pos_mm: c.heldout_rms_pos_m * 1e3,
+        heldout_rms_rot_deg: c.heldout_rms_rot_rad.to_degrees(),
+        significant: c.significant,
+        evaluated: c.evaluated,
+        confounded_with_geometry: !c.evaluated,
+        improvement_z: c.evaluated.then_some(c.improvement_z).and_then(finite),
+        z_vs_best: c.evaluated.then_some(c.z_vs_best).and_then(finite),
+        gap_closed_fraction: c.gap_closed_fraction,
+        fitted_params: c.fitted_params,
+        distinctness: c.distinctness,
+        least_distinct: c.least_distinct.map(|p| label::<N>(p.0)),
+        structurally_redundant: labels::<N>(&c.structural),
+        data_deficient: c
+            .data_deficient
+            .iter()
+            .map(|i| {
+                let d = c.dropped.iter().flatten().find(|d| d.param.0 == i);
+                DroppedJson {
+                    label: label::<N>(i),
+                    aligned_with: d.and_then(|d| d.partner).map(|p| label::<N>(p.0)),
+                    cosine: d.map_or(0.0, |d| d.cosine),
+                }
+            })
+            .collect(),
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn report_json<const N: usize>(
+    d: &Diagnosis<N>,
+    meas: &[Measurement<N>],
+    set: &MeasurementSet,
+    poses: &[PoseDiagnosis],
+    data_path: &Path,
+    outputs: &Outputs,
+) -> Report {
+    let n = &d.noise;
+    let loc = &d.location;
+    let effect_params = d
+        .verdict
+        .effects
+        .iter()
+        .fold(ParamSet::new(), |acc, e| acc.union(&e.params(N)));
+    let parameters = d
+        .fit
+        .analysis
+        .identifiable
+        .iter()
+        .filter(|&i| effect_params.contains(i))
+        .map(|i| ParamValueJson {
+            label: label::<N>(i),
+            value: d.model.param(ParamIndex(i)).unwrap_or(f64::NAN),
+            unit: ParamId::from_index(ParamIndex(i), N).map_or("", crate::units::si_unit),
+            std_error: d.fit.std_errors[i],
+        })
+        .collect();
+    Report {
+        noise_floor: NoiseJson {
+            pos_mm: n.sigma_pos_m * 1e3,
+            rot_deg: n.sigma_rot_rad.to_degrees(),
+            pos_source: if n.stated_pos { "stated" } else { "repeats" },
+            rot_source: if n.stated_rot { "stated" } else { "repeats" },
+            dof_pos: finite(n.dof_pos),
+            dof_rot: finite(n.dof_rot),
+            repeat_subgroups: n.repeat_subgroups,
+            rms_pos_mm: n.rms_pos_m() * 1e3,
+            rms_rot_deg: n.rms_rot_rad().to_degrees(),
+        },
+        baseline: BaselineJson {
+            heldout_rms_pos_mm: d.baseline.heldout_rms_pos_m * 1e3,
+            heldout_rms_rot_deg: d.baseline.heldout_rms_rot_rad.to_degrees(),
+            insample_rms_pos_mm: d.geometric_residuals.rms_pos_m * 1e3,
+            insample_rms_rot_deg: d.geometric_residuals.rms_rot_rad.to_degrees(),
+            expected_rms_pos_mm: d.gap.expected_rms_pos_m * 1e3,
+            expected_rms_rot_deg: d.gap.expected_rms_rot_rad.to_degrees(),
+            gap_ratio: d.gap.ratio,
+            gap_z: finite(d.gap.z),
+            gap: d.verdict.status != Status::NoGap,
+            fitted_params: d.baseline.fitted_params,
+        },
+        candidates: d.candidates().iter().map(candidate_json::<N>).collect(),
+        verdict: VerdictJson {
+            effects: names(d.verdict.effects),
+            status: d.verdict.status.name(),
+            confounded_with: names(d.verdict.confounded_effects()),
+            confounded_candidates: d.verdict.confounded().iter().map(|s| names(*s)).collect(),
+            gap_closed_fraction: d.verdict.gap_closed_fraction,
+            heldout_rms_pos_mm: d.final_heldout_rms_pos_m * 1e3,
+            heldout_rms_rot_deg: d.final_heldout_rms_rot_rad.to_degrees(),
+            remaining_gap_z: finite(d.remaining.z),
+            parameters,
+        },
+        where_: WhereJson {
+            rms_axis: axis(&loc.rms_axis),
+            mean_axis: axis(&loc.mean_axis),
+            rms_pos_mm: loc.rms_pos_m * 1e3,
+            rms_rot_deg: loc.rms_rot_rad.to_degrees(),
+            bbox_min_mm: mm3(&loc.bbox_min_m),
+            bbox_max_mm: mm3(&loc.bbox_max_m),
+            regions: loc
+                .regions
+                .iter()
+                .map(|r| RegionJson {
+                    min_mm: mm3(&r.min_m),
+                    max_mm: mm3(&r.max_m),
+                    count: r.count,
+                    rms_pos_mm: r.rms_pos_m * 1e3,
+                    rms_rot_deg: r.rms_rot_rad.to_degrees(),
+                    mean_pos_mm: mm3(&r.mean_pos_m),
+                })
+                .collect(),
+            correlations: loc
+                .correlates()
+                .iter()
+                .map(|c| CorrelationJson {
+                    quantity: quantity_label(c.quantity),
+                    unit: quantity_unit(c.quantity),
+                    corr: c.corr,
+                    corr_norm_pos: c.corr_norm_pos,
+                    explained_pos: c.explained_pos,
+                    explained_rot: c.explained_rot,
+                    explained: c.explained,
+                })
+                .collect(),
+            most_correlated: loc
+                .most_correlated
+                .map(|k| quantity_label(loc.correlates()[k].quantity)),
+            per_pose: poses
+                .iter()
+                .zip(&set.rows)
+                .map(|(p, row)| PoseJson {
+                    line: row.line,
+                    pose_id: row.pose_id.clone(),
+                    fold: p.fold,
+                    residual_mm: mm3(&p.residual[..3]),
+                    residual_deg: [
+                        p.residual[3].to_degrees(),
+                        p.residual[4].to_degrees(),
+                        p.residual[5].to_degrees(),
+                    ],
+                    heldout_geometric_mm: mm3(&p.heldout_baseline[..3]),
+                    heldout_final_mm: mm3(&p.heldout_final[..3]),
+                    heldout_geometric_norm_mm: norm3(&p.heldout_baseline[..3]) * 1e3,
+                    heldout_final_norm_mm: norm3(&p.heldout_final[..3]) * 1e3,
+                })
+                .collect(),
+        },
+        data: DataInfoJson {
+            path: data_path.display().to_string(),
+            sha256: set.sha256.clone(),
+            rows: meas.len(),
+            groups: d.groups,
+            folds: d.folds,
+            has_approach: set.has_approach,
+            has_temperature: set.has_temperature,
+        },
+        settings: {
+            let c = Config::default();
+            SettingsJson {
+                z_gap: c.z_gap,
+                z_significance: c.z_significance,
+                z_equivalence: c.z_equivalence,
+                explained_fraction: c.explained_fraction,
+                partial_fraction: c.partial_fraction,
+                pairs: d.candidates().iter().any(|c| c.effects.len() == 2),
+                candidates: names(d.candidates().iter().fold(EffectSet::NONE, |acc, c| {
+                    c.effects.iter().fold(acc, EffectSet::with)
+                })),
+                paired_test: "Wilcoxon signed-rank over pose_id groups of the whitened held-out squared errors",
+            }
+        },
+        files: FilesJson {
+            model: outputs.model.display().to_string(),
+            report: outputs.report.display().to_string(),
+            plots: [
+                &outputs.plot_residuals,
+                &outputs.plot_correlate,
+                &outputs.plot_candidates,
+            ]
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect(),
+        },
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Readable report
+
+fn mm(v: f64) -> String {
+    format!("{:.3}", v * 1e3)
+}
+
+fn deg(v: f64) -> String {
+    format!("{:.4}", v.to_degrees())
+}
+
+fn zfmt(z: f64) -> String {
+    if z.is_finite() {
+        format!("{z:.1}")
+    } else if z > 0.0 {
+        "+inf".into()
+    } else {
+        "-inf".into()
+    }
+}
+
+fn effects_text(s: EffectSet) -> String {
+    if s.is_empty() {
+        "geometric only".into()
+    } else {
+        s.iter().map(|e| e.name()).collect::<Vec<_>>().join(" + ")
+    }
+}
+
+/// The readable report.
+pub fn readable<const N: usize>(
+    robot: &str,
+    source: &str,
+    d: &Diagnosis<N>,
+    meas: &[Measurement<N>],
+    seconds: f64,
+) -> String {
+    let mut s = String::new();
+    let n = &d.noise;
+    let _ = writeln!(
+        s,
+        "Sim-to-real diagnosis of '{robot}' from {source}: {} rows in {} pose groups, {}-fold cross-validation by pose_id\n",
+        meas.len(),
+        d.groups,
+        d.folds
+    );
+    let src = |stated: bool, dof: f64| {
+        if stated {
+            "stated".to_string()
+        } else {
+            format!("from repeats, {dof:.0} degrees of freedom")
+        }
+    };
+    let _ = writeln!(
+        s,
+        "Noise floor: {} mm ({}) and {}° ({}) per axis; pure noise gives an RMS of √3σ = {} mm, {}°.",
+        mm(n.sigma_pos_m),
+        src(n.stated_pos, n.dof_pos),
+        deg(n.sigma_rot_rad),
+        src(n.stated_rot, n.dof_rot),
+        mm(n.rms_pos_m()),
+        deg(n.rms_rot_rad())
+    );
+    let _ = writeln!(
+        s,
+        "Geometric calibration ({} parameters): in-sample RMS {} mm, {}°; held-out RMS {} mm, {}°\n  (expected at the noise floor, estimation error included: {} mm, {}°): observed/expected {:.2}, gap z = {} → {}.\n",
+        d.baseline.fitted_params,
+        mm(d.geometric_residuals.rms_pos_m),
+        deg(d.geometric_residuals.rms_rot_rad),
+        mm(d.baseline.heldout_rms_pos_m),
+        deg(d.baseline.heldout_rms_rot_rad),
+        mm(d.gap.expected_rms_pos_m),
+        deg(d.gap.expected_rms_rot_rad),
+        d.gap.ratio,
+        zfmt(d.gap.z),
+        if d.verdict.status == Status::NoGap {
+            "consistent with the noise floor (no gap)"
+        } else {
+            "a gap above the noise floor"
+        }
+    );
+
+    // Where.
+    let loc = &d.location;
+    let _ = writeln!(
+        s,
+        "WHERE — residuals of the geometric calibration (all rows):"
+    );
+    let _ = writeln!(
+        s,
+        "  by axis (RMS): x {} y {} z {} mm; φx {} φy {} φz {}°",
+        mm(loc.rms_axis[0]),
+        mm(loc.rms_axis[1]),
+        mm(loc.rms_axis[2]),
+        deg(loc.rms_axis[3]),
+        deg(loc.rms_axis[4]),
+        deg(loc.rms_axis[5])
+    );
+    let mut t = Table::new(&[
+        "region (octant)",
+        "poses",
+        "RMS |Δp| mm",
+        "RMS angle °",
+        "mean Δp (x, y, z) mm",
+    ]);
+    for (k, r) in loc.regions.iter().enumerate() {
+        if r.count == 0 {
+            continue;
+        }
+        let half =
+            |b: usize, axis: &str| format!("{axis}{}", if k & (1 << b) != 0 { "+" } else { "−" });
+        t.row(vec![
+            format!("{} {} {}", half(0, "x"), half(1, "y"), half(2, "z")),
+            r.count.to_string(),
+            mm(r.rms_pos_m),
+            deg(r.rms_rot_rad),
+            format!(
+                "({}, {}, {})",
+                mm(r.mean_pos_m[0]),
+                mm(r.mean_pos_m[1]),
+                mm(r.mean_pos_m[2])
+            ),
+        ]);
+    }
+    s.push_str(&t.render("  "));
+    let mut cs: Vec<_> = loc.correlates().to_vec();
+    cs.sort_by(|a, b| b.explained.total_cmp(&a.explained));
+    let mut t = Table::new(&[
+        "quantity",
+        "explains (whitened)",
+        "explains Δp var.",
+        "explains Δφ var.",
+        "corr x",
+        "corr y",
+        "corr z",
+        "corr |Δp|",
+    ]);
+    for c in cs.iter().take(8) {
+        t.row(vec![
+            quantity_label(c.quantity),
+            format!("{:.0} %", 100.0 * c.explained),
+            format!("{:.0} %", 100.0 * c.explained_pos),
+            format!("{:.0} %", 100.0 * c.explained_rot),
+            format!("{:+.2}", c.corr[0]),
+            format!("{:+.2}", c.corr[1]),
+            format!("{:+.2}", c.corr[2]),
+            format!("{:+.2}", c.corr_norm_pos),
+        ]);
+    }
+    let _ = writeln!(
+        s,
+        "  correlation with the quantities the effects depend on, ranked by the share of the residual variance\n  (components weighted by 1/σ²) a linear function of the quantity explains:"
+    );
+    s.push_str(&t.render("  "));
+
+    // Which.
+    let _ = writeln!(
+        s,
+        "\nWHICH — every candidate fitted with the geometry, judged on held-out poses:"
+    );
+    let mut t = Table::new(&[
+        "candidate",
+        "params",
+        "held-out mm",
+        "held-out °",
+        "z vs geometric",
+        "significant",
+        "gap closed",
+        "note",
+    ]);
+    t.row(vec![
+        "geometric only".into(),
+        d.baseline.fitted_params.to_string(),
+        mm(d.baseline.heldout_rms_pos_m),
+        deg(d.baseline.heldout_rms_rot_rad),
+        "".into(),
+        "".into(),
+        "".into(),
+        "baseline".into(),
+    ]);
+    let mut order: Vec<&ModelScore> = d.candidates().iter().collect();
+    order.sort_by(|a, b| match (a.evaluated, b.evaluated) {
+        (true, true) => a.heldout_chi2.total_cmp(&b.heldout_chi2),
+        (a, b) => b.cmp(&a),
+    });
+    for c in order {
+        let note = if !c.evaluated {
+            let partner = c
+                .dropped
+                .iter()
+                .flatten()
+                .next()
+                .and_then(|x| x.partner)
+                .map(|p| label::<N>(p.0))
+                .unwrap_or_default();
+            format!("confounded with the geometry ({partner})")
+        } else if c.effects == d.verdict.effects {
+            "VERDICT".into()
+        } else if d.verdict.confounded().contains(&c.effects) {
+            "confounded with the verdict".into()
+        } else if c.distinctness < 0.05 {
+            format!(
+                "weakly determined: {} has {:.3} of its column outside the others'",
+                c.least_distinct
+                    .map(|p| label::<N>(p.0))
+                    .unwrap_or_default(),
+                c.distinctness
+            )
+        } else {
+            String::new()
+        };
+        t.row(vec![
+            effects_text(c.effects),
+            c.fitted_params.to_string(),
+            if c.evaluated {
+                mm(c.heldout_rms_pos_m)
+            } else {
+                "-".into()
+            },
+            if c.evaluated {
+                deg(c.heldout_rms_rot_rad)
+            } else {
+                "-".into()
+            },
+            if c.evaluated {
+                zfmt(c.improvement_z)
+            } else {
+                "-".into()
+            },
+            if c.significant { "yes" } else { "no" }.into(),
+            if c.evaluated {
+                format!("{:.0} %", 100.0 * c.gap_closed_fraction)
+            } else {
+                "-".into()
+            },
+            note,
+        ]);
+    }
+    s.push_str(&t.render("  "));
+
+    // Verdict and how far.
+    let v = &d.verdict;
+    let _ = writeln!(
+        s,
+        "\nVERDICT: {} — {}",
+        v.status.name(),
+        match v.status {
+            Status::NoGap => "the geometric model is already at the noise floor".to_string(),
+            Status::Unexplained =>
+                "a gap, but no candidate closes a significant share of it".to_string(),
+            _ => effects_text(v.effects),
+        }
+    );
+    if !v.confounded().is_empty() {
+        let _ = writeln!(
+            s,
+            "  confounded with: {} (they explain these data as well: add poses that separate them)",
+            v.confounded()
+                .iter()
+                .map(|c| effects_text(*c))
+                .collect::<Vec<_>>()
+                .join("; ")
+        );
+    }
+    if !v.effects.is_empty() {
+        let _ = writeln!(
+            s,
+            "HOW FAR: held-out RMS {} → {} mm, {} → {}° (noise floor {} mm, {}°): {:.0} % of the gap above the noise floor closed; what remains: z = {}.",
+            mm(d.baseline.heldout_rms_pos_m),
+            mm(d.final_heldout_rms_pos_m),
+            deg(d.baseline.heldout_rms_rot_rad),
+            deg(d.final_heldout_rms_rot_rad),
+            mm(n.rms_pos_m()),
+            deg(n.rms_rot_rad()),
+            100.0 * v.gap_closed_fraction,
+            zfmt(d.remaining.z)
+        );
+        let mut t = Table::new(&["effect parameter", "value", "std error", "unit"]);
+        let effect_params = v
+            .effects
+            .iter()
+            .fold(ParamSet::new(), |acc, e| acc.union(&e.params(N)));
+        for i in d
+            .fit
+            .analysis
+            .identifiable
+            .iter()
+            .filter(|&i| effect_params.contains(i))
+        {
+            let id = ParamId::from_index(ParamIndex(i), N);
+            t.row(vec![
+                label::<N>(i),
+                format!("{:.4e}", d.model.param(ParamIndex(i)).unwrap_or(f64::NAN)),
+                format!("{:.2e}", d.fit.std_errors[i]),
+                id.map_or("", crate::units::si_unit).to_string(),
+            ]);
+        }
+        let _ = writeln!(s, "  identified effect parameters (all rows):");
+        s.push_str(&t.render("  "));
+    }
+    let _ = writeln!(s, "Diagnosis took {seconds:.2} s.");
+    s
+}

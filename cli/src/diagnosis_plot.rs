@@ -1,0 +1,367 @@
+//! The diagnosis plots (SVG): residual vectors over the working region, the residual against
+//! the most correlated quantity, and the held-out RMS of every candidate.
+
+use std::path::{Path, PathBuf};
+
+use kincal::EffectSet;
+use kincal::diagnosis::{Diagnosis, PoseDiagnosis, QuantityKind};
+use kincal::identify::Measurement;
+use plotters::prelude::*;
+
+use crate::cmd_diagnose::{Outputs, quantity_label, quantity_unit};
+use crate::error::CliError;
+
+type Res<T> = Result<T, Box<dyn std::error::Error>>;
+
+const GEOMETRIC: RGBColor = RGBColor(230, 120, 20);
+const FINAL: RGBColor = RGBColor(31, 119, 180);
+const AXES: [RGBColor; 3] = [
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(31, 119, 180),
+];
+
+fn effects_text(s: EffectSet) -> String {
+    if s.is_empty() {
+        "geometric only".into()
+    } else {
+        s.iter().map(|e| e.name()).collect::<Vec<_>>().join(" + ")
+    }
+}
+
+fn norm3(v: &[f64]) -> f64 {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+}
+
+/// Residual vectors over the working region: top view (x, y) and side view (x, z).
+/// Positions in mm; arrows are the position residuals magnified by a common factor.
+pub fn residual_vectors_svg<const N: usize>(
+    d: &Diagnosis<N>,
+    meas: &[Measurement<N>],
+    poses: &[PoseDiagnosis],
+) -> Res<String> {
+    let pts: Vec<[f64; 3]> = meas
+        .iter()
+        .map(|m| {
+            let p = m.pose.translation.vector * 1e3;
+            [p.x, p.y, p.z]
+        })
+        .collect();
+    let lo = |k: usize| pts.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min);
+    let hi = |k: usize| pts.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max);
+    let span = (0..3).map(|k| hi(k) - lo(k)).fold(1.0f64, f64::max);
+    let largest = poses
+        .iter()
+        .map(|p| norm3(&p.residual))
+        .fold(0.0f64, f64::max)
+        * 1e3;
+    // The largest arrow is 8 % of the data's largest extent.
+    let factor = if largest > 0.0 {
+        0.08 * span / largest
+    } else {
+        1.0
+    };
+    let with_final = !d.verdict.effects.is_empty();
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (1300, 680)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let title = format!(
+            "Position residuals over the working region (arrows ×{factor:.0}: 1 mm drawn as {factor:.0} mm)"
+        );
+        let body = root.titled(&title, ("sans-serif", 22))?;
+        let panels = body.split_evenly((1, 2));
+        for (panel, (a, b, name)) in panels.iter().zip([(0, 1, "top view"), (0, 2, "side view")]) {
+            let pad = 0.12 * span;
+            let axis = |k: usize| ["x", "y", "z"][k];
+            let mut chart = ChartBuilder::on(panel)
+                .caption(
+                    format!("{name}: {} – {} [mm]", axis(a), axis(b)),
+                    ("sans-serif", 18),
+                )
+                .margin(12)
+                .x_label_area_size(40)
+                .y_label_area_size(60)
+                .build_cartesian_2d((lo(a) - pad)..(hi(a) + pad), (lo(b) - pad)..(hi(b) + pad))?;
+            chart
+                .configure_mesh()
+                .x_desc(format!("{} [mm]", axis(a)))
+                .y_desc(format!("{} [mm]", axis(b)))
+                .label_style(("sans-serif", 12))
+                .light_line_style(RGBColor(240, 240, 240))
+                .draw()?;
+            let mut series: Vec<(RGBColor, String, Vec<[f64; 3]>)> = vec![(
+                GEOMETRIC,
+                "geometric calibration (in-sample)".to_string(),
+                poses
+                    .iter()
+                    .map(|p| [p.residual[0], p.residual[1], p.residual[2]])
+                    .collect(),
+            )];
+            if with_final {
+                series.push((
+                    FINAL,
+                    format!("{} (held-out)", effects_text(d.verdict.effects)),
+                    poses
+                        .iter()
+                        .map(|p| [p.heldout_final[0], p.heldout_final[1], p.heldout_final[2]])
+                        .collect(),
+                ));
+            }
+            chart.draw_series(
+                pts.iter()
+                    .map(|p| Circle::new((p[a], p[b]), 2, RGBColor(120, 120, 120).filled())),
+            )?;
+            for (colour, label, vecs) in series {
+                chart
+                    .draw_series(pts.iter().zip(&vecs).map(|(p, v)| {
+                        let end = (p[a] + factor * v[a] * 1e3, p[b] + factor * v[b] * 1e3);
+                        PathElement::new(vec![(p[a], p[b]), end], colour.stroke_width(2))
+                    }))?
+                    .label(label)
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+                    });
+            }
+            chart
+                .configure_series_labels()
+                .border_style(BLACK)
+                .background_style(WHITE.mix(0.85))
+                .label_font(("sans-serif", 13))
+                .draw()?;
+        }
+        root.present()?;
+    }
+    Ok(svg)
+}
+
+/// The geometric residual (position above, orientation below) against the quantity that
+/// explains the largest share of it (the pose index when nothing varies).
+pub fn residual_vs_quantity_svg<const N: usize>(
+    d: &Diagnosis<N>,
+    meas: &[Measurement<N>],
+    poses: &[PoseDiagnosis],
+) -> Res<String> {
+    let loc = &d.location;
+    let best = loc.most_correlated.map(|k| loc.correlates()[k]);
+    let xs: Vec<f64> = match best.map(|c| c.quantity) {
+        Some(q) => meas
+            .iter()
+            .map(|m| match q {
+                QuantityKind::JointAngle(j) => m.state.q[j],
+                QuantityKind::GravityTorque(j) => d.geometric.gravity_torques(&m.state.q)[j],
+                QuantityKind::Approach(j) => m.state.approach.map_or(0.0, |s| s[j]),
+                QuantityKind::Temperature => m.state.temp_c.unwrap_or(0.0),
+            })
+            .collect(),
+        None => (1..=meas.len()).map(|i| i as f64).collect(),
+    };
+    let (xname, xunit) = best.map_or(("pose".to_string(), ""), |c| {
+        (quantity_label(c.quantity), quantity_unit(c.quantity))
+    });
+    let (xlo, xhi) = xs
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let xpad = ((xhi - xlo) * 0.05).max(1e-9);
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (900, 860)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let title = match best {
+            Some(c) => format!(
+                "Geometric residual against {xname}: explains {:.0} % of the residual variance ({:.0} % position, {:.0} % rotation)",
+                100.0 * c.explained,
+                100.0 * c.explained_pos,
+                100.0 * c.explained_rot
+            ),
+            None => "Geometric residual per pose".to_string(),
+        };
+        let body = root.titled(&title, ("sans-serif", 16))?;
+        let panels = body.split_evenly((2, 1));
+        for (p, panel) in panels.iter().enumerate() {
+            let (names, unit, scale, off) = if p == 0 {
+                (["Δx", "Δy", "Δz"], "mm", 1e3, 0)
+            } else {
+                (
+                    ["Δφx", "Δφy", "Δφz"],
+                    "deg",
+                    180.0 / std::f64::consts::PI,
+                    3,
+                )
+            };
+            let ys: Vec<[f64; 3]> = poses
+                .iter()
+                .map(|q| {
+                    [
+                        q.residual[off] * scale,
+                        q.residual[off + 1] * scale,
+                        q.residual[off + 2] * scale,
+                    ]
+                })
+                .collect();
+            let m = ys
+                .iter()
+                .flat_map(|y| y.iter())
+                .fold(0.0f64, |a, v| a.max(v.abs()))
+                .max(1e-9)
+                * 1.1;
+            let mut chart = ChartBuilder::on(panel)
+                .margin(14)
+                .x_label_area_size(44)
+                .y_label_area_size(70)
+                .build_cartesian_2d((xlo - xpad)..(xhi + xpad), -m..m)?;
+            chart
+                .configure_mesh()
+                .x_desc(if xunit.is_empty() {
+                    xname.clone()
+                } else {
+                    format!("{xname} [{xunit}]")
+                })
+                .y_desc(format!(
+                    "{} residual [{unit}]",
+                    if p == 0 { "position" } else { "orientation" }
+                ))
+                .label_style(("sans-serif", 12))
+                .light_line_style(RGBColor(240, 240, 240))
+                .draw()?;
+            for (k, name) in names.iter().enumerate() {
+                let colour = AXES[k];
+                let corr =
+                    best.map_or(String::new(), |c| format!(" (r = {:+.2})", c.corr[off + k]));
+                chart
+                    .draw_series(
+                        xs.iter()
+                            .zip(&ys)
+                            .map(|(x, y)| Circle::new((*x, y[k]), 3, colour.filled())),
+                    )?
+                    .label(format!("{name}{corr}"))
+                    .legend(move |(x, y)| Circle::new((x + 8, y), 4, colour.filled()));
+            }
+            chart
+                .configure_series_labels()
+                .border_style(BLACK)
+                .background_style(WHITE.mix(0.85))
+                .label_font(("sans-serif", 13))
+                .draw()?;
+        }
+        root.present()?;
+    }
+    Ok(svg)
+}
+
+/// Held-out RMS position error of every evaluated candidate (bars), with the geometric
+/// model's and the noise floor's as lines; the verdict green, confounded candidates yellow.
+pub fn candidates_svg<const N: usize>(d: &Diagnosis<N>) -> Res<String> {
+    let mut cands: Vec<_> = d.candidates().iter().filter(|c| c.evaluated).collect();
+    cands.sort_by(|a, b| a.heldout_rms_pos_m.total_cmp(&b.heldout_rms_pos_m));
+    let n = cands.len().max(1);
+    let base = d.baseline.heldout_rms_pos_m * 1e3;
+    let floor = d.noise.rms_pos_m() * 1e3;
+    let xmax = cands
+        .iter()
+        .map(|c| c.heldout_rms_pos_m * 1e3)
+        .fold(base.max(floor), f64::max)
+        * 1.1;
+    let labels: Vec<String> = cands.iter().map(|c| effects_text(c.effects)).collect();
+    let mut svg = String::new();
+    {
+        let h = 120 + 24 * n as u32;
+        let root = SVGBackend::with_string(&mut svg, (1000, h)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                "Held-out RMS position error per candidate (k-fold by pose_id)",
+                ("sans-serif", 18),
+            )
+            .margin(14)
+            .x_label_area_size(40)
+            .y_label_area_size(300)
+            .build_cartesian_2d(0.0..xmax, -0.5..(n as f64 - 0.5))?;
+        let label_of = |v: &f64| {
+            let k = v.round();
+            if (v - k).abs() < 1e-6 && k >= 0.0 {
+                labels.get(k as usize).cloned().unwrap_or_default()
+            } else {
+                String::new()
+            }
+        };
+        chart
+            .configure_mesh()
+            .y_labels(n)
+            .y_label_formatter(&label_of)
+            .x_desc("held-out RMS |Δp| [mm]")
+            .label_style(("sans-serif", 12))
+            .disable_y_mesh()
+            .light_line_style(RGBColor(240, 240, 240))
+            .draw()?;
+        chart.draw_series(cands.iter().enumerate().map(|(i, c)| {
+            let colour = if c.effects == d.verdict.effects {
+                RGBColor(44, 160, 44)
+            } else if d.verdict.confounded().contains(&c.effects) {
+                RGBColor(230, 190, 30)
+            } else if c.significant {
+                RGBColor(120, 160, 210)
+            } else {
+                RGBColor(190, 190, 190)
+            };
+            let y = i as f64;
+            Rectangle::new(
+                [(0.0, y - 0.35), (c.heldout_rms_pos_m * 1e3, y + 0.35)],
+                colour.filled(),
+            )
+        }))?;
+        for (x, colour, name) in [
+            (base, RGBColor(90, 90, 90), "geometric only"),
+            (floor, RGBColor(214, 39, 40), "noise floor √3σ"),
+        ] {
+            chart
+                .draw_series(DashedLineSeries::new(
+                    [(x, -0.5), (x, n as f64 - 0.5)],
+                    6,
+                    4,
+                    colour.stroke_width(2),
+                ))?
+                .label(format!("{name} ({x:.3} mm)"))
+                .legend(move |(a, b)| {
+                    PathElement::new(vec![(a, b), (a + 20, b)], colour.stroke_width(2))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::LowerRight)
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.85))
+            .label_font(("sans-serif", 13))
+            .draw()?;
+        root.present()?;
+    }
+    Ok(svg)
+}
+
+fn drawn(path: &Path, svg: Res<String>) -> Result<(PathBuf, String), CliError> {
+    let svg =
+        svg.map_err(|e| CliError::io(format!("{}: cannot draw the plot: {e}", path.display())))?;
+    Ok((path.to_path_buf(), svg))
+}
+
+/// The three plots as (path, SVG text).
+pub fn render_all<const N: usize>(
+    d: &Diagnosis<N>,
+    meas: &[Measurement<N>],
+    poses: &[PoseDiagnosis],
+    outputs: &Outputs,
+) -> Result<Vec<(PathBuf, String)>, CliError> {
+    Ok(vec![
+        drawn(
+            &outputs.plot_residuals,
+            residual_vectors_svg(d, meas, poses),
+        )?,
+        drawn(
+            &outputs.plot_correlate,
+            residual_vs_quantity_svg(d, meas, poses),
+        )?,
+        drawn(&outputs.plot_candidates, candidates_svg(d))?,
+    ])
+}

@@ -1,0 +1,36 @@
+//! The `kincal` command-line tool as a library: the commands and the file formats
+//! (measurement CSV, robot description TOML, URDF import, model JSON), so that integration
+//! tests and the fuzz targets (`fuzz/`) exercise exactly the code the binary runs.
+
+pub mod args;
+pub mod calibration;
+pub mod cmd_calibrate;
+pub mod cmd_crossval;
+pub mod cmd_demo;
+pub mod cmd_design_tool;
+pub mod cmd_diagnose;
+pub mod cmd_evaluate;
+pub mod cmd_import;
+pub mod cmd_markers;
+pub mod cmd_predict;
+pub mod cmd_select;
+pub mod cmd_validate;
+pub mod data;
+pub mod datasets;
+pub mod design_args;
+pub mod designs;
+pub mod diagnosis_plot;
+pub mod error;
+pub mod files;
+pub mod measurements;
+pub mod model_file;
+pub mod plot;
+pub mod progress;
+pub mod report;
+pub mod robot_arg;
+pub mod robot_file;
+pub mod study;
+pub mod study_plot;
+pub mod tool_file;
+pub mod units;
+pub mod urdf;

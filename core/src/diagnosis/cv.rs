@@ -1,0 +1,328 @@
+//! Linearised k-fold cross-validation of every model at once.
+//!
+//! All models are fitted around one point, the geometric calibration on all data `lin`:
+//! with `e_l` the residual and `J_l` the identification Jacobian of pose `l` there, a
+//! model with parameter columns `S` fitted on the training poses `T` is one Gauss–Newton
+//! step `δ = argmin Σ_{l∈T} |W^½(e_l − J_l[S]·δ)|²`, and its held-out residual on pose
+//! `l` is `e_l − J_l[S]·δ`. The neglected terms are second order in the step (about
+//! `|δ|²·reach`, micrometres for effects of realistic size; the test suite checks the
+//! held-out RMS against fold-by-fold nonlinear fits).
+//!
+//! The normal equations of every training set come from two whitened Gram matrices over
+//! the union `U` of all models' columns: `G_all` (all poses) minus `G_fold` (the fold's
+//! poses). Each model's system is its sub-block, solved by a greedy Cholesky factor on
+//! unit-scaled columns in priority order (the test of [`crate::identify::analyze`]:
+//! a column whose part outside the span of the earlier kept columns is shorter than the
+//! rank tolerance is dropped). Cost: three Jacobians per pose, two Gram updates per pose,
+//! and one small factorisation per model and fold.
+
+use super::{DiagWorkspace, MAX_MODELS, ModelAcc, PoseDiagnosis};
+use crate::error::{Error, Result};
+use crate::identify::Measurement;
+use crate::math::sqrt;
+use crate::model::Robot;
+use crate::pose::{OrientationError, pose_error};
+
+/// Whitened rows of pose `m` at `lin` into `ws.a`/`ws.b` (`a[k][c] = √w_k·J_k[U_c]`,
+/// `b[k] = √w_k·e_k`; rows of unmeasured components are zero); returns the raw residual.
+pub(crate) fn pose_rows<const N: usize, const P: usize>(
+    lin: &Robot<N>,
+    m: &Measurement<N>,
+    sw: &[f64; 6],
+    ws: &mut DiagWorkspace<P>,
+) -> Result<[f64; 6]> {
+    let n_jac = Robot::<N>::NUM_PARAMS;
+    let jac = ws.jac.get_mut(..n_jac).ok_or(Error::CapacityExceeded {
+        needed: n_jac,
+        capacity: crate::identify::MAX_MODEL_PARAMS,
+    })?;
+    let t = m.model_jacobian(lin, jac)?;
+    let e = pose_error(&m.pose, &t, OrientationError::Exact);
+    for k in 0..6 {
+        let w = if m.mask.has(k) { sw[k] } else { 0.0 };
+        ws.b[k] = w * e[k];
+        for c in 0..ws.n_u {
+            ws.a[k][c] = w * ws.jac[ws.u[c]][k];
+        }
+    }
+    Ok(e)
+}
+
+/// Folds the rows in `ws.a`/`ws.b` into `ws.g_all` (`fold = false`) or `ws.g_fold`.
+pub(crate) fn fold_rows<const P: usize>(ws: &mut DiagWorkspace<P>, fold: bool) -> Result<()> {
+    let n = ws.n_u;
+    let DiagWorkspace {
+        a,
+        b,
+        g_all,
+        g_fold,
+        ..
+    } = ws;
+    let g = if fold { g_fold } else { g_all };
+    for k in 0..6 {
+        if b[k] == 0.0 && a[k][..n].iter().all(|&v| v == 0.0) {
+            continue;
+        }
+        g.add_row_weighted(&a[k][..n], b[k], 1.0)?;
+    }
+    Ok(())
+}
+
+/// Entry (i, j) of the whitened Gram over positions of `U`, all data minus the fold
+/// (when `fold`).
+#[inline]
+fn gram<const P: usize>(ws: &DiagWorkspace<P>, i: usize, j: usize, fold: bool) -> f64 {
+    let (i, j) = if i <= j { (i, j) } else { (j, i) };
+    let v = ws.g_all.gram()[i][j];
+    if fold { v - ws.g_fold.gram()[i][j] } else { v }
+}
+
+#[inline]
+fn rhs<const P: usize>(ws: &DiagWorkspace<P>, i: usize, fold: bool) -> f64 {
+    let v = ws.g_all.atb()[i];
+    if fold { v - ws.g_fold.atb()[i] } else { v }
+}
+
+/// What the greedy factorisation found for one column.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct ColumnFate {
+    /// Kept in the factor.
+    pub kept: bool,
+    /// Length of the unit-scaled column's part outside the span of the kept columns before
+    /// it (1 = orthogonal to them, 0 = inside their span).
+    pub distinct: f64,
+    /// For a dropped column: the kept column (model position) it is most aligned with, and
+    /// |cos| of the angle.
+    pub partner: Option<(usize, f64)>,
+}
+
+/// Greedy Cholesky of the unit-scaled normal matrix of model `model` (its columns
+/// `ws.model_cols[model][..]`), all data (`fold = false`) or the training set of the
+/// current fold. Factor in `ws.chol` (lower, kept order), scales in `ws.scale`, kept
+/// positions in `ws.kept[..n]`; `fate`, when given, receives each column's fate. Returns
+/// the number of kept columns.
+pub(crate) fn factor<const P: usize>(
+    ws: &mut DiagWorkspace<P>,
+    model: usize,
+    fold: bool,
+    tol: f64,
+    mut fate: Option<&mut [ColumnFate]>,
+) -> usize {
+    let n_cols = ws.model_n[model];
+    let mut n = 0;
+    for j in 0..n_cols {
+        let cj = ws.model_cols[model][j] as usize;
+        let djj = gram(ws, cj, cj, fold);
+        let mut f = ColumnFate {
+            kept: false,
+            distinct: 0.0,
+            partner: None,
+        };
+        if djj > 0.0 && djj.is_finite() {
+            let dj = sqrt(djj);
+            // y = L⁻¹·(unit-scaled cross products with the kept columns).
+            let mut y2 = 0.0;
+            for r in 0..n {
+                let cr = ws.model_cols[model][ws.kept[r]] as usize;
+                let mut v = gram(ws, cr, cj, fold) / (ws.scale[r] * dj);
+                for c in 0..r {
+                    v -= ws.chol[r][c] * ws.tmp[c];
+                }
+                let v = v / ws.chol[r][r];
+                ws.tmp[r] = v;
+                y2 += v * v;
+            }
+            let piv2 = 1.0 - y2;
+            f.distinct = sqrt(piv2.max(0.0));
+            if piv2 > tol * tol && n < P {
+                for c in 0..n {
+                    ws.chol[n][c] = ws.tmp[c];
+                }
+                ws.chol[n][n] = sqrt(piv2);
+                ws.scale[n] = dj;
+                ws.kept[n] = j;
+                n += 1;
+                f.kept = true;
+            } else {
+                let mut best: Option<(usize, f64)> = None;
+                for r in 0..n {
+                    let cr = ws.model_cols[model][ws.kept[r]] as usize;
+                    let c = (gram(ws, cr, cj, fold) / (ws.scale[r] * dj)).abs();
+                    if best.is_none_or(|b| c > b.1) {
+                        best = Some((ws.kept[r], c));
+                    }
+                }
+                f.partner = best;
+            }
+        }
+        if let Some(slot) = fate.as_deref_mut().and_then(|fs| fs.get_mut(j)) {
+            *slot = f;
+        }
+    }
+    n
+}
+
+/// Solves the factored system for the current fold; writes the step of model `model` into
+/// `ws.delta[model]` (model column order, zero for dropped columns).
+fn solve<const P: usize>(ws: &mut DiagWorkspace<P>, model: usize, n: usize, fold: bool) {
+    for j in 0..ws.model_n[model] {
+        ws.delta[model][j] = 0.0;
+    }
+    for r in 0..n {
+        let cr = ws.model_cols[model][ws.kept[r]] as usize;
+        let mut v = rhs(ws, cr, fold) / ws.scale[r];
+        for c in 0..r {
+            v -= ws.chol[r][c] * ws.tmp[c];
+        }
+        ws.tmp[r] = v / ws.chol[r][r];
+    }
+    for r in (0..n).rev() {
+        let mut v = ws.tmp[r];
+        for c in (r + 1)..n {
+            v -= ws.chol[c][r] * ws.tmp[c];
+        }
+        ws.tmp[r] = v / ws.chol[r][r];
+    }
+    for r in 0..n {
+        ws.delta[model][ws.kept[r]] = ws.tmp[r] / ws.scale[r];
+    }
+}
+
+/// Leverage of the current pose's rows under the factor in `ws.chol` (model `model`, `n`
+/// kept columns): `Σ_k |L⁻¹·D⁻¹·a_k[S]|²`, split into position and rotation rows.
+fn leverage<const P: usize>(ws: &mut DiagWorkspace<P>, model: usize, n: usize) -> (f64, f64) {
+    let (mut hp, mut hr) = (0.0, 0.0);
+    for k in 0..6 {
+        let mut h = 0.0;
+        for r in 0..n {
+            let cr = ws.model_cols[model][ws.kept[r]] as usize;
+            let mut v = ws.a[k][cr] / ws.scale[r];
+            for c in 0..r {
+                v -= ws.chol[r][c] * ws.tmp[c];
+            }
+            let v = v / ws.chol[r][r];
+            ws.tmp[r] = v;
+            h += v * v;
+        }
+        if k < 3 {
+            hp += h;
+        } else {
+            hr += h;
+        }
+    }
+    (hp, hr)
+}
+
+/// Which pass of [`cross_validate`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Pass {
+    /// Every model in `models`; model 0 (the geometric baseline) gives the leverage and the
+    /// per-pose `heldout_baseline`.
+    Candidates,
+    /// One model (the verdict's): leverage and per-pose `heldout_final`.
+    Final(usize),
+}
+
+/// Runs the k-fold cross-validation of `models` and of the pass's leverage model (indices
+/// into the workspace's model list) with the Gram `ws.g_all` already accumulated at `lin`. Per-pose whitened held-out
+/// squared errors go to `poses[l].sq[model]`, totals to `ws.acc[model]`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn cross_validate<const N: usize, const P: usize>(
+    lin: &Robot<N>,
+    data: &[Measurement<N>],
+    sw: &[f64; 6],
+    poses: &mut [PoseDiagnosis],
+    folds: usize,
+    models: &[usize],
+    pass: Pass,
+    tol: f64,
+    ws: &mut DiagWorkspace<P>,
+) -> Result<()> {
+    let lev_model = match pass {
+        Pass::Candidates => 0,
+        Pass::Final(m) => m,
+    };
+    let order = || {
+        models
+            .iter()
+            .copied()
+            .filter(move |&m| m != lev_model)
+            .chain(core::iter::once(lev_model))
+    };
+    for m in order() {
+        if m >= MAX_MODELS {
+            return Err(Error::CapacityExceeded {
+                needed: m + 1,
+                capacity: MAX_MODELS,
+            });
+        }
+        ws.acc[m] = ModelAcc::default();
+    }
+    for f in 0..folds {
+        ws.g_fold.reset(ws.n_u)?;
+        for (l, m) in data.iter().enumerate() {
+            if usize::from(poses[l].fold) == f {
+                pose_rows(lin, m, sw, ws)?;
+                fold_rows(ws, true)?;
+            }
+        }
+        // The leverage model last, so its factor stays in `ws.chol`.
+        let mut n_lev = 0;
+        for model in order() {
+            let n = factor(ws, model, true, tol, None);
+            solve(ws, model, n, true);
+            n_lev = n;
+        }
+        for (l, m) in data.iter().enumerate() {
+            if usize::from(poses[l].fold) != f {
+                continue;
+            }
+            pose_rows(lin, m, sw, ws)?;
+            let n_pos = (0..3).filter(|&k| m.mask.has(k)).count();
+            let n_rot = (3..6).filter(|&k| m.mask.has(k)).count();
+            for model in order() {
+                let mut r = [0.0; 6];
+                let mut s = 0.0;
+                for k in 0..6 {
+                    let mut v = ws.b[k];
+                    for j in 0..ws.model_n[model] {
+                        let d = ws.delta[model][j];
+                        if d != 0.0 {
+                            v -= ws.a[k][ws.model_cols[model][j] as usize] * d;
+                        }
+                    }
+                    r[k] = if sw[k] > 0.0 && m.mask.has(k) {
+                        v / sw[k]
+                    } else {
+                        0.0
+                    };
+                    s += v * v;
+                }
+                poses[l].sq[model] = s;
+                let acc = &mut ws.acc[model];
+                acc.chi2 += s;
+                if n_pos == 3 {
+                    acc.pos2 += r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+                    acc.n_pos += 1;
+                }
+                if n_rot == 3 {
+                    acc.rot2 += r[3] * r[3] + r[4] * r[4] + r[5] * r[5];
+                    acc.n_rot += 1;
+                }
+                acc.rows += n_pos + n_rot;
+                if model == lev_model {
+                    match pass {
+                        Pass::Candidates => poses[l].heldout_baseline = r,
+                        Pass::Final(_) => poses[l].heldout_final = r,
+                    }
+                }
+            }
+            let (hp, hr) = leverage(ws, lev_model, n_lev);
+            let acc = &mut ws.acc[lev_model];
+            acc.expected_pos += n_pos as f64 + hp;
+            acc.expected_rot += n_rot as f64 + hr;
+            acc.variance += 2.0 * ((n_pos + n_rot) as f64 + 2.0 * (hp + hr));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,180 @@
+//! Inverse kinematics with effects compensated.
+
+use kincal::ik::{IkOptions, IkSolution, solve_ik};
+use kincal::pose::Transform;
+use kincal::{Robot, with_any_robot};
+
+use crate::kinematics::{CALL_AUX, joint_state, kincal_joint_aux, robot_and_q};
+use crate::robot::{KINCAL_MAX_JOINTS, kincal_robot};
+use crate::status::{FfiResult, kincal_error, kincal_status};
+
+/// Options of `kincal_ik`; get the defaults from `kincal_ik_options_default`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[allow(non_camel_case_types)]
+pub struct kincal_ik_options {
+    /// Iterations per seed (default 200).
+    pub max_iterations: u32,
+    /// Non-zero: stop at the first seed that converges (faster; the answer is then the
+    /// solution reached from the earliest converging seed rather than the nearest to the
+    /// caller's seed). Default 0.
+    pub first_solution: u32,
+    /// Seeds tried after the caller's: a deterministic Halton sequence over the limits clipped
+    /// to ±π (default 16).
+    pub extra_seeds: usize,
+    /// Convergence: position residual below this [m], finite and > 0 (default 1e-11).
+    pub tol_pos_m: f64,
+    /// Convergence: orientation residual below this [rad], finite and > 0 (default 1e-11).
+    pub tol_rot_rad: f64,
+}
+
+impl From<IkOptions> for kincal_ik_options {
+    fn from(o: IkOptions) -> Self {
+        kincal_ik_options {
+            max_iterations: o.max_iterations,
+            first_solution: u32::from(o.first_solution),
+            extra_seeds: o.extra_seeds,
+            tol_pos_m: o.tol_pos_m,
+            tol_rot_rad: o.tol_rot_rad,
+        }
+    }
+}
+
+fn options(o: &kincal_ik_options) -> FfiResult<IkOptions> {
+    for (v, name) in [
+        (o.tol_pos_m, c"opts->tol_pos_m"),
+        (o.tol_rot_rad, c"opts->tol_rot_rad"),
+    ] {
+        crate::args::finite(&[v], name)?;
+        if v <= 0.0 {
+            return Err(kincal_error::new(kincal_status::InvalidArgument)
+                .arg(name)
+                .value(v));
+        }
+    }
+    Ok(IkOptions {
+        max_iterations: o.max_iterations,
+        tol_pos_m: o.tol_pos_m,
+        tol_rot_rad: o.tol_rot_rad,
+        extra_seeds: o.extra_seeds,
+        first_solution: o.first_solution != 0,
+    })
+}
+
+/// What `kincal_ik` found besides the readings.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[allow(non_camel_case_types)]
+pub struct kincal_ik_info {
+    /// Position residual of the solution [m].
+    pub residual_pos_m: f64,
+    /// Orientation residual of the solution [rad].
+    pub residual_rot_rad: f64,
+    /// Iterations used from the chosen seed.
+    pub iterations: u32,
+    /// Which seed converged to the solution (0 = the caller's).
+    pub seed_index: usize,
+}
+
+/// Writes the default IK options into `opts_out`. Returns OK, NULL_POINTER or
+/// MISALIGNED_POINTER.
+///
+/// # Safety
+/// `opts_out` must be NULL or writable; `err` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn kincal_ik_options_default(
+    opts_out: *mut kincal_ik_options,
+    err: *mut kincal_error,
+) -> kincal_status {
+    ffi_boundary!(err = err; {
+        let out = arg_out1!(opts_out);
+        // SAFETY: checked by `arg_out1!`; writable by contract.
+        unsafe { out.put(IkOptions::default().into()) };
+        Ok(())
+    })
+}
+
+fn ik_of<const N: usize>(
+    r: &Robot<N>,
+    target: &Transform,
+    seed: &[f64; KINCAL_MAX_JOINTS],
+    aux: Option<&kincal_joint_aux>,
+    opts: &IkOptions,
+) -> FfiResult<([f64; KINCAL_MAX_JOINTS], IkSolution<N>)> {
+    let s = seed
+        .get(..N)
+        .ok_or(kincal_error::new(kincal_status::Internal))?;
+    let state = joint_state::<N>(s, aux, CALL_AUX)?;
+    let sol = solve_ik(r, target, &state, opts)?;
+    let mut q = [0.0; KINCAL_MAX_JOINTS];
+    for (d, s) in q.iter_mut().zip(sol.q.iter()) {
+        *d = *s;
+    }
+    Ok((q, sol))
+}
+
+/// Inverse kinematics: readings `q_out` (N doubles [rad], within the joint limits) whose
+/// effect-compensated FK reaches `target` (4×4 column-major rigid transform, 16 doubles: the
+/// tool pose in the base frame). Damped least squares from `q_seed` and `opts->extra_seeds`
+/// further seeds; the converged solution nearest to `q_seed` is returned (joints whose range
+/// spans more than 2π are shifted by ±2π towards the seed where the limits allow).
+///
+/// - `q_seed`, `q_seed_len`: start configuration [rad], N doubles (clamped into the limits).
+/// - `aux`: approach directions / temperature the model needs, or NULL.
+/// - `opts`: NULL for the defaults (`kincal_ik_options_default`).
+/// - `q_out`, `q_out_len`: N doubles, written on success only; may overlap `q_seed`.
+/// - `info_out`: residuals, iterations and seed of the solution, or NULL.
+///
+/// Returns OK, UNREACHABLE (no seed converged; `residual_pos_m`/`residual_rot_rad` give the
+/// best residual found), NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE,
+/// INVALID_TRANSFORM, INVALID_ARGUMENT (an approach direction or tolerance), MISSING_INPUT or
+/// any status of `kincal_robot_validate`. With `std` the call runs in a catch_unwind
+/// boundary; the no_std build is proved panic-free at link time.
+///
+/// # Safety
+/// Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn kincal_ik(
+    robot: *const kincal_robot,
+    target: *const f64,
+    target_len: usize,
+    q_seed: *const f64,
+    q_seed_len: usize,
+    aux: *const kincal_joint_aux,
+    opts: *const kincal_ik_options,
+    q_out: *mut f64,
+    q_out_len: usize,
+    info_out: *mut kincal_ik_info,
+    err: *mut kincal_error,
+) -> kincal_status {
+    ffi_boundary!(err = err; {
+        // SAFETY: forwarded contract.
+        let (any, seed, aux) = unsafe { robot_and_q(robot, q_seed, q_seed_len, c"q_seed", aux) }?;
+        let n = any.n_joints();
+        let target = crate::pose::from_matrix(arg_slice!(target, target_len, 16), c"target")?;
+        let opts = match arg_opt!(opts) {
+            Some(o) => options(o)?,
+            None => IkOptions::default(),
+        };
+        let out = arg_out!(q_out, q_out_len, n);
+        let info = if info_out.is_null() { None } else { Some(arg_out1!(info_out)) };
+        let (q, info_v) = with_any_robot!(&any, r => {
+            ik_of(r, &target, &seed, aux.as_ref(), &opts).map(|(q, s)| {
+                (q, kincal_ik_info {
+                    residual_pos_m: s.residual_pos_m,
+                    residual_rot_rad: s.residual_rot_rad,
+                    iterations: s.iterations,
+                    seed_index: s.seed_index,
+                })
+            })
+        })?;
+        // SAFETY: checked by `arg_out!`/`arg_out1!`; writable by contract.
+        unsafe {
+            out.write(&q);
+            if let Some(i) = info {
+                i.put(info_v);
+            }
+        }
+        Ok(())
+    })
+}

@@ -1,0 +1,2324 @@
+/*
+ * kincal: C ABI of the kincal kinematic-calibration toolkit.
+ *
+ * GENERATED FILE, DO NOT EDIT. It is generated from ffi/src by cbindgen 0.29.4
+ * (ffi/cbindgen.toml); regenerate with
+ *     KINCAL_BLESS=1 cargo test -p kincal-ffi header
+ *
+ * Conventions:
+ * - Every fallible function returns a kincal_status (KINCAL_STATUS_OK = 0) and takes a
+ *   last `kincal_error *err` for the positional detail of a failure (NULL allowed).
+ * - Argument order: object, inputs, outputs (`*_out`). Every buffer is caller-owned and
+ *   followed by its length in elements (`*_len`), which must equal what the call needs.
+ * - Nothing is allocated and no pointer is kept after a call returns. Outputs are written
+ *   on success only unless a function says otherwise.
+ * - Units: metres, radians, kilograms, seconds. 4x4 poses are column-major
+ *   (t[4*col + row]); quaternions are [w, x, y, z]. Indices are zero-based; parameter
+ *   labels use 1-based link numbers ("theta0_3").
+ * - Static strings returned by the library are never freed.
+ * - Library version: kincal_version(); sizeof(kincal_robot) == kincal_robot_size().
+ */
+
+#ifndef KINCAL_H
+#define KINCAL_H
+
+#include <stdint.h>
+#include <stddef.h>
+#include <stdbool.h>
+/*
+ "No index" marker of the size_t fields of kincal_error.
+ */
+#define KINCAL_NO_INDEX SIZE_MAX
+
+/*
+ Joint count of ARIA.
+ */
+#define KINCAL_ARIA_NUM_JOINTS 6
+
+/*
+ Number of Table 2 calibration-tool poses.
+ */
+#define KINCAL_ARIA_NUM_TOOL_POSES 10
+
+/*
+ Mask of every effect.
+ */
+#define KINCAL_EFFECTS_ALL 127
+
+/*
+ Most strongly correlated parameter pairs a report lists (`kincal_identify_report`).
+ */
+#define KINCAL_MAX_CORRELATED_PAIRS 32
+
+/*
+ Alignment `kincal_identify` needs of its workspace pointer (`malloc` provides it).
+ */
+#define KINCAL_WORKSPACE_ALIGN 16
+
+/*
+ Largest `frames_len` of `kincal_fk_frames`: 16·(`KINCAL_MAX_JOINTS` + 2).
+ */
+#define KINCAL_MAX_FRAMES_LEN 160
+
+/*
+ Largest design `kincal_select_poses` selects (`m`; the core's exchange needs 3 more slots).
+ */
+#define KINCAL_MAX_SELECT 61
+
+/*
+ A buffer of this many bytes holds every parameter label with its terminating NUL.
+ */
+#define KINCAL_LABEL_CAPACITY 32
+
+/*
+ Tolerance of the rigid-transform check of input matrices: every entry of RᵀR − I within
+ this, and det R > 0.
+ */
+#define KINCAL_ROTATION_TOLERANCE 1e-6
+
+/*
+ Most markers on one body.
+ */
+#define KINCAL_MAX_MARKERS 32
+
+/*
+ Most markers `kincal_register` may exclude as outliers.
+ */
+#define KINCAL_MAX_OUTLIERS 3
+
+/*
+ Largest joint count of a `kincal_robot`.
+ */
+#define KINCAL_MAX_JOINTS 8
+
+/*
+ Capacity of `kincal_robot.params`: `kincal_num_params(KINCAL_MAX_JOINTS)` = 12·8 + 13.
+ */
+#define KINCAL_MAX_PARAMS 109
+
+/*
+ Capacity of `kincal_robot.nominal`: `kincal_num_geometric_params(KINCAL_MAX_JOINTS)` =
+ 5·8 + 12.
+ */
+#define KINCAL_MAX_GEOMETRIC_PARAMS 52
+
+/*
+ The paper's position target of Section 4.4: every pose error below 1 mm [m].
+ */
+#define KINCAL_TARGET_POS_M 0.001
+
+/*
+ The paper's orientation target: every pose error below 0.66° [rad].
+ */
+#define KINCAL_TARGET_ROT_RAD 0.011519173063162576
+
+/*
+ Doubles per pose in `kincal_validate`'s `errors_out`: `[e_x, e_y, e_z] (m)`,
+ `[e_φx, e_φy, e_φz] (rad, exact rotation vector)`, `|e_p| (m)`, `|e_φ| (rad)`.
+ */
+#define KINCAL_POSE_ERRORS_LEN 8
+
+/*
+ Result of every fallible export. `KINCAL_STATUS_OK` (0) is success.
+
+ The numbers are part of the ABI and never reused: argument errors are 100–199, numerical
+ failures 200–299, internal errors 900–999 (`KINCAL_STATUS_PANIC` last). A retired code stays
+ listed here as a comment. The type is 32 bits wide whatever the C compiler's enum size
+ (`-fshort-enums` is the default of bare-metal ARM GCC), so in C it is `uint32_t`.
+ */
+enum kincal_status
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     Success.
+     */
+    KINCAL_STATUS_OK = 0,
+    /*
+     A required pointer argument was NULL (`kincal_error.argument` names it).
+     */
+    KINCAL_STATUS_NULL_POINTER = 100,
+    /*
+     A buffer length or count disagreed with what the call needs (`expected`, `found`);
+     this includes a joint vector whose length is not the robot's joint count.
+     */
+    KINCAL_STATUS_BAD_LENGTH = 101,
+    /*
+     A number that must be finite was NaN or infinite (`argument`, `index`, `quantity`).
+     */
+    KINCAL_STATUS_NON_FINITE = 102,
+    /*
+     A joint reading lies outside the joint limits (`joint`, `value`, `lower`, `upper`).
+     */
+    KINCAL_STATUS_OUT_OF_LIMITS = 103,
+    /*
+     `kincal_robot.n_joints` is not in 1..=KINCAL_MAX_JOINTS (`found`).
+     */
+    KINCAL_STATUS_BAD_JOINT_COUNT = 104,
+    /*
+     Joint limits with lower > upper or a non-finite bound (`joint`).
+     */
+    KINCAL_STATUS_INVALID_LIMITS = 105,
+    /*
+     A model parameter the model cannot use, e.g. a negative mass or a zero quaternion
+     (`index`, `value`).
+     */
+    KINCAL_STATUS_INVALID_PARAMETER = 106,
+    /*
+     An input the model needs is missing: approach directions for a model with backlash,
+     temperature for a model with thermal expansion (`quantity`).
+     */
+    KINCAL_STATUS_MISSING_INPUT = 107,
+    /*
+     A parameter label or effect name is not known for this robot.
+     */
+    KINCAL_STATUS_UNKNOWN_LABEL = 108,
+    /*
+     A parameter, link or pose index is out of range (`index`, `expected` = the count).
+     */
+    KINCAL_STATUS_INDEX_OUT_OF_RANGE = 109,
+    /*
+     A 4×4 matrix is not a rigid transform: bottom row not (0, 0, 0, 1), or the rotation
+     not orthonormal with determinant +1 within 1e-6 (`argument`).
+     */
+    KINCAL_STATUS_INVALID_TRANSFORM = 110,
+    /*
+     An enumeration, flag or option value outside its domain (`argument`, `index`, `value`).
+     */
+    KINCAL_STATUS_INVALID_ARGUMENT = 111,
+    /*
+     A fixed capacity is too small (`found` = needed, `expected` = capacity).
+     */
+    KINCAL_STATUS_CAPACITY_EXCEEDED = 112,
+    /*
+     Not enough data for the operation (`found`, `expected` = at least).
+     */
+    KINCAL_STATUS_TOO_FEW_DATA = 113,
+    /*
+     A pose could not be used, e.g. a degenerate measurement (`pose`).
+     */
+    KINCAL_STATUS_BAD_POSE = 114,
+    /*
+     A pointer argument is not aligned for its type (`argument`).
+     */
+    KINCAL_STATUS_MISALIGNED_POINTER = 115,
+    /*
+     A joint axis was given with a zero (or non-normalisable) direction (`joint`).
+     */
+    KINCAL_STATUS_DEGENERATE_AXIS = 116,
+    /*
+     Inverse kinematics found no configuration within the limits that reaches the pose
+     (`residual_pos_m`, `residual_rot_rad`: the best residual found).
+     */
+    KINCAL_STATUS_UNREACHABLE = 200,
+    /*
+     An iterative method stopped at its iteration limit (`iterations`).
+     */
+    KINCAL_STATUS_NOT_CONVERGED = 201,
+    /*
+     The data do not determine enough parameters (`found` = rank, `expected` = required).
+     */
+    KINCAL_STATUS_RANK_DEFICIENT = 202,
+    /*
+     A parameter fitted under bounds ended outside them (`index`, `value`).
+     */
+    KINCAL_STATUS_BOUND_VIOLATED = 203,
+    /*
+     The core reported an error this version of the C ABI does not know: a bug, please
+     report it.
+     */
+    KINCAL_STATUS_INTERNAL = 900,
+    /*
+     A panic was caught at the boundary: a bug, please report it. The robot and output
+     buffers passed to the call may hold partial results.
+     */
+    KINCAL_STATUS_PANIC = 999,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_status kincal_status;
+#else
+typedef uint32_t kincal_status;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ Which input held a bad number or is missing (`kincal_error.quantity`).
+ */
+enum kincal_quantity
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     Not applicable or not known.
+     */
+    KINCAL_QUANTITY_NONE = 0,
+    /*
+     A joint reading `q`.
+     */
+    KINCAL_QUANTITY_JOINT_READING = 1,
+    /*
+     A model parameter (link, base, tool or effect).
+     */
+    KINCAL_QUANTITY_PARAMETER = 2,
+    /*
+     A measured or target position.
+     */
+    KINCAL_QUANTITY_POSITION = 3,
+    /*
+     A measured or target orientation.
+     */
+    KINCAL_QUANTITY_ORIENTATION = 4,
+    /*
+     A weight, tolerance, bound or other option.
+     */
+    KINCAL_QUANTITY_SETTING = 5,
+    /*
+     Approach directions (backlash).
+     */
+    KINCAL_QUANTITY_APPROACH_DIRECTION = 6,
+    /*
+     Arm temperature (thermal effect).
+     */
+    KINCAL_QUANTITY_TEMPERATURE = 7,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_quantity kincal_quantity;
+#else
+typedef uint32_t kincal_quantity;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ Which of d and β a link identifies (values of `kincal_robot.length_param`).
+ */
+enum kincal_length_param
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     Identify d, keep β at its nominal value (non-parallel consecutive axes).
+     */
+    KINCAL_LENGTH_PARAM_D = 0,
+    /*
+     Identify β, keep d at its nominal value (parallel consecutive axes).
+     */
+    KINCAL_LENGTH_PARAM_BETA = 1,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_length_param kincal_length_param;
+#else
+typedef uint32_t kincal_length_param;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ A non-geometric effect. In effect masks (`uint32_t effects`), bit k stands for effect k,
+ e.g. `(1u << KINCAL_EFFECT_JOINT_COMPLIANCE) | (1u << KINCAL_EFFECT_BACKLASH)`.
+ */
+enum kincal_effect
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     `base_frame`: measured poses are expressed in a base frame off by a small rigid
+     transform (parameters `base_px` … `base_rz`).
+     */
+    KINCAL_EFFECT_BASE_FRAME = 0,
+    /*
+     `tool_frame`: the probe/tool frame is off (`tool_px` … `tool_rz`).
+     */
+    KINCAL_EFFECT_TOOL_FRAME = 1,
+    /*
+     `joint_compliance`: Δθ_j = c_j·τ_j(q), τ_j the gravity torque (`compliance_j`,
+     rad/(N·m)).
+     */
+    KINCAL_EFFECT_JOINT_COMPLIANCE = 2,
+    /*
+     `joint_scale`: Δθ_j = k_j·q_j (`scale_j`).
+     */
+    KINCAL_EFFECT_JOINT_SCALE = 3,
+    /*
+     `joint_cyclic`: Δθ_j = a·sin q + b·cos q + c·sin 2q + d·cos 2q (`cyclic_sin1_j`,
+     `cyclic_cos1_j`, `cyclic_sin2_j`, `cyclic_cos2_j`, rad).
+     */
+    KINCAL_EFFECT_JOINT_CYCLIC = 4,
+    /*
+     `backlash`: Δθ_j = b_j·s_j, s_j the approach direction (`backlash_j`, rad); needs
+     approach directions in `kincal_joint_aux`.
+     */
+    KINCAL_EFFECT_BACKLASH = 5,
+    /*
+     `thermal`: every d and a times 1 + κ·(T − 20 °C) (`thermal_kappa`, 1/K); needs the
+     temperature in `kincal_joint_aux`.
+     */
+    KINCAL_EFFECT_THERMAL = 6,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_effect kincal_effect;
+#else
+typedef uint32_t kincal_effect;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ Which orientation error `kincal_pose_error*` report.
+ */
+enum kincal_orientation_error
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     Eq. (16) of the ARIA paper: S(Δφ) = (R_meas − R_model)·R_modelᵀ, skew part taken.
+     First-order accurate; what the paper uses for small calibration errors.
+     */
+    KINCAL_ORIENTATION_ERROR_SMALL_ANGLE = 0,
+    /*
+     The exact rotation vector log(R_meas·R_modelᵀ), right for any error size.
+     */
+    KINCAL_ORIENTATION_ERROR_EXACT = 1,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_orientation_error kincal_orientation_error;
+#else
+typedef uint32_t kincal_orientation_error;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ Which built-in ARIA model `kincal_robot_aria` writes.
+ */
+enum kincal_aria_model
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     Table 1 nominal geometry with joint limits (eq. 2; q3 lower limit assumed −π) and the
+     assumed mass model.
+     */
+    KINCAL_ARIA_MODEL_NOMINAL = 0,
+    /*
+     Table 3: the virtual "true" robot of the paper's simulation study (nominal geometry
+     Table 1).
+     */
+    KINCAL_ARIA_MODEL_VIRTUAL_TRUTH = 1,
+    /*
+     Table 4: the real robot identified from motion-capture data (nominal geometry Table 1).
+     */
+    KINCAL_ARIA_MODEL_REAL_IDENTIFIED = 2,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_aria_model kincal_aria_model;
+#else
+typedef uint32_t kincal_aria_model;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ The identification algorithms of the paper (Section 4.1.3).
+ */
+enum kincal_algorithm
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     Gauss–Newton with the minimum-norm least-squares step (Matlab `lsqminnorm`).
+     */
+    KINCAL_ALGORITHM_OLS = 0,
+    /*
+     Bounded fit inside the prior intervals `lower`/`upper` of the options (`fmincon` in
+     the paper): projected Levenberg–Marquardt; parameters ending on a bound are reported.
+     */
+    KINCAL_ALGORITHM_OPT1 = 1,
+    /*
+     Levenberg–Marquardt with MINPACK's trust region (`lsqnonlin`).
+     */
+    KINCAL_ALGORITHM_OPT2 = 2,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_algorithm kincal_algorithm;
+#else
+typedef uint32_t kincal_algorithm;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ What the registration concluded about one marker (`kincal_marker_fit.status`).
+ */
+enum kincal_marker_status
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     Used in the fit and consistent with it.
+     */
+    KINCAL_MARKER_STATUS_INLIER = 0,
+    /*
+     Masked as not seen.
+     */
+    KINCAL_MARKER_STATUS_MISSING = 1,
+    /*
+     Excluded: off by more than its threshold and not explained by a swap.
+     */
+    KINCAL_MARKER_STATUS_MOVED = 2,
+    /*
+     Excluded: its label is swapped with marker `swapped_with`.
+     */
+    KINCAL_MARKER_STATUS_SWAPPED = 3,
+    /*
+     Used, but above its threshold in a fit no exclusion could make consistent.
+     */
+    KINCAL_MARKER_STATUS_SUSPECT = 4,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_marker_status kincal_marker_status;
+#else
+typedef uint32_t kincal_marker_status;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ How the Jacobian columns are scaled before the singular values are taken.
+ */
+enum kincal_scaling_kind
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     Raw columns (metres per metre, metres per radian): the indices depend on units.
+     */
+    KINCAL_SCALING_KIND_NONE = 0,
+    /*
+     Every column divided by its norm over the pose set (the default; the convention of
+     the identifiability condition number).
+     */
+    KINCAL_SCALING_KIND_UNIT_COLUMNS = 1,
+    /*
+     Columns times the expected error of their parameter: `length_m` for lengths,
+     `angle_rad` for angles (effect parameters unscaled).
+     */
+    KINCAL_SCALING_KIND_TOLERANCE = 2,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_scaling_kind kincal_scaling_kind;
+#else
+typedef uint32_t kincal_scaling_kind;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ The observability indices; all are "larger is better".
+ */
+enum kincal_obs_index
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     Eq. (17): σ_min/σ_max.
+     */
+    KINCAL_OBS_INDEX_O = 0,
+    /*
+     Borm–Menq: (σ_1···σ_p)^(1/p)/√m.
+     */
+    KINCAL_OBS_INDEX_O1 = 1,
+    /*
+     Inverse condition number (equal to O).
+     */
+    KINCAL_OBS_INDEX_O2 = 2,
+    /*
+     σ_min.
+     */
+    KINCAL_OBS_INDEX_O3 = 3,
+    /*
+     Noise amplification σ_min²/σ_max.
+     */
+    KINCAL_OBS_INDEX_O4 = 4,
+    /*
+     1/σ_max.
+     */
+    KINCAL_OBS_INDEX_O5 = 5,
+    /*
+     A-optimality 1/Σ σ⁻¹.
+     */
+    KINCAL_OBS_INDEX_A_OPT = 6,
+    /*
+     D-optimality ln det(JᵀJ).
+     */
+    KINCAL_OBS_INDEX_D_OPT = 7,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_obs_index kincal_obs_index;
+#else
+typedef uint32_t kincal_obs_index;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ Where and why a call failed: a caller-owned plain struct (pass NULL when the detail is not
+ wanted; it need not be initialised). Every export that takes one overwrites all of it before
+ returning: `status` = the returned code, the fields that code documents set, the others
+ cleared (indices `KINCAL_NO_INDEX`, numbers NaN, `argument` NULL, `iterations` 0).
+ Indices are zero-based.
+ */
+typedef struct kincal_error {
+    /*
+     The status the call returned (a `kincal_status` value).
+     */
+    uint32_t status;
+    /*
+     Which input held the bad number or is missing (a `kincal_quantity` value; 0 = none).
+     */
+    uint32_t quantity;
+    /*
+     Name of the offending argument or struct field as in the header (e.g. `"q"`,
+     `"robot->params"`): a static NUL-terminated string, or NULL when not known. Never free it.
+     */
+    const char *argument;
+    /*
+     Element index within that argument, or the parameter index (`KINCAL_NO_INDEX` if none).
+     */
+    size_t index;
+    /*
+     Joint (zero-based; `KINCAL_NO_INDEX` if none).
+     */
+    size_t joint;
+    /*
+     Pose (zero-based; `KINCAL_NO_INDEX` if none).
+     */
+    size_t pose;
+    /*
+     Length, count, rank or capacity that was needed (`KINCAL_NO_INDEX` if none).
+     */
+    size_t expected;
+    /*
+     Length, count or rank that was given or found (`KINCAL_NO_INDEX` if none).
+     */
+    size_t found;
+    /*
+     The offending value (NaN if none).
+     */
+    double value;
+    /*
+     Lower limit [rad] for `KINCAL_STATUS_OUT_OF_LIMITS` (NaN otherwise).
+     */
+    double lower;
+    /*
+     Upper limit [rad] for `KINCAL_STATUS_OUT_OF_LIMITS` (NaN otherwise).
+     */
+    double upper;
+    /*
+     Best position residual [m] for `KINCAL_STATUS_UNREACHABLE` (NaN otherwise).
+     */
+    double residual_pos_m;
+    /*
+     Best orientation residual [rad] for `KINCAL_STATUS_UNREACHABLE` (NaN otherwise).
+     */
+    double residual_rot_rad;
+    /*
+     Iterations performed, for `KINCAL_STATUS_NOT_CONVERGED` (0 otherwise).
+     */
+    uint32_t iterations;
+} kincal_error;
+
+/*
+ A robot model with 1..=`KINCAL_MAX_JOINTS` revolute joints: Hayati/mDH geometry, base and
+ tool frames, joint limits, point-mass model and effect parameters. Caller-owned plain data:
+ declare it anywhere (stack, static, flash), fill it with `kincal_robot_init` or
+ `kincal_robot_aria`, edit it with the `kincal_robot_*` setters or directly, and pass it to
+ every call. The library keeps no pointer to it and allocates nothing.
+
+ Every call validates the fields it uses and ignores entries beyond the joint count.
+ `sizeof(kincal_robot)` must equal `kincal_robot_size()` (checks that header and library
+ agree).
+
+ Units: metres, radians, kilograms, seconds.
+ */
+typedef struct kincal_robot {
+    /*
+     Number of joints N, 1..=`KINCAL_MAX_JOINTS`.
+     */
+    uint32_t n_joints;
+    /*
+     Per link: `KINCAL_LENGTH_PARAM_D` (0) or `KINCAL_LENGTH_PARAM_BETA` (1).
+     */
+    uint32_t length_param[KINCAL_MAX_JOINTS];
+    /*
+     Current parameters, first `kincal_num_params(N)` = 12N + 13 entries, in the flat layout
+     of the core: `5i..5i+5` link i+1 [θ0, d, a, α, β]; `5N..5N+6` base [px, py, pz, rx, ry,
+     rz] (Trans(p)·Rot(r), r a rotation vector); `5N+6..5N+12` tool, same form; then
+     compliance (N) [rad/(N·m)], scale (N), cyclic (4N: sin q, cos q, sin 2q, cos 2q per
+     joint) [rad], backlash (N) [rad], thermal κ [1/K]. Labels: `kincal_robot_param_label`.
+     */
+    double params[KINCAL_MAX_PARAMS];
+    /*
+     Nominal geometry (the description's), first `kincal_num_geometric_params(N)` = 5N + 12
+     entries in the same layout as `params` (links, base, tool). Gravity torques are
+     evaluated with it, so calibrating `params` does not move the mass model.
+     */
+    double nominal[KINCAL_MAX_GEOMETRIC_PARAMS];
+    /*
+     Lower joint limits [rad], inclusive.
+     */
+    double limits_lower[KINCAL_MAX_JOINTS];
+    /*
+     Upper joint limits [rad], inclusive.
+     */
+    double limits_upper[KINCAL_MAX_JOINTS];
+    /*
+     Mass of each link [kg], at the midpoint between the origins of frames k−1 and k.
+     */
+    double link_masses_kg[KINCAL_MAX_JOINTS];
+    /*
+     Mass of the tool [kg], at the end-effector origin.
+     */
+    double tool_mass_kg;
+    /*
+     Gravity in the base frame [m/s²].
+     */
+    double gravity[3];
+} kincal_robot;
+
+/*
+ Options of `kincal_identify` and `kincal_analyze_identifiability`; fill them with
+ `kincal_identify_options_default`, then edit. Plain data, no pointers.
+ */
+typedef struct kincal_identify_options {
+    /*
+     A `kincal_algorithm`.
+     */
+    uint32_t algorithm;
+    /*
+     Iteration limit (default 200); reaching it is `KINCAL_STATUS_NOT_CONVERGED`.
+     */
+    uint32_t max_iterations;
+    /*
+     Non-zero: fit the identifiable subset even when the data leave some generically
+     identifiable parameters undetermined (otherwise `KINCAL_STATUS_RANK_DEFICIENT`).
+     */
+    uint32_t allow_data_deficiency;
+    /*
+     Orientation error of the cost, a `kincal_orientation_error` (default exact).
+     */
+    uint32_t orientation;
+    /*
+     Relative step tolerance (default 1e-12).
+     */
+    double xtol;
+    /*
+     Relative cost-reduction tolerance (default 1e-14).
+     */
+    double ftol;
+    /*
+     Absolute cost below which the fit is exact (default 1e-28).
+     */
+    double abs_cost_tol;
+    /*
+     Identifiability tolerance on unit-scaled Jacobian columns (default 1e-6).
+     */
+    double rank_tol;
+    /*
+     Weight of each position row [1/m²] (default 1).
+     */
+    double weight_pos;
+    /*
+     Weight of each rotation row [1/rad²] (default 1).
+     */
+    double weight_rot;
+    /*
+     Parameters to identify: `requested[i]` non-zero for flat index i (first
+     `kincal_num_params(N)` used); only their identifiable subset is fitted.
+     */
+    uint8_t requested[KINCAL_MAX_PARAMS];
+    /*
+     OPT1 prior intervals, absolute values per flat index (±infinity allowed, NaN not).
+     */
+    double lower[KINCAL_MAX_PARAMS];
+    /*
+     Upper ends of the OPT1 intervals.
+     */
+    double upper[KINCAL_MAX_PARAMS];
+} kincal_identify_options;
+
+/*
+ Auxiliary inputs of a joint state that some effects need. Pass NULL where a function takes
+ `const kincal_joint_aux *aux` when the model has neither backlash nor thermal expansion.
+ */
+typedef struct kincal_joint_aux {
+    /*
+     Non-zero: `approach` holds the approach directions (needed with backlash).
+     */
+    uint32_t has_approach;
+    /*
+     Non-zero: `temp_c` holds the arm temperature (needed with thermal expansion).
+     */
+    uint32_t has_temp;
+    /*
+     Direction from which each joint approached the pose: −1, 0 or +1 (first N used).
+     */
+    double approach[KINCAL_MAX_JOINTS];
+    /*
+     Arm temperature [°C].
+     */
+    double temp_c;
+} kincal_joint_aux;
+
+/*
+ A set of measurements: caller-owned arrays, viewed (not copied into the library) for the
+ duration of one call. L = `n_poses`, N = the robot's joint count.
+ */
+typedef struct kincal_measurements {
+    /*
+     Number of poses L (≥ 1).
+     */
+    size_t n_poses;
+    /*
+     Joint readings [rad], L × N row-major (pose l at `q[l*N]`); `q_len` = L·N.
+     */
+    const double *q;
+    /*
+     Length of `q`.
+     */
+    size_t q_len;
+    /*
+     Measured tool poses `T_e^b` in the base frame: L 4×4 column-major rigid transforms;
+     `poses_len` = 16·L.
+     */
+    const double *poses;
+    /*
+     Length of `poses`.
+     */
+    size_t poses_len;
+    /*
+     Measured components per pose (bit k = component k of `[x, y, z, φx, φy, φz]`: 0x3f a
+     full pose, 0x07 position only), or NULL for full poses; `masks_len` = L.
+     */
+    const uint8_t *masks;
+    /*
+     Length of `masks` (ignored when NULL).
+     */
+    size_t masks_len;
+    /*
+     Approach directions / temperature per pose, or NULL; `aux_len` = L.
+     */
+    const struct kincal_joint_aux *aux;
+    /*
+     Length of `aux` (ignored when NULL).
+     */
+    size_t aux_len;
+    /*
+     Weight of each pose in the fit (finite, ≥ 0; it multiplies the row weights): 1
+     normally, 0 to hold a pose out (cross-validation), other values for robust
+     reweighting; or NULL for all 1. `weights_len` = L. Validation ignores the weights.
+     */
+    const double *weights;
+    /*
+     Length of `weights` (ignored when NULL).
+     */
+    size_t weights_len;
+} kincal_measurements;
+
+/*
+ What the data can determine. Masks are indexed by flat parameter index (1 = member).
+ */
+typedef struct kincal_identifiability {
+    /*
+     Number of identifiable parameters.
+     */
+    size_t rank;
+    /*
+     σ_max/σ_min of the unit-column-scaled Jacobian of the identifiable parameters
+     (infinity when singular).
+     */
+    double condition_number;
+    /*
+     What was asked for.
+     */
+    uint8_t requested[KINCAL_MAX_PARAMS];
+    /*
+     What the data determine (and is fitted).
+     */
+    uint8_t identifiable[KINCAL_MAX_PARAMS];
+    /*
+     Redundant in the model for the measured components, whatever the poses.
+     */
+    uint8_t structural[KINCAL_MAX_PARAMS];
+    /*
+     Identifiable in general but not from these poses.
+     */
+    uint8_t data_deficient[KINCAL_MAX_PARAMS];
+    /*
+     For each parameter not kept: the kept parameter its column aligns with most
+     (`KINCAL_NO_INDEX` if none).
+     */
+    size_t partner[KINCAL_MAX_PARAMS];
+    /*
+     |cos| of the angle between the two columns (NaN if no partner).
+     */
+    double partner_cosine[KINCAL_MAX_PARAMS];
+    /*
+     Number of valid entries of `singular_values` (= `rank`).
+     */
+    size_t n_singular_values;
+    /*
+     Singular values (descending) of the unit-column-scaled Jacobian of the identifiable
+     parameters.
+     */
+    double singular_values[KINCAL_MAX_PARAMS];
+} kincal_identifiability;
+
+/*
+ Residual statistics of a model on a set of measurements.
+ */
+typedef struct kincal_residual_stats {
+    /*
+     Number of poses.
+     */
+    size_t poses;
+    /*
+     Number of measured rows (components).
+     */
+    size_t rows;
+    /*
+     Weighted sum of squares (the identification cost).
+     */
+    double cost;
+    /*
+     RMS of |e_p| over poses with a measured position [m].
+     */
+    double rms_pos_m;
+    /*
+     Largest |e_p| [m].
+     */
+    double max_pos_m;
+    /*
+     RMS of the rotation angle over poses with a measured orientation [rad].
+     */
+    double rms_rot_rad;
+    /*
+     Largest rotation angle [rad].
+     */
+    double max_rot_rad;
+} kincal_residual_stats;
+
+/*
+ A pair of strongly correlated parameter estimates.
+ */
+typedef struct kincal_correlation {
+    /*
+     First parameter (flat index).
+     */
+    size_t a;
+    /*
+     Second parameter (flat index).
+     */
+    size_t b;
+    /*
+     Correlation coefficient.
+     */
+    double rho;
+} kincal_correlation;
+
+/*
+ Everything `kincal_identify` reports besides the identified model.
+ */
+typedef struct kincal_identify_report {
+    /*
+     The `kincal_algorithm` used.
+     */
+    uint32_t algorithm;
+    /*
+     Iterations used.
+     */
+    uint32_t iterations;
+    /*
+     The identifiability analysis.
+     */
+    struct kincal_identifiability analysis;
+    /*
+     Residuals of the initial model.
+     */
+    struct kincal_residual_stats initial;
+    /*
+     Residuals of the identified model.
+     */
+    struct kincal_residual_stats fitted;
+    /*
+     Residual variance σ² = cost/(rows − fitted parameters) (0 without redundancy).
+     */
+    double sigma2;
+    /*
+     Standard error of each fitted parameter (flat index; 0 for parameters not fitted).
+     */
+    double std_errors[KINCAL_MAX_PARAMS];
+    /*
+     OPT1: fitted parameters that ended on a bound (mask by flat index).
+     */
+    uint8_t at_bound[KINCAL_MAX_PARAMS];
+    /*
+     Number of pairs with |ρ| above 0.95 (only the first `KINCAL_MAX_CORRELATED_PAIRS`
+     are listed).
+     */
+    size_t n_correlated;
+    /*
+     The listed pairs.
+     */
+    struct kincal_correlation correlated[KINCAL_MAX_CORRELATED_PAIRS];
+} kincal_identify_report;
+
+/*
+ Options of `kincal_ik`; get the defaults from `kincal_ik_options_default`.
+ */
+typedef struct kincal_ik_options {
+    /*
+     Iterations per seed (default 200).
+     */
+    uint32_t max_iterations;
+    /*
+     Non-zero: stop at the first seed that converges (faster; the answer is then the
+     solution reached from the earliest converging seed rather than the nearest to the
+     caller's seed). Default 0.
+     */
+    uint32_t first_solution;
+    /*
+     Seeds tried after the caller's: a deterministic Halton sequence over the limits clipped
+     to ±π (default 16).
+     */
+    size_t extra_seeds;
+    /*
+     Convergence: position residual below this [m], finite and > 0 (default 1e-11).
+     */
+    double tol_pos_m;
+    /*
+     Convergence: orientation residual below this [rad], finite and > 0 (default 1e-11).
+     */
+    double tol_rot_rad;
+} kincal_ik_options;
+
+/*
+ What `kincal_ik` found besides the readings.
+ */
+typedef struct kincal_ik_info {
+    /*
+     Position residual of the solution [m].
+     */
+    double residual_pos_m;
+    /*
+     Orientation residual of the solution [rad].
+     */
+    double residual_rot_rad;
+    /*
+     Iterations used from the chosen seed.
+     */
+    uint32_t iterations;
+    /*
+     Which seed converged to the solution (0 = the caller's).
+     */
+    size_t seed_index;
+} kincal_ik_info;
+
+/*
+ Column scaling of the observability exports. Plain data.
+ */
+typedef struct kincal_scaling {
+    /*
+     A `kincal_scaling_kind`.
+     */
+    uint32_t kind;
+    /*
+     Tolerance of lengths [m] (finite, > 0; used by `KINCAL_SCALING_KIND_TOLERANCE` only).
+     */
+    double length_m;
+    /*
+     Tolerance of angles [rad] (finite, > 0; used by `KINCAL_SCALING_KIND_TOLERANCE` only).
+     */
+    double angle_rad;
+} kincal_scaling;
+
+/*
+ The observability indices of a pose set (singular values σ of the stacked, scaled
+ identification Jacobian: rows `[Δp (m); Δφ (rad)]` per pose, one column per parameter).
+ */
+typedef struct kincal_observability_indices {
+    /*
+     Eq. (17), σ_min/σ_max.
+     */
+    double o;
+    /*
+     Borm–Menq, (σ_1···σ_p)^(1/p)/√m.
+     */
+    double o1;
+    /*
+     Inverse condition number.
+     */
+    double o2;
+    /*
+     σ_min.
+     */
+    double o3;
+    /*
+     σ_min²/σ_max.
+     */
+    double o4;
+    /*
+     1/σ_max.
+     */
+    double o5;
+    /*
+     A-optimality, 1/Σ σ⁻¹.
+     */
+    double a_optimality;
+    /*
+     D-optimality, ln det(JᵀJ) (−infinity when singular).
+     */
+    double d_optimality;
+    /*
+     Smallest singular value.
+     */
+    double sigma_min;
+    /*
+     Largest singular value.
+     */
+    double sigma_max;
+    /*
+     Number of poses m.
+     */
+    size_t poses;
+    /*
+     Number of parameters p (columns).
+     */
+    size_t params;
+} kincal_observability_indices;
+
+/*
+ An axis-aligned box in the base frame [m].
+ */
+typedef struct kincal_region {
+    /*
+     Lower corner `[x, y, z]` [m].
+     */
+    double min_m[3];
+    /*
+     Upper corner `[x, y, z]` [m] (each ≥ the lower one).
+     */
+    double max_m[3];
+} kincal_region;
+
+/*
+ The outcome of `kincal_select_poses`.
+ */
+typedef struct kincal_selection {
+    /*
+     Objective (the chosen index, from the Gram matrix) of the selected set.
+     */
+    double value;
+    /*
+     Objective after the greedy initial set.
+     */
+    double initial_value;
+    /*
+     Objective after the exchange, before the joint-space refinement.
+     */
+    double exchange_value;
+    /*
+     Objective evaluations.
+     */
+    uint64_t evaluations;
+    /*
+     Accepted exchanges.
+     */
+    size_t exchanges;
+    /*
+     Accepted refinement moves.
+     */
+    size_t refinements;
+    /*
+     The start that gave the result.
+     */
+    size_t start;
+    /*
+     The indices of the selected set (SVD route, as `kincal_observability`).
+     */
+    struct kincal_observability_indices indices;
+} kincal_selection;
+
+/*
+ Options of `kincal_register`; `kincal_registration_options_default` fills them.
+ */
+typedef struct kincal_registration_options {
+    /*
+     Stated measurement noise, 1σ per axis at weight 1 [m] (finite, > 0).
+     */
+    double sigma_m;
+    /*
+     Outlier threshold in units of σ_j on the 3-D residual distance (default 4).
+     */
+    double k_sigma;
+    /*
+     Most markers to exclude as outliers (≤ `KINCAL_MAX_OUTLIERS`; 0 disables the search;
+     default 2).
+     */
+    size_t max_outliers;
+} kincal_registration_options;
+
+/*
+ The fit of one marker.
+ */
+typedef struct kincal_marker_fit {
+    /*
+     Predicted position `t_mocap_body · design` in the motion-capture frame [m].
+     */
+    double predicted_m[3];
+    /*
+     Residual measured − predicted [m] (zero if missing).
+     */
+    double residual_m[3];
+    /*
+     Length of the residual [m] (zero if missing).
+     */
+    double distance_m;
+    /*
+     Outlier threshold k·σ/√w of this marker [m].
+     */
+    double threshold_m;
+    /*
+     A `kincal_marker_status`.
+     */
+    uint32_t status;
+    /*
+     For `KINCAL_MARKER_STATUS_SWAPPED`: the other marker (zero-based); else
+     `KINCAL_NO_INDEX`.
+     */
+    size_t swapped_with;
+} kincal_marker_fit;
+
+/*
+ The result of `kincal_register`.
+ */
+typedef struct kincal_registration {
+    /*
+     The body frame in the motion-capture frame, 4×4 column-major:
+     measured ≈ t_mocap_body · design.
+     */
+    double t_mocap_body[16];
+    /*
+     Markers used in the fit.
+     */
+    size_t n_used;
+    /*
+     Weighted RMS residual distance of the used markers [m].
+     */
+    double rms_m;
+    /*
+     1 when every used marker is within its threshold.
+     */
+    uint32_t consistent;
+    /*
+     Number of markers (entries of `markers` that are valid).
+     */
+    size_t n_markers;
+    /*
+     Per-marker fits, in input order.
+     */
+    struct kincal_marker_fit markers[KINCAL_MAX_MARKERS];
+} kincal_registration;
+
+/*
+ Summary of a validation: RMS (sqrt(mean |e|²)) and maximum of the error norms, and whether
+ the worst pose meets the targets.
+ */
+typedef struct kincal_validation_summary {
+    /*
+     Number of poses.
+     */
+    size_t count;
+    /*
+     RMS of |e_p| [m].
+     */
+    double rms_pos_m;
+    /*
+     Largest |e_p| [m].
+     */
+    double max_pos_m;
+    /*
+     RMS of |e_φ| [rad].
+     */
+    double rms_rot_rad;
+    /*
+     Largest |e_φ| [rad].
+     */
+    double max_rot_rad;
+    /*
+     1 when every |e_p| is below the position target.
+     */
+    uint32_t pos_ok;
+    /*
+     1 when every |e_φ| is below the orientation target.
+     */
+    uint32_t rot_ok;
+} kincal_validation_summary;
+
+#ifdef __cplusplus
+extern "C" {
+#endif // __cplusplus
+
+#if defined(KINCAL_TEST_PANIC)
+/*
+ Panics on purpose inside the panic boundary; returns `KINCAL_STATUS_PANIC` (and fills `err`)
+ in `std` builds. Exists only with the cargo feature `test-panic`, to prove from C that no
+ panic crosses the ABI; in the `panic-never` build it is the canary whose reference must
+ make the link fail.
+
+ # Safety
+ `err` must be NULL or point to a writable `kincal_error`.
+ */
+kincal_status kincal_test_panic(struct kincal_error *err);
+#endif
+
+/*
+ Writes a built-in ARIA model (`model` is a `kincal_aria_model`) into `robot_out` (need not be
+ initialised; written on success only). Identity base and tool, no effects. Returns OK,
+ NULL_POINTER, MISALIGNED_POINTER or INVALID_ARGUMENT (`model`).
+
+ # Safety
+ `robot_out` must be NULL or writable; `err` NULL or writable.
+ */
+kincal_status kincal_robot_aria(struct kincal_robot *robot_out,
+                                uint32_t model,
+                                struct kincal_error *err);
+
+/*
+ Table 2 calibration-tool pose `index` (zero-based, < `KINCAL_ARIA_NUM_TOOL_POSES`) as a 4×4
+ column-major pose in `t_out` (16 doubles). Returns OK, NULL_POINTER, MISALIGNED_POINTER,
+ BAD_LENGTH or INDEX_OUT_OF_RANGE.
+
+ # Safety
+ `t_out` must be NULL or writable for `t_len` doubles; `err` NULL or writable.
+ */
+kincal_status kincal_aria_tool_pose(size_t index,
+                                    double *t_out,
+                                    size_t t_len,
+                                    struct kincal_error *err);
+
+/*
+ A configuration near the Table 2 tool poses [rad] (6 doubles in `q_out`), the IK seed that
+ solves every tool pose on the same branch. Returns OK, NULL_POINTER, MISALIGNED_POINTER or
+ BAD_LENGTH.
+
+ # Safety
+ `q_out` must be NULL or writable for `q_len` doubles; `err` NULL or writable.
+ */
+kincal_status kincal_aria_tool_seed(double *q_out,
+                                    size_t q_len,
+                                    struct kincal_error *err);
+
+/*
+ Builds a robot from its N revolute joint axes at q = 0, all given in one reference frame:
+ the mDH links, d/β choices (β for parallel consecutive axes), base and tool frames are
+ computed so that the model's FK equals the chain's product of exponentials
+ `T_base_tool(q) = T_ref_base⁻¹ · Rot(p_1, u_1, q_1) ··· Rot(p_N, u_N, q_N) · T_ref_tool`
+ to rounding. No masses, no effects; this geometry is also the nominal one.
+
+ - `robot_out`: written on success only; need not be initialised.
+ - `n_joints`: 1..=`KINCAL_MAX_JOINTS`.
+ - `points`, `points_len`: a point on each axis [m], N × 3 doubles.
+ - `directions`, `directions_len`: each axis direction, N × 3 doubles (positive rotation is
+   right-handed about it; normalised, must not be zero).
+ - `t_ref_base`, `t_ref_base_len`: the robot's base frame in the reference frame (16 doubles,
+   4×4 column-major), or NULL for identity.
+ - `t_ref_tool`, `t_ref_tool_len`: the tool (flange) frame in the reference frame at q = 0,
+   or NULL for identity.
+ - `limits`, `limits_len`: `[lower, upper]` per joint [rad], 2N doubles.
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_JOINT_COUNT, BAD_LENGTH, NON_FINITE,
+ INVALID_TRANSFORM, DEGENERATE_AXIS (`joint`) or INVALID_LIMITS.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_robot_from_axes(struct kincal_robot *robot_out,
+                                     size_t n_joints,
+                                     const double *points,
+                                     size_t points_len,
+                                     const double *directions,
+                                     size_t directions_len,
+                                     const double *t_ref_base,
+                                     size_t t_ref_base_len,
+                                     const double *t_ref_tool,
+                                     size_t t_ref_tool_len,
+                                     const double *limits,
+                                     size_t limits_len,
+                                     struct kincal_error *err);
+
+/*
+ The public name of effect `effect` (`"base_frame"`, `"joint_compliance"`, …): a static
+ NUL-terminated string (never free it), or NULL when `effect` is not a `kincal_effect`.
+ */
+const char *kincal_effect_name(uint32_t effect);
+
+/*
+ The `kincal_effect` named `name` (NUL-terminated, e.g. `"joint_compliance"`), written to
+ `effect_out`. Returns OK, NULL_POINTER, MISALIGNED_POINTER or UNKNOWN_LABEL.
+
+ # Safety
+ `name` must be NULL or a NUL-terminated string; `effect_out` NULL or writable; `err` NULL or
+ writable.
+ */
+kincal_status kincal_effect_from_name(const char *name,
+                                      uint32_t *effect_out,
+                                      struct kincal_error *err);
+
+/*
+ The mask of the joint effects with a non-zero parameter in the model (compliance, scale,
+ cyclic, backlash, thermal; base and tool frames are geometry and never reported), written
+ to `effects_out`. Returns OK, NULL_POINTER, MISALIGNED_POINTER or any status of
+ `kincal_robot_validate`.
+
+ # Safety
+ `robot` must be NULL or point to a readable `kincal_robot`; `effects_out` NULL or writable;
+ `err` NULL or writable.
+ */
+kincal_status kincal_robot_active_effects(const struct kincal_robot *robot,
+                                          uint32_t *effects_out,
+                                          struct kincal_error *err);
+
+/*
+ Sets every parameter of the effects in the mask `effects` to zero (for `base_frame` and
+ `tool_frame`: the current base/tool frame becomes identity). On failure `*robot` is
+ unchanged. Returns OK, NULL_POINTER, MISALIGNED_POINTER, INVALID_ARGUMENT (unknown bits) or
+ any status of `kincal_robot_validate`.
+
+ # Safety
+ `robot` must be NULL or point to a readable and writable `kincal_robot`; `err` NULL or
+ writable.
+ */
+kincal_status kincal_robot_clear_effects(struct kincal_robot *robot,
+                                         uint32_t effects,
+                                         struct kincal_error *err);
+
+/*
+ Bytes of caller memory `kincal_identify` and `kincal_analyze_identifiability` need for
+ `n_poses` measurements of an `n_joints` robot when `n_requested` parameters are
+ requested (the count of non-zero `requested` entries; the size is that of the smallest
+ capacity, 32 or `KINCAL_MAX_PARAMS`, that holds them: about 66 KB or 680 KB,
+ plus about 0.25 KB per pose). Returns 0 for an invalid joint count, more than
+ `KINCAL_MAX_PARAMS` parameters, or an overflowing size.
+ */
+size_t kincal_identify_workspace_size(size_t n_joints,
+                                      size_t n_poses,
+                                      size_t n_requested);
+
+/*
+ Default identification options for `robot`: `algorithm` (a `kincal_algorithm`), the
+ geometric parameters θ0, a, α and d-or-β of every link plus every parameter of the effects in
+ the mask `effects` requested, OPT1 intervals of the paper (±5 mm on lengths, ±5° on angles
+ around the current parameters; compliance in [0, 1e-2] rad/(N·m)), and the tolerances listed
+ in `kincal_identify_options`. Returns OK, NULL_POINTER, MISALIGNED_POINTER,
+ INVALID_ARGUMENT (`algorithm`, `effects`) or any status of `kincal_robot_validate`.
+
+ # Safety
+ `robot` must be NULL or point to a readable `kincal_robot`; `opts_out` NULL or writable;
+ `err` NULL or writable.
+ */
+kincal_status kincal_identify_options_default(const struct kincal_robot *robot,
+                                              uint32_t algorithm,
+                                              uint32_t effects,
+                                              struct kincal_identify_options *opts_out,
+                                              struct kincal_error *err);
+
+/*
+ Identification: fits the identifiable subset of `opts->requested` to the measurements,
+ starting from `robot`, with `opts->algorithm` (OLS, OPT1 or OPT2), and writes the identified
+ model to `robot_out` and the report (identifiability analysis, residuals before and after,
+ standard errors, correlations, parameters on a bound) to `report_out` (NULL if not wanted).
+
+ - `robot`: initial model (read only). `robot_out` may point to the same struct.
+ - `data`: the measurements (see `kincal_measurements`); their poses in metres.
+ - `opts`: from `kincal_identify_options_default`, possibly edited.
+ - `workspace`, `workspace_len`: caller memory of at least `kincal_identify_workspace_size(N,
+   L, requested count)` bytes, aligned to `KINCAL_WORKSPACE_ALIGN`; its contents are scratch.
+
+ Returns OK; argument errors (NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH with `expected` =
+ the bytes needed for a short workspace, NON_FINITE, INVALID_TRANSFORM or INVALID_ARGUMENT
+ with `pose` set for a bad measurement, INVALID_ARGUMENT for an option, MISSING_INPUT when a
+ requested effect's input is missing, TOO_FEW_DATA, CAPACITY_EXCEEDED, any status of
+ `kincal_robot_validate`); RANK_DEFICIENT (the data leave requested parameters undetermined;
+ see `kincal_analyze_identifiability`, or set `allow_data_deficiency`), NOT_CONVERGED (`iterations`),
+ INVALID_PARAMETER (OPT1 with an initial value outside its interval). Outputs are written on
+ success only.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths (`workspace` writable for
+ `workspace_len` bytes and not overlapping the other arguments); `err` NULL or writable.
+ */
+kincal_status kincal_identify(const struct kincal_robot *robot,
+                              const struct kincal_measurements *data,
+                              const struct kincal_identify_options *opts,
+                              void *workspace,
+                              size_t workspace_len,
+                              struct kincal_robot *robot_out,
+                              struct kincal_identify_report *report_out,
+                              struct kincal_error *err);
+
+/*
+ The identifiability analysis alone: which of `opts->requested` the measurements determine
+ (rank, structural and data-deficient parameters with their aligned partners, condition
+ number and singular values of the unit-scaled Jacobian), written to `analysis_out`.
+ Arguments, memory and statuses as `kincal_identify` (no iterations, so never
+ NOT_CONVERGED or RANK_DEFICIENT: a deficiency is reported in `analysis_out`).
+
+ # Safety
+ As `kincal_identify`.
+ */
+kincal_status kincal_analyze_identifiability(const struct kincal_robot *robot,
+                                             const struct kincal_measurements *data,
+                                             const struct kincal_identify_options *opts,
+                                             void *workspace,
+                                             size_t workspace_len,
+                                             struct kincal_identifiability *analysis_out,
+                                             struct kincal_error *err);
+
+/*
+ Writes the default IK options into `opts_out`. Returns OK, NULL_POINTER or
+ MISALIGNED_POINTER.
+
+ # Safety
+ `opts_out` must be NULL or writable; `err` NULL or writable.
+ */
+kincal_status kincal_ik_options_default(struct kincal_ik_options *opts_out,
+                                        struct kincal_error *err);
+
+/*
+ Inverse kinematics: readings `q_out` (N doubles [rad], within the joint limits) whose
+ effect-compensated FK reaches `target` (4×4 column-major rigid transform, 16 doubles: the
+ tool pose in the base frame). Damped least squares from `q_seed` and `opts->extra_seeds`
+ further seeds; the converged solution nearest to `q_seed` is returned (joints whose range
+ spans more than 2π are shifted by ±2π towards the seed where the limits allow).
+
+ - `q_seed`, `q_seed_len`: start configuration [rad], N doubles (clamped into the limits).
+ - `aux`: approach directions / temperature the model needs, or NULL.
+ - `opts`: NULL for the defaults (`kincal_ik_options_default`).
+ - `q_out`, `q_out_len`: N doubles, written on success only; may overlap `q_seed`.
+ - `info_out`: residuals, iterations and seed of the solution, or NULL.
+
+ Returns OK, UNREACHABLE (no seed converged; `residual_pos_m`/`residual_rot_rad` give the
+ best residual found), NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE,
+ INVALID_TRANSFORM, INVALID_ARGUMENT (an approach direction or tolerance), MISSING_INPUT or
+ any status of `kincal_robot_validate`. With `std` the call runs in a catch_unwind
+ boundary; the no_std build is proved panic-free at link time.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_ik(const struct kincal_robot *robot,
+                        const double *target,
+                        size_t target_len,
+                        const double *q_seed,
+                        size_t q_seed_len,
+                        const struct kincal_joint_aux *aux,
+                        const struct kincal_ik_options *opts,
+                        double *q_out,
+                        size_t q_out_len,
+                        struct kincal_ik_info *info_out,
+                        struct kincal_error *err);
+
+/*
+ Forward kinematics: the tool pose `T_e^b` (end effector in the base frame, effects
+ compensated) as a 4×4 column-major matrix.
+
+ - `robot`: the model (read only; the library keeps no pointer to it).
+ - `q`, `q_len`: joint readings [rad], `q_len` = `robot->n_joints` (else BAD_LENGTH).
+ - `aux`: approach directions / temperature, or NULL (then a model with backlash or thermal
+   expansion returns MISSING_INPUT).
+ - `t_base_tool_out`, `t_base_tool_len`: 16 doubles, written on success only.
+ - `err`: detail on failure, or NULL.
+
+ Joint limits are not checked (see `kincal_robot_check_limits`). Returns OK, NULL_POINTER,
+ MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE, INVALID_ARGUMENT (an approach direction not
+ −1/0/+1), MISSING_INPUT or any status of `kincal_robot_validate`.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_fk(const struct kincal_robot *robot,
+                        const double *q,
+                        size_t q_len,
+                        const struct kincal_joint_aux *aux,
+                        double *t_base_tool_out,
+                        size_t t_base_tool_len,
+                        struct kincal_error *err);
+
+/*
+ As `kincal_fk`, with the pose as position + quaternion `[px, py, pz, qw, qx, qy, qz]`
+ (metres; unit quaternion, qw ≥ 0) in `pq_out` (7 doubles).
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_fk_pq(const struct kincal_robot *robot,
+                           const double *q,
+                           size_t q_len,
+                           const struct kincal_joint_aux *aux,
+                           double *pq_out,
+                           size_t pq_len,
+                           struct kincal_error *err);
+
+/*
+ Every frame of one FK evaluation, in the base frame, as N + 2 consecutive 4×4 column-major
+ matrices in `frames_out` (`frames_len` = 16·(N + 2) doubles): `T_0^b` (frame 0, before joint
+ 1), then frames 1..N (`T_0^b·A_1···A_i`), then the tool `T_e^b`. Arguments and statuses as
+ `kincal_fk`.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_fk_frames(const struct kincal_robot *robot,
+                               const double *q,
+                               size_t q_len,
+                               const struct kincal_joint_aux *aux,
+                               double *frames_out,
+                               size_t frames_len,
+                               struct kincal_error *err);
+
+/*
+ The identification Jacobian at `q`: a 6 × P column-major matrix in `jac_out`, column `i` =
+ ∂[p; φ]/∂param_i, rows `[Δp (m); Δφ (rad)]` in the base frame (the row order of
+ `kincal_pose_error`). P is chosen by `jac_len`:
+ `6 * kincal_num_geometric_params(N)` (links, base, tool: the first 5N + 12 parameters) or
+ `6 * kincal_num_params(N)` (also every effect column); anything else is BAD_LENGTH with
+ `expected` = the full size. Link columns follow eq. (13a–e) of the ARIA paper.
+
+ - `t_base_tool_out`, `t_base_tool_len`: the pose at `q` (16 doubles, column-major), or NULL.
+
+ Every column is written (the caller need not zero the buffer). On failure the contents of
+ `jac_out` are unspecified. Other arguments and statuses as `kincal_fk`.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `jac_out` must not overlap the
+ other arguments; `err` NULL or writable.
+ */
+kincal_status kincal_jacobian(const struct kincal_robot *robot,
+                              const double *q,
+                              size_t q_len,
+                              const struct kincal_joint_aux *aux,
+                              double *jac_out,
+                              size_t jac_len,
+                              double *t_base_tool_out,
+                              size_t t_base_tool_len,
+                              struct kincal_error *err);
+
+/*
+ Gravity torque about each joint axis [N·m] at readings `q` (`tau_out`, N doubles), from the
+ mass model and the nominal geometry: τ_j = z_{j−1}·Σ_{k≥j}(c_k − p_{j−1}) × (m_k·g); a
+ positive compliance moves a joint the way gravity pulls. Returns OK, NULL_POINTER,
+ MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE or any status of `kincal_robot_validate`.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_gravity_torques(const struct kincal_robot *robot,
+                                     const double *q,
+                                     size_t q_len,
+                                     double *tau_out,
+                                     size_t tau_len,
+                                     struct kincal_error *err);
+
+/*
+ The joint angles the geometry sees after the joint effects (compliance, scale, cyclic,
+ backlash), `q_j + Δθ_j` without θ0, in `angles_out` (N doubles) [rad]: what a controller
+ compensating the calibrated model works with. Arguments and statuses as `kincal_fk`.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_joint_angles(const struct kincal_robot *robot,
+                                  const double *q,
+                                  size_t q_len,
+                                  const struct kincal_joint_aux *aux,
+                                  double *angles_out,
+                                  size_t angles_len,
+                                  struct kincal_error *err);
+
+/*
+ Checks that every reading of `q` (N doubles [rad]) lies within the joint limits
+ (inclusive). Returns OK, OUT_OF_LIMITS (`joint`, `value`, `lower`, `upper`), NULL_POINTER,
+ MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE or any status of `kincal_robot_validate`.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_robot_check_limits(const struct kincal_robot *robot,
+                                        const double *q,
+                                        size_t q_len,
+                                        struct kincal_error *err);
+
+/*
+ Bytes of caller memory `kincal_observability` and `kincal_pose_singular_values` need for
+ `n_params` parameters (the mask's count, or `kincal_num_geometric_params`-sized default
+ set's count; the size is that of the smallest capacity, 32 or `KINCAL_MAX_PARAMS`, that
+ holds them). Returns 0 for 0 or more than `KINCAL_MAX_PARAMS` parameters.
+ */
+size_t kincal_observability_workspace_size(size_t n_params);
+
+/*
+ Bytes of caller memory `kincal_select_poses` needs for `n_params` parameters and a pool
+ of `pool_len` configurations (the core workspace and selection scratch, then one Jacobian
+ block and position per candidate: about 1.5 KB per candidate at capacity 32). Returns 0
+ for 0 or more than `KINCAL_MAX_PARAMS` parameters or an overflowing size.
+ */
+size_t kincal_select_workspace_size(size_t n_params,
+                                    size_t pool_len);
+
+/*
+ Observability indices of `n_poses` configurations of `robot` (normally the nominal
+ model): the singular values σ_1 ≥ … ≥ σ_p of the stacked identification Jacobian
+ (6 rows `[Δp (m); Δφ (rad)]` per pose, one column per parameter, scaled as `scaling`
+ says) and the indices O (eq. 17), O1–O5, A- and D-optimality.
+
+ - `qs`, `qs_len`: joint values [rad], `n_poses` × N row-major (pose l at `qs[l*N]`);
+   `qs_len` = `n_poses`·N, `n_poses` ≥ 1.
+ - `params`, `params_len`: parameter mask by flat index (`params_len` =
+   `kincal_num_params(N)`, non-zero = a column), or NULL for the robot's geometric set
+   (θ0, a, α and d-or-β of every link; `params_len` ignored).
+ - `scaling`: column scaling, or NULL for unit columns.
+ - `workspace`, `workspace_len`: caller memory of at least
+   `kincal_observability_workspace_size(p)` bytes aligned to `KINCAL_WORKSPACE_ALIGN`;
+   scratch.
+ - `indices_out`: the indices. `sv_out`, `sv_len`: the p singular values (descending), or
+   NULL if not wanted; `sv_len` = p.
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH (`workspace`: `expected` = bytes
+ needed), NON_FINITE, INVALID_ARGUMENT (`scaling`), TOO_FEW_DATA (no pose, empty mask),
+ CAPACITY_EXCEEDED, NOT_CONVERGED (SVD), any status of `kincal_robot_validate`. Outputs are
+ written on success only.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths (`workspace` writable for
+ `workspace_len` bytes and not overlapping the other arguments); `err` NULL or writable.
+ */
+kincal_status kincal_observability(const struct kincal_robot *robot,
+                                   const double *qs,
+                                   size_t n_poses,
+                                   size_t qs_len,
+                                   const uint8_t *params,
+                                   size_t params_len,
+                                   const struct kincal_scaling *scaling,
+                                   void *workspace,
+                                   size_t workspace_len,
+                                   struct kincal_observability_indices *indices_out,
+                                   double *sv_out,
+                                   size_t sv_len,
+                                   struct kincal_error *err);
+
+/*
+ The per-pose index: the six singular values (descending) of configuration `q`'s 6 × p
+ block of the identification Jacobian, columns scaled as `scaling` says (unit columns use
+ this pose's own column norms); what the workspace-clustering design compares.
+
+ - `q`, `q_len`: joint values [rad], `q_len` = N.
+ - `params`, `params_len`, `scaling`, `workspace`, `workspace_len`: as
+   `kincal_observability`.
+ - `sv_out`, `sv_len`: the six singular values; `sv_len` = 6.
+
+ Returns the statuses of `kincal_observability`.
+
+ # Safety
+ As `kincal_observability`.
+ */
+kincal_status kincal_pose_singular_values(const struct kincal_robot *robot,
+                                          const double *q,
+                                          size_t q_len,
+                                          const uint8_t *params,
+                                          size_t params_len,
+                                          const struct kincal_scaling *scaling,
+                                          void *workspace,
+                                          size_t workspace_len,
+                                          double *sv_out,
+                                          size_t sv_len,
+                                          struct kincal_error *err);
+
+/*
+ Pose selection (eq. 18): the `m` configurations that maximise the index `objective`, from
+ the caller's candidate pool (greedy start, DETMAX exchange, then joint-space refinement
+ within the joint limits minus `joint_margin_rad` and inside `region`; refined poses need
+ not be pool members). Deterministic for a given `seed` (the core's default of 4 starts).
+
+ - `pool_q`, `pool_q_len`: candidate joint values [rad], `pool_len` × N row-major;
+   `pool_q_len` = `pool_len`·N; `m` ≤ `pool_len`.
+ - `m`: poses to select, 1 ≤ `m` ≤ `KINCAL_MAX_SELECT`.
+ - `params`, `params_len`, `scaling`: as `kincal_observability`.
+ - `objective`: a `kincal_obs_index`. `seed`: random seed.
+ - `region`: the end effector's box [m], or NULL for none. `joint_margin_rad`: distance
+   kept from every joint limit [rad] (finite, ≥ 0).
+ - `workspace`, `workspace_len`: caller memory of at least
+   `kincal_select_workspace_size(p, pool_len)` bytes aligned to `KINCAL_WORKSPACE_ALIGN`;
+   scratch.
+ - `q_out`, `q_out_len`: the selected configurations, `m` × N row-major; `q_out_len` = m·N.
+ - `selection_out`: objective values, counts and the indices of the selected set (NULL if
+   not wanted).
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE, INVALID_ARGUMENT
+ (`objective`, `scaling`, `region`, `joint_margin_rad`), TOO_FEW_DATA (`m` = 0 or above the
+ pool), CAPACITY_EXCEEDED (`m` > `KINCAL_MAX_SELECT`), NOT_CONVERGED, any status of
+ `kincal_robot_validate`. Outputs are written on success only.
+
+ # Safety
+ As `kincal_observability`; `q_out` writable for `q_out_len` doubles.
+ */
+kincal_status kincal_select_poses(const struct kincal_robot *robot,
+                                  const double *pool_q,
+                                  size_t pool_len,
+                                  size_t pool_q_len,
+                                  size_t m,
+                                  const uint8_t *params,
+                                  size_t params_len,
+                                  const struct kincal_scaling *scaling,
+                                  uint32_t objective,
+                                  uint64_t seed,
+                                  const struct kincal_region *region,
+                                  double joint_margin_rad,
+                                  void *workspace,
+                                  size_t workspace_len,
+                                  double *q_out,
+                                  size_t q_out_len,
+                                  struct kincal_selection *selection_out,
+                                  struct kincal_error *err);
+
+/*
+ The value of parameter `index` (flat layout, see `kincal_robot.params`).
+
+ - `value_out`: one double, written on success only; unit by parameter (m, rad,
+   rad/(N·m), 1, 1/K).
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, INDEX_OUT_OF_RANGE (`index >=
+ kincal_num_params(N)`) or any status of `kincal_robot_validate`.
+
+ # Safety
+ `robot` must be NULL or point to a readable `kincal_robot`; `value_out` NULL or writable;
+ `err` NULL or writable.
+ */
+kincal_status kincal_robot_get_param(const struct kincal_robot *robot,
+                                     size_t index,
+                                     double *value_out,
+                                     struct kincal_error *err);
+
+/*
+ Sets parameter `index` (flat layout) of the current model to `value` (finite). On failure
+ `*robot` is unchanged. Returns OK, NULL_POINTER, MISALIGNED_POINTER, INDEX_OUT_OF_RANGE,
+ NON_FINITE or any status of `kincal_robot_validate`.
+
+ # Safety
+ `robot` must be NULL or point to a readable and writable `kincal_robot`; `err` NULL or
+ writable.
+ */
+kincal_status kincal_robot_set_param(struct kincal_robot *robot,
+                                     size_t index,
+                                     double value,
+                                     struct kincal_error *err);
+
+/*
+ The flat index of the parameter labelled `label` (NUL-terminated, e.g. `"theta0_3"`,
+ `"beta_2"`, `"base_px"`, `"tool_rz"`, `"compliance_2"`, `"scale_1"`, `"cyclic_sin1_4"`,
+ `"backlash_6"`, `"thermal_kappa"`; link and joint numbers are 1-based).
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, UNKNOWN_LABEL or any status of
+ `kincal_robot_validate`.
+
+ # Safety
+ `robot` must be NULL or point to a readable `kincal_robot`; `label` NULL or a NUL-terminated
+ string; `index_out` NULL or writable; `err` NULL or writable.
+ */
+kincal_status kincal_robot_param_index(const struct kincal_robot *robot,
+                                       const char *label,
+                                       size_t *index_out,
+                                       struct kincal_error *err);
+
+/*
+ The value of the parameter labelled `label` (see `kincal_robot_param_index`). Returns as
+ `kincal_robot_get_param`, plus UNKNOWN_LABEL.
+
+ # Safety
+ As `kincal_robot_param_index`, with `value_out` NULL or writable.
+ */
+kincal_status kincal_robot_get_param_by_label(const struct kincal_robot *robot,
+                                              const char *label,
+                                              double *value_out,
+                                              struct kincal_error *err);
+
+/*
+ Sets the parameter labelled `label` (see `kincal_robot_param_index`) to `value` (finite).
+ On failure `*robot` is unchanged. Returns as `kincal_robot_set_param`, plus UNKNOWN_LABEL.
+
+ # Safety
+ `robot` must be NULL or point to a readable and writable `kincal_robot`; `label` NULL or a
+ NUL-terminated string; `err` NULL or writable.
+ */
+kincal_status kincal_robot_set_param_by_label(struct kincal_robot *robot,
+                                              const char *label,
+                                              double value,
+                                              struct kincal_error *err);
+
+/*
+ Writes the label of parameter `index` (e.g. `"theta0_3"`) as a NUL-terminated string into
+ `label_out`, which holds `label_len` bytes; `KINCAL_LABEL_CAPACITY` bytes always suffice.
+ If the buffer is too small, returns BAD_LENGTH with `expected` = the bytes needed (NUL
+ included) and writes nothing.
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, INDEX_OUT_OF_RANGE, BAD_LENGTH or any status of
+ `kincal_robot_validate`.
+
+ # Safety
+ `robot` must be NULL or point to a readable `kincal_robot`; `label_out` NULL or writable for
+ `label_len` bytes; `err` NULL or writable.
+ */
+kincal_status kincal_robot_param_label(const struct kincal_robot *robot,
+                                       size_t index,
+                                       char *label_out,
+                                       size_t label_len,
+                                       struct kincal_error *err);
+
+/*
+ Copies every parameter (`params_len` = `kincal_num_params(N)` doubles, flat layout) into
+ `params_out`. Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH or any status of
+ `kincal_robot_validate`.
+
+ # Safety
+ `robot` must be NULL or point to a readable `kincal_robot`; `params_out` NULL or writable for
+ `params_len` doubles; `err` NULL or writable.
+ */
+kincal_status kincal_robot_get_params(const struct kincal_robot *robot,
+                                      double *params_out,
+                                      size_t params_len,
+                                      struct kincal_error *err);
+
+/*
+ Sets every parameter from `params` (`params_len` = `kincal_num_params(N)` finite doubles,
+ flat layout). On failure `*robot` is unchanged. Returns OK, NULL_POINTER,
+ MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE or any status of `kincal_robot_validate`.
+
+ # Safety
+ `robot` must be NULL or point to a readable and writable `kincal_robot`; `params` NULL or
+ readable for `params_len` doubles; `err` NULL or writable.
+ */
+kincal_status kincal_robot_set_params(struct kincal_robot *robot,
+                                      const double *params,
+                                      size_t params_len,
+                                      struct kincal_error *err);
+
+/*
+ The parameters identified by default, as a mask: `mask_out[i]` = 1 when parameter `i` is
+ identified, 0 when it is fixed (`mask_len` = `kincal_num_params(N)` bytes). By default θ0,
+ a, α and (d or β, see `kincal_robot.length_param`) of every link are identified, plus every
+ parameter of the effects in `effects` (a bit mask: bit k = effect k of `kincal_effect`).
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH, INVALID_ARGUMENT (unknown effect
+ bits) or any status of `kincal_robot_validate`.
+
+ # Safety
+ `robot` must be NULL or point to a readable `kincal_robot`; `mask_out` NULL or writable for
+ `mask_len` bytes; `err` NULL or writable.
+ */
+kincal_status kincal_robot_param_mask(const struct kincal_robot *robot,
+                                      uint32_t effects,
+                                      uint8_t *mask_out,
+                                      size_t mask_len,
+                                      struct kincal_error *err);
+
+/*
+ Kinematic error of `measured` relative to `model` (both 4×4 column-major rigid transforms,
+ 16 doubles each): `error_out` = `[Δp (m); Δφ (rad)]` (6 doubles), measured minus model, both
+ in the base frame; `form` is a `kincal_orientation_error`.
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE, INVALID_TRANSFORM or
+ INVALID_ARGUMENT (`form`). `error_out` is written on success only and may overlap the inputs.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_pose_error(const double *measured,
+                                size_t measured_len,
+                                const double *model,
+                                size_t model_len,
+                                uint32_t form,
+                                double *error_out,
+                                size_t error_len,
+                                struct kincal_error *err);
+
+/*
+ As `kincal_pose_error` with both poses as position + quaternion `[px, py, pz, qw, qx, qy,
+ qz]` (7 doubles each; quaternions normalised, a zero quaternion gives INVALID_PARAMETER).
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_pose_error_pq(const double *measured,
+                                   size_t measured_len,
+                                   const double *model,
+                                   size_t model_len,
+                                   uint32_t form,
+                                   double *error_out,
+                                   size_t error_len,
+                                   struct kincal_error *err);
+
+/*
+ Converts position + quaternion `pq` (7 doubles `[px, py, pz, qw, qx, qy, qz]`, quaternion
+ normalised) to a 4×4 column-major pose `t_out` (16 doubles). Returns OK, NULL_POINTER,
+ MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE or INVALID_PARAMETER (zero quaternion).
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_pose_from_pq(const double *pq,
+                                  size_t pq_len,
+                                  double *t_out,
+                                  size_t t_len,
+                                  struct kincal_error *err);
+
+/*
+ Converts a 4×4 column-major rigid transform `t` (16 doubles) to position + quaternion
+ `pq_out` (7 doubles, qw ≥ 0). Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH,
+ NON_FINITE or INVALID_TRANSFORM.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_pose_to_pq(const double *t,
+                                size_t t_len,
+                                double *pq_out,
+                                size_t pq_len,
+                                struct kincal_error *err);
+
+/*
+ Converts `xyz_rpy` (6 doubles: x, y, z [m], roll, pitch, yaw [rad] with
+ R = Rz(yaw)·Ry(pitch)·Rx(roll), the measurement-file convention) to a 4×4 column-major pose
+ `t_out` (16 doubles). Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH or NON_FINITE.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_pose_from_xyz_rpy(const double *xyz_rpy,
+                                       size_t xyz_rpy_len,
+                                       double *t_out,
+                                       size_t t_len,
+                                       struct kincal_error *err);
+
+/*
+ Converts a 4×4 column-major rigid transform `t` (16 doubles) to `xyz_rpy_out` (6 doubles:
+ x, y, z [m], roll, pitch, yaw [rad], pitch in [−π/2, π/2]; at gimbal lock roll = 0).
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE or INVALID_TRANSFORM.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_pose_to_xyz_rpy(const double *t,
+                                     size_t t_len,
+                                     double *xyz_rpy_out,
+                                     size_t xyz_rpy_len,
+                                     struct kincal_error *err);
+
+/*
+ Default registration options for noise `sigma_m` [m]: k = 4, up to 2 outliers. Returns OK,
+ NULL_POINTER or MISALIGNED_POINTER (`sigma_m` is checked by `kincal_register`).
+
+ # Safety
+ `opts_out` must be NULL or writable; `err` NULL or writable.
+ */
+kincal_status kincal_registration_options_default(double sigma_m,
+                                                  struct kincal_registration_options *opts_out,
+                                                  struct kincal_error *err);
+
+/*
+ Weighted rigid registration of one body's M markers (3 ≤ M ≤ `KINCAL_MAX_MARKERS`) with
+ outlier identification (Horn's method; see the core's `registration` docs).
+
+ - `design`, `design_len`: design positions in the body frame, M × 3 doubles [m].
+ - `measured`, `measured_len`: measured positions in the motion-capture frame, M × 3 [m];
+   entries of markers not visible are ignored (NaN allowed).
+ - `visible`, `visible_len`: M bytes (non-zero = seen), or NULL for all seen.
+ - `weights`, `weights_len`: M relative weights (finite, > 0), or NULL for all 1.
+ - `opts`: from `kincal_registration_options_default`.
+ - `registration_out`: written on success only.
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH (lengths not M × 3 / M),
+ CAPACITY_EXCEEDED (M or `max_outliers` too large), NON_FINITE, INVALID_PARAMETER (σ, k or a
+ weight not positive: `index`), TOO_FEW_DATA (fewer than 3 markers used) or RANK_DEFICIENT
+ (collinear design or ambiguous rotation).
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_register(const double *design,
+                              size_t design_len,
+                              const double *measured,
+                              size_t measured_len,
+                              const uint8_t *visible,
+                              size_t visible_len,
+                              const double *weights,
+                              size_t weights_len,
+                              const struct kincal_registration_options *opts,
+                              struct kincal_registration *registration_out,
+                              struct kincal_error *err);
+
+/*
+ The end-effector pose in the robot base frame from the two registrations' poses,
+ `t_base_ee = t_mocap_base⁻¹ · t_mocap_ee` (all 4×4 column-major rigid transforms, 16
+ doubles each). Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE or
+ INVALID_TRANSFORM.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_t_base_ee(const double *t_mocap_base,
+                               size_t t_mocap_base_len,
+                               const double *t_mocap_ee,
+                               size_t t_mocap_ee_len,
+                               double *t_base_ee_out,
+                               size_t t_base_ee_len,
+                               struct kincal_error *err);
+
+/*
+ Number of parameters (`kincal_robot.params` entries used) of an `n_joints` model: 12N + 13.
+ Returns 0 when `n_joints` is not in 1..=`KINCAL_MAX_JOINTS`.
+ */
+size_t kincal_num_params(size_t n_joints);
+
+/*
+ Number of geometric parameters (links, base, tool; `kincal_robot.nominal` entries used) of
+ an `n_joints` model: 5N + 12. Returns 0 when `n_joints` is not in 1..=`KINCAL_MAX_JOINTS`.
+ */
+size_t kincal_num_geometric_params(size_t n_joints);
+
+/*
+ `sizeof(kincal_robot)` as the library was built: compare with the header's to detect a
+ header/library mismatch.
+ */
+size_t kincal_robot_size(void);
+
+/*
+ Builds a robot from a parameter table: `n_joints` links with identity base and tool, no
+ masses, no effects, and the d/β choice made from axis parallelism (β for links whose axis is
+ parallel to the next one within 1°, d otherwise). This geometry is also the nominal one.
+
+ - `robot_out`: written on success only; need not be initialised.
+ - `n_joints`: 1..=`KINCAL_MAX_JOINTS`, else `KINCAL_STATUS_BAD_JOINT_COUNT`.
+ - `links`, `links_len`: row-major table of `5 * n_joints` doubles, one row per link
+   `[θ0 rad, d m, a m, α rad, β rad]`.
+ - `limits`, `limits_len`: `2 * n_joints` doubles, `[lower, upper]` per joint [rad].
+ - `err`: detail on failure, or NULL.
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_JOINT_COUNT, BAD_LENGTH, NON_FINITE or
+ INVALID_LIMITS.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths.
+ */
+kincal_status kincal_robot_init(struct kincal_robot *robot_out,
+                                size_t n_joints,
+                                const double *links,
+                                size_t links_len,
+                                const double *limits,
+                                size_t limits_len,
+                                struct kincal_error *err);
+
+/*
+ Checks a robot the caller filled or edited directly: returns the status any call would
+ return for it (OK when every used field is valid).
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_JOINT_COUNT, NON_FINITE, INVALID_LIMITS,
+ INVALID_PARAMETER or INVALID_ARGUMENT (a `length_param` entry not 0/1).
+
+ # Safety
+ `robot` must be NULL or point to a readable `kincal_robot`; `err` NULL or writable.
+ */
+kincal_status kincal_robot_validate(const struct kincal_robot *robot,
+                                    struct kincal_error *err);
+
+/*
+ Sets the base frame `T_0^b` = Trans(p)·Rot(r) as `[px, py, pz, rx, ry, rz]` (metres and a
+ rotation vector in radians), both current and nominal (use `kincal_robot_set_param` with
+ `base_*` labels to change only the current one). `base_len` must be 6.
+
+ On failure `*robot` is unchanged. Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH,
+ NON_FINITE or any status of `kincal_robot_validate`.
+
+ # Safety
+ `robot` must be NULL or point to a readable and writable `kincal_robot`; `base` NULL or
+ readable for `base_len` doubles; `err` NULL or writable.
+ */
+kincal_status kincal_robot_set_base(struct kincal_robot *robot,
+                                    const double *base,
+                                    size_t base_len,
+                                    struct kincal_error *err);
+
+/*
+ Sets the tool frame `T_e^N` = Trans(p)·Rot(r) relative to the last link frame as
+ `[px, py, pz, rx, ry, rz]` (metres, rotation vector in radians), both current and nominal.
+ `tool_len` must be 6. On failure `*robot` is unchanged; statuses as
+ `kincal_robot_set_base`.
+
+ # Safety
+ As `kincal_robot_set_base`.
+ */
+kincal_status kincal_robot_set_tool(struct kincal_robot *robot,
+                                    const double *tool,
+                                    size_t tool_len,
+                                    struct kincal_error *err);
+
+/*
+ Sets the joint limits: `limits_len` = 2N doubles `[lower, upper]` per joint [rad],
+ inclusive. On failure `*robot` is unchanged. Returns OK, NULL_POINTER, MISALIGNED_POINTER,
+ BAD_LENGTH, NON_FINITE, INVALID_LIMITS or any status of `kincal_robot_validate`.
+
+ # Safety
+ `robot` must be NULL or point to a readable and writable `kincal_robot`; `limits` NULL or
+ readable for `limits_len` doubles; `err` NULL or writable.
+ */
+kincal_status kincal_robot_set_limits(struct kincal_robot *robot,
+                                      const double *limits,
+                                      size_t limits_len,
+                                      struct kincal_error *err);
+
+/*
+ Sets the point-mass model: `link_masses_kg` (N values [kg], at the midpoint between the
+ origins of frames k−1 and k), `tool_mass_kg` [kg] at the end-effector origin, `gravity`
+ (3 values [m/s²] in the base frame, e.g. {0, 0, -9.81}). Masses must be ≥ 0. On failure
+ `*robot` is unchanged. Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE,
+ INVALID_PARAMETER (a negative mass; `index` = link, N = tool) or any status of
+ `kincal_robot_validate`.
+
+ # Safety
+ `robot` must be NULL or point to a readable and writable `kincal_robot`; arrays NULL or
+ readable for their lengths; `err` NULL or writable.
+ */
+kincal_status kincal_robot_set_mass(struct kincal_robot *robot,
+                                    const double *link_masses_kg,
+                                    size_t link_masses_kg_len,
+                                    double tool_mass_kg,
+                                    const double *gravity,
+                                    size_t gravity_len,
+                                    struct kincal_error *err);
+
+/*
+ Sets which of d/β link `link` (zero-based, < N) identifies: `choice` is
+ `KINCAL_LENGTH_PARAM_D` or `KINCAL_LENGTH_PARAM_BETA`. On failure `*robot` is unchanged.
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, INDEX_OUT_OF_RANGE (`link`), INVALID_ARGUMENT
+ (`choice`) or any status of `kincal_robot_validate`.
+
+ # Safety
+ `robot` must be NULL or point to a readable and writable `kincal_robot`; `err` NULL or
+ writable.
+ */
+kincal_status kincal_robot_set_length_param(struct kincal_robot *robot,
+                                            size_t link,
+                                            uint32_t choice,
+                                            struct kincal_error *err);
+
+/*
+ Makes the current geometry (links, base, tool of `params`) the nominal one, e.g. to use a
+ calibrated model as the description of a new calibration. On failure `*robot` is unchanged;
+ statuses as `kincal_robot_validate`.
+
+ # Safety
+ `robot` must be NULL or point to a readable and writable `kincal_robot`; `err` NULL or
+ writable.
+ */
+kincal_status kincal_robot_adopt_geometry_as_nominal(struct kincal_robot *robot,
+                                                     struct kincal_error *err);
+
+/*
+ Static text of a status code: `"KINCAL_STATUS_<NAME>: <explanation>"`, or
+ `"unknown kincal status code"` for a number that is not a status.
+
+ Takes a `uint32_t` rather than the enum because C may pass any integer. The returned string
+ is static and NUL-terminated: never free or modify it. Never returns NULL.
+ */
+const char *kincal_status_str(uint32_t status);
+
+/*
+ Version of the library (`"MAJOR.MINOR.PATCH"`, from the crate version): a static
+ NUL-terminated string; never free it. Compare it with the version your build expects.
+ */
+const char *kincal_version(void);
+
+/*
+ Formats `error` as one line of text into the caller's buffer, like `snprintf`: writes at most
+ `buf_len` bytes including the terminating NUL and returns the length of the whole message
+ (excluding the NUL), so a return value `>= buf_len` means the text was truncated. 512 bytes
+ always suffice. The no_std (firmware) build leaves the floating-point fields out of the text.
+
+ `error` NULL: returns 0 and writes nothing. `buf` may be NULL only when `buf_len` is 0 (to
+ ask for the length). Nothing is allocated.
+
+ # Safety
+ `error` must be NULL or point to a `kincal_error` filled by this library (or reset by the
+ caller with `argument` NULL); `buf` must be writable for `buf_len` bytes.
+ */
+size_t kincal_error_describe(const struct kincal_error *error,
+                             char *buf,
+                             size_t buf_len);
+
+/*
+ Validates `robot` on measurements with full poses (every mask 0x3f): the error of each
+ pose, measured minus model in the base frame with the exact rotation-vector orientation
+ error, and their summary judged against `target_pos_m` [m] and `target_rot_rad` [rad]
+ (the paper's: `KINCAL_TARGET_POS_M`, `KINCAL_TARGET_ROT_RAD`).
+
+ - `errors_out`, `errors_len`: `KINCAL_POSE_ERRORS_LEN`·L doubles (see there), or NULL.
+ - `summary_out`: required.
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE, INVALID_TRANSFORM,
+ INVALID_ARGUMENT (`pose` set for a partial mask or bad approach direction; a target not
+ positive), MISSING_INPUT, TOO_FEW_DATA or any status of `kincal_robot_validate`. Outputs
+ are written on success only; `errors_out` must not overlap the inputs.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
+ */
+kincal_status kincal_validate(const struct kincal_robot *robot,
+                              const struct kincal_measurements *data,
+                              double target_pos_m,
+                              double target_rot_rad,
+                              double *errors_out,
+                              size_t errors_len,
+                              struct kincal_validation_summary *summary_out,
+                              struct kincal_error *err);
+
+/*
+ Eq. (3): the largest orientation error [rad] that keeps the needle tip inside a tumour of
+ radius `r_t_m` [m] when the puncture point is off by `d_m` [m] and the insertion is at most
+ `l_max_m` [m] long, `2·asin((r_t − d)/(2·√2·l_max))`, written to `rotation_out` (0.66° for
+ 5 mm, √3 mm, 0.2 m). Returns OK, NULL_POINTER, MISALIGNED_POINTER, NON_FINITE or
+ INVALID_PARAMETER (`index` 0: r_t ≤ 0; 1: d outside [0, r_t); 2: l_max ≤ 0).
+
+ # Safety
+ `rotation_out` must be NULL or writable; `err` NULL or writable.
+ */
+kincal_status kincal_biopsy_allowed_rotation(double r_t_m,
+                                             double d_m,
+                                             double l_max_m,
+                                             double *rotation_out,
+                                             struct kincal_error *err);
+
+#ifdef __cplusplus
+}  // extern "C"
+#endif  // __cplusplus
+
+#endif  /* KINCAL_H */

@@ -1,0 +1,70 @@
+function failures = run_tests(varargin)
+%RUN_TESTS  Runs the kincal Matlab/Octave tests (plain functions; Matlab and Octave).
+%   FAILURES = RUN_TESTS() runs every test of the test_*.m files in this folder and returns
+%   the number that failed. Each test_*.m returns a cell of {name, function handle} pairs;
+%   a test passes when its handle returns without an error.
+%   RUN_TESTS('filter', TEXT) runs only the tests whose "file/name" contains TEXT.
+%   RUN_TESTS(..., 'exit', true) ends the interpreter with exit status 1 on a failure and 0
+%   otherwise (for CI: octave-cli --eval "run_tests('exit', true)").
+%   A test that cannot run here calls SKIP_TEST (printed as SKIP); when the environment
+%   variable CI is "true" a skip counts as a failure.
+%
+%   Needs the MEX gateway (make_kincal) and, for the CLI cross-checks, the kincal CLI
+%   (cargo build --release -p kincal-cli; $KINCAL_CLI overrides its path).
+%
+%   See also MAKE_KINCAL.
+opts = struct('filter', '', 'exit', false);
+for k = 1:2:numel(varargin)
+    opts.(varargin{k}) = varargin{k + 1};
+end
+here = fileparts(mfilename('fullpath'));
+addpath(fileparts(here));   % the toolbox
+addpath(here);
+if exist('OCTAVE_VERSION', 'builtin')
+    % gnuplot is the toolkit octave-cli has; its "discouraged" notice is not a test result.
+    warning('off', 'Octave:gnuplot-graphics');
+end
+
+files = dir(fullfile(here, 'test_*.m'));
+names = sort({files.name});
+failures = 0;
+passed = 0;
+skipped = 0;
+failed = {};
+ci = strcmp(getenv('CI'), 'true');
+t_all = tic();
+for f = 1:numel(names)
+    [~, fname] = fileparts(names{f});
+    tests = feval(fname);
+    for t = 1:size(tests, 1)
+        id = sprintf('%s/%s', fname, tests{t, 1});
+        if ~isempty(opts.filter) && isempty(strfind(id, opts.filter))
+            continue
+        end
+        t0 = tic();
+        try
+            tests{t, 2}();
+            passed = passed + 1;
+            fprintf('PASS  %-60s %6.2f s\n', id, toc(t0));
+        catch err
+            if strcmp(err.identifier, 'test:skip') && ~ci
+                skipped = skipped + 1;
+                fprintf('SKIP  %-60s %6.2f s\n      %s\n', id, toc(t0), err.message);
+                continue
+            end
+            failures = failures + 1;
+            failed{end + 1} = id; %#ok<AGROW>
+            fprintf('FAIL  %-60s %6.2f s\n      %s: %s\n', id, toc(t0), err.identifier, ...
+                strrep(err.message, sprintf('\n'), sprintf('\n      ')));
+        end
+    end
+end
+fprintf('\n%d passed, %d failed, %d skipped (%.1f s)\n', passed, failures, skipped, ...
+    toc(t_all));
+for k = 1:numel(failed)
+    fprintf('  failed: %s\n', failed{k});
+end
+if opts.exit
+    exit(double(failures > 0));
+end
+end

@@ -1,0 +1,641 @@
+// C++17 consumer of the kincal C ABI (tests/cpp/run.sh builds it against the staticlib and the
+// cdylib with -Wall -Wextra -Werror -pedantic).
+//
+// What it checks, from C++ through the header only:
+// - forward kinematics of the built-in ARIA against an independent C++ implementation of the
+//   Hayati/mDH chain of spec/aria.md, reading the parameters through the parameter API;
+// - literal values shared with the Rust test `values_shared_with_cpp` (ffi/src/tests/abi.rs);
+// - inverse kinematics of every Table 2 pose (FK of the solution reaches the pose);
+// - a Jacobian column against the analytic formula of eq. (13a) built from kincal_fk_frames;
+// - effects on the model, pose error in both forms;
+// - the documented status codes for bad arguments (NULL, short buffers, NaN, wrong joint
+//   count, corrupt robot struct, unknown labels), and with KINCAL_TEST_PANIC the panic boundary.
+// - a full calibration of the paper's simulation study: Table 3 truth measured at the Table 2
+//   tool poses, identified from Table 1 with OLS, OPT1 and OPT2, validated before and after;
+// - marker registration with a hidden and a moved marker.
+
+#include <kincal.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstddef>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace {
+
+int g_failures = 0;
+int g_checks = 0;
+
+void check(bool ok, const std::string &what, int line) {
+    ++g_checks;
+    if (!ok) {
+        ++g_failures;
+        std::printf("consumer.cpp:%d: FAILED: %s\n", line, what.c_str());
+    }
+}
+
+#define CHECK(cond) check((cond), #cond, __LINE__)
+
+/// Checks `status == expected` and, when given, the argument named in the error detail.
+void check_status(kincal_status status, kincal_status expected, const kincal_error &err,
+                  const char *argument, int line) {
+    std::string what = std::string("status ") + std::to_string(static_cast<unsigned>(status)) +
+                       " (" + kincal_status_str(status) + "), expected " +
+                       std::to_string(static_cast<unsigned>(expected));
+    check(status == expected, what, line);
+    check(err.status == static_cast<uint32_t>(status), "err.status mirrors the return", line);
+    if (argument != nullptr) {
+        const char *got = err.argument != nullptr ? err.argument : "(null)";
+        check(std::strcmp(got, argument) == 0,
+              std::string("argument '") + got + "', expected '" + argument + "'", line);
+    }
+}
+
+#define CHECK_STATUS(call, expected, err, argument) \
+    check_status((call), (expected), (err), (argument), __LINE__)
+
+double max_abs_diff(const double *a, const double *b, size_t n) {
+    double m = 0.0;
+    for (size_t i = 0; i < n; ++i) m = std::fmax(m, std::fabs(a[i] - b[i]));
+    return m;
+}
+
+// ------------------------------------------------------------------ independent mDH FK
+
+using Mat4 = std::array<double, 16>;  // column-major, m[4*col + row]
+
+Mat4 identity() {
+    Mat4 m{};
+    m[0] = m[5] = m[10] = m[15] = 1.0;
+    return m;
+}
+
+Mat4 mul(const Mat4 &a, const Mat4 &b) {
+    Mat4 c{};
+    for (int col = 0; col < 4; ++col)
+        for (int row = 0; row < 4; ++row) {
+            double s = 0.0;
+            for (int k = 0; k < 4; ++k) s += a[4 * k + row] * b[4 * col + k];
+            c[4 * col + row] = s;
+        }
+    return c;
+}
+
+Mat4 rot(int axis, double angle) {
+    Mat4 m = identity();
+    const double c = std::cos(angle), s = std::sin(angle);
+    const int i = (axis + 1) % 3, j = (axis + 2) % 3;
+    m[4 * i + i] = c;
+    m[4 * j + j] = c;
+    m[4 * i + j] = s;   // R(j, i) = s
+    m[4 * j + i] = -s;  // R(i, j) = -s
+    return m;
+}
+
+Mat4 trans(double x, double y, double z) {
+    Mat4 m = identity();
+    m[12] = x;
+    m[13] = y;
+    m[14] = z;
+    return m;
+}
+
+/// Trans(p)·Rot(r), r a rotation vector (Rodrigues).
+Mat4 frame(const double v[6]) {
+    Mat4 m = trans(v[0], v[1], v[2]);
+    const double t = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5]);
+    if (t > 0.0) {
+        const double k[3] = {v[3] / t, v[4] / t, v[5] / t};
+        const double c = std::cos(t), s = std::sin(t), C = 1.0 - c;
+        const double r[3][3] = {
+            {c + k[0] * k[0] * C, k[0] * k[1] * C - k[2] * s, k[0] * k[2] * C + k[1] * s},
+            {k[1] * k[0] * C + k[2] * s, c + k[1] * k[1] * C, k[1] * k[2] * C - k[0] * s},
+            {k[2] * k[0] * C - k[1] * s, k[2] * k[1] * C + k[0] * s, c + k[2] * k[2] * C}};
+        for (int row = 0; row < 3; ++row)
+            for (int col = 0; col < 3; ++col) m[4 * col + row] = r[row][col];
+    }
+    return m;
+}
+
+/// T_e^b = T_0^b·A_1···A_N·T_e^N with A_i = Rz(q_i + θ0_i)·Tz(d_i)·Tx(a_i)·Rx(α_i)·Ry(β_i),
+/// the link parameters read by label through the C API (no effects).
+Mat4 reference_fk(const kincal_robot &robot, const double *q) {
+    auto param = [&](const std::string &label) {
+        double v = NAN;
+        kincal_error err;
+        CHECK(kincal_robot_get_param_by_label(&robot, label.c_str(), &v, &err) ==
+              KINCAL_STATUS_OK);
+        return v;
+    };
+    double base[6], tool[6];
+    const char *names[6] = {"px", "py", "pz", "rx", "ry", "rz"};
+    for (int k = 0; k < 6; ++k) {
+        base[k] = param(std::string("base_") + names[k]);
+        tool[k] = param(std::string("tool_") + names[k]);
+    }
+    Mat4 t = frame(base);
+    for (uint32_t i = 1; i <= robot.n_joints; ++i) {
+        const std::string n = std::to_string(i);
+        t = mul(t, rot(2, q[i - 1] + param("theta0_" + n)));
+        t = mul(t, trans(0.0, 0.0, param("d_" + n)));
+        t = mul(t, trans(param("a_" + n), 0.0, 0.0));
+        t = mul(t, rot(0, param("alpha_" + n)));
+        t = mul(t, rot(1, param("beta_" + n)));
+    }
+    return mul(t, frame(tool));
+}
+
+kincal_robot aria(kincal_aria_model model) {
+    kincal_robot r;
+    kincal_error err;
+    CHECK_STATUS(kincal_robot_aria(&r, model, &err), KINCAL_STATUS_OK, err, nullptr);
+    return r;
+}
+
+// ------------------------------------------------------------------ shared literal values
+// Keep identical to `mod shared_with_cpp` in ffi/src/tests/abi.rs.
+
+const double Q[6] = {0.3, 0.7, -0.4, 1.1, -0.6, 0.9};
+const double FK_PQ_NOMINAL[7] = {0.7141755095975209,  0.35561149467273084, 0.6386459078672299,
+                                 0.6930479765324871,  -0.604655159428662,  0.3671248824646843,
+                                 -0.13890990272769088};
+const double FK_PQ_TRUTH[7] = {0.744165633329287,   0.34655010957859805, 0.5634775604690159,
+                               0.48366787176089576, -0.7423793201311939, 0.2777715990346434,
+                               -0.37118899988761694};
+const double TAU_NOMINAL[6] = {0.0, -22.42315448575973, -6.734168502227332, -0.6950360241046818,
+                               -0.5196913966683572, 0.0};
+const double IK_Q_TRUTH_POSE1[6] = {0.43454034295052607, 0.7930473894128408,
+                                    -1.0650469975285652, 4.382635158022495,
+                                    1.079216589289747,   -2.813354506099495};
+
+// ------------------------------------------------------------------ tests
+
+void test_version_and_layout() {
+    CHECK(std::strlen(kincal_version()) >= 5);
+    CHECK(kincal_robot_size() == sizeof(kincal_robot));
+    CHECK(kincal_num_params(6) == 85);
+    CHECK(kincal_num_geometric_params(6) == 42);
+    CHECK(kincal_num_params(0) == 0 && kincal_num_params(KINCAL_MAX_JOINTS + 1) == 0);
+    CHECK(std::strncmp(kincal_status_str(KINCAL_STATUS_OK), "KINCAL_STATUS_OK", 16) == 0);
+    CHECK(std::strcmp(kincal_status_str(12345), "unknown kincal status code") == 0);
+}
+
+void test_fk_against_reference() {
+    for (auto model : {KINCAL_ARIA_MODEL_NOMINAL, KINCAL_ARIA_MODEL_VIRTUAL_TRUTH,
+                       KINCAL_ARIA_MODEL_REAL_IDENTIFIED}) {
+        kincal_robot r = aria(model);
+        for (int k = 0; k < 5; ++k) {
+            double q[6];
+            for (int j = 0; j < 6; ++j) q[j] = std::sin(1.3 * k + 0.7 * j) * 1.5;
+            double t[16];
+            kincal_error err;
+            CHECK_STATUS(kincal_fk(&r, q, 6, nullptr, t, 16, &err), KINCAL_STATUS_OK, err,
+                         nullptr);
+            const Mat4 ref = reference_fk(r, q);
+            CHECK(max_abs_diff(t, ref.data(), 16) < 1e-12);
+        }
+    }
+    // With a base and a tool frame as well.
+    kincal_robot r = aria(KINCAL_ARIA_MODEL_VIRTUAL_TRUTH);
+    const double base[6] = {0.1, -0.05, 0.02, 0.01, -0.02, 0.3};
+    const double tool[6] = {0.0, 0.01, 0.12, 0.2, 0.0, -0.1};
+    kincal_error err;
+    CHECK_STATUS(kincal_robot_set_base(&r, base, 6, &err), KINCAL_STATUS_OK, err, nullptr);
+    CHECK_STATUS(kincal_robot_set_tool(&r, tool, 6, &err), KINCAL_STATUS_OK, err, nullptr);
+    double t[16];
+    CHECK_STATUS(kincal_fk(&r, Q, 6, nullptr, t, 16, &err), KINCAL_STATUS_OK, err, nullptr);
+    CHECK(max_abs_diff(t, reference_fk(r, Q).data(), 16) < 1e-12);
+}
+
+void test_shared_values() {
+    kincal_error err;
+    double pq[7];
+    kincal_robot nominal = aria(KINCAL_ARIA_MODEL_NOMINAL);
+    CHECK_STATUS(kincal_fk_pq(&nominal, Q, 6, nullptr, pq, 7, &err), KINCAL_STATUS_OK, err,
+                 nullptr);
+    CHECK(max_abs_diff(pq, FK_PQ_NOMINAL, 7) < 1e-12);
+    kincal_robot truth = aria(KINCAL_ARIA_MODEL_VIRTUAL_TRUTH);
+    CHECK_STATUS(kincal_fk_pq(&truth, Q, 6, nullptr, pq, 7, &err), KINCAL_STATUS_OK, err,
+                 nullptr);
+    CHECK(max_abs_diff(pq, FK_PQ_TRUTH, 7) < 1e-12);
+    double tau[6];
+    CHECK_STATUS(kincal_gravity_torques(&nominal, Q, 6, tau, 6, &err), KINCAL_STATUS_OK, err,
+                 nullptr);
+    CHECK(max_abs_diff(tau, TAU_NOMINAL, 6) < 1e-10);
+}
+
+void test_ik_every_tool_pose() {
+    kincal_robot truth = aria(KINCAL_ARIA_MODEL_VIRTUAL_TRUTH);
+    double seed[6];
+    kincal_error err;
+    CHECK_STATUS(kincal_aria_tool_seed(seed, 6, &err), KINCAL_STATUS_OK, err, nullptr);
+    for (size_t l = 0; l < KINCAL_ARIA_NUM_TOOL_POSES; ++l) {
+        double target[16], q[6], t[16];
+        kincal_ik_info info;
+        CHECK_STATUS(kincal_aria_tool_pose(l, target, 16, &err), KINCAL_STATUS_OK, err,
+                     nullptr);
+        CHECK_STATUS(kincal_ik(&truth, target, 16, seed, 6, nullptr, nullptr, q, 6, &info, &err),
+                     KINCAL_STATUS_OK, err, nullptr);
+        CHECK(info.residual_pos_m < 1e-9 && info.residual_rot_rad < 1e-9);
+        CHECK_STATUS(kincal_fk(&truth, q, 6, nullptr, t, 16, &err), KINCAL_STATUS_OK, err,
+                     nullptr);
+        CHECK(max_abs_diff(t, target, 16) < 1e-9);
+        CHECK_STATUS(kincal_robot_check_limits(&truth, q, 6, &err), KINCAL_STATUS_OK, err,
+                     nullptr);
+        if (l == 0) CHECK(max_abs_diff(q, IK_Q_TRUTH_POSE1, 6) < 1e-9);
+    }
+    // An unreachable target: the best residual is reported.
+    double far[16], q[6] = {0, 0, 0, 0, 0, 0};
+    CHECK_STATUS(kincal_aria_tool_pose(0, far, 16, &err), KINCAL_STATUS_OK, err, nullptr);
+    far[12] = 5.0;
+    kincal_ik_options opts;
+    CHECK_STATUS(kincal_ik_options_default(&opts, &err), KINCAL_STATUS_OK, err, nullptr);
+    opts.extra_seeds = 2;
+    opts.max_iterations = 50;
+    CHECK_STATUS(kincal_ik(&truth, far, 16, seed, 6, nullptr, &opts, q, 6, nullptr, &err),
+                 KINCAL_STATUS_UNREACHABLE, err, nullptr);
+    CHECK(err.residual_pos_m > 3.0);
+    CHECK(q[0] == 0.0);  // outputs are written on success only
+}
+
+void test_jacobian_theta0_column() {
+    kincal_robot r = aria(KINCAL_ARIA_MODEL_VIRTUAL_TRUTH);
+    kincal_error err;
+    const size_t p = kincal_num_params(6);
+    std::vector<double> jac(6 * p, NAN);
+    std::vector<double> frames(16 * 8);
+    CHECK_STATUS(kincal_jacobian(&r, Q, 6, nullptr, jac.data(), jac.size(), nullptr, 0, &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    CHECK_STATUS(kincal_fk_frames(&r, Q, 6, nullptr, frames.data(), frames.size(), &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    // Eq. (13a): θ0_i column = [z_{i-1} × (p_e − p_{i-1}); z_{i-1}] (frame i-1 = frames[i-1]).
+    const double *pe = &frames[16 * 7 + 12];
+    for (int i = 1; i <= 6; ++i) {
+        size_t index = 0;
+        const std::string label = "theta0_" + std::to_string(i);
+        CHECK_STATUS(kincal_robot_param_index(&r, label.c_str(), &index, &err),
+                     KINCAL_STATUS_OK, err, nullptr);
+        const double *f = &frames[16 * (i - 1)];
+        const double z[3] = {f[8], f[9], f[10]};
+        const double d[3] = {pe[0] - f[12], pe[1] - f[13], pe[2] - f[14]};
+        const double expected[6] = {z[1] * d[2] - z[2] * d[1], z[2] * d[0] - z[0] * d[2],
+                                    z[0] * d[1] - z[1] * d[0], z[0], z[1], z[2]};
+        CHECK(max_abs_diff(&jac[6 * index], expected, 6) < 1e-12);
+    }
+    CHECK_STATUS(kincal_jacobian(&r, Q, 6, nullptr, jac.data(), 6 * p - 6, nullptr, 0, &err),
+                 KINCAL_STATUS_BAD_LENGTH, err, "jac_out");
+    CHECK(err.expected == 6 * p && err.found == 6 * p - 6);
+}
+
+void test_effects_and_pose_error() {
+    kincal_robot r = aria(KINCAL_ARIA_MODEL_NOMINAL);
+    const kincal_robot nominal = r;
+    kincal_error err;
+    CHECK_STATUS(kincal_robot_set_param_by_label(&r, "compliance_2", 2e-3, &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    uint32_t active = 0;
+    CHECK_STATUS(kincal_robot_active_effects(&r, &active, &err), KINCAL_STATUS_OK, err, nullptr);
+    CHECK(active == (1u << KINCAL_EFFECT_JOINT_COMPLIANCE));
+    double angles[6], t_comp[16], t_plain[16], e6[6];
+    CHECK_STATUS(kincal_joint_angles(&r, Q, 6, nullptr, angles, 6, &err), KINCAL_STATUS_OK, err,
+                 nullptr);
+    CHECK(std::fabs(angles[1] - (Q[1] + 2e-3 * TAU_NOMINAL[1])) < 1e-12);
+    CHECK_STATUS(kincal_fk(&r, Q, 6, nullptr, t_comp, 16, &err), KINCAL_STATUS_OK, err, nullptr);
+    CHECK_STATUS(kincal_fk(&nominal, angles, 6, nullptr, t_plain, 16, &err), KINCAL_STATUS_OK,
+                 err, nullptr);
+    CHECK(max_abs_diff(t_comp, t_plain, 16) < 1e-12);
+    // Pose error of the compensated against the plain model: both forms, first order equal.
+    CHECK_STATUS(kincal_fk(&nominal, Q, 6, nullptr, t_plain, 16, &err), KINCAL_STATUS_OK, err,
+                 nullptr);
+    double exact[6], small[6];
+    CHECK_STATUS(kincal_pose_error(t_comp, 16, t_plain, 16, KINCAL_ORIENTATION_ERROR_EXACT, exact,
+                                   6, &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    CHECK_STATUS(kincal_pose_error(t_comp, 16, t_plain, 16, KINCAL_ORIENTATION_ERROR_SMALL_ANGLE,
+                                   small, 6, &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    CHECK(std::fabs(exact[0] - (t_comp[12] - t_plain[12])) < 1e-15);
+    // The two orientation forms agree to first order: they differ by O(angle²).
+    const double angle = std::sqrt(exact[3] * exact[3] + exact[4] * exact[4] + exact[5] * exact[5]);
+    CHECK(angle > 1e-3);
+    CHECK(max_abs_diff(exact, small, 6) < angle * angle);
+    CHECK(max_abs_diff(exact, small, 6) > 0.0);
+    double pq_a[7], pq_b[7];
+    CHECK_STATUS(kincal_pose_to_pq(t_comp, 16, pq_a, 7, &err), KINCAL_STATUS_OK, err, nullptr);
+    CHECK_STATUS(kincal_pose_to_pq(t_plain, 16, pq_b, 7, &err), KINCAL_STATUS_OK, err, nullptr);
+    CHECK_STATUS(kincal_pose_error_pq(pq_a, 7, pq_b, 7, KINCAL_ORIENTATION_ERROR_EXACT, e6, 6,
+                                      &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    CHECK(max_abs_diff(e6, exact, 6) < 1e-12);
+    CHECK_STATUS(kincal_robot_clear_effects(&r, KINCAL_EFFECTS_ALL, &err), KINCAL_STATUS_OK, err,
+                 nullptr);
+    CHECK(std::memcmp(&r, &nominal, sizeof r) == 0);
+}
+
+void test_bad_arguments() {
+    kincal_robot r = aria(KINCAL_ARIA_MODEL_NOMINAL);
+    kincal_error err;
+    double t[16], q[6];
+    std::memcpy(q, Q, sizeof q);
+    // NULL pointers.
+    CHECK_STATUS(kincal_fk(nullptr, q, 6, nullptr, t, 16, &err), KINCAL_STATUS_NULL_POINTER, err,
+                 "robot");
+    CHECK_STATUS(kincal_fk(&r, nullptr, 6, nullptr, t, 16, &err), KINCAL_STATUS_NULL_POINTER,
+                 err, "q");
+    CHECK_STATUS(kincal_fk(&r, q, 6, nullptr, nullptr, 16, &err), KINCAL_STATUS_NULL_POINTER,
+                 err, "t_base_tool_out");
+    CHECK(kincal_fk(&r, q, 6, nullptr, nullptr, 16, nullptr) == KINCAL_STATUS_NULL_POINTER);
+    // Short buffers and the wrong joint count.
+    CHECK_STATUS(kincal_fk(&r, q, 6, nullptr, t, 15, &err), KINCAL_STATUS_BAD_LENGTH, err,
+                 "t_base_tool_out");
+    CHECK(err.expected == 16 && err.found == 15);
+    CHECK_STATUS(kincal_fk(&r, q, 5, nullptr, t, 16, &err), KINCAL_STATUS_BAD_LENGTH, err, "q");
+    CHECK(err.expected == 6 && err.found == 5);
+    double seed[6] = {0, 0, 0, 0, 0, 0}, target[16];
+    CHECK_STATUS(kincal_aria_tool_pose(0, target, 16, &err), KINCAL_STATUS_OK, err, nullptr);
+    CHECK_STATUS(kincal_ik(&r, target, 16, seed, 7, nullptr, nullptr, q, 6, nullptr, &err),
+                 KINCAL_STATUS_BAD_LENGTH, err, "q_seed");
+    // NaN.
+    q[3] = NAN;
+    CHECK_STATUS(kincal_fk(&r, q, 6, nullptr, t, 16, &err), KINCAL_STATUS_NON_FINITE, err, "q");
+    CHECK(err.index == 3);
+    q[3] = Q[3];
+    target[13] = INFINITY;
+    CHECK_STATUS(kincal_ik(&r, target, 16, seed, 6, nullptr, nullptr, q, 6, nullptr, &err),
+                 KINCAL_STATUS_NON_FINITE, err, "target");
+    CHECK(err.index == 13);
+    CHECK_STATUS(kincal_robot_set_param(&r, 0, NAN, &err), KINCAL_STATUS_NON_FINITE, err,
+                 "value");
+    // Not a rigid transform.
+    CHECK_STATUS(kincal_aria_tool_pose(0, target, 16, &err), KINCAL_STATUS_OK, err, nullptr);
+    target[0] *= 1.01;
+    CHECK_STATUS(kincal_ik(&r, target, 16, seed, 6, nullptr, nullptr, q, 6, nullptr, &err),
+                 KINCAL_STATUS_INVALID_TRANSFORM, err, "target");
+    // A corrupt robot struct.
+    kincal_robot bad = r;
+    bad.n_joints = 9;
+    CHECK_STATUS(kincal_fk(&bad, q, 6, nullptr, t, 16, &err), KINCAL_STATUS_BAD_JOINT_COUNT, err,
+                 "robot->n_joints");
+    CHECK(err.found == 9 && err.expected == KINCAL_MAX_JOINTS);
+    bad = r;
+    bad.params[7] = NAN;
+    CHECK_STATUS(kincal_fk(&bad, q, 6, nullptr, t, 16, &err), KINCAL_STATUS_NON_FINITE, err,
+                 "robot->params");
+    CHECK(err.index == 7);
+    bad = r;
+    bad.limits_lower[2] = 5.0;
+    CHECK_STATUS(kincal_robot_validate(&bad, &err), KINCAL_STATUS_INVALID_LIMITS, err, nullptr);
+    CHECK(err.joint == 2);
+    // Labels, indices, enumerations.
+    CHECK_STATUS(kincal_robot_set_param_by_label(&r, "theta0_9", 0.1, &err),
+                 KINCAL_STATUS_UNKNOWN_LABEL, err, "label");
+    CHECK_STATUS(kincal_robot_set_param_by_label(&r, nullptr, 0.1, &err),
+                 KINCAL_STATUS_NULL_POINTER, err, "label");
+    double v = 0.0;
+    CHECK_STATUS(kincal_robot_get_param(&r, 85, &v, &err), KINCAL_STATUS_INDEX_OUT_OF_RANGE, err,
+                 "index");
+    char label[4];
+    CHECK_STATUS(kincal_robot_param_label(&r, 0, label, sizeof label, &err),
+                 KINCAL_STATUS_BAD_LENGTH, err, "label_out");
+    CHECK(err.expected == std::strlen("theta0_1") + 1);
+    CHECK_STATUS(kincal_robot_aria(&r, 7, &err), KINCAL_STATUS_INVALID_ARGUMENT, err, "model");
+    CHECK_STATUS(kincal_robot_clear_effects(&r, 1u << 9, &err), KINCAL_STATUS_INVALID_ARGUMENT,
+                 err, "effects");
+    // Missing inputs of effects.
+    CHECK_STATUS(kincal_robot_set_param_by_label(&r, "backlash_2", 0.01, &err), KINCAL_STATUS_OK,
+                 err, nullptr);
+    CHECK_STATUS(kincal_fk(&r, q, 6, nullptr, t, 16, &err), KINCAL_STATUS_MISSING_INPUT, err,
+                 nullptr);
+    CHECK(err.quantity == KINCAL_QUANTITY_APPROACH_DIRECTION);
+    kincal_joint_aux aux{};
+    aux.has_approach = 1;
+    for (int j = 0; j < 6; ++j) aux.approach[j] = 1.0;
+    CHECK_STATUS(kincal_fk(&r, q, 6, &aux, t, 16, &err), KINCAL_STATUS_OK, err, nullptr);
+    // Joint limits.
+    q[1] = 4.0;
+    CHECK_STATUS(kincal_robot_check_limits(&r, q, 6, &err), KINCAL_STATUS_OUT_OF_LIMITS, err,
+                 nullptr);
+    CHECK(err.joint == 1 && err.value == 4.0 && err.upper == 3.615);
+    // The error text.
+    char text[512];
+    const size_t n = kincal_error_describe(&err, text, sizeof text);
+    CHECK(n == std::strlen(text) && std::strstr(text, "OUT_OF_LIMITS") != nullptr);
+}
+
+void test_robot_from_table() {
+    // A planar 2R arm: a_1 = 0.5, a_2 = 0.3, parallel axes (link 1 identifies β).
+    const double links[10] = {0, 0, 0.5, 0, 0, 0, 0, 0.3, 0, 0};
+    const double limits[4] = {-3, 3, -3, 3};
+    kincal_robot r;
+    kincal_error err;
+    CHECK_STATUS(kincal_robot_init(&r, 2, links, 10, limits, 4, &err), KINCAL_STATUS_OK, err,
+                 nullptr);
+    CHECK(r.n_joints == 2 && r.length_param[0] == KINCAL_LENGTH_PARAM_BETA);
+    const double q[2] = {0.4, -0.9};
+    double pq[7];
+    CHECK_STATUS(kincal_fk_pq(&r, q, 2, nullptr, pq, 7, &err), KINCAL_STATUS_OK, err, nullptr);
+    const double x = 0.5 * std::cos(0.4) + 0.3 * std::cos(0.4 - 0.9);
+    const double y = 0.5 * std::sin(0.4) + 0.3 * std::sin(0.4 - 0.9);
+    CHECK(std::fabs(pq[0] - x) < 1e-15 && std::fabs(pq[1] - y) < 1e-15 && pq[2] == 0.0);
+    CHECK_STATUS(kincal_robot_init(&r, 0, links, 0, limits, 0, &err),
+                 KINCAL_STATUS_BAD_JOINT_COUNT, err, "n_joints");
+    CHECK_STATUS(kincal_robot_init(&r, 2, links, 9, limits, 4, &err), KINCAL_STATUS_BAD_LENGTH,
+                 err, "links");
+}
+
+void test_full_calibration() {
+    const kincal_robot nominal = aria(KINCAL_ARIA_MODEL_NOMINAL);
+    const kincal_robot truth = aria(KINCAL_ARIA_MODEL_VIRTUAL_TRUTH);
+    kincal_error err;
+    // Simulated measurements: the truth reaching each tool pose.
+    const size_t L = KINCAL_ARIA_NUM_TOOL_POSES;
+    std::vector<double> q(6 * L), poses(16 * L);
+    double seed[6];
+    CHECK_STATUS(kincal_aria_tool_seed(seed, 6, &err), KINCAL_STATUS_OK, err, nullptr);
+    for (size_t l = 0; l < L; ++l) {
+        double target[16];
+        CHECK_STATUS(kincal_aria_tool_pose(l, target, 16, &err), KINCAL_STATUS_OK, err, nullptr);
+        CHECK_STATUS(kincal_ik(&truth, target, 16, seed, 6, nullptr, nullptr, &q[6 * l], 6,
+                               nullptr, &err),
+                     KINCAL_STATUS_OK, err, nullptr);
+        CHECK_STATUS(kincal_fk(&truth, &q[6 * l], 6, nullptr, &poses[16 * l], 16, &err),
+                     KINCAL_STATUS_OK, err, nullptr);
+    }
+    kincal_measurements data{};
+    data.n_poses = L;
+    data.q = q.data();
+    data.q_len = q.size();
+    data.poses = poses.data();
+    data.poses_len = poses.size();
+
+    kincal_validation_summary before, after;
+    CHECK_STATUS(kincal_validate(&nominal, &data, KINCAL_TARGET_POS_M, KINCAL_TARGET_ROT_RAD,
+                                 nullptr, 0, &before, &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    CHECK(before.count == L && before.pos_ok == 0 && before.rms_pos_m > 1e-2);
+
+    for (auto algorithm : {KINCAL_ALGORITHM_OLS, KINCAL_ALGORITHM_OPT1, KINCAL_ALGORITHM_OPT2}) {
+        kincal_identify_options opts;
+        CHECK_STATUS(kincal_identify_options_default(&nominal, algorithm, 0, &opts, &err),
+                     KINCAL_STATUS_OK, err, nullptr);
+        // Table 3 moves θ0_4 by 0.8 rad, far outside the paper's ±5°: widen OPT1's intervals.
+        for (size_t i = 0; i < kincal_num_params(6); ++i) {
+            if (std::isfinite(opts.lower[i])) {
+                opts.lower[i] = nominal.params[i] - 1.0;
+                opts.upper[i] = nominal.params[i] + 1.0;
+            }
+        }
+        size_t n_requested = 0;
+        for (unsigned char m : opts.requested) n_requested += m != 0;
+        CHECK(n_requested == 24);
+        const size_t size = kincal_identify_workspace_size(6, L, n_requested);
+        CHECK(size > 0);
+        std::vector<std::max_align_t> workspace(size / sizeof(std::max_align_t) + 1);
+        kincal_robot fitted;
+        auto report = std::make_unique<kincal_identify_report>();
+        // A workspace one byte short is refused with the size it needs.
+        CHECK_STATUS(kincal_identify(&nominal, &data, &opts, workspace.data(), size - 1, &fitted,
+                                     report.get(), &err),
+                     KINCAL_STATUS_BAD_LENGTH, err, "workspace");
+        CHECK(err.expected == size);
+        CHECK_STATUS(kincal_identify(&nominal, &data, &opts, workspace.data(), size, &fitted,
+                                     report.get(), &err),
+                     KINCAL_STATUS_OK, err, nullptr);
+        CHECK(report->algorithm == static_cast<uint32_t>(algorithm));
+        CHECK(report->analysis.rank == 24 && report->analysis.n_singular_values == 24);
+        CHECK(report->fitted.rms_pos_m < 1e-9 && report->fitted.rms_rot_rad < 1e-9);
+        double worst = 0.0;
+        for (size_t i = 0; i < kincal_num_params(6); ++i)
+            if (report->analysis.identifiable[i] != 0)
+                worst = std::fmax(worst, std::fabs(fitted.params[i] - truth.params[i]));
+        CHECK(worst < 1e-8);
+        std::vector<double> errors(KINCAL_POSE_ERRORS_LEN * L);
+        CHECK_STATUS(kincal_validate(&fitted, &data, KINCAL_TARGET_POS_M, KINCAL_TARGET_ROT_RAD,
+                                     errors.data(), errors.size(), &after, &err),
+                     KINCAL_STATUS_OK, err, nullptr);
+        CHECK(after.pos_ok == 1 && after.rot_ok == 1 && after.max_pos_m < 1e-9);
+    }
+    std::printf("full calibration: Table 3 recovered from %zu tool poses (rms before %.2f mm)\n",
+                L, before.rms_pos_m * 1e3);
+
+    // Bad measurements name the pose.
+    poses[16 * 3 + 15] = 2.0;
+    kincal_identify_options opts;
+    CHECK_STATUS(kincal_identify_options_default(&nominal, KINCAL_ALGORITHM_OLS, 0, &opts, &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    const size_t size = kincal_identify_workspace_size(6, L, 24);
+    std::vector<std::max_align_t> workspace(size / sizeof(std::max_align_t) + 1);
+    auto analysis = std::make_unique<kincal_identifiability>();
+    CHECK_STATUS(kincal_analyze_identifiability(&nominal, &data, &opts, workspace.data(), size,
+                                                analysis.get(), &err),
+                 KINCAL_STATUS_INVALID_TRANSFORM, err, "data->poses");
+    CHECK(err.pose == 3);
+    poses[16 * 3 + 15] = 1.0;
+    CHECK_STATUS(kincal_analyze_identifiability(&nominal, &data, &opts, workspace.data(), size,
+                                                analysis.get(), &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    CHECK(analysis->rank == 24 && std::isfinite(analysis->condition_number));
+}
+
+void test_registration() {
+    // An asymmetric probe of five markers, rotated about z and shifted.
+    const double design[15] = {0, 0, 0, 0.1, 0, 0, 0, 0.15, 0, 0, 0, 0.07, 0.05, 0.05, 0.02};
+    const double c = std::cos(0.4), s = std::sin(0.4);
+    double measured[15];
+    for (int j = 0; j < 5; ++j) {
+        const double *p = &design[3 * j];
+        measured[3 * j] = c * p[0] - s * p[1] + 1.0;
+        measured[3 * j + 1] = s * p[0] + c * p[1] + 2.0;
+        measured[3 * j + 2] = p[2] + 0.5;
+    }
+    measured[6] = NAN;     // marker 2 not seen ...
+    measured[12] += 5e-3;  // ... and marker 4 knocked by 5 mm
+    const unsigned char visible[5] = {1, 1, 0, 1, 1};
+    kincal_registration_options opts;
+    kincal_error err;
+    CHECK_STATUS(kincal_registration_options_default(1e-4, &opts, &err), KINCAL_STATUS_OK, err,
+                 nullptr);
+    auto reg = std::make_unique<kincal_registration>();
+    CHECK_STATUS(kincal_register(design, 15, measured, 15, visible, 5, nullptr, 0, &opts,
+                                 reg.get(), &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    CHECK(reg->n_markers == 5 && reg->n_used == 3);
+    CHECK(reg->markers[2].status == KINCAL_MARKER_STATUS_MISSING);
+    CHECK(reg->markers[4].status == KINCAL_MARKER_STATUS_MOVED);
+    const double expected[16] = {c, s, 0, 0, -s, c, 0, 0, 0, 0, 1, 0, 1, 2, 0.5, 1};
+    CHECK(max_abs_diff(reg->t_mocap_body, expected, 16) < 1e-12);
+    CHECK_STATUS(kincal_register(design, 15, measured, 15, nullptr, 0, nullptr, 0, &opts,
+                                 reg.get(), &err),
+                 KINCAL_STATUS_NON_FINITE, err, "measured");
+    CHECK(err.index == 6);
+}
+
+void test_panic_boundary() {
+#if defined(KINCAL_TEST_PANIC)
+    kincal_error err;
+    CHECK_STATUS(kincal_test_panic(&err), KINCAL_STATUS_PANIC, err, nullptr);
+    CHECK(kincal_test_panic(nullptr) == KINCAL_STATUS_PANIC);
+    std::printf("panic boundary: kincal_test_panic returned KINCAL_STATUS_PANIC\n");
+#endif
+}
+
+}  // namespace
+
+// O (eq. 17) of the ten Table 2 tool poses (IK on the nominal model), default geometric
+// parameters, unit columns. Keep identical to `TABLE2_O` in ffi/src/tests/observability.rs.
+const double TABLE2_O = 1.453933636665828e-2;
+
+void test_observability_table2() {
+    kincal_robot nominal = aria(KINCAL_ARIA_MODEL_NOMINAL);
+    double seed[6];
+    kincal_error err;
+    CHECK_STATUS(kincal_aria_tool_seed(seed, 6, &err), KINCAL_STATUS_OK, err, nullptr);
+    std::vector<double> qs(6 * KINCAL_ARIA_NUM_TOOL_POSES);
+    for (size_t l = 0; l < KINCAL_ARIA_NUM_TOOL_POSES; ++l) {
+        double target[16];
+        CHECK_STATUS(kincal_aria_tool_pose(l, target, 16, &err), KINCAL_STATUS_OK, err,
+                     nullptr);
+        CHECK_STATUS(kincal_ik(&nominal, target, 16, seed, 6, nullptr, nullptr, &qs[6 * l], 6,
+                               nullptr, &err),
+                     KINCAL_STATUS_OK, err, nullptr);
+    }
+    const size_t size = kincal_observability_workspace_size(24);
+    CHECK(size > 0);
+    std::vector<std::max_align_t> workspace(size / sizeof(std::max_align_t) + 1);
+    kincal_observability_indices ind;
+    double sv[24];
+    CHECK_STATUS(kincal_observability(&nominal, qs.data(), KINCAL_ARIA_NUM_TOOL_POSES, qs.size(),
+                                      nullptr, 0, nullptr, workspace.data(), size, &ind, sv, 24,
+                                      &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    CHECK(ind.params == 24 && ind.poses == KINCAL_ARIA_NUM_TOOL_POSES);
+    CHECK(std::fabs(ind.o - TABLE2_O) < 1e-9 * TABLE2_O);
+    CHECK(sv[0] == ind.sigma_max && sv[23] == ind.sigma_min);
+    // A short workspace is refused with the size it needs.
+    CHECK_STATUS(kincal_observability(&nominal, qs.data(), KINCAL_ARIA_NUM_TOOL_POSES, qs.size(),
+                                      nullptr, 0, nullptr, workspace.data(), size - 1, &ind,
+                                      nullptr, 0, &err),
+                 KINCAL_STATUS_BAD_LENGTH, err, "workspace");
+}
+
+int main() {
+    test_version_and_layout();
+    test_fk_against_reference();
+    test_shared_values();
+    test_ik_every_tool_pose();
+    test_observability_table2();
+    test_jacobian_theta0_column();
+    test_effects_and_pose_error();
+    test_bad_arguments();
+    test_robot_from_table();
+    test_full_calibration();
+    test_registration();
+    test_panic_boundary();
+    std::printf("kincal %s C++ consumer: %d checks, %d failed\n", kincal_version(), g_checks,
+                g_failures);
+    return g_failures == 0 ? 0 : 1;
+}

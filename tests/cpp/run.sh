@@ -1,0 +1,185 @@
+#!/usr/bin/env bash
+# Cross-language tests of the kincal C ABI; the project's test command runs this script.
+#
+#  1. builds kincal-ffi in release (through ffi/install.sh), and in debug with the
+#     `test-panic` export;
+#  2. C++17 consumer (tests/cpp/consumer.cpp, -Wall -Wextra -Werror -pedantic) against the
+#     release staticlib and cdylib (both under ASan/UBSan when the compiler has them) and the
+#     debug test-panic staticlib (checks that a panic comes back as KINCAL_STATUS_PANIC);
+#  3. the header as C99 and C11 (-pedantic);
+#  4. ffi/install.sh into a temporary prefix, then the ffi/README.md example built through
+#     pkg-config (shared and static) and through CMake find_package(kincal) (static, shared);
+#  5. the panic-never proof: the no_std build linked with --gc-sections against
+#     tests/cpp/panic_never.c must succeed and run, and with the panicking canary referenced
+#     must fail on the undefined kincal_panic_path_remains.
+#
+# Environment: CARGO_TARGET_DIR (default: ./target of the workspace); CC, CXX (default gcc,
+# g++); CI=true turns a missing cmake or pkg-config into a failure (as root they are installed
+# with apt-get when missing); KINCAL_CHECK_THUMB=1 also builds the no_std library for
+# thumbv7em-none-eabihf.
+set -euo pipefail
+
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+root=$(cd "$here/../.." && pwd)
+target=${CARGO_TARGET_DIR:-$root/target}
+[[ $target = /* ]] || target=$PWD/$target
+export CARGO_TARGET_DIR=$target
+CC=${CC:-gcc}
+CXX=${CXX:-g++}
+work=$(mktemp -d "${TMPDIR:-/tmp}/kincal-ffi-test.XXXXXX")
+trap 'rm -rf "$work"' EXIT
+cd "$root"
+
+step() { printf '\n=== %s\n' "$*"; }
+fail() {
+    echo "run.sh: FAILED: $*" >&2
+    exit 1
+}
+
+# A tool the test needs: install it as root when missing; without it, fail under CI, else skip.
+have_tool() {
+    local tool=$1 package=$2
+    if ! command -v "$tool" >/dev/null && [[ $(id -u) -eq 0 ]] && command -v apt-get >/dev/null; then
+        echo "installing $package (apt-get)"
+        apt-get install -y "$package" >/dev/null 2>&1 ||
+            { apt-get update >/dev/null 2>&1 && apt-get install -y "$package" >/dev/null 2>&1; } || true
+    fi
+    if command -v "$tool" >/dev/null; then
+        return 0
+    fi
+    [[ ${CI:-} == true ]] && fail "$tool is required (CI=true) and could not be installed"
+    echo "SKIP: $tool not available"
+    return 1
+}
+
+# The compiler flags of the strict builds; sanitizers when the compiler has them.
+cxxflags=(-std=c++17 -Wall -Wextra -Werror -pedantic -O1 -g -I"$root/include")
+sanitize=()
+if echo 'int main(void){return 0;}' | "$CC" -x c -fsanitize=address,undefined - -o "$work/probe" 2>/dev/null; then
+    sanitize=(-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
+fi
+
+step "debug build of kincal-ffi with the test-panic export"
+cargo build -p kincal-ffi --features test-panic
+cp "$target/debug/libkincal.a" "$work/libkincal-test-panic.a"
+
+step "ffi/install.sh (release build of kincal-ffi) into a temporary prefix"
+prefix=$work/prefix
+"$root/ffi/install.sh" "$prefix"
+native=$(sed -n 's/^Libs: [^ ]*libkincal\.a //p' "$prefix/lib/pkgconfig/kincal-static.pc")
+read -r -a native_libs <<<"$native"
+[[ ${#native_libs[@]} -gt 0 ]] || fail "no native-static-libs in kincal-static.pc"
+
+step "C++ consumer against the staticlib ${sanitize[*]:+(sanitizers on)}"
+"$CXX" "${cxxflags[@]}" "${sanitize[@]}" "$here/consumer.cpp" "$target/release/libkincal.a" \
+    "${native_libs[@]}" -o "$work/consumer_static"
+"$work/consumer_static"
+
+step "C++ consumer against the cdylib ${sanitize[*]:+(sanitizers on)}"
+"$CXX" "${cxxflags[@]}" "${sanitize[@]}" "$here/consumer.cpp" -L"$target/release" -lkincal \
+    -Wl,-rpath,"$target/release" -o "$work/consumer_shared"
+# (ldd output captured first: `ldd | grep -q` can fail under pipefail when grep exits early)
+deps=$(ldd "$work/consumer_shared")
+grep -qF "$target/release/libkincal.so" <<<"$deps" ||
+    fail "consumer_shared does not load $target/release/libkincal.so"
+"$work/consumer_shared"
+
+step "C++ consumer against the debug test-panic staticlib (KINCAL_TEST_PANIC)"
+"$CXX" "${cxxflags[@]}" -DKINCAL_TEST_PANIC "$here/consumer.cpp" "$work/libkincal-test-panic.a" \
+    "${native_libs[@]}" -o "$work/consumer_panic"
+"$work/consumer_panic" 2>"$work/panic.stderr" | tee "$work/panic.stdout"
+grep -q "returned KINCAL_STATUS_PANIC" "$work/panic.stdout" || fail "the panic test did not run"
+
+step "the header as C99 and C11"
+awk '/^```c$/ {inside = 1; next} /^```$/ && inside {exit} inside' "$root/ffi/README.md" \
+    >"$work/example.c"
+[[ -s $work/example.c ]] || fail "no \`\`\`c block in ffi/README.md"
+for std in c99 c11; do
+    "$CC" -std=$std -Wall -Wextra -Werror -pedantic -I"$root/include" -c "$work/example.c" \
+        -o "$work/example_$std.o"
+done
+
+if have_tool pkg-config pkg-config; then
+    step "README example through pkg-config (kincal: shared, kincal-static: static)"
+    export PKG_CONFIG_PATH=$prefix/lib/pkgconfig
+    [[ $(pkg-config --modversion kincal) == $(cargo pkgid -p kincal-ffi | sed 's/.*[#@]//') ]] ||
+        fail "pkg-config version differs from the crate version"
+    # shellcheck disable=SC2046 # pkg-config output is a list of words by design
+    "$CC" -std=c99 -Wall -Wextra -Werror -pedantic "$work/example.c" \
+        $(pkg-config --cflags --libs kincal) -Wl,-rpath,"$prefix/lib" -o "$work/example_pc_shared"
+    # shellcheck disable=SC2046
+    "$CC" -std=c99 -Wall -Wextra -Werror -pedantic "$work/example.c" \
+        $(pkg-config --cflags --libs kincal-static) -o "$work/example_pc_static"
+    deps=$(ldd "$work/example_pc_shared")
+    grep -qF "$prefix/lib/libkincal.so" <<<"$deps" ||
+        fail "example_pc_shared does not load the installed libkincal.so"
+    deps=$(ldd "$work/example_pc_static")
+    ! grep -q libkincal <<<"$deps" || fail "example_pc_static is not static"
+    "$work/example_pc_shared"
+    "$work/example_pc_static" >/dev/null
+fi
+
+if have_tool cmake cmake; then
+    step "README example through CMake find_package(kincal)"
+    cmake -S "$here/cmake" -B "$work/cmake-build" -DCMAKE_PREFIX_PATH="$prefix" \
+        -DKINCAL_EXAMPLE_SOURCE="$work/example.c" -DCMAKE_C_COMPILER="$CC" >/dev/null
+    cmake --build "$work/cmake-build" >/dev/null
+    "$work/cmake-build/example_static" >/dev/null
+    LD_LIBRARY_PATH=$prefix/lib "$work/cmake-build/example_shared" >/dev/null
+    echo "example_static and example_shared built and ran"
+fi
+
+# Exports the panic-never proof does not cover: the core's identification and registration
+# kernels index arrays by loop counters the compiler cannot bound (never out of range by
+# construction, but not provably so). With std they run inside catch_unwind like every export.
+# Identification, registration, observability and pose selection run host-side kernels with
+# indexed loops the compiler cannot prove in bounds; std builds catch panics at the boundary.
+NOT_PANIC_PROVEN="kincal_identify kincal_analyze_identifiability kincal_register kincal_test_panic"
+NOT_PANIC_PROVEN+=" kincal_observability kincal_observability_workspace_size"
+NOT_PANIC_PROVEN+=" kincal_pose_singular_values kincal_select_poses kincal_select_workspace_size"
+
+step "panic-never: every export is linked by panic_never.c or listed as not proven"
+exports=$(sed -nE 's/^[a-z_ ]*[ *](kincal_[a-z0-9_]+)\(.*/\1/p' "$root/include/kincal.h" | sort -u)
+[[ -n $exports ]] || fail "no exports found in include/kincal.h"
+for f in $exports; do
+    if ! grep -q "$f(" "$here/panic_never.c" && [[ " $NOT_PANIC_PROVEN " != *" $f "* ]]; then
+        fail "$f is neither called in tests/cpp/panic_never.c nor listed in NOT_PANIC_PROVEN"
+    fi
+done
+echo "$(wc -w <<<"$exports") exports; not proven: $NOT_PANIC_PROVEN"
+
+step "panic-never: no_std build linked with --gc-sections must have no panic path"
+cargo rustc -p kincal-ffi --profile panic-never --no-default-features --features panic-never \
+    --crate-type staticlib
+pn_lib=$target/panic-never/libkincal.a
+pn_flags=(-std=c11 -O2 -Wall -Wextra -Werror -pedantic -I"$root/include")
+if ! "$CC" "${pn_flags[@]}" "$here/panic_never.c" "$pn_lib" -Wl,--gc-sections -lm \
+    -o "$work/panic_never" 2>"$work/pn.log"; then
+    cat "$work/pn.log" >&2
+    echo "exports that reach a panic:" >&2
+    for f in $exports; do
+        printf 'extern void %s(void);\nint main(void){void (*volatile p)(void) = %s; return p == 0;}\n' \
+            "$f" "$f" >"$work/one.c"
+        "$CC" "$work/one.c" "$pn_lib" -Wl,--gc-sections -lm -o "$work/one" 2>/dev/null ||
+            echo "  $f" >&2
+    done
+    fail "a panic path remains in the no_std build (see above)"
+fi
+"$work/panic_never"
+
+step "panic-never canary: referencing kincal_test_panic must break the link"
+if "$CC" "${pn_flags[@]}" -DKINCAL_TEST_PANIC -DKINCAL_PANIC_CANARY "$here/panic_never.c" \
+    "$pn_lib" -Wl,--gc-sections -lm -o "$work/canary" 2>"$work/canary.log"; then
+    fail "the canary linked: the panic-never check cannot detect panics"
+fi
+grep -q "undefined reference to .kincal_panic_path_remains" "$work/canary.log" ||
+    { cat "$work/canary.log" >&2; fail "the canary link failed for another reason"; }
+echo "canary link failed on kincal_panic_path_remains, as it must"
+
+if [[ ${KINCAL_CHECK_THUMB:-0} == 1 ]]; then
+    step "no_std build for thumbv7em-none-eabihf"
+    cargo rustc -p kincal-ffi --profile panic-never --no-default-features --features panic-never \
+        --crate-type staticlib --target thumbv7em-none-eabihf
+fi
+
+step "all C ABI tests passed"
