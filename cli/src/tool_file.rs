@@ -250,7 +250,8 @@ pub fn parse_tool(text: &str, name: &str) -> Result<Vec<ToolPose>, InputError> {
 }
 
 /// Writes a tool specification: comments, then `pose_id,x_mm,y_mm,z_mm,roll_deg,
-/// pitch_deg,yaw_deg` and the nominal configuration as `extra_q1_rad…`.
+/// pitch_deg,yaw_deg` (rounded to 1e-6 mm and 1e-9°) and the nominal configuration as
+/// `extra_q1_rad…` (full precision).
 pub fn write_tool<const N: usize>(
     out: &mut dyn Write,
     comments: &[String],
@@ -274,9 +275,15 @@ pub fn write_tool<const N: usize>(
     for (l, (t, q)) in poses.iter().zip(configs).enumerate() {
         let p = t.translation.vector * 1e3;
         let rpy = matrix_to_rpy(t.rotation.matrix()).map(f64::to_degrees);
+        // A drawing needs no more than nanometres and nano-degrees: rounding there removes
+        // the binary noise of metre → millimetre (216.00000000000003) and −0.
+        let clean = |v: f64, step: f64| {
+            let r = (v / step).round() * step;
+            format_f64(if r == 0.0 { 0.0 } else { r })
+        };
         let mut row = vec![(l + 1).to_string()];
-        row.extend([p.x, p.y, p.z].iter().map(|v| format_f64(*v)));
-        row.extend(rpy.iter().map(|v| format_f64(*v)));
+        row.extend([p.x, p.y, p.z].iter().map(|v| clean(*v, 1e-6)));
+        row.extend(rpy.iter().map(|v| clean(*v, 1e-9)));
         row.extend(q.iter().map(|v| format_f64(*v)));
         writeln!(out, "{}", row.join(","))?;
     }
@@ -304,8 +311,8 @@ mod tests {
         let back = parse_tool(&text, "t.csv").unwrap();
         assert_eq!(back.len(), 10);
         for (a, b) in back.iter().zip(&poses) {
-            assert!((a.pose.translation.vector - b.translation.vector).norm() < 1e-12);
-            assert!((a.pose.rotation.matrix() - b.rotation.matrix()).norm() < 1e-12);
+            assert!((a.pose.translation.vector - b.translation.vector).norm() < 1e-9);
+            assert!((a.pose.rotation.matrix() - b.rotation.matrix()).norm() < 1e-10);
         }
         assert_eq!(back[0].line, 3);
         assert_eq!(back[0].q_hint, vec![0.5; 6]);

@@ -353,6 +353,11 @@ fn newton_ik<const N: usize>(
             for (k, v) in st.q.iter_mut().enumerate() {
                 *v += dq[k];
             }
+            // Quadratic convergence: after a step below 1e-8 rad the residual is of order
+            // 1e-15, far below the 1e-10 test, so the check would only cost an FK.
+            if dq.iter().all(|d| d.abs() < 1e-8) {
+                return Ok(st.q);
+            }
         } else {
             let jjt = j * j.transpose() + SMatrix::<f64, 6, 6>::identity() * 1e-14;
             let Some(ch) = Cholesky::new(jjt) else {
@@ -370,27 +375,43 @@ fn newton_ik<const N: usize>(
 /// Solves the 6×6 system `[A | b]` in place (partial pivoting); `None` when a pivot is
 /// below 1e-12 of the largest entry (near-singular: the caller falls back to damped IK).
 fn solve6(a: &mut [[f64; 7]; 6]) -> Option<[f64; 6]> {
-    let scale = a
-        .iter()
-        .flat_map(|r| r[..6].iter())
-        .fold(0.0f64, |m, v| m.max(v.abs()));
+    let mut scale = 0.0f64;
+    for row in a.iter() {
+        for v in &row[..6] {
+            scale = scale.max(v.abs());
+        }
+    }
+    let tiny = 1e-12 * scale;
     for k in 0..6 {
-        let p = (k..6).fold(k, |b, r| if a[r][k].abs() > a[b][k].abs() { r } else { b });
-        if a[p][k].abs() <= 1e-12 * scale {
+        let mut p = k;
+        for r in (k + 1)..6 {
+            if a[r][k].abs() > a[p][k].abs() {
+                p = r;
+            }
+        }
+        if a[p][k].is_nan() || a[p][k].abs() <= tiny {
             return None;
         }
-        a.swap(k, p);
+        if p != k {
+            a.swap(k, p);
+        }
+        let inv = 1.0 / a[k][k];
         for r in (k + 1)..6 {
-            let f = a[r][k] / a[k][k];
-            for c in k..7 {
-                a[r][c] -= f * a[k][c];
+            let f = a[r][k] * inv;
+            if f != 0.0 {
+                for c in (k + 1)..7 {
+                    a[r][c] -= f * a[k][c];
+                }
             }
         }
     }
     let mut x = [0.0; 6];
     for k in (0..6).rev() {
-        let s: f64 = ((k + 1)..6).map(|c| a[k][c] * x[c]).sum();
-        x[k] = (a[k][6] - s) / a[k][k];
+        let mut s = a[k][6];
+        for c in (k + 1)..6 {
+            s -= a[k][c] * x[c];
+        }
+        x[k] = s / a[k][k];
     }
     Some(x)
 }
