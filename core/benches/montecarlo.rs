@@ -61,7 +61,9 @@ fn montecarlo(c: &mut Criterion) {
         c.bench_function(&format!("calibration_run_table2_{name}"), |b| {
             b.iter(|| {
                 run += 1;
-                black_box(simulate_run(&study, &design, &analysis, run, &mut ws, &mut data))
+                black_box(simulate_run(
+                    &study, &design, &analysis, run, &mut ws, &mut data,
+                ))
             })
         });
     }
