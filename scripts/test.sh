@@ -46,6 +46,7 @@ rustup component list --installed 2>/dev/null | grep -q '^rustfmt' || rustup com
 step "format and lints"
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets -- -D warnings
+RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --workspace
 
 step "no_std core for a bare-metal target"
 cargo build -p kincal --target thumbv7em-none-eabihf

@@ -2,6 +2,10 @@
 //! (measurement CSV, robot description TOML, URDF import, model JSON), so that integration
 //! tests and the fuzz targets (`fuzz/`) exercise exactly the code the binary runs.
 
+// The argument structs' doc comments are the `--help` text, where units read `[mm]`; escaping
+// them for rustdoc would print the backslashes in the help.
+#![allow(rustdoc::broken_intra_doc_links, rustdoc::private_intra_doc_links)]
+
 pub mod args;
 pub mod calibration;
 pub mod cmd_calibrate;

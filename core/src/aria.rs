@@ -9,11 +9,11 @@ use crate::pose::{Transform, pose_from_xyz_rpy};
 /// Number of joints of ARIA.
 pub const N: usize = 6;
 
-/// Lower limit of joint 3 [rad]. **Assumed**: the paper's eq. (2) prints a garbled "2π";
+/// Lower limit of joint 3 \[rad\]. **Assumed**: the paper's eq. (2) prints a garbled "2π";
 /// −π is our choice, kept in one place so it can be corrected.
 pub const Q3_LOWER_ASSUMED_RAD: f64 = -PI;
 
-/// Joint limits, eq. (2) [rad], with [`Q3_LOWER_ASSUMED_RAD`].
+/// Joint limits, eq. (2) \[rad\], with [`Q3_LOWER_ASSUMED_RAD`].
 pub const JOINT_LIMITS: [JointLimits; N] = [
     JointLimits::new(-2.0 * PI, 2.0 * PI),
     JointLimits::new(-0.97, 3.615),
@@ -23,7 +23,7 @@ pub const JOINT_LIMITS: [JointLimits; N] = [
     JointLimits::new(-2.0 * PI, 2.0 * PI),
 ];
 
-/// Table 1: nominal links (θ0 [rad], d [m], a [m], α [rad]; β = 0).
+/// Table 1: nominal links (θ0 \[rad\], d \[m\], a \[m\], α \[rad\]; β = 0).
 pub const NOMINAL_LINKS: [Link; N] = [
     Link::dh(0.0, 0.205, 0.0, FRAC_PI_2),
     Link::dh(0.0, 0.0, 0.41, 0.0),
@@ -96,9 +96,9 @@ pub const REAL_LINKS: [Link; N] = [
     Link::dh(0.0093, 0.216, -0.0011, -0.0087),
 ];
 
-/// **Assumed** mass model: link masses [kg] (links 1..6) and tool mass [kg].
+/// **Assumed** mass model: link masses \[kg\] (links 1..6) and tool mass \[kg\].
 pub const LINK_MASSES_KG: [f64; N] = [1.6, 2.2, 1.4, 1.2, 0.7, 0.4];
-/// **Assumed** tool mass [kg], at the end-effector origin.
+/// **Assumed** tool mass \[kg\], at the end-effector origin.
 pub const TOOL_MASS_KG: f64 = 0.3;
 
 /// The assumed mass model with g = (0, 0, −9.81) m/s² in the base frame.
@@ -108,8 +108,8 @@ pub const MASS_MODEL: MassModel<N> = MassModel {
     gravity: [0.0, 0.0, -9.81],
 };
 
-/// Table 2: the calibration tool's ten reference poses, `[x, y, z]` [m] and
-/// `[roll, pitch, yaw]` [deg] (R = Rz(yaw)·Ry(pitch)·Rx(roll)).
+/// Table 2: the calibration tool's ten reference poses, `[x, y, z]` \[m\] and
+/// `[roll, pitch, yaw]` \[deg\] (R = Rz(yaw)·Ry(pitch)·Rx(roll)).
 pub const TOOL_POSES: [([f64; 3], [f64; 3]); 10] = [
     ([0.566, 0.354, 0.235], [-150.0, 0.0, 0.0]),
     ([0.518, 0.501, 0.235], [-160.0, 0.0, 0.0]),
@@ -175,7 +175,7 @@ pub fn with_links(links: [Link; N]) -> Robot<N> {
 /// y ∈ [0.116, 0.592] m, z ∈ [0.235, 0.335] m, with the tool tilted 150°–160° about x
 /// (needle pointing down and outwards) as on the calibration tool.
 pub const WORKING_REGION_MIN_M: [f64; 3] = [0.066, 0.116, 0.235];
-/// Upper corner of the working region [m] (see [`WORKING_REGION_MIN_M`]).
+/// Upper corner of the working region \[m\] (see [`WORKING_REGION_MIN_M`]).
 pub const WORKING_REGION_MAX_M: [f64; 3] = [0.566, 0.592, 0.335];
 
 /// The validation grid over the working region: `nx × ny × nz` positions (corners

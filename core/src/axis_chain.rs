@@ -59,7 +59,7 @@ use crate::pose::{
     Transform, pose_from_vector6, pose_to_vector6, rot_x, rot_y, rotation_exp, transform,
 };
 
-/// Lengths below this [m] count as zero when classifying axes: intersecting axes (common
+/// Lengths below this \[m\] count as zero when classifying axes: intersecting axes (common
 /// normal shorter than this) and coincident axes. Snapping changes the FK by less than it.
 pub const SNAP_LENGTH_M: f64 = 1e-14;
 
@@ -69,7 +69,7 @@ pub const MIN_DIRECTION_NORM: f64 = 1e-9;
 /// One revolute joint axis at the zero configuration, in the chain's reference frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct JointAxis {
-    /// A point on the axis [m].
+    /// A point on the axis \[m\].
     pub point: Vector3<f64>,
     /// Direction of the axis; positive joint rotation is right-handed about it. Need not be
     /// unit length (it is normalised) but must be longer than [`MIN_DIRECTION_NORM`].
@@ -77,7 +77,7 @@ pub struct JointAxis {
 }
 
 impl JointAxis {
-    /// An axis through `point` [m] along `direction`.
+    /// An axis through `point` \[m\] along `direction`.
     #[must_use]
     pub fn new(point: [f64; 3], direction: [f64; 3]) -> Self {
         JointAxis {
@@ -124,7 +124,7 @@ pub fn link_transform_at_zero(l: &Link) -> Transform {
     transform(rz * (rot_x(l.alpha) * rot_y(l.beta)), p)
 }
 
-/// The rotation by `angle` [rad] about the line through `point` along the unit vector
+/// The rotation by `angle` \[rad\] about the line through `point` along the unit vector
 /// `unit_dir`, as a rigid transform.
 #[must_use]
 pub fn rotation_about_line(point: &Vector3<f64>, unit_dir: &Vector3<f64>, angle: f64) -> Transform {

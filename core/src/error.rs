@@ -64,11 +64,11 @@ pub enum Error {
     OutOfLimits {
         /// The joint.
         joint: JointIndex,
-        /// The reading [rad].
+        /// The reading \[rad\].
         value: f64,
-        /// Lower limit [rad].
+        /// Lower limit \[rad\].
         lower: f64,
-        /// Upper limit [rad].
+        /// Upper limit \[rad\].
         upper: f64,
     },
     /// An input the model needs is missing (e.g. approach directions for a model with
@@ -92,9 +92,9 @@ pub enum Error {
     /// Inverse kinematics found no configuration within the limits that reaches the pose;
     /// the best residual found is reported.
     Unreachable {
-        /// Best position residual [m].
+        /// Best position residual \[m\].
         residual_pos_m: f64,
-        /// Best orientation residual [rad].
+        /// Best orientation residual \[rad\].
         residual_rot_rad: f64,
     },
     /// An iterative method stopped at its iteration limit before its convergence test held.

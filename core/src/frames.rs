@@ -44,12 +44,12 @@ use crate::registration::{rotation_from_correlation, symmetric_eigen};
 
 /// Poses with a measured orientation needed for the hand-eye estimate of the rotations.
 pub const MIN_ORIENTED_POSES: usize = 3;
-/// Pose pairs whose relative rotation is smaller than this [rad] (or within it of a half
+/// Pose pairs whose relative rotation is smaller than this \[rad\] (or within it of a half
 /// turn, where the quaternion sign is ambiguous) carry no hand-eye information.
 pub const MIN_PAIR_ANGLE_RAD: f64 = 0.05;
 /// Alternating rounds of the position-only estimate.
 pub const MAX_ROUNDS: u32 = 500;
-/// The position-only rounds stop when the RMS residual changes by less than this [m].
+/// The position-only rounds stop when the RMS residual changes by less than this \[m\].
 pub const CONVERGED_M: f64 = 1e-10;
 /// Most partners of each pose in the hand-eye sums (pairs `(i, i+1..i+PAIR_SPAN)`):
 /// enough pairs for any data set, linear cost.
@@ -67,9 +67,9 @@ pub struct FrameEstimate<const N: usize> {
     pub tool_change: Transform,
     /// Whether the tool rotation was estimated (not with position-only data of one point).
     pub tool_rotation_estimated: bool,
-    /// RMS position residual of the estimate over the poses with positions [m].
+    /// RMS position residual of the estimate over the poses with positions \[m\].
     pub rms_pos_m: f64,
-    /// RMS rotation angle over the poses with orientations [rad] (0 without).
+    /// RMS rotation angle over the poses with orientations \[rad\] (0 without).
     pub rms_rot_rad: f64,
     /// Alternating rounds used.
     pub rounds: u32,

@@ -18,9 +18,9 @@ use crate::pose::{Transform, rotation_log};
 pub struct IkOptions {
     /// Iterations per seed.
     pub max_iterations: u32,
-    /// Convergence: position residual below this [m].
+    /// Convergence: position residual below this \[m\].
     pub tol_pos_m: f64,
-    /// Convergence: orientation residual below this [rad].
+    /// Convergence: orientation residual below this \[rad\].
     pub tol_rot_rad: f64,
     /// Seeds tried after the caller's (a deterministic Halton sequence over the limits,
     /// clipped to ±π).
@@ -45,11 +45,11 @@ impl Default for IkOptions {
 /// A solution of [`solve_ik`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IkSolution<const N: usize> {
-    /// Joint readings [rad], within the limits.
+    /// Joint readings \[rad\], within the limits.
     pub q: [f64; N],
-    /// Position residual [m].
+    /// Position residual \[m\].
     pub residual_pos_m: f64,
-    /// Orientation residual [rad].
+    /// Orientation residual \[rad\].
     pub residual_rot_rad: f64,
     /// Iterations used for the chosen seed.
     pub iterations: u32,

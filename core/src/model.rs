@@ -22,15 +22,15 @@ pub const PARALLEL_AXES_TOL_RAD: f64 = 0.017_453_292_519_943_295;
 /// The five Hayati/mDH parameters of one link.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Link {
-    /// Joint offset θ0 [rad].
+    /// Joint offset θ0 \[rad\].
     pub theta0: f64,
-    /// Offset along the previous z axis, d [m].
+    /// Offset along the previous z axis, d \[m\].
     pub d: f64,
-    /// Length along the common normal, a [m].
+    /// Length along the common normal, a \[m\].
     pub a: f64,
-    /// Twist about x, α [rad].
+    /// Twist about x, α \[rad\].
     pub alpha: f64,
-    /// Hayati's twist about y, β [rad].
+    /// Hayati's twist about y, β \[rad\].
     pub beta: f64,
 }
 
@@ -79,12 +79,12 @@ pub enum LengthParam {
     Beta = 1,
 }
 
-/// Inclusive joint limits [rad].
+/// Inclusive joint limits \[rad\].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct JointLimits {
-    /// Lower limit [rad].
+    /// Lower limit \[rad\].
     pub lower: f64,
-    /// Upper limit [rad].
+    /// Upper limit \[rad\].
     pub upper: f64,
 }
 
@@ -105,9 +105,9 @@ impl JointLimits {
 /// between the origins of frames k−1 and k; the tool's at the end-effector origin.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MassModel<const N: usize> {
-    /// Mass of each link [kg].
+    /// Mass of each link \[kg\].
     pub link_masses_kg: [f64; N],
-    /// Mass of the tool [kg].
+    /// Mass of the tool \[kg\].
     pub tool_mass_kg: f64,
     /// Gravity in the base frame [m/s²].
     pub gravity: [f64; 3],
@@ -128,7 +128,7 @@ impl<const N: usize> MassModel<N> {
 /// Joint readings and the auxiliary data some effects need.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct JointState<const N: usize> {
-    /// Joint readings as the controller reports them [rad].
+    /// Joint readings as the controller reports them \[rad\].
     pub q: [f64; N],
     /// Direction from which each joint approached the pose (−1, 0, +1), for backlash.
     pub approach: Option<[f64; N]>,
@@ -171,11 +171,11 @@ impl<const N: usize> JointState<N> {
 pub struct EffectParams<const N: usize> {
     /// Joint compliance c_j [rad/(N·m)].
     pub compliance: [f64; N],
-    /// Joint scale k_j [1].
+    /// Joint scale k_j \[1\].
     pub scale: [f64; N],
-    /// Cyclic error [a_j, b_j, c_j, d_j] [rad] on sin q, cos q, sin 2q, cos 2q.
+    /// Cyclic error [a_j, b_j, c_j, d_j] \[rad\] on sin q, cos q, sin 2q, cos 2q.
     pub cyclic: [[f64; 4]; N],
-    /// Backlash b_j [rad].
+    /// Backlash b_j \[rad\].
     pub backlash: [f64; N],
     /// Thermal expansion κ [1/K].
     pub thermal_kappa: f64,

@@ -47,18 +47,18 @@ pub enum Acquisition {
 /// manufacturing errors and **assumed** measurement figures.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Scenario {
-    /// Each identified length parameter is off by a uniform error in ± this [m].
+    /// Each identified length parameter is off by a uniform error in ± this \[m\].
     pub length_error_m: f64,
-    /// Each identified angle parameter is off by a uniform error in ± this [rad].
+    /// Each identified angle parameter is off by a uniform error in ± this \[rad\].
     pub angle_error_rad: f64,
-    /// Measurement (instrument) or seating (tool) noise, 1σ per axis of position [m].
+    /// Measurement (instrument) or seating (tool) noise, 1σ per axis of position \[m\].
     pub noise_pos_m: f64,
-    /// … and of the rotation vector [rad].
+    /// … and of the rotation vector \[rad\].
     pub noise_rot_rad: f64,
     /// Tool designs: manufacturing error of each reference pose, uniform in ± this per
-    /// position axis [m] …
+    /// position axis \[m\] …
     pub tool_tol_pos_m: f64,
-    /// … and per rotation-vector axis [rad].
+    /// … and per rotation-vector axis \[rad\].
     pub tool_tol_rot_rad: f64,
 }
 
@@ -276,7 +276,7 @@ pub fn reach_true<const N: usize>(
 }
 
 /// A joint of a true robot moves less than this from the nominal solution (manufacturing
-/// errors of a few millimetres and degrees, away from singularities) [rad].
+/// errors of a few millimetres and degrees, away from singularities) \[rad\].
 const BRANCH_RAD: f64 = 0.5;
 
 /// `q` with every joint shifted by whole turns to the reading nearest `q0` that lies within

@@ -55,12 +55,12 @@ pub fn repeat_leader<const N: usize>(
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct RepeatScatter {
     /// Σ over subgroups and position axes of the squared deviation from the subgroup mean
-    /// [m²].
+    /// \[m²\].
     pub ss_pos: f64,
     /// Degrees of freedom of `ss_pos`: Σ (rows measuring the axis − 1) over subgroups and
     /// position axes.
     pub dof_pos: usize,
-    /// As `ss_pos` for the rotation axes [rad²].
+    /// As `ss_pos` for the rotation axes \[rad²\].
     pub ss_rot: f64,
     /// Degrees of freedom of `ss_rot`.
     pub dof_rot: usize,
@@ -69,13 +69,13 @@ pub struct RepeatScatter {
 }
 
 impl RepeatScatter {
-    /// Pooled position noise, 1σ per axis [m]: `√(ss_pos / dof_pos)`; `None` without
+    /// Pooled position noise, 1σ per axis \[m\]: `√(ss_pos / dof_pos)`; `None` without
     /// degrees of freedom.
     #[must_use]
     pub fn sigma_pos_m(&self) -> Option<f64> {
         (self.dof_pos > 0).then(|| sqrt(self.ss_pos / self.dof_pos as f64))
     }
-    /// Pooled rotation noise, 1σ per axis [rad]; `None` without degrees of freedom.
+    /// Pooled rotation noise, 1σ per axis \[rad\]; `None` without degrees of freedom.
     #[must_use]
     pub fn sigma_rot_rad(&self) -> Option<f64> {
         (self.dof_rot > 0).then(|| sqrt(self.ss_rot / self.dof_rot as f64))
@@ -151,10 +151,10 @@ pub fn pooled_repeat_scatter<E>(
 /// whatever the model does not explain).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ResidualSigma {
-    /// Position σ per axis [m] (0 without position rows; infinite when the parameters use
+    /// Position σ per axis \[m\] (0 without position rows; infinite when the parameters use
     /// up every row).
     pub sigma_pos_m: f64,
-    /// Rotation σ per axis [rad] (as `sigma_pos_m`).
+    /// Rotation σ per axis \[rad\] (as `sigma_pos_m`).
     pub sigma_rot_rad: f64,
     /// Position rows (measured position components).
     pub rows_pos: usize,

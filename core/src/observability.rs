@@ -54,9 +54,9 @@ pub enum ColumnScaling {
     /// `angle_rad` for angles (effect parameters unscaled), so the singular values are pose
     /// errors caused by parameter errors of one tolerance.
     Tolerance {
-        /// Tolerance of lengths [m].
+        /// Tolerance of lengths \[m\].
         length_m: f64,
-        /// Tolerance of angles [rad].
+        /// Tolerance of angles \[rad\].
         angle_rad: f64,
     },
 }

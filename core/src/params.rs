@@ -4,13 +4,13 @@
 //!
 //! | range | parameters | labels |
 //! |---|---|---|
-//! | `5i .. 5i+5` | link `i`: θ0 [rad], d [m], a [m], α [rad], β [rad] | `theta0_1`, `d_1`, `a_1`, `alpha_1`, `beta_1` |
-//! | `5N .. 5N+6` | base frame `Trans(p)·Rot(r)`: px, py, pz [m], rx, ry, rz [rad, rotation vector] | `base_px` … `base_rz` |
+//! | `5i .. 5i+5` | link `i`: θ0 \[rad\], d \[m\], a \[m\], α \[rad\], β \[rad\] | `theta0_1`, `d_1`, `a_1`, `alpha_1`, `beta_1` |
+//! | `5N .. 5N+6` | base frame `Trans(p)·Rot(r)`: px, py, pz \[m\], rx, ry, rz [rad, rotation vector] | `base_px` … `base_rz` |
 //! | `5N+6 .. 5N+12` | tool frame, same form | `tool_px` … `tool_rz` |
 //! | `5N+12 .. 6N+12` | joint compliance c_j [rad/(N·m)] | `compliance_1` … |
-//! | `6N+12 .. 7N+12` | joint scale k_j [1] | `scale_1` … |
-//! | `7N+12 .. 11N+12` | cyclic error a_j, b_j, c_j, d_j [rad] (sin q, cos q, sin 2q, cos 2q) | `cyclic_sin1_1`, `cyclic_cos1_1`, `cyclic_sin2_1`, `cyclic_cos2_1` … |
-//! | `11N+12 .. 12N+12` | backlash b_j [rad] | `backlash_1` … |
+//! | `6N+12 .. 7N+12` | joint scale k_j \[1\] | `scale_1` … |
+//! | `7N+12 .. 11N+12` | cyclic error a_j, b_j, c_j, d_j \[rad\] (sin q, cos q, sin 2q, cos 2q) | `cyclic_sin1_1`, `cyclic_cos1_1`, `cyclic_sin2_1`, `cyclic_cos2_1` … |
+//! | `11N+12 .. 12N+12` | backlash b_j \[rad\] | `backlash_1` … |
 //! | `12N+12` | thermal expansion κ [1/K] | `thermal_kappa` |
 //!
 //! The names of the effects are those of spec/effects.md.
@@ -22,15 +22,15 @@ use crate::error::{Error, ParamIndex, Result};
 /// One of the five Hayati/mDH link parameters.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum LinkParam {
-    /// Joint offset θ0 [rad].
+    /// Joint offset θ0 \[rad\].
     Theta0 = 0,
-    /// Offset along z, d [m].
+    /// Offset along z, d \[m\].
     D = 1,
-    /// Length along x, a [m].
+    /// Length along x, a \[m\].
     A = 2,
-    /// Twist about x, α [rad].
+    /// Twist about x, α \[rad\].
     Alpha = 3,
-    /// Hayati's twist about y, β [rad].
+    /// Hayati's twist about y, β \[rad\].
     Beta = 4,
 }
 
@@ -64,17 +64,17 @@ impl LinkParam {
 /// One of the six parameters of a frame `Trans(p)·Rot(r)`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum FrameParam {
-    /// Translation x [m].
+    /// Translation x \[m\].
     Px = 0,
-    /// Translation y [m].
+    /// Translation y \[m\].
     Py = 1,
-    /// Translation z [m].
+    /// Translation z \[m\].
     Pz = 2,
-    /// Rotation vector x [rad].
+    /// Rotation vector x \[rad\].
     Rx = 3,
-    /// Rotation vector y [rad].
+    /// Rotation vector y \[rad\].
     Ry = 4,
-    /// Rotation vector z [rad].
+    /// Rotation vector z \[rad\].
     Rz = 5,
 }
 

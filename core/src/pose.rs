@@ -13,7 +13,7 @@ use crate::math::{atan2, cos, hypot, sin, sin_cos, sqrt};
 /// A rigid transform (rotation matrix + translation in metres).
 pub type Transform = IsometryMatrix3<f64>;
 
-/// A pose error `[Δp; Δφ]`: position [m] then orientation [rad], both in the base frame,
+/// A pose error `[Δp; Δφ]`: position \[m\] then orientation \[rad\], both in the base frame,
 /// measured minus model. This is also the row order of every identification Jacobian.
 pub type PoseError = [f64; 6];
 
@@ -33,28 +33,28 @@ pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
 }
 
-/// Elementary rotation about x by `angle` [rad].
+/// Elementary rotation about x by `angle` \[rad\].
 #[must_use]
 pub fn rot_x(angle: f64) -> Matrix3<f64> {
     let (s, c) = sin_cos(angle);
     Matrix3::new(1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c)
 }
 
-/// Elementary rotation about y by `angle` [rad].
+/// Elementary rotation about y by `angle` \[rad\].
 #[must_use]
 pub fn rot_y(angle: f64) -> Matrix3<f64> {
     let (s, c) = sin_cos(angle);
     Matrix3::new(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c)
 }
 
-/// Elementary rotation about z by `angle` [rad].
+/// Elementary rotation about z by `angle` \[rad\].
 #[must_use]
 pub fn rot_z(angle: f64) -> Matrix3<f64> {
     let (s, c) = sin_cos(angle);
     Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
 }
 
-/// Builds a transform from a rotation matrix and a translation [m].
+/// Builds a transform from a rotation matrix and a translation \[m\].
 #[must_use]
 pub fn transform(rotation: Matrix3<f64>, translation: Vector3<f64>) -> Transform {
     IsometryMatrix3::from_parts(
@@ -179,7 +179,7 @@ pub fn matrix_to_quaternion(r: &Matrix3<f64>) -> [f64; 4] {
     ]
 }
 
-/// Rotation matrix of the rotation vector `v` (axis times angle [rad]): Rodrigues' formula
+/// Rotation matrix of the rotation vector `v` (axis times angle \[rad\]): Rodrigues' formula
 /// with series expansions near zero.
 #[must_use]
 pub fn rotation_exp(v: &Vector3<f64>) -> Matrix3<f64> {
@@ -279,7 +279,7 @@ pub fn pose_error(measured: &Transform, model: &Transform, form: OrientationErro
     [dp.x, dp.y, dp.z, dphi.x, dphi.y, dphi.z]
 }
 
-/// A pose from position [m] and RPY angles [rad] (`R = Rz(yaw)·Ry(pitch)·Rx(roll)`).
+/// A pose from position \[m\] and RPY angles \[rad\] (`R = Rz(yaw)·Ry(pitch)·Rx(roll)`).
 #[must_use]
 pub fn pose_from_xyz_rpy(xyz: [f64; 3], rpy: [f64; 3]) -> Transform {
     transform(

@@ -66,9 +66,9 @@ const MAX_SWEEPS: u32 = 50;
 /// The markers of one rigid body in one frame of motion-capture data.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Markers<'a> {
-    /// Design positions in the body frame [m].
+    /// Design positions in the body frame \[m\].
     pub design: &'a [[f64; 3]],
-    /// Measured positions in the motion-capture frame [m], same order and length.
+    /// Measured positions in the motion-capture frame \[m\], same order and length.
     pub measured: &'a [[f64; 3]],
     /// Which markers were seen (`None`: all). Values of unseen markers are ignored.
     pub visible: Option<&'a [bool]>,
@@ -92,7 +92,7 @@ impl<'a> Markers<'a> {
 /// Options of [`register`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RegistrationOptions {
-    /// Stated measurement noise, 1σ per axis at weight 1 [m].
+    /// Stated measurement noise, 1σ per axis at weight 1 \[m\].
     pub sigma_m: f64,
     /// Outlier threshold in units of σ_j on the 3-D residual distance.
     pub k_sigma: f64,
@@ -101,7 +101,7 @@ pub struct RegistrationOptions {
 }
 
 impl RegistrationOptions {
-    /// Noise `sigma_m` [m], `k` = [`DEFAULT_K_SIGMA`], up to 2 outliers.
+    /// Noise `sigma_m` \[m\], `k` = [`DEFAULT_K_SIGMA`], up to 2 outliers.
     #[must_use]
     pub const fn new(sigma_m: f64) -> Self {
         RegistrationOptions {
@@ -134,13 +134,13 @@ pub enum MarkerStatus {
 /// The fit of one marker.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MarkerFit {
-    /// Predicted position `t_mocap_body · design` in the motion-capture frame [m].
+    /// Predicted position `t_mocap_body · design` in the motion-capture frame \[m\].
     pub predicted_m: [f64; 3],
-    /// Residual measured − predicted in the motion-capture frame [m] (zero if missing).
+    /// Residual measured − predicted in the motion-capture frame \[m\] (zero if missing).
     pub residual_m: [f64; 3],
-    /// Length of the residual [m] (zero if missing).
+    /// Length of the residual \[m\] (zero if missing).
     pub distance_m: f64,
-    /// Outlier threshold `k·σ/√w` of this marker [m].
+    /// Outlier threshold `k·σ/√w` of this marker \[m\].
     pub threshold_m: f64,
     /// The verdict.
     pub status: MarkerStatus,
@@ -161,7 +161,7 @@ pub struct Registration {
     pub t_mocap_body: Transform,
     /// Markers used in the fit.
     pub n_used: usize,
-    /// Weighted RMS residual distance of the used markers, `sqrt(Σ w |r|² / Σ w)` [m].
+    /// Weighted RMS residual distance of the used markers, `sqrt(Σ w |r|² / Σ w)` \[m\].
     pub rms_m: f64,
     /// Whether every used marker is within its threshold.
     pub consistent: bool,

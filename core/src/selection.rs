@@ -41,7 +41,7 @@ use nalgebra::{Matrix3, Vector3};
 /// Largest design (m plus the excursion) [`select_start`] handles.
 pub const MAX_DESIGN: usize = 64;
 
-/// An axis-aligned box in the base frame [m].
+/// An axis-aligned box in the base frame \[m\].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Region {
     /// Lower corner.
@@ -101,7 +101,7 @@ impl Region {
 pub struct Cone {
     /// Unit axis in the base frame.
     pub axis: [f64; 3],
-    /// Half opening angle [rad].
+    /// Half opening angle \[rad\].
     pub half_angle_rad: f64,
 }
 
@@ -138,7 +138,7 @@ pub struct Constraints {
     pub region: Option<Region>,
     /// End-effector z axis inside this cone.
     pub cone: Option<Cone>,
-    /// Distance kept from every joint limit [rad].
+    /// Distance kept from every joint limit \[rad\].
     pub joint_margin_rad: f64,
     /// Smallest admissible [`dexterity`] (0: no test). Tool poses need it: near a
     /// singularity a slightly different real robot may not reach the pose, or only with
@@ -353,7 +353,7 @@ pub struct Pool<'a, const N: usize, const P: usize> {
     pub q: &'a [[f64; N]],
     /// Their blocks ([`pose_block`]).
     pub blocks: &'a [PoseBlock<P>],
-    /// Their end-effector positions [m].
+    /// Their end-effector positions \[m\].
     pub pos: &'a [[f64; 3]],
 }
 
@@ -412,9 +412,9 @@ pub struct SelectOptions {
     pub max_exchanges: usize,
     /// Joint-space refinement trials per start (0: none; the poses then stay pool members).
     pub refine_trials: usize,
-    /// Initial refinement step (standard deviation per joint) [rad].
+    /// Initial refinement step (standard deviation per joint) \[rad\].
     pub refine_step_rad: f64,
-    /// Smallest distance between two selected end-effector positions [m].
+    /// Smallest distance between two selected end-effector positions \[m\].
     pub min_separation_m: f64,
     /// Seed; start `s` uses `SplitMix64::new(seed).fork(s)`.
     pub seed: u64,
@@ -858,7 +858,7 @@ pub fn select_poses<const N: usize, const P: usize>(
 pub struct ClusterOptions {
     /// The region split into cubes.
     pub region: Region,
-    /// Cube side L [m].
+    /// Cube side L \[m\].
     pub cube_m: f64,
     /// Largest accepted spread of the per-pose indices: `max_k |ln σ_k(q) − ln σ_k(q*)|`
     /// over the chosen poses `q` and the target pose `q*` (0.1 ≈ 10 %).

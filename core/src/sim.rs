@@ -27,13 +27,13 @@ use crate::rng::SplitMix64;
 /// `orientation`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Region {
-    /// Lower corner of the position box [m].
+    /// Lower corner of the position box \[m\].
     pub min_m: [f64; 3],
-    /// Upper corner of the position box [m].
+    /// Upper corner of the position box \[m\].
     pub max_m: [f64; 3],
     /// Central orientation of the tool.
     pub orientation: Matrix3<f64>,
-    /// Largest rotation away from `orientation` [rad].
+    /// Largest rotation away from `orientation` \[rad\].
     pub cone_rad: f64,
 }
 
@@ -86,9 +86,9 @@ pub struct SessionConfig {
     /// measurement (only those repeats show the pure instrument noise when there is
     /// backlash); otherwise every joint's direction is drawn afresh.
     pub same_approach_probability: f64,
-    /// Instrument noise, 1σ per position axis [m] …
+    /// Instrument noise, 1σ per position axis \[m\] …
     pub sigma_pos_m: f64,
-    /// … and per rotation axis [rad] (a rotation vector with this σ per component).
+    /// … and per rotation axis \[rad\] (a rotation vector with this σ per component).
     pub sigma_rot_rad: f64,
     /// Record the approach direction of every joint (random ±1 per pose).
     pub record_approach: bool,
@@ -287,17 +287,17 @@ pub fn perturb_geometry<const N: usize>(
 /// transmission error of strain-wave gears (~1 arcmin), lost motion (1…5 arcmin),
 /// aluminium links (2.3e-5 1/K).
 pub mod magnitude {
-    /// Base/tool frame translation per axis [m].
+    /// Base/tool frame translation per axis \[m\].
     pub const FRAME_TRANSLATION_M: f64 = 2e-3;
-    /// Base/tool frame rotation per axis [rad] (0.3°).
+    /// Base/tool frame rotation per axis \[rad\] (0.3°).
     pub const FRAME_ROTATION_RAD: f64 = 0.3 * core::f64::consts::PI / 180.0;
     /// Joint compliance [rad/(N·m)].
     pub const COMPLIANCE: f64 = 1e-3;
-    /// Joint scale error [1].
+    /// Joint scale error \[1\].
     pub const SCALE: f64 = 2e-3;
-    /// Cyclic error coefficient, 1σ [rad] (~1 arcmin).
+    /// Cyclic error coefficient, 1σ \[rad\] (~1 arcmin).
     pub const CYCLIC_RAD: f64 = 3e-4;
-    /// Backlash [rad] (5 arcmin).
+    /// Backlash \[rad\] (5 arcmin).
     pub const BACKLASH_RAD: f64 = 1.5e-3;
     /// Thermal expansion [1/K] (aluminium).
     pub const THERMAL_PER_K: f64 = 2.3e-5;

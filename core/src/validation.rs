@@ -10,13 +10,13 @@ use crate::pose::{OrientationError, Transform, pose_error};
 /// Errors of one pose, measured minus model, in the base frame.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct PoseErrors {
-    /// Position error e_x, e_y, e_z [m].
+    /// Position error e_x, e_y, e_z \[m\].
     pub pos_m: [f64; 3],
-    /// Orientation error (rotation vector) [rad].
+    /// Orientation error (rotation vector) \[rad\].
     pub rot_rad: [f64; 3],
-    /// |e_p| [m].
+    /// |e_p| \[m\].
     pub pos_norm_m: f64,
-    /// |e_φ|, the rotation angle [rad].
+    /// |e_φ|, the rotation angle \[rad\].
     pub rot_norm_rad: f64,
 }
 
@@ -74,9 +74,9 @@ impl PoseErrors {
 pub struct ErrorSummary {
     /// Number of poses.
     pub count: usize,
-    /// Largest |e_p| [m].
+    /// Largest |e_p| \[m\].
     pub max_pos_m: f64,
-    /// Largest |e_φ| [rad].
+    /// Largest |e_φ| \[rad\].
     pub max_rot_rad: f64,
     sum_sq_pos: f64,
     sum_sq_rot: f64,
@@ -121,7 +121,7 @@ impl ErrorSummary {
     pub fn count_rot(&self) -> usize {
         self.count_rot
     }
-    /// RMS of |e_p| [m] (0 for no poses).
+    /// RMS of |e_p| \[m\] (0 for no poses).
     #[must_use]
     pub fn rms_pos_m(&self) -> f64 {
         if self.count_pos == 0 {
@@ -130,7 +130,7 @@ impl ErrorSummary {
             sqrt(self.sum_sq_pos / self.count_pos as f64)
         }
     }
-    /// RMS of |e_φ| [rad] (0 for no poses).
+    /// RMS of |e_φ| \[rad\] (0 for no poses).
     #[must_use]
     pub fn rms_rot_rad(&self) -> f64 {
         if self.count_rot == 0 {
@@ -146,7 +146,7 @@ pub const TARGET_POS_M: f64 = 1e-3;
 /// … and below 0.66° (eq. 3 with r_t = 5 mm, d = √3 mm, l_max = 0.2 m).
 pub const TARGET_ROT_RAD: f64 = 0.66 * core::f64::consts::PI / 180.0;
 
-/// Eq. (3): the largest orientation error [rad] that keeps the needle tip inside a tumour of
+/// Eq. (3): the largest orientation error \[rad\] that keeps the needle tip inside a tumour of
 /// radius `r_t_m` when the puncture point is off by `d_m` and the insertion is at most
 /// `l_max_m` long: `2·asin((r_t − d) / (2·√2·l_max))`.
 ///
@@ -197,7 +197,7 @@ pub struct Verdict {
 }
 
 impl Verdict {
-    /// Judges a summary against targets [m], [rad] (the worst pose decides).
+    /// Judges a summary against targets \[m\], \[rad\] (the worst pose decides).
     #[must_use]
     pub fn judge(summary: &ErrorSummary, target_pos_m: f64, target_rot_rad: f64) -> Self {
         Verdict {

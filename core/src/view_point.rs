@@ -65,19 +65,19 @@ pub const PARALLEL_AXES_RATIO: f64 = 1e-9;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ViewPoint {
     /// The point nearest (least squares) to every viewing axis, in the frame the poses
-    /// are given in [m].
+    /// are given in \[m\].
     pub point_m: [f64; 3],
-    /// Mean distance from the frame origins to the point, measured along each axis [m]:
+    /// Mean distance from the frame origins to the point, measured along each axis \[m\]:
     /// the re-expression distance `s` (the point `s·e_axis` of every frame).
     pub mean_distance_m: f64,
-    /// Smallest and largest distance along an axis [m] (negative: the point lies behind
+    /// Smallest and largest distance along an axis \[m\] (negative: the point lies behind
     /// that frame).
     pub min_distance_m: f64,
     /// See `min_distance_m`.
     pub max_distance_m: f64,
-    /// RMS over the poses of the point's distance from each viewing axis [m].
+    /// RMS over the poses of the point's distance from each viewing axis \[m\].
     pub miss_rms_m: f64,
-    /// Largest distance of the point from a viewing axis [m].
+    /// Largest distance of the point from a viewing axis \[m\].
     pub miss_max_m: f64,
     /// Index of the pose whose axis passes farthest from the point.
     pub miss_max_pose: usize,
@@ -184,7 +184,7 @@ pub fn view_point_from(
 }
 
 /// `pose·Trans(point_m)`: the same rigid body's frame moved (not rotated) to `point_m`,
-/// given in that frame [m]: the pose a row with measured point `point_m` carries.
+/// given in that frame \[m\]: the pose a row with measured point `point_m` carries.
 #[must_use]
 pub fn moved_to_point(pose: &Transform, point_m: &[f64; 3]) -> Transform {
     let p = Vector3::new(point_m[0], point_m[1], point_m[2]);

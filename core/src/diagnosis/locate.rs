@@ -16,7 +16,7 @@ pub const REGIONS: usize = 8;
 /// A quantity a residual may depend on (joints zero-based).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum QuantityKind {
-    /// Joint reading q_j [rad].
+    /// Joint reading q_j \[rad\].
     JointAngle(usize),
     /// Gravity torque τ_j of the mass model [N·m].
     GravityTorque(usize),
@@ -61,17 +61,17 @@ pub struct Correlate {
 /// Residual statistics of one region.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct RegionStats {
-    /// Lower corner of the region [m].
+    /// Lower corner of the region \[m\].
     pub min_m: [f64; 3],
-    /// Upper corner of the region [m].
+    /// Upper corner of the region \[m\].
     pub max_m: [f64; 3],
     /// Poses in it.
     pub count: usize,
-    /// RMS position error [m].
+    /// RMS position error \[m\].
     pub rms_pos_m: f64,
-    /// RMS rotation angle [rad].
+    /// RMS rotation angle \[rad\].
     pub rms_rot_rad: f64,
-    /// Mean position error (a systematic direction) [m].
+    /// Mean position error (a systematic direction) \[m\].
     pub mean_pos_m: [f64; 3],
 }
 
@@ -80,17 +80,17 @@ pub struct RegionStats {
 pub struct Location {
     /// Poses used (all rows).
     pub poses: usize,
-    /// RMS of each residual component `[x, y, z]` [m], `[φx, φy, φz]` [rad].
+    /// RMS of each residual component `[x, y, z]` \[m\], `[φx, φy, φz]` \[rad\].
     pub rms_axis: [f64; 6],
     /// Mean of each component.
     pub mean_axis: [f64; 6],
-    /// RMS position error [m].
+    /// RMS position error \[m\].
     pub rms_pos_m: f64,
-    /// RMS rotation angle [rad].
+    /// RMS rotation angle \[rad\].
     pub rms_rot_rad: f64,
-    /// Bounding box of the measured positions [m].
+    /// Bounding box of the measured positions \[m\].
     pub bbox_min_m: [f64; 3],
-    /// Upper corner of the bounding box [m].
+    /// Upper corner of the bounding box \[m\].
     pub bbox_max_m: [f64; 3],
     /// Octants of the bounding box: index bit 0 = upper half in x, bit 1 in y, bit 2 in z.
     pub regions: [RegionStats; REGIONS],

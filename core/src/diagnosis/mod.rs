@@ -101,9 +101,9 @@ pub const MAX_DROPPED: usize = 8;
 /// Settings of [`diagnose`]. [`Config::default`] documents the defaults.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Config {
-    /// Stated position noise, 1σ per axis [m]; `None`: estimate from repeats.
+    /// Stated position noise, 1σ per axis \[m\]; `None`: estimate from repeats.
     pub sigma_pos_m: Option<f64>,
-    /// Stated rotation noise, 1σ per axis [rad]; `None`: estimate from repeats.
+    /// Stated rotation noise, 1σ per axis \[rad\]; `None`: estimate from repeats.
     pub sigma_rot_rad: Option<f64>,
     /// Number of cross-validation folds (≥ 2).
     pub folds: usize,
@@ -157,9 +157,9 @@ impl Default for Config {
 /// The noise floor used.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NoiseFloor {
-    /// Position noise, 1σ per axis [m].
+    /// Position noise, 1σ per axis \[m\].
     pub sigma_pos_m: f64,
-    /// Rotation noise, 1σ per axis [rad].
+    /// Rotation noise, 1σ per axis \[rad\].
     pub sigma_rot_rad: f64,
     /// Degrees of freedom of the position estimate (infinite when stated).
     pub dof_pos: f64,
@@ -174,12 +174,12 @@ pub struct NoiseFloor {
 }
 
 impl NoiseFloor {
-    /// Expected RMS position error of a pose at the noise floor, √3·σ_pos [m].
+    /// Expected RMS position error of a pose at the noise floor, √3·σ_pos \[m\].
     #[must_use]
     pub fn rms_pos_m(&self) -> f64 {
         sqrt(3.0) * self.sigma_pos_m
     }
-    /// Expected RMS rotation angle at the noise floor, √3·σ_rot [rad].
+    /// Expected RMS rotation angle at the noise floor, √3·σ_rot \[rad\].
     #[must_use]
     pub fn rms_rot_rad(&self) -> f64 {
         sqrt(3.0) * self.sigma_rot_rad
@@ -224,9 +224,9 @@ pub struct ModelScore {
     pub least_distinct: Option<ParamIndex>,
     /// Whether the model was cross-validated (false: no effect parameter identifiable).
     pub evaluated: bool,
-    /// Held-out RMS position error [m].
+    /// Held-out RMS position error \[m\].
     pub heldout_rms_pos_m: f64,
-    /// Held-out RMS rotation angle [rad].
+    /// Held-out RMS rotation angle \[rad\].
     pub heldout_rms_rot_rad: f64,
     /// Sum over held-out poses of the whitened squared errors.
     pub heldout_chi2: f64,
@@ -276,10 +276,10 @@ pub struct GapTest {
     pub ratio: f64,
     /// z of ln(Q/E).
     pub z: f64,
-    /// Held-out RMS position error expected at the noise floor, √(σ²·Σ(3 + h_pos)/n) [m]
+    /// Held-out RMS position error expected at the noise floor, √(σ²·Σ(3 + h_pos)/n) \[m\]
     /// (√3·σ inflated by the parameter-estimation error on held-out poses).
     pub expected_rms_pos_m: f64,
-    /// Held-out RMS rotation angle expected at the noise floor [rad].
+    /// Held-out RMS rotation angle expected at the noise floor \[rad\].
     pub expected_rms_rot_rad: f64,
 }
 
@@ -503,9 +503,9 @@ pub struct Diagnosis<const N: usize> {
     pub verdict: Verdict,
     /// Gap test of the verdict's model (the baseline's without effects): what remains.
     pub remaining: GapTest,
-    /// Held-out RMS position error of the verdict's model [m].
+    /// Held-out RMS position error of the verdict's model \[m\].
     pub final_heldout_rms_pos_m: f64,
-    /// Held-out RMS rotation angle of the verdict's model [rad].
+    /// Held-out RMS rotation angle of the verdict's model \[rad\].
     pub final_heldout_rms_rot_rad: f64,
     /// Where the geometric calibration's residual lies.
     pub location: Location,

@@ -48,7 +48,7 @@ pub struct Measurement<const N: usize> {
     /// Weight of the pose in the fit (>= 0): 1 normally, 0 to hold it out (cross-validation),
     /// other values for robust reweighting. Multiplies the row weights.
     pub weight: f64,
-    /// The measured point's position in the tool frame [m], known by design (one of several
+    /// The measured point's position in the tool frame \[m\], known by design (one of several
     /// markers or reflectors on the end effector): the measurement is then of the frame
     /// `T_e^b(q)·Trans(point)` — the tool frame moved to that point, not rotated — so
     /// several points on one body share one tool frame (whose parameters, with position-only
@@ -343,13 +343,13 @@ pub struct ResidualStats {
     pub rows: usize,
     /// Weighted sum of squares (the identification cost).
     pub cost: f64,
-    /// RMS of |e_p| over poses with a measured position [m].
+    /// RMS of |e_p| over poses with a measured position \[m\].
     pub rms_pos_m: f64,
-    /// Largest |e_p| [m].
+    /// Largest |e_p| \[m\].
     pub max_pos_m: f64,
-    /// RMS of the rotation angle over poses with a measured orientation [rad].
+    /// RMS of the rotation angle over poses with a measured orientation \[rad\].
     pub rms_rot_rad: f64,
-    /// Largest rotation angle [rad].
+    /// Largest rotation angle \[rad\].
     pub max_rot_rad: f64,
 }
 

@@ -120,9 +120,9 @@ pub struct RobustOptions {
     pub weight_tol: f64,
     /// Fixed per-axis scales `(σ_p [m], σ_φ [rad])` instead of the robust estimate.
     pub scale: Option<(f64, f64)>,
-    /// Lower bound of the estimated σ_p [m] (noise-free data fit to rounding).
+    /// Lower bound of the estimated σ_p \[m\] (noise-free data fit to rounding).
     pub min_scale_pos_m: f64,
-    /// Lower bound of the estimated σ_φ [rad].
+    /// Lower bound of the estimated σ_φ \[rad\].
     pub min_scale_rot_rad: f64,
 }
 
@@ -149,9 +149,9 @@ impl RobustOptions {
 pub struct PoseResidual {
     /// The caller's weight of the pose (0: held out).
     pub prior_weight: f64,
-    /// |e_p| over the measured position components [m] (0 if none).
+    /// |e_p| over the measured position components \[m\] (0 if none).
     pub pos_m: f64,
-    /// |e_φ| over the measured orientation components [rad] (0 if none).
+    /// |e_φ| over the measured orientation components \[rad\] (0 if none).
     pub rot_rad: f64,
     /// Number of measured components k (1..=6).
     pub components: u8,
@@ -166,9 +166,9 @@ pub struct PoseResidual {
 /// Outcome of [`residual_test`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ResidualTest {
-    /// Per-axis position scale σ_p used [m].
+    /// Per-axis position scale σ_p used \[m\].
     pub scale_pos_m: f64,
-    /// Per-axis orientation scale σ_φ used [rad].
+    /// Per-axis orientation scale σ_φ used \[rad\].
     pub scale_rot_rad: f64,
     /// Number of suspects.
     pub n_suspect: usize,
@@ -438,7 +438,7 @@ fn test_at<const N: usize>(
     Ok(out)
 }
 
-/// Robust identification: as [`identify`] (same options, same errors for bad or
+/// Robust identification: as [`identify`](super::identify) (same options, same errors for bad or
 /// insufficient data), then iteratively reweighted fits with `ropts.loss`, then the residual
 /// test at the final model. `report` (`report.len() == data.len()`) receives every pose's
 /// residuals, standardised residual, final robust weight and suspect flag. The weights in
