@@ -74,10 +74,168 @@ pub fn is_same_file(output: &Path, input: &Path) -> bool {
     same_inode(output, input)
 }
 
+/// What an output path is before it is written: the file that will really be replaced
+/// (a symlink is followed to its final target) and its permission bits, if it exists.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct OutputTarget {
+    /// The path the new file is renamed onto: `path` itself, or the final target of the
+    /// symlink `path` names.
+    pub path: PathBuf,
+    /// Unix permission bits of the existing file (kept by the replacement); `None` for a
+    /// new file.
+    pub mode: Option<u32>,
+}
+
+/// Checks that `path` may be written: absent, or a regular file that is not
+/// write-protected; a symlink is followed to its final target, which must be such a file
+/// (a dangling symlink is refused: kincal never creates a file at a link's far end). Device
+/// nodes, FIFOs, sockets and directories are refused: an atomic rename would replace the
+/// node itself (as root, `--out /dev/null` would replace the system's /dev/null). The
+/// containing folder must exist. The error says why, in words for the user.
+pub fn output_target(path: &Path) -> Result<OutputTarget, String> {
+    if path.file_name().is_none() {
+        return Err("the path names no file".into());
+    }
+    let link = fs::symlink_metadata(path);
+    let target = match &link {
+        Ok(m) if m.file_type().is_symlink() => fs::canonicalize(path).map_err(|e| {
+            format!("it is a symlink whose target cannot be resolved ({e}); kincal writes through a symlink only to an existing regular file")
+        })?,
+        _ => path.to_path_buf(),
+    };
+    let dir = parent_dir(&target);
+    match fs::metadata(dir) {
+        Ok(m) if m.is_dir() => {}
+        Ok(_) => return Err(format!("'{}' is not a folder", dir.display())),
+        Err(_) => {
+            return Err(format!(
+                "the folder '{}' does not exist (kincal creates no folders: create it first)",
+                dir.display()
+            ));
+        }
+    }
+    let meta = match fs::metadata(&target) {
+        Ok(m) => m,
+        Err(e) if e.kind() == io::ErrorKind::NotFound => {
+            return Ok(OutputTarget {
+                path: target,
+                mode: None,
+            });
+        }
+        Err(e) => return Err(format!("cannot inspect it: {e}")),
+    };
+    if !meta.is_file() {
+        return Err(format!(
+            "it is {}, not a regular file: kincal writes only regular files",
+            kind_of(&meta)
+        ));
+    }
+    if meta.permissions().readonly() {
+        return Err(
+            "it is write-protected (no write permission bits): kincal does not replace it; \
+             make it writable or choose another path"
+                .into(),
+        );
+    }
+    Ok(OutputTarget {
+        path: target,
+        mode: mode_of(&meta),
+    })
+}
+
+/// The folder a file path lives in (`.` for a bare name).
+fn parent_dir(p: &Path) -> &Path {
+    match p.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    }
+}
+
+#[cfg(unix)]
+fn kind_of(m: &fs::Metadata) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    let t = m.file_type();
+    if t.is_dir() {
+        "a directory"
+    } else if t.is_fifo() {
+        "a FIFO (named pipe)"
+    } else if t.is_char_device() {
+        "a character device"
+    } else if t.is_block_device() {
+        "a block device"
+    } else if t.is_socket() {
+        "a socket"
+    } else {
+        "a special file"
+    }
+}
+
+#[cfg(not(unix))]
+fn kind_of(m: &fs::Metadata) -> &'static str {
+    if m.is_dir() {
+        "a directory"
+    } else {
+        "a special file"
+    }
+}
+
+#[cfg(unix)]
+fn mode_of(m: &fs::Metadata) -> Option<u32> {
+    use std::os::unix::fs::PermissionsExt;
+    Some(m.permissions().mode() & 0o7777)
+}
+
+#[cfg(not(unix))]
+fn mode_of(_m: &fs::Metadata) -> Option<u32> {
+    None
+}
+
+/// Prefix of the temporary file for `name`: `.kincal-<name>-<pid>-`, so that a leftover is
+/// recognisable (which output, which process) and can be removed once its process is gone.
+fn temp_prefix(name: &str, pid: u32) -> String {
+    format!(".kincal-{name}-{pid}-")
+}
+
+/// Removes temporary files of earlier runs writing `name` in `dir` whose process no longer
+/// exists (a run killed between creating and renaming its temporary file). Linux only
+/// (liveness from /proc); elsewhere nothing is removed.
+fn remove_stale_temporaries(dir: &Path, name: &str) {
+    let proc_root = Path::new("/proc/self");
+    if !proc_root.exists() {
+        return;
+    }
+    let head = format!(".kincal-{name}-");
+    let Ok(entries) = fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let file_name = entry.file_name();
+        let Some(rest) = file_name
+            .to_str()
+            .and_then(|f| f.strip_prefix(&head))
+            .filter(|r| r.ends_with(".tmp"))
+        else {
+            continue;
+        };
+        let Some(pid) = rest.split('-').next().and_then(|p| p.parse::<u32>().ok()) else {
+            continue;
+        };
+        let alive = Path::new("/proc").join(pid.to_string()).exists();
+        let is_file = entry.file_type().is_ok_and(|t| t.is_file());
+        if !alive && is_file {
+            let _ = fs::remove_file(entry.path());
+        }
+    }
+}
+
 /// Writes `path` atomically: `write` fills a temporary file in the same directory, which is
 /// flushed, fsynced and then renamed over `path`. Refuses (kind `SameAsInput`) if `path`
-/// is one of `inputs` (same canonical path, or same device and inode). On any error the
-/// target is untouched and the temporary file is removed.
+/// is one of `inputs` (same canonical path, or same device and inode), and (kind `Io`) a
+/// path [`output_target`] refuses: only regular files or absent paths are written; a
+/// symlink is followed and its target replaced (the link stays). An existing file keeps its
+/// permission bits (not its owner). The temporary file is `.kincal-<name>-<pid>-<random>.tmp`;
+/// on any error the target is untouched and the temporary file is removed, and leftovers of
+/// killed runs are removed by the next write of the same output.
 pub fn write_atomic(
     path: &Path,
     inputs: &[&Path],
@@ -103,34 +261,40 @@ pub fn write_atomic(
             });
         }
     }
-    if path.file_name().is_none() {
-        return Err(io_err(
-            "cannot write",
-            io::Error::new(io::ErrorKind::InvalidInput, "the path names no file"),
-        ));
-    }
-    if path.is_dir() {
-        return Err(io_err(
-            "cannot write",
-            io::Error::new(io::ErrorKind::IsADirectory, "the path is a directory"),
-        ));
-    }
+    let target = output_target(path).map_err(|reason| OutputError {
+        path: shown.clone(),
+        kind: OutputErrorKind::Io,
+        reason: format!("cannot write: {reason}"),
+    })?;
+    let dir = parent_dir(&target.path);
+    let name = target
+        .path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    remove_stale_temporaries(dir, &name);
 
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
     let mut builder = tempfile::Builder::new();
-    builder.prefix(".kincal-").suffix(".tmp");
+    let prefix = temp_prefix(&name, std::process::id());
+    builder.prefix(&prefix).suffix(".tmp");
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt;
-        // Like any newly created file: 0666 less the umask (tempfile's default is 0600).
-        builder.permissions(fs::Permissions::from_mode(0o666));
+        // An existing output keeps its bits; a new one is like any newly created file:
+        // 0666 less the umask (tempfile's default is 0600).
+        builder.permissions(fs::Permissions::from_mode(target.mode.unwrap_or(0o666)));
     }
     let tmp = builder
         .tempfile_in(dir)
         .map_err(|e| io_err("cannot create a temporary file in the output directory", e))?;
+    #[cfg(unix)]
+    if let Some(mode) = target.mode {
+        // Creation applies the umask; the existing file's bits are restored exactly.
+        use std::os::unix::fs::PermissionsExt;
+        tmp.as_file()
+            .set_permissions(fs::Permissions::from_mode(mode))
+            .map_err(|e| io_err("cannot set the permissions of the temporary file", e))?;
+    }
 
     {
         let mut out = BufWriter::new(tmp.as_file());
@@ -141,7 +305,7 @@ pub fn write_atomic(
         .sync_all()
         .map_err(|e| io_err("fsync failed", e))?;
     // On failure the returned PersistError owns the temporary file and deletes it on drop.
-    tmp.persist(path)
+    tmp.persist(&target.path)
         .map_err(|e| io_err("cannot rename the temporary file into place", e.error))?;
     #[cfg(unix)]
     {

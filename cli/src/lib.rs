@@ -26,6 +26,7 @@ pub mod design_args;
 pub mod designs;
 pub mod diagnosis_plot;
 pub mod error;
+pub mod file_plan;
 pub mod files;
 pub mod measurements;
 pub mod model_file;

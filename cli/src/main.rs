@@ -2,7 +2,7 @@
 
 use kincal_cli::{
     cmd_calibrate, cmd_crossval, cmd_demo, cmd_design_tool, cmd_diagnose, cmd_evaluate, cmd_import,
-    cmd_markers, cmd_observed_point, cmd_predict, cmd_select, cmd_validate,
+    cmd_markers, cmd_observed_point, cmd_predict, cmd_select, cmd_validate, file_plan,
 };
 
 use std::process::ExitCode;
@@ -74,7 +74,38 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result = match &cli.command {
+    let result = plan(&cli.command).check().and_then(|()| run(&cli.command));
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("kincal: error: {}", e.message);
+            ExitCode::from(e.exit as u8)
+        }
+    }
+}
+
+/// Every input and output path of the command, checked before any work
+/// (`kincal_cli::file_plan`).
+fn plan(command: &Command) -> file_plan::FilePlan {
+    match command {
+        // The demo reads nothing and writes only inside the folder it creates.
+        Command::Demo(_) => file_plan::FilePlan::new(),
+        Command::Calibrate(a) => file_plan::calibrate(a),
+        Command::Predict(a) => file_plan::predict(a),
+        Command::Validate(a) => file_plan::validate(a),
+        Command::SelectPoses(a) => file_plan::select_poses(a),
+        Command::DesignTool(a) => file_plan::design_tool(a),
+        Command::EvaluateDesigns(a) => file_plan::evaluate_designs(a),
+        Command::Diagnose(a) => file_plan::diagnose(a),
+        Command::ImportDataset(a) => file_plan::import_dataset(a),
+        Command::Crossval(a) => file_plan::crossval(a),
+        Command::Markers(a) => file_plan::markers(a),
+        Command::ObservedPoint(a) => file_plan::observed_point(a),
+    }
+}
+
+fn run(command: &Command) -> Result<(), kincal_cli::error::CliError> {
+    match command {
         Command::Demo(a) => cmd_demo::run(a),
         Command::Calibrate(a) => cmd_calibrate::run(a),
         Command::Predict(a) => cmd_predict::run(a),
@@ -87,12 +118,5 @@ fn main() -> ExitCode {
         Command::Crossval(a) => cmd_crossval::run(a),
         Command::Markers(a) => cmd_markers::run(a),
         Command::ObservedPoint(a) => cmd_observed_point::run(a),
-    };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("kincal: error: {}", e.message);
-            ExitCode::from(e.exit as u8)
-        }
     }
 }
