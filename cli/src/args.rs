@@ -93,3 +93,50 @@ pub fn non_negative(s: &str) -> Result<f64, String> {
         Err(e) => Err(format!("expected a number: {e}")),
     }
 }
+
+/// Parses a number within `[lo, hi]` (both finite, > 0), naming the plausible range.
+fn within(s: &str, lo: f64, hi: f64, unit: &str) -> Result<f64, String> {
+    let v = positive(s)?;
+    if (lo..=hi).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!(
+            "{v:e} {unit} is implausible: expected a value within [{lo:e}, {hi:e}] {unit}"
+        ))
+    }
+}
+
+/// Parses an instrument's position noise, 1σ [mm]: 1 nm to 10 m. Its weight 1/σ² stays
+/// finite (a σ of 1e-200 mm would make it infinite and the fit meaningless).
+pub fn sigma_mm(s: &str) -> Result<f64, String> {
+    within(s, 1e-6, 1e4, "mm")
+}
+
+/// Parses an instrument's orientation noise, 1σ [deg]: 1e-6° to 180°.
+pub fn sigma_deg(s: &str) -> Result<f64, String> {
+    within(s, 1e-6, 180.0, "deg")
+}
+
+/// Parses a least-squares weight [1/m² or 1/rad²] within 1e-30..1e30, so that weighted
+/// squared residuals stay finite.
+pub fn weight(s: &str) -> Result<f64, String> {
+    within(s, 1e-30, 1e30, "")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn noise_and_weights_are_bounded() {
+        assert_eq!(sigma_mm("0.1"), Ok(0.1));
+        assert!(sigma_mm("1e-200").unwrap_err().contains("implausible"));
+        assert!(sigma_mm("1e5").is_err());
+        assert_eq!(sigma_deg("0.02"), Ok(0.02));
+        assert!(sigma_deg("1e-200").is_err());
+        assert!(sigma_deg("360").is_err());
+        assert_eq!(weight("2"), Ok(2.0));
+        assert!(weight("1e300").is_err());
+        assert!(weight("0").is_err());
+    }
+}

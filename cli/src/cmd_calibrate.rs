@@ -113,16 +113,16 @@ pub struct Args {
     #[arg(long)]
     pub allow_data_deficiency: bool,
     /// Weight of the position rows [1/m²] (default 1)
-    #[arg(long, value_name = "W", value_parser = positive, conflicts_with_all = ["sigma_pos_mm", "sigma_rot_deg"])]
+    #[arg(long, value_name = "W", value_parser = crate::args::weight, conflicts_with_all = ["sigma_pos_mm", "sigma_rot_deg"])]
     pub weight_pos: Option<f64>,
     /// Weight of the rotation rows [1/rad²] (default 1)
-    #[arg(long, value_name = "W", value_parser = positive, conflicts_with_all = ["sigma_pos_mm", "sigma_rot_deg"])]
+    #[arg(long, value_name = "W", value_parser = crate::args::weight, conflicts_with_all = ["sigma_pos_mm", "sigma_rot_deg"])]
     pub weight_rot: Option<f64>,
     /// Instrument position noise, 1σ per axis [mm]: weight 1/σ²
-    #[arg(long, value_name = "S", value_parser = positive, requires = "sigma_rot_deg")]
+    #[arg(long, value_name = "S", value_parser = crate::args::sigma_mm, requires = "sigma_rot_deg")]
     pub sigma_pos_mm: Option<f64>,
     /// Instrument orientation noise, 1σ per axis [deg]: weight 1/σ²
-    #[arg(long, value_name = "S", value_parser = positive, requires = "sigma_pos_mm")]
+    #[arg(long, value_name = "S", value_parser = crate::args::sigma_deg, requires = "sigma_pos_mm")]
     pub sigma_rot_deg: Option<f64>,
     /// Orientation error used in the cost
     #[arg(long, value_enum, default_value = "exact")]

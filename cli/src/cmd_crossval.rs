@@ -19,7 +19,7 @@ use kincal::{Effect, EffectSet, ParamSet, Robot};
 use rayon::prelude::*;
 use serde_json::{Value, json};
 
-use crate::args::{parse_effect, positive};
+use crate::args::parse_effect;
 use crate::calibration::new_workspace;
 use crate::data::{self, DataOptions};
 use crate::error::CliError;
@@ -89,10 +89,10 @@ pub struct Args {
     #[arg(long, value_name = "K1,K2", value_delimiter = ',', default_value = "theta0,d,a,alpha", value_parser = ["theta0", "d", "a", "alpha"])]
     pub geometry: Vec<String>,
     /// Instrument position noise, 1σ per axis [mm]: weight 1/σ²
-    #[arg(long, value_name = "S", value_parser = positive, requires = "sigma_rot_deg", conflicts_with = "unit_weights")]
+    #[arg(long, value_name = "S", value_parser = crate::args::sigma_mm, requires = "sigma_rot_deg", conflicts_with = "unit_weights")]
     pub sigma_pos_mm: Option<f64>,
     /// Instrument orientation noise, 1σ per axis [deg]: weight 1/σ²
-    #[arg(long, value_name = "S", value_parser = positive, requires = "sigma_pos_mm")]
+    #[arg(long, value_name = "S", value_parser = crate::args::sigma_deg, requires = "sigma_pos_mm")]
     pub sigma_rot_deg: Option<f64>,
     /// Weights 1 per m² and 1 per rad² (the paper's) instead of residual-based ones
     #[arg(long)]

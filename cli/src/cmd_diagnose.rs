@@ -15,7 +15,7 @@ use kincal::identify::{Algorithm, Measurement};
 use kincal::{Effect, EffectSet, ParamId, ParamIndex, ParamSet, Robot};
 use serde::Serialize;
 
-use crate::args::{parse_effect, positive};
+use crate::args::parse_effect;
 use crate::calibration::{Calibration, Run, Settings, Weighting};
 use crate::data::{self, DataOptions};
 use crate::error::{CliError, core_error};
@@ -73,10 +73,10 @@ pub struct Args {
     #[arg(long, value_name = "ROBOT")]
     pub robot: String,
     /// Instrument position noise, 1σ per axis [mm] (default: from repeats)
-    #[arg(long, value_name = "S", value_parser = positive)]
+    #[arg(long, value_name = "S", value_parser = crate::args::sigma_mm)]
     pub sigma_pos_mm: Option<f64>,
     /// Instrument orientation noise, 1σ per axis [deg] (default: from repeats)
-    #[arg(long, value_name = "S", value_parser = positive)]
+    #[arg(long, value_name = "S", value_parser = crate::args::sigma_deg)]
     pub sigma_rot_deg: Option<f64>,
     /// The diagnosis report (JSON)
     #[arg(long, value_name = "REPORT.json")]
@@ -196,6 +196,22 @@ pub fn group_ids(set: &MeasurementSet) -> Vec<u32> {
         .collect()
 }
 
+/// Why the repeats gave no noise floor: there are none, or those there are agree exactly.
+fn why_no_repeat_scatter(groups: &[u32]) -> String {
+    let mut sorted = groups.to_vec();
+    sorted.sort_unstable();
+    let repeated = sorted.windows(2).filter(|w| w[0] == w[1]).count();
+    if repeated == 0 {
+        "no pose_id was measured twice under the same conditions (same s1..sN, temperatures within 0.5 °C)".into()
+    } else {
+        format!(
+            "{repeated} row(s) repeat an earlier pose_id, but the repeats under the same conditions \
+             (same s1..sN, temperatures within 0.5 °C) agree exactly or differ in those conditions: \
+             zero scatter estimates no noise"
+        )
+    }
+}
+
 /// Reads DATA, runs the diagnosis and writes every output; returns the readable report.
 pub fn execute<const N: usize>(
     robot: &Robot<N>,
@@ -224,9 +240,10 @@ pub fn execute<const N: usize>(
         kincal::Error::MissingInput {
             what: kincal::Quantity::NoiseFloor,
         } => CliError::usage(format!(
-            "{}: no noise floor: no pose_id was measured twice under the same conditions (same s1..sN, temperatures within 0.5 °C), and --sigma-pos-mm/--sigma-rot-deg are not given\n\
+            "{}: no noise floor: {}, and --sigma-pos-mm/--sigma-rot-deg are not given\n\
              hint: state the instrument's noise (1σ per axis) with --sigma-pos-mm and --sigma-rot-deg, or repeat some poses",
-            set.source
+            set.source,
+            why_no_repeat_scatter(&groups)
         )),
         kincal::Error::TooFewData { found, needed } => CliError::input(format!(
             "{}: {found} distinct pose_id groups, {needed} folds need at least {needed}",

@@ -88,7 +88,7 @@ pub struct Args {
     #[arg(long, value_name = "DATA.csv")]
     pub out: PathBuf,
     /// Marker noise, 1σ per axis [mm] (overrides the design's sigma_mm)
-    #[arg(long, value_name = "S", value_parser = positive)]
+    #[arg(long, value_name = "S", value_parser = crate::args::sigma_mm)]
     pub sigma_mm: Option<f64>,
     /// Outlier threshold in units of σ on a marker's 3-D residual
     #[arg(long, value_name = "K", default_value = "4", value_parser = positive)]

@@ -87,6 +87,30 @@ pub struct Evaluation {
 }
 
 /// Per-pose errors of `robot` on `meas` (orientation errors zero for position-only rows).
+/// Refuses errors that overflowed (no table, JSON or figure may carry them), naming the
+/// first row.
+fn refuse_non_finite(
+    e: &Evaluation,
+    set: &crate::measurements::MeasurementSet,
+) -> Result<(), CliError> {
+    let bad = e.errors.iter().position(|p| {
+        !p.pos_m
+            .iter()
+            .chain(&p.rot_rad)
+            .chain([&p.pos_norm_m, &p.rot_norm_rad])
+            .all(|v| v.is_finite())
+    });
+    match bad {
+        None => Ok(()),
+        Some(i) => Err(CliError::numeric(format!(
+            "{}:{}: the error of model {} overflowed (not a finite number): the model or the data hold implausibly large numbers",
+            set.source,
+            data::line_of(set, i).unwrap_or(0),
+            e.name
+        ))),
+    }
+}
+
 pub fn evaluate<const N: usize>(
     name: &str,
     robot: &Robot<N>,
@@ -317,6 +341,9 @@ fn validate<const N: usize>(
         .map(|(n, r)| evaluate(n, r, &meas))
         .collect::<Result<Vec<_>, _>>()
         .map_err(fail)?;
+    for e in std::iter::once(&main).chain(&evals) {
+        refuse_non_finite(e, &set)?;
+    }
     let targets = Targets {
         pos_m: args.target_pos_mm * 1e-3,
         rot_rad: args.target_rot_deg.to_radians(),

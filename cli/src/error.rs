@@ -89,7 +89,18 @@ pub fn core_error(
         None => file.to_string(),
     };
     match e {
-        E::NonFinite { index, .. } => CliError::input(format!("{}: {e}", at(index))),
+        // The readers refuse non-finite and implausibly large numbers, so a non-finite
+        // value here arose in the computation: its `index` is a parameter, option or vector
+        // element, not a row, and no line of DATA is to blame.
+        E::NonFinite {
+            what: kincal::Quantity::Setting,
+            ..
+        } => CliError::usage(format!(
+            "an option gave a non-finite number ({e}): check the weights, noise levels and bounds given"
+        )),
+        E::NonFinite { .. } => CliError::numeric(format!(
+            "{file}: the computation overflowed ({e}): the data or the robot hold numbers too large to fit"
+        )),
         E::BadPose { pose } => CliError::input(format!("{}: {e}", at(pose.0))),
         E::OutOfLimits { .. } | E::MissingInput { .. } | E::DimensionMismatch { .. } => {
             CliError::input(format!("{file}: {e}"))

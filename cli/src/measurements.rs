@@ -256,6 +256,18 @@ struct Records<R> {
     n_ends: usize,
 }
 
+/// Longest record (line, or lines of one quoted record) read: a longer one is refused
+/// instead of buffered without limit (`kincal calibrate /dev/zero`).
+pub const MAX_RECORD_BYTES: usize = 1 << 20;
+/// Most fields in one record.
+pub const MAX_FIELDS: usize = 4096;
+/// Longest field (a pose label or an extra column included).
+pub const MAX_FIELD_BYTES: usize = 64 * 1024;
+
+fn too_long(what: String) -> io::Error {
+    io::Error::new(io::ErrorKind::InvalidData, what)
+}
+
 fn count_newlines(b: &[u8]) -> u64 {
     b.iter().filter(|&&c| c == b'\n').count() as u64
 }
@@ -304,7 +316,13 @@ impl<R: BufRead> Records<R> {
     /// Reads one raw line, terminator included.
     fn read_raw_line(&mut self, raw: &mut Vec<u8>) -> io::Result<()> {
         raw.clear();
-        self.rdr.read_until(b'\n', raw)?;
+        let limit = MAX_RECORD_BYTES as u64 + 1;
+        (&mut self.rdr).take(limit).read_until(b'\n', raw)?;
+        if raw.len() > MAX_RECORD_BYTES {
+            return Err(too_long(format!(
+                "line longer than {MAX_RECORD_BYTES} bytes: expected a comment line of ordinary length"
+            )));
+        }
         self.line += count_newlines(raw);
         Ok(())
     }
@@ -331,11 +349,22 @@ impl<R: BufRead> Records<R> {
             match res {
                 csv_core::ReadRecordResult::InputEmpty => {}
                 csv_core::ReadRecordResult::OutputFull => {
-                    let n = self.out.len() * 2;
+                    if self.out.len() >= MAX_RECORD_BYTES {
+                        return Err(too_long(format!(
+                            "record longer than {MAX_RECORD_BYTES} bytes (no line end, or an \
+                             unterminated quote): expected rows of ordinary length"
+                        )));
+                    }
+                    let n = (self.out.len() * 2).min(MAX_RECORD_BYTES);
                     self.out.resize(n, 0);
                 }
                 csv_core::ReadRecordResult::OutputEndsFull => {
-                    let n = self.ends.len() * 2;
+                    if self.ends.len() >= MAX_FIELDS {
+                        return Err(too_long(format!(
+                            "more than {MAX_FIELDS} fields in one row: expected the header's columns"
+                        )));
+                    }
+                    let n = (self.ends.len() * 2).min(MAX_FIELDS);
                     self.ends.resize(n, 0);
                 }
                 csv_core::ReadRecordResult::Record => return Ok(Some(start)),
@@ -508,6 +537,21 @@ fn parse_number(cell: &str) -> Result<f64, String> {
     }
 }
 
+/// Refuses a joint reading, position, point or angle beyond
+/// [`crate::units::MAX_MAGNITUDE_SI`] (after unit conversion) and a temperature beyond
+/// ±1000 °C: finite, but not a measurement.
+fn plausible(kind: Kind, v: f64) -> Result<f64, String> {
+    let why = match kind {
+        Kind::Joint(_) | Kind::Pos(_) | Kind::Point(_) | Kind::Rpy(_) => {
+            crate::units::implausible_si(v)
+        }
+        Kind::Temp => (v.abs() > 1e3)
+            .then(|| format!("{v} °C is implausible: expected a temperature within ±1000 °C")),
+        Kind::PoseId | Kind::Quat(_) | Kind::Approach(_) | Kind::Extra(_) => None,
+    };
+    why.map_or(Ok(v), Err)
+}
+
 fn convert(v: f64, unit: Unit) -> f64 {
     match unit {
         Unit::Deg => v.to_radians(),
@@ -553,7 +597,34 @@ impl<'a> Parser<'a> {
     }
 
     fn io_err(&self, line: Option<u64>, e: io::Error) -> InputError {
+        if e.kind() == io::ErrorKind::InvalidData {
+            // A record over the size caps: a property of the file, not a failed read.
+            return self.err(line, None, e.to_string());
+        }
         self.err(line, None, format!("read error: {e}"))
+    }
+
+    /// Refuses a field longer than [`MAX_FIELD_BYTES`], naming its column.
+    fn check_field_lengths(
+        &self,
+        fields: &[&str],
+        columns: &[Column],
+        line: u64,
+    ) -> Result<(), InputError> {
+        match fields.iter().position(|f| f.len() > MAX_FIELD_BYTES) {
+            None => Ok(()),
+            Some(i) => {
+                let hash = format!("#{}", i + 1);
+                let name = columns.get(i).map_or(hash.as_str(), |c| c.name.as_str());
+                Err(self.err(
+                    Some(line),
+                    Some(name),
+                    format!(
+                        "cell longer than {MAX_FIELD_BYTES} bytes: expected a number or a short label"
+                    ),
+                ))
+            }
+        }
     }
 
     fn run(&self, reader: impl Read) -> Result<MeasurementSet, InputError> {
@@ -639,6 +710,7 @@ impl<'a> Parser<'a> {
                     format!("cell is not valid UTF-8 ({e}): expected UTF-8 text"),
                 )
             })?;
+            self.check_field_lengths(&fields, &layout.columns, line)?;
             rows.push(self.row(&layout, &fields, line, n_fields)?);
         }
         if rows.is_empty() {
@@ -931,6 +1003,7 @@ impl<'a> Parser<'a> {
             let col = &cols[c];
             parse_number(rec[c])
                 .map(|v| convert(v, col.unit))
+                .and_then(|v| plausible(col.kind, v))
                 .map_err(|r| self.err(Some(line), Some(&col.name), r))
         };
 
@@ -2069,23 +2142,24 @@ mod tests {
         fn unit(&mut self) -> f64 {
             (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
         }
-        /// Any finite double: random bit patterns, special values, plain decimals.
+        /// Any finite double the readers accept (magnitude at most
+        /// `units::MAX_MAGNITUDE_SI`): random bit patterns, special values, plain decimals.
         fn any(&mut self) -> f64 {
             match self.next_u64() % 6 {
                 0 => {
                     let v = f64::from_bits(self.next_u64());
-                    if v.is_finite() { v } else { 0.1 }
+                    if v.is_finite() { v % 1e3 } else { 0.1 }
                 }
                 1 => [
                     0.0,
                     -0.0,
                     5e-324,
                     -2.2250738585072014e-308,
-                    f64::MAX,
+                    999.9999999999999,
                     f64::MIN_POSITIVE,
                 ][(self.next_u64() % 6) as usize],
                 2 => (self.unit() - 0.5) * 1e-7,
-                3 => (self.unit() - 0.5) * 1e17,
+                3 => (self.unit() - 0.5) * 2e3,
                 _ => (self.unit() - 0.5) * 2.0 * PI,
             }
         }

@@ -777,6 +777,11 @@ impl RobotJson {
             if std::mem::replace(&mut seen[i], true) {
                 return Err(format!("parameter \"{}\" appears twice", p.label));
             }
+            if matches!(crate::units::si_unit(id), "m" | "rad")
+                && let Some(why) = crate::units::implausible_si(p.value)
+            {
+                return Err(format!("parameter \"{}\": {why}", p.label));
+            }
             r.set_param(ParamIndex(i), p.value)
                 .map_err(e(&format!("parameter \"{}\"", p.label)))?;
         }

@@ -44,6 +44,25 @@ fn tick(v: f64, span: f64) -> String {
 
 type Res<T> = Result<T, Box<dyn std::error::Error>>;
 
+/// `top` if finite (see [`require_finite`]).
+pub fn finite_top(top: f64) -> Result<f64, String> {
+    if top.is_finite() {
+        Ok(top)
+    } else {
+        Err("non-finite values (an overflow upstream): the figure is not drawn".into())
+    }
+}
+
+/// Refuses to draw non-finite values: plotters' tick computation on an infinite axis range
+/// never ends (`validate --plot` spun forever on an overflowed error norm).
+pub fn require_finite<'a>(values: impl IntoIterator<Item = &'a f64>) -> Res<()> {
+    if values.into_iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err("non-finite values (an overflow upstream): the figure is not drawn".into())
+    }
+}
+
 fn panel(
     area: &DrawingArea<SVGBackend<'_>, Shift>,
     title: &str,
@@ -63,6 +82,7 @@ fn panel(
         let vals: Vec<f64> = s.errors.iter().map(|e| value(e, row)).collect();
         let m = vals.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         let m = if m > 0.0 { m * 1.15 } else { 1e-9 };
+        require_finite(vals.iter().chain([&m, &target]))?;
         // The norm row shows the target when the data stay readable next to it (errors
         // at least 5% of the target); far smaller errors are autoscaled without it.
         let show_target = row == 3 && m >= 0.05 * target;
@@ -238,6 +258,7 @@ pub fn heldout_svg(
                 .map(value)
                 .fold(0.0f64, f64::max);
             let hi = if top > 0.0 { top * 1.15 } else { 1e-9 };
+            require_finite([&hi])?;
             let mut chart = ChartBuilder::on(area)
                 .margin(12)
                 .x_label_area_size(36)

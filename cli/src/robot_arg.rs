@@ -86,14 +86,42 @@ pub struct ModelSpec {
     pub from_file: bool,
 }
 
+/// Refuses MODEL text that is neither a model file nor a robot description, rather than
+/// reporting TOML errors for it: an empty file, or JSON that is not an object.
+fn refuse_what_is_neither(text: &str, arg: &str) -> Result<(), CliError> {
+    let body = text.trim_start_matches('\u{feff}');
+    if body.trim().is_empty() {
+        return Err(CliError::input(format!(
+            "{arg}:1:1: empty file: expected a model file (a JSON object) or a robot description (TOML or .urdf)"
+        )));
+    }
+    if !model_file::looks_like_json(body)
+        && let Ok(v) = serde_json::from_str::<serde_json::Value>(body)
+    {
+        let kind = match v {
+            serde_json::Value::Array(_) => "a JSON array",
+            serde_json::Value::String(_) => "a JSON string",
+            serde_json::Value::Number(_) => "a JSON number",
+            _ => "a JSON literal",
+        };
+        return Err(CliError::input(format!(
+            "{arg}:1:1: the file is {kind}: expected a model file (a JSON object with \"schema_version\") or a robot description"
+        )));
+    }
+    Ok(())
+}
+
 /// Resolves a MODEL argument: a model file (JSON with `schema_version`), else a ROBOT.
 pub fn resolve_model(arg: &str) -> Result<ModelSpec, CliError> {
     let path = Path::new(arg);
     if built_in(arg).is_none() && path.is_file() {
         let text = std::fs::read_to_string(path)
             .map_err(|e| CliError::input(format!("{arg}: cannot read: {e}")))?;
-        if model_file::looks_like_json(&text) {
-            let file = model_file::parse(&text, arg)?;
+        refuse_what_is_neither(&text, arg)?;
+        // A UTF-8 byte-order mark is not part of the JSON.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+        if model_file::looks_like_json(text) {
+            let file = model_file::parse(text, arg)?;
             let robot = file
                 .robot
                 .any_robot()

@@ -113,7 +113,9 @@ struct Source<'a> {
 }
 
 type SF = Option<Spanned<f64>>;
-type SV3 = Option<Spanned<[f64; 3]>>;
+/// A 3-vector as written: any length, so that `[0, 0, 0, 0.05]` is refused by [`pick3`]
+/// instead of silently truncated to three elements by the deserialiser.
+type SV3 = Option<Spanned<Vec<f64>>>;
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -172,6 +174,17 @@ struct RawJoint {
 enum Unit {
     Length,
     Angle,
+    /// Masses [kg] and gravity [m/s²]: no suffixed form, a looser magnitude bound.
+    Plain,
+}
+
+/// Why the value `x` (SI) of a quantity in `unit` is implausible, if it is.
+fn implausible(x: f64, unit: Unit) -> Option<String> {
+    match unit {
+        Unit::Length | Unit::Angle => crate::units::implausible_si(x),
+        Unit::Plain => (x.abs() > 1e6)
+            .then(|| format!("{x:e} is implausibly large: expected a magnitude of at most 1e6")),
+    }
 }
 
 /// One quantity given in base units or suffixed units (`_mm` / `_deg`), at most one form.
@@ -186,6 +199,7 @@ fn pick(
     let suffix = match unit {
         Unit::Length => "_mm",
         Unit::Angle => "_deg",
+        Unit::Plain => "",
     };
     let (name, v) = match (plain, suffixed) {
         (Some(p), Some(s)) => {
@@ -229,11 +243,15 @@ fn pick(
             format!("{x} is not a finite number"),
         ));
     }
-    Ok(Some(match (unit, suffixed.is_some()) {
-        (_, false) => x,
+    let si = match (unit, suffixed.is_some()) {
         (Unit::Length, true) => x / 1000.0,
         (Unit::Angle, true) => x.to_radians(),
-    }))
+        _ => x,
+    };
+    if let Some(why) = implausible(si, unit) {
+        return Err(DescriptionError::at(src, Some(v.span()), Some(name), why));
+    }
+    Ok(Some(si))
 }
 
 /// A 3-vector picked from one of its forms: key used, its span, value in SI units.
@@ -249,6 +267,7 @@ fn pick3(
     let suffix = match unit {
         Unit::Length => "_mm",
         Unit::Angle => "_deg",
+        Unit::Plain => "",
     };
     let (name, v) = match (plain, suffixed) {
         (Some(p), Some(s)) => {
@@ -268,7 +287,14 @@ fn pick3(
         (None, Some(s)) => (format!("{key}{suffix}"), s),
         (None, None) => return Ok(None),
     };
-    let x = *v.get_ref();
+    let x: [f64; 3] = v.get_ref().as_slice().try_into().map_err(|_| {
+        DescriptionError::at(
+            src,
+            Some(v.span()),
+            Some(name.clone()),
+            format!("expected 3 numbers [x, y, z], found {}", v.get_ref().len()),
+        )
+    })?;
     if x.iter().any(|c| !c.is_finite()) {
         return Err(DescriptionError::at(
             src,
@@ -278,11 +304,15 @@ fn pick3(
         ));
     }
     let conv = |c: f64| match (unit, suffixed.is_some()) {
-        (_, false) => c,
         (Unit::Length, true) => c / 1000.0,
         (Unit::Angle, true) => c.to_radians(),
+        _ => c,
     };
-    Ok(Some((name, v.span(), x.map(conv))))
+    let si = x.map(conv);
+    if let Some(why) = si.iter().find_map(|&c| implausible(c, unit)) {
+        return Err(DescriptionError::at(src, Some(v.span()), Some(name), why));
+    }
+    Ok(Some((name, v.span(), si)))
 }
 
 /// `[px, py, pz, rx, ry, rz]` of a frame table (identity when absent).
@@ -383,8 +413,7 @@ pub fn parse_robot_description(
                 format!("upper limit {upper} rad is below the lower limit {lower} rad"),
             ));
         }
-        let mass =
-            pick(&src, &k("mass_kg"), &j.mass_kg, &None, Unit::Length, false)?.unwrap_or(0.0);
+        let mass = pick(&src, &k("mass_kg"), &j.mass_kg, &None, Unit::Plain, false)?.unwrap_or(0.0);
         if mass < 0.0 {
             return Err(DescriptionError::at(
                 &src,
@@ -445,7 +474,7 @@ pub fn parse_robot_description(
         Some(m) => {
             let m = m.get_ref();
             let t =
-                pick(&src, "mass.tool_kg", &m.tool_kg, &None, Unit::Length, false)?.unwrap_or(0.0);
+                pick(&src, "mass.tool_kg", &m.tool_kg, &None, Unit::Plain, false)?.unwrap_or(0.0);
             if t < 0.0 {
                 return Err(DescriptionError::at(
                     &src,
@@ -454,7 +483,7 @@ pub fn parse_robot_description(
                     format!("mass {t} kg is negative"),
                 ));
             }
-            let g = pick3(&src, "mass.gravity", &m.gravity, &None, Unit::Length)?
+            let g = pick3(&src, "mass.gravity", &m.gravity, &None, Unit::Plain)?
                 .map_or([0.0, 0.0, -9.81], |g| g.2);
             (t, g)
         }

@@ -58,7 +58,7 @@ fn panel(
         .margin_bottom(40)
         .x_label_area_size(10)
         .y_label_area_size(64)
-        .build_cartesian_2d(0.4f64..(n as f64 + 0.6), 0.0..top)?;
+        .build_cartesian_2d(0.4f64..(n as f64 + 0.6), 0.0..crate::plot::finite_top(top)?)?;
     chart
         .configure_mesh()
         .disable_x_mesh()

@@ -2,6 +2,21 @@
 
 use kincal::ParamId;
 
+/// Largest magnitude a reader accepts for a length [m], a position [m] or an angle [rad]
+/// (joint readings, frames, mDH parameters, limits). Real arms and instruments stay far
+/// below it; beyond it a number is a unit or export error, and its square or product with
+/// another (error norms, transforms) could overflow to infinity downstream.
+pub const MAX_MAGNITUDE_SI: f64 = 1e3;
+
+/// Why `v` [m or rad, SI] is implausible, if it is.
+pub fn implausible_si(v: f64) -> Option<String> {
+    (v.abs() > MAX_MAGNITUDE_SI).then(|| {
+        format!(
+            "{v:e} is implausibly large: expected a magnitude of at most {MAX_MAGNITUDE_SI} (metres or radians)"
+        )
+    })
+}
+
 /// SI unit of a parameter as written in model files.
 pub fn si_unit(id: ParamId) -> &'static str {
     match id {

@@ -254,9 +254,74 @@ pub fn import_urdf_str(
     file: &str,
     sel: &ChainSelection<'_>,
 ) -> Result<ImportedUrdf, DescriptionError> {
+    check_nesting(text, file)?;
     let urdf = urdf_rs::read_from_string(text)
         .map_err(|e| DescriptionError::new(file, None, format!("not a readable URDF: {e}")))?;
     import_urdf(&urdf, file, sel)
+}
+
+/// Deepest element nesting accepted in a URDF (real ones nest about 5 deep). The XML reader
+/// recurses per level: a file nested 20,000 deep overflowed the stack (exit 134).
+pub const MAX_URDF_DEPTH: usize = 64;
+
+/// Refuses XML nested deeper than [`MAX_URDF_DEPTH`] before the recursive parser sees it,
+/// naming the line and column of the first element too deep. A light scan: comments,
+/// `<?…?>`, `<!…>` and quoted attribute values are skipped; malformed XML is left to the
+/// parser.
+pub fn check_nesting(text: &str, file: &str) -> Result<(), DescriptionError> {
+    let b = text.as_bytes();
+    let mut depth = 0usize;
+    let mut i = 0;
+    while let Some(off) = b.get(i..).and_then(|r| r.iter().position(|&c| c == b'<')) {
+        let start = i + off;
+        let rest = &text[start..];
+        i = if rest.starts_with("<!--") {
+            rest.find("-->").map_or(b.len(), |e| start + e + 3)
+        } else if rest.starts_with("<![CDATA[") {
+            rest.find("]]>").map_or(b.len(), |e| start + e + 3)
+        } else if rest.starts_with("</") {
+            depth = depth.saturating_sub(1);
+            start + 2
+        } else if rest.starts_with("<?") || rest.starts_with("<!") {
+            start + 2
+        } else {
+            let end = tag_end(b, start + 1);
+            let self_closing = end > 0 && b.get(end - 1) == Some(&b'/');
+            if !self_closing {
+                depth += 1;
+                if depth > MAX_URDF_DEPTH {
+                    let (line, column) = crate::robot_file::line_col(text, start);
+                    return Err(DescriptionError {
+                        file: file.to_string(),
+                        line: Some(line),
+                        column: Some(column),
+                        key: None,
+                        reason: format!(
+                            "elements nested more than {MAX_URDF_DEPTH} deep: not a URDF (a robot description nests about 5 deep)"
+                        ),
+                    });
+                }
+            }
+            end + 1
+        };
+    }
+    Ok(())
+}
+
+/// Index of the `>` closing the tag whose name starts at `from` (quoted values skipped), or
+/// the end of the text.
+fn tag_end(b: &[u8], from: usize) -> usize {
+    let mut quote: Option<u8> = None;
+    for (k, &c) in b.iter().enumerate().skip(from) {
+        match (quote, c) {
+            (Some(q), _) if c == q => quote = None,
+            (Some(_), _) => {}
+            (None, b'"' | b'\'') => quote = Some(c),
+            (None, b'>') => return k,
+            (None, _) => {}
+        }
+    }
+    b.len()
 }
 
 /// Imports the selected chain of a parsed URDF.
@@ -281,6 +346,14 @@ pub fn import_urdf(
         let o = &j.origin;
         if o.xyz.iter().chain(o.rpy.iter()).any(|v| !v.is_finite()) {
             return Err(jerr(j, "origin has a non-finite number".into()));
+        }
+        if let Some(why) = o
+            .xyz
+            .iter()
+            .chain(o.rpy.iter())
+            .find_map(|&v| crate::units::implausible_si(v))
+        {
+            return Err(jerr(j, format!("origin: {why}")));
         }
         t *= origin_transform(o);
         match j.joint_type {
@@ -309,10 +382,11 @@ pub fn import_urdf(
                     JointLimits::new(-CONTINUOUS_LIMIT_RAD, CONTINUOUS_LIMIT_RAD)
                 } else {
                     let (lo, hi) = (j.limit.lower, j.limit.upper);
-                    if !(lo.is_finite() && hi.is_finite()) || lo >= hi {
+                    let bound = crate::units::MAX_MAGNITUDE_SI;
+                    if !(lo.abs() <= bound && hi.abs() <= bound) || lo >= hi {
                         return Err(jerr(
                             j,
-                            format!("revolute joint without usable limits (lower {lo}, upper {hi}); expected finite lower < upper"),
+                            format!("revolute joint without usable limits (lower {lo}, upper {hi}); expected finite lower < upper within ±{bound} rad"),
                         ));
                     }
                     JointLimits::new(lo, hi)

@@ -200,7 +200,7 @@ fn bad_inputs_are_refused() {
         (
             &["observed-point", "cam.csv", "--out", "cam.csv"][..],
             2,
-            "refusing to write: this is the input file",
+            "names the same file as the input DATA 'cam.csv': an input is never overwritten",
         ),
         (
             &["observed-point", "missing.csv", "--out", "o.csv"][..],

@@ -206,10 +206,10 @@ fn a_failed_command_leaves_an_existing_output_untouched_and_no_temporary_file() 
         d,
         None,
     );
-    // (The bad input is found before the output is checked against the inputs.)
+    // (The outputs are checked against the inputs before any input is read.)
     assert_eq!(
         o.status.code(),
-        Some(3),
+        Some(2),
         "{}",
         String::from_utf8_lossy(&o.stderr)
     );

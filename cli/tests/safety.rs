@@ -382,3 +382,378 @@ fn an_output_in_a_missing_folder_is_refused_before_any_work() {
         &["--out", "names no file"],
     );
 }
+
+// ---- 3. implausible magnitudes, non-finite outputs, no hang ---------------------------
+
+const HEADER6: &str = "pose_id,q1,q2,q3,q4,q5,q6,x,y,z\n";
+
+#[test]
+fn implausible_positions_are_refused_with_line_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv =
+        format!("# two rows\n{HEADER6}a,0,0,0,0,0,0,0.1,0.2,0.3\nb,0,0,0,0,0,0,1e155,0.2,0.3\n");
+    fs::write(dir.path().join("d.csv"), csv).unwrap();
+    let t = Instant::now();
+    // Before: the error norm overflowed and `--plot` spun forever.
+    let o = kincal(
+        &["validate", "aria", "d.csv", "--plot", "e.svg"],
+        dir.path(),
+    );
+    assert!(t.elapsed() < Duration::from_secs(20), "{:?}", t.elapsed());
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("d.csv:4: column 'x'"), "{e}");
+    assert!(e.contains("implausibly large"), "{e}");
+    assert!(!dir.path().join("e.svg").exists());
+    // Millimetre columns are bounded after conversion: 2e6 mm = 2 km.
+    let csv = "q1,q2,q3,q4,q5,q6,x_mm,y_mm,z_mm\n0,0,0,0,0,0,2e6,0,0\n";
+    fs::write(dir.path().join("mm.csv"), csv).unwrap();
+    let o = kincal(&["validate", "aria", "mm.csv"], dir.path());
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("mm.csv:2: column 'x_mm'"),
+        "{}",
+        stderr(&o)
+    );
+    // A joint reading of 1e200 rad, even with --allow-out-of-limits.
+    let csv = format!("{HEADER6}a,0,1e200,0,0,0,0,0.1,0.2,0.3\n");
+    fs::write(dir.path().join("q.csv"), csv).unwrap();
+    let o = kincal(
+        &["validate", "aria", "q.csv", "--allow-out-of-limits"],
+        dir.path(),
+    );
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("q.csv:2: column 'q2'"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn implausible_robot_lengths_are_refused_in_every_description_format() {
+    let dir = tempfile::tempdir().unwrap();
+    // Robot TOML: the line and column of the value.
+    let toml = aria_toml().replacen("\nd = ", "\nd = 1e200 # was ", 1);
+    let (line, _) = toml
+        .lines()
+        .enumerate()
+        .find(|(_, l)| l.contains("1e200"))
+        .unwrap();
+    fs::write(dir.path().join("big.toml"), &toml).unwrap();
+    fs::write(
+        dir.path().join("d.csv"),
+        format!("{HEADER6}a,0,0,0,0,0,0,0.1,0.2,0.3\n"),
+    )
+    .unwrap();
+    let o = kincal(&["validate", "big.toml", "d.csv"], dir.path());
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains(&format!("big.toml:{}:", line + 1)), "{e}");
+    assert!(e.contains("implausibly large"), "{e}");
+    // Model file: a parameter of 1e200 m.
+    let o = kincal(&["predict", "aria", "d.csv", "--out", "p.csv"], dir.path());
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let model = kincal_cli::model_file::ModelFile::nominal("aria", &kincal::aria::nominal());
+    let mut v: serde_json::Value = serde_json::from_str(&model.to_json()).unwrap();
+    let params = v["robot"]["parameters"].as_array_mut().unwrap();
+    let d1 = params.iter_mut().find(|p| p["label"] == "a_2").unwrap();
+    d1["value"] = serde_json::json!(1e200);
+    fs::write(dir.path().join("m.json"), v.to_string()).unwrap();
+    let o = kincal(&["validate", "m.json", "d.csv"], dir.path());
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    assert!(stderr(&o).contains("a_2"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("implausibly large"), "{}", stderr(&o));
+    // URDF: an origin 1e200 m away.
+    let urdf = r#"<robot name="r">
+  <link name="base"/><link name="l1"/>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+    <origin xyz="0 0 1e200" rpy="0 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+</robot>"#;
+    fs::write(dir.path().join("big.urdf"), urdf).unwrap();
+    let o = kincal(&["validate", "big.urdf", "d.csv"], dir.path());
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    assert!(stderr(&o).contains("joint j1"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("implausibly large"), "{}", stderr(&o));
+}
+
+#[test]
+fn plots_refuse_non_finite_values_instead_of_spinning() {
+    use kincal::validation::PoseErrors;
+    use kincal_cli::plot::{Series, error_figure_svg};
+    let bad = PoseErrors {
+        pos_m: [f64::INFINITY, 0.0, 0.0],
+        rot_rad: [0.0; 3],
+        pos_norm_m: f64::INFINITY,
+        rot_norm_rad: 0.0,
+    };
+    let series = [Series {
+        name: "NOM".into(),
+        errors: vec![bad],
+    }];
+    let targets = kincal_cli::cmd_validate::Targets {
+        pos_m: 1e-3,
+        rot_rad: 0.01,
+    };
+    let t = Instant::now();
+    let e = error_figure_svg("t", &series, true, targets).unwrap_err();
+    assert!(e.to_string().contains("non-finite"), "{e}");
+    assert!(t.elapsed() < Duration::from_secs(5));
+}
+
+// ---- 4. deep URDF --------------------------------------------------------------------
+
+#[test]
+fn a_deeply_nested_urdf_is_refused_without_overflowing_the_stack() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = 20_000;
+    let text = format!(
+        "<robot name=\"r\">\n{}{}</robot>\n",
+        "<link name=\"a\">".repeat(n),
+        "</link>".repeat(n)
+    );
+    fs::write(dir.path().join("deep.urdf"), text).unwrap();
+    fs::write(
+        dir.path().join("d.csv"),
+        format!("{HEADER6}a,0,0,0,0,0,0,0.1,0.2,0.3\n"),
+    )
+    .unwrap();
+    let o = kincal(&["validate", "deep.urdf", "d.csv"], dir.path());
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("deep.urdf:2:"), "{e}");
+    assert!(e.contains("nested more than"), "{e}");
+    // Ordinary nesting, comments and quoted '>' pass the scan.
+    let ok = "<?xml version=\"1.0\"?><!-- <a><b><c> --><robot name=\"a>b\"><link name=\"x\"><visual><geometry><box size=\"1 1 1\"/></geometry></visual></link></robot>";
+    kincal_cli::urdf::check_nesting(ok, "ok.urdf").unwrap();
+}
+
+// ---- 5. unbounded lines --------------------------------------------------------------
+
+#[cfg(unix)]
+#[test]
+fn an_endless_line_is_refused_in_bounded_memory() {
+    let dir = tempfile::tempdir().unwrap();
+    let t = Instant::now();
+    let o = kincal(
+        &[
+            "calibrate",
+            "/dev/zero",
+            "--robot",
+            "aria",
+            "--out",
+            "m.json",
+        ],
+        dir.path(),
+    );
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("/dev/zero:1:"), "{e}");
+    assert!(e.contains("record longer than"), "{e}");
+    assert!(t.elapsed() < Duration::from_secs(20), "{:?}", t.elapsed());
+    // A long comment line and a long cell, each named by line (and column).
+    let long = "x".repeat(2 << 20);
+    fs::write(dir.path().join("c.csv"), format!("#{long}\nq1\n0\n")).unwrap();
+    let o = kincal(&["validate", "aria", "c.csv"], dir.path());
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("c.csv:1: line longer than"),
+        "{}",
+        stderr(&o)
+    );
+    let cell = "7".repeat(100_000);
+    fs::write(
+        dir.path().join("f.csv"),
+        format!("{HEADER6}a,0,0,0,0,0,0,0.1,0.2,0.3\n{cell},0,0,0,0,0,0,0.1,0.2,0.3\n"),
+    )
+    .unwrap();
+    let o = kincal(&["validate", "aria", "f.csv"], dir.path());
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("f.csv:3: column 'pose_id': cell longer than"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+// ---- 6. robot TOML arrays ------------------------------------------------------------
+
+#[test]
+fn robot_toml_arrays_of_the_wrong_length_are_refused() {
+    let base = aria_toml();
+    for (from, to, key, found) in [
+        (
+            "[tool]\nxyz = [0.0, 0.0, 0.0]",
+            "[tool]\nxyz = [0, 0, 0, 0.05]",
+            "tool.xyz",
+            "found 4",
+        ),
+        (
+            "[base]\nxyz = [0.0, 0.0, 0.0]\nrpy = [0.0, 0.0, 0.0]",
+            "[base]\nxyz = [0.0, 0.0, 0.0]\nrpy = [0.1, 0.2]",
+            "base.rpy",
+            "found 2",
+        ),
+        (
+            "gravity = [0.0, 0.0, -9.81]",
+            "gravity = [0.0, 0.0, -9.81, 1.0]",
+            "mass.gravity",
+            "found 4",
+        ),
+    ] {
+        assert!(base.contains(from), "aria.toml changed: {from}");
+        let text = base.replacen(from, to, 1);
+        let e = kincal_cli::robot_file::parse_robot_description(&text, "r.toml").unwrap_err();
+        let msg = e.to_string();
+        assert!(msg.contains(key), "{msg}");
+        assert!(msg.contains("expected 3 numbers"), "{msg}");
+        assert!(msg.contains(found), "{msg}");
+        let want_line = text
+            .lines()
+            .position(|l| l.contains(&to[to.rfind('\n').map_or(0, |k| k + 1)..]))
+            .unwrap()
+            + 1;
+        assert_eq!(e.line, Some(want_line), "{msg}");
+    }
+}
+
+// ---- 7. errors blame the right thing ---------------------------------------------------
+
+#[test]
+fn a_bad_option_is_blamed_on_the_option() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(
+        dir.path().join("d.csv"),
+        format!("{HEADER6}a,0,0,0,0,0,0,0.1,0.2,0.3\n"),
+    )
+    .unwrap();
+    for args in [
+        &[
+            "calibrate",
+            "d.csv",
+            "--robot",
+            "aria",
+            "--out",
+            "m.json",
+            "--sigma-pos-mm",
+            "1e-200",
+            "--sigma-rot-deg",
+            "0.01",
+        ][..],
+        &[
+            "diagnose",
+            "d.csv",
+            "--robot",
+            "aria",
+            "--json",
+            "r.json",
+            "--out",
+            "m.json",
+            "--sigma-pos-mm",
+            "1e-200",
+        ][..],
+        &[
+            "calibrate",
+            "d.csv",
+            "--robot",
+            "aria",
+            "--out",
+            "m.json",
+            "--weight-pos",
+            "1e300",
+        ][..],
+    ] {
+        let o = kincal(args, dir.path());
+        assert_eq!(code(&o), 2, "{args:?}: {}", stderr(&o));
+        let e = stderr(&o);
+        assert!(
+            e.contains("--sigma-pos-mm") || e.contains("--weight-pos"),
+            "{e}"
+        );
+        assert!(e.contains("implausible"), "{e}");
+        assert!(!e.contains("d.csv"), "blamed on the data: {e}");
+    }
+}
+
+#[test]
+fn a_model_file_that_is_not_one_is_not_parsed_as_toml() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(
+        dir.path().join("d.csv"),
+        format!("{HEADER6}a,0,0,0,0,0,0,0.1,0.2,0.3\n"),
+    )
+    .unwrap();
+    fs::write(dir.path().join("empty.json"), "").unwrap();
+    fs::write(dir.path().join("array.json"), "[1, 2, 3]\n").unwrap();
+    let o = kincal(&["validate", "empty.json", "d.csv"], dir.path());
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("empty.json:1:1: empty file"),
+        "{}",
+        stderr(&o)
+    );
+    let o = kincal(&["validate", "array.json", "d.csv"], dir.path());
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    assert!(stderr(&o).contains("a JSON array"), "{}", stderr(&o));
+    assert!(
+        !stderr(&o).to_lowercase().contains("toml"),
+        "{}",
+        stderr(&o)
+    );
+    // A model file with a UTF-8 byte-order mark reads like one without.
+    let model = kincal_cli::model_file::ModelFile::nominal("aria", &kincal::aria::nominal());
+    fs::write(dir.path().join("plain.json"), model.to_json()).unwrap();
+    fs::write(
+        dir.path().join("bom.json"),
+        format!("\u{feff}{}", model.to_json()),
+    )
+    .unwrap();
+    let a = kincal(&["validate", "plain.json", "d.csv", "--quiet"], dir.path());
+    let b = kincal(&["validate", "bom.json", "d.csv", "--quiet"], dir.path());
+    assert_eq!(code(&a), 0, "{}", stderr(&a));
+    assert_eq!(code(&b), 0, "{}", stderr(&b));
+    let text = |o: &Output| String::from_utf8_lossy(&o.stdout).replace("bom.json", "plain.json");
+    assert_eq!(text(&a), text(&b));
+}
+
+#[test]
+fn exact_repeats_are_not_reported_as_missing_repeats() {
+    let dir = tempfile::tempdir().unwrap();
+    let robot = kincal::aria::nominal();
+    let mut csv = String::from("pose_id,q1,q2,q3,q4,q5,q6,x,y,z\n");
+    for k in 0..8 {
+        let q = [
+            0.1 * k as f64,
+            -0.3 + 0.05 * k as f64,
+            0.4,
+            0.2 - 0.1 * k as f64,
+            0.5,
+            0.1,
+        ];
+        let p = robot.fk_q(&q).unwrap().translation.vector;
+        for _ in 0..2 {
+            let cells: Vec<String> = q.iter().map(|v| v.to_string()).collect();
+            csv.push_str(&format!(
+                "p{k},{},{},{},{}\n",
+                cells.join(","),
+                p.x,
+                p.y,
+                p.z
+            ));
+        }
+    }
+    fs::write(dir.path().join("d.csv"), csv).unwrap();
+    let o = kincal(
+        &[
+            "diagnose", "d.csv", "--robot", "aria", "--json", "r.json", "--out", "m.json",
+        ],
+        dir.path(),
+    );
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("no noise floor"), "{e}");
+    assert!(!e.contains("no pose_id was measured twice"), "{e}");
+    assert!(e.contains("8 row(s) repeat an earlier pose_id"), "{e}");
+    assert!(e.contains("agree exactly"), "{e}");
+}
