@@ -146,14 +146,19 @@ impl Outputs {
 #[derive(Debug, Clone)]
 pub struct Outcome<const N: usize> {
     pub diagnosis: Box<Diagnosis<N>>,
+    /// The readable report, as written to its file.
     pub text: String,
+    /// Run time [s] (for the screen, never written).
+    pub seconds: f64,
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
     let spec = crate::robot_arg::resolve_robot(&args.robot)?;
     kincal::with_any_robot!(&spec.robot, r => {
         let out = execute(r, &spec.name, args)?;
-        report::emit(&out.text);
+        // The run time goes to the screen only: the report files are byte-for-byte
+        // reproducible.
+        report::emit(&format!("{}Diagnosis took {:.2} s.\n", out.text, out.seconds));
         Ok(())
     })
 }
@@ -282,7 +287,7 @@ pub fn execute<const N: usize>(
     let plots = crate::diagnosis_plot::render_all::<N>(&d, &meas, &poses, &outputs)?;
     let json = report_json::<N>(&d, &meas, &set, &poses, &args.data, &outputs);
     let json_text = serde_json::to_string_pretty(&json).unwrap_or_default() + "\n";
-    let mut text = readable::<N>(name, &set.source, &d, &meas, seconds);
+    let mut text = readable::<N>(name, &set.source, &d, &meas);
     let _ = writeln!(
         text,
         "\nFiles: {} (report), {} (readable), {} (model: geometric{}), plots {}",
@@ -328,7 +333,11 @@ pub fn execute<const N: usize>(
     for (path, content) in &files {
         crate::files::write_atomic(path, &inputs, |w| w.write_all(content.as_bytes()))?;
     }
-    Ok(Outcome { diagnosis: d, text })
+    Ok(Outcome {
+        diagnosis: d,
+        text,
+        seconds,
+    })
 }
 
 /// The verdict's fit as a one-run calibration (what `calibrate --effects …` would have
@@ -822,7 +831,6 @@ pub fn readable<const N: usize>(
     source: &str,
     d: &Diagnosis<N>,
     meas: &[Measurement<N>],
-    seconds: f64,
 ) -> String {
     let mut s = String::new();
     let n = &d.noise;
@@ -1087,6 +1095,5 @@ pub fn readable<const N: usize>(
         let _ = writeln!(s, "  identified effect parameters (all rows):");
         s.push_str(&t.render("  "));
     }
-    let _ = writeln!(s, "Diagnosis took {seconds:.2} s.");
     s
 }

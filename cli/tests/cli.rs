@@ -583,6 +583,15 @@ fn demo_runs_and_writes_its_files() {
         let p = d.join(name);
         assert!(p.is_file() && fs::metadata(&p).unwrap().len() > 0, "{name}");
     }
+    // Run times are on the screen only: report.txt is byte-for-byte reproducible.
+    assert!(out.contains("Done in"), "{out}");
+    for name in ["report.txt", "real_aria_REPORT.txt"] {
+        let text = fs::read_to_string(d.join(name)).unwrap();
+        assert!(
+            !text.contains("Done in") && !text.contains("took"),
+            "{name}"
+        );
+    }
     // The noise-free model recovers the truth; its files feed the other commands.
     let m: Value =
         serde_json::from_str(&fs::read_to_string(d.join("model_noise_free.json")).unwrap())

@@ -757,3 +757,102 @@ fn exact_repeats_are_not_reported_as_missing_repeats() {
     assert!(e.contains("8 row(s) repeat an earlier pose_id"), "{e}");
     assert!(e.contains("agree exactly"), "{e}");
 }
+
+// ---- 9. output files are byte-for-byte reproducible (no run times) ---------------------
+
+#[test]
+fn evaluate_designs_json_has_no_run_times_and_is_byte_identical() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |out: &str, threads: &str| {
+        let o = Command::new(BIN)
+            .args([
+                "evaluate-designs",
+                "--runs",
+                "3",
+                "--grid",
+                "1,1,1",
+                "--designs",
+                "table2",
+                "--json",
+                out,
+            ])
+            .env("RAYON_NUM_THREADS", threads)
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        assert_eq!(code(&o), 0, "{}", stderr(&o));
+        // The run time is still shown on the screen.
+        assert!(String::from_utf8_lossy(&o.stdout).contains("Timing:"));
+        fs::read(dir.path().join(out)).unwrap()
+    };
+    let a = run("a.json", "2");
+    let b = run("b.json", "1");
+    assert_eq!(a, b, "evaluate-designs --json differs between runs");
+    let text = String::from_utf8(a).unwrap();
+    for word in ["seconds", "wall_s", "cpu_s", "threads"] {
+        assert!(!text.contains(word), "{word} in the JSON");
+    }
+}
+
+#[test]
+fn diagnose_reports_are_byte_identical_across_runs() {
+    use kincal::pose::matrix_to_quaternion;
+    let dir = tempfile::tempdir().unwrap();
+    let truth = kincal::aria::virtual_truth();
+    let mut csv = String::from("pose_id,q1,q2,q3,q4,q5,q6,x,y,z,qw,qx,qy,qz\n");
+    for k in 0..40 {
+        let f = k as f64;
+        let q = [
+            (0.37 * f).sin() * 1.2,
+            -0.4 + (0.23 * f).cos() * 0.5,
+            0.6 + (0.51 * f).sin() * 0.4,
+            (0.17 * f).cos() * 1.0,
+            0.8 + (0.29 * f).sin() * 0.5,
+            (0.41 * f).cos(),
+        ];
+        let t = truth.fk_q(&q).unwrap();
+        let p = t.translation.vector;
+        let w = matrix_to_quaternion(t.rotation.matrix());
+        let cells: Vec<String> = q
+            .iter()
+            .chain([p.x, p.y, p.z].iter())
+            .chain(w.iter())
+            .map(|v| v.to_string())
+            .collect();
+        csv.push_str(&format!("p{k},{}\n", cells.join(",")));
+    }
+    fs::write(dir.path().join("d.csv"), csv).unwrap();
+    let run = |stem: &str| {
+        let json = format!("{stem}.json");
+        let model = format!("{stem}_model.json");
+        let o = kincal(
+            &[
+                "diagnose",
+                "d.csv",
+                "--robot",
+                "aria",
+                "--json",
+                &json,
+                "--out",
+                &model,
+                "--sigma-pos-mm",
+                "0.05",
+                "--sigma-rot-deg",
+                "0.02",
+                "--allow-out-of-limits",
+            ],
+            dir.path(),
+        );
+        assert_eq!(code(&o), 0, "{}", stderr(&o));
+        assert!(String::from_utf8_lossy(&o.stdout).contains("Diagnosis took"));
+        let txt = fs::read_to_string(dir.path().join(format!("{stem}.txt"))).unwrap();
+        assert!(!txt.contains("took"), "run time in the report file");
+        (
+            fs::read_to_string(dir.path().join(&json))
+                .unwrap()
+                .replace(stem, "X"),
+            txt.replace(stem, "X"),
+        )
+    };
+    assert_eq!(run("first"), run("second"));
+}
