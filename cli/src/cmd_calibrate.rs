@@ -73,8 +73,15 @@ the ROBOT's frames; when those are far off (more than a few cm or degrees), --in
 first estimates both frames from the data with the nominal geometry (hand-eye equation for
 full poses, alternating rigid fits for positions; kincal::frames) and starts from there.
 
-Exit status: 0 success, 2 usage, 3 bad input (file:line, column and reason), 4 numerical
-failure (rank too low, no convergence).";
+Plausibility: measured positions a median of more than 100 reaches from the base cannot be
+the robot's (millimetres under a metre header?) and are refused unless --allow-implausible.
+Positions out of reach or all within 1 % of the reach of the base, a residual worse after
+calibration than before (position or orientation), and identified changes beyond 10× the
+--bounds-mm/--bounds-deg tolerance are warnings, on stderr and in the model file
+(calibration.warnings).
+
+Exit status: 0 success, 1 the output could not be written, 2 usage, 3 bad input (file:line,
+column and reason), 4 numerical failure (rank too low, no convergence).";
 
 pub const EXAMPLE: &str = "\
 Example:
@@ -141,6 +148,10 @@ pub struct Args {
     /// for a full pose, 2.80 for a position)
     #[arg(long, value_name = "C", value_parser = positive, requires = "robust")]
     pub robust_tuning: Option<f64>,
+    /// Fit data that cannot be right for the robot (positions a hundred reaches from the
+    /// base: a unit error?) instead of refusing it; the warning stays in the model file
+    #[arg(long)]
+    pub allow_implausible: bool,
 }
 
 impl Args {
@@ -201,6 +212,16 @@ fn calibrate<const N: usize>(start: &Robot<N>, name: &str, args: &Args) -> Resul
         },
     )?;
     let meas = data::measurements::<N>(&set)?;
+    let findings = crate::plausibility::check_data(start, &meas, &set.source, args.init_frames);
+    if let (Some(e), false) = (findings.errors.first(), args.allow_implausible) {
+        return Err(CliError::input(format!(
+            "{e}\nhint: pass --allow-implausible to fit these data anyway"
+        )));
+    }
+    // Shown before the fit, which may fail on such data.
+    for w in findings.errors.iter().chain(&findings.warnings) {
+        eprintln!("kincal: warning: {w}");
+    }
     let initial;
     let start = if args.init_frames {
         let (r, note) = calibration::init_frames(start, &meas, &set.source)?;
@@ -281,6 +302,16 @@ fn calibrate<const N: usize>(start: &Robot<N>, name: &str, args: &Args) -> Resul
         })
         .collect();
     file.record_robust(&cal, 0, &labels);
+    let mut warnings = findings.errors;
+    warnings.extend(findings.warnings);
+    let result_warnings = crate::plausibility::check_result(&file);
+    for w in &result_warnings {
+        eprintln!("kincal: warning: {w}");
+    }
+    warnings.extend(result_warnings);
+    if let Some(c) = file.calibration.as_mut() {
+        c.warnings = warnings;
+    }
     let text = file.to_json();
     let mut inputs: Vec<&Path> = vec![&args.data];
     let robot_path = Path::new(&args.robot);

@@ -99,12 +99,54 @@ pub fn core_error(
             "an option gave a non-finite number ({e}): check the weights, noise levels and bounds given"
         )),
         E::NonFinite { .. } => CliError::numeric(format!(
-            "{file}: the computation overflowed ({e}): the data or the robot hold numbers too large to fit"
+            "the computation overflowed while fitting {file} ({e}): the data or the robot hold numbers too large to fit"
         )),
         E::BadPose { pose } => CliError::input(format!("{}: {e}", at(pose.0))),
         E::OutOfLimits { .. } | E::MissingInput { .. } | E::DimensionMismatch { .. } => {
             CliError::input(format!("{file}: {e}"))
         }
         _ => CliError::numeric(format!("{file}: {e}")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use kincal::Quantity;
+
+    #[test]
+    fn a_non_finite_core_value_is_not_blamed_on_a_row() {
+        // Row i starts on line i + 5: an index 1 must not become "d.csv:6".
+        let line = |i: usize| Some(i as u64 + 5);
+        let e = core_error(
+            kincal::Error::NonFinite {
+                what: Quantity::Parameter,
+                index: 1,
+            },
+            "d.csv",
+            line,
+        );
+        assert_eq!(e.exit, Exit::Numeric, "{e}");
+        assert!(!e.message.contains("d.csv:"), "{e}");
+        assert!(e.message.contains("overflowed"), "{e}");
+        let e = core_error(
+            kincal::Error::NonFinite {
+                what: Quantity::Setting,
+                index: 0,
+            },
+            "d.csv",
+            line,
+        );
+        assert_eq!(e.exit, Exit::Usage, "{e}");
+        assert!(!e.message.contains("d.csv"), "{e}");
+        // A bad pose keeps its row.
+        let e = core_error(
+            kincal::Error::BadPose {
+                pose: kincal::PoseIndex(1),
+            },
+            "d.csv",
+            line,
+        );
+        assert!(e.message.starts_with("d.csv:6:"), "{e}");
     }
 }

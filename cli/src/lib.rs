@@ -30,6 +30,7 @@ pub mod file_plan;
 pub mod files;
 pub mod measurements;
 pub mod model_file;
+pub mod plausibility;
 pub mod plot;
 pub mod progress;
 pub mod report;

@@ -142,6 +142,10 @@ pub struct CalibrationJson {
     /// The robust fit (with `calibrate --robust`): loss, thresholds, and the model's run.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub robust: Option<RobustJson>,
+    /// Plausibility warnings (`crate::plausibility`): suspicious data or results that were
+    /// not refused.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -622,6 +626,7 @@ impl ModelFile {
                 results,
                 consensus: cal.consensus.as_ref().map(consensus_json::<N>),
                 robust: None,
+                warnings: Vec::new(),
             }),
         }
     }
