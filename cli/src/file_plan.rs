@@ -118,16 +118,39 @@ impl FilePlan {
                     out.path.display()
                 )));
             }
-            output_target(&out.path).map_err(|reason| {
-                CliError::usage(format!(
-                    "{} '{}': cannot write there: {reason}",
-                    out.flag,
-                    out.path.display()
-                ))
-            })?;
+            output_target(&out.path)
+                .and_then(|t| probe_folder(&t.path))
+                .map_err(|reason| {
+                    CliError::usage(format!(
+                        "{} '{}': cannot write there: {reason}",
+                        out.flag,
+                        out.path.display()
+                    ))
+                })?;
         }
         Ok(())
     }
+}
+
+/// Creates and removes a temporary file beside `target`: the folder accepts the atomic
+/// write's temporary file (permissions, a read-only file system), checked before the work
+/// rather than after it.
+fn probe_folder(target: &Path) -> Result<(), String> {
+    let dir = match target.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    tempfile::Builder::new()
+        .prefix(".kincal-probe-")
+        .suffix(".tmp")
+        .tempfile_in(dir)
+        .map(drop)
+        .map_err(|e| {
+            format!(
+                "cannot create a file in the folder '{}': {e}",
+                dir.display()
+            )
+        })
 }
 
 /// `calibrate`.

@@ -1073,3 +1073,32 @@ fn a_result_worse_than_the_start_is_warned() {
         stderr(&o)
     );
 }
+
+#[cfg(unix)]
+#[test]
+fn an_output_in_a_read_only_folder_is_refused_before_any_work() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let ro = dir.path().join("ro");
+    fs::create_dir(&ro).unwrap();
+    fs::set_permissions(&ro, fs::Permissions::from_mode(0o555)).unwrap();
+    // Root writes anywhere: nothing to check then.
+    let writable = fs::write(ro.join("probe"), "x").is_ok();
+    if !writable {
+        let t = Instant::now();
+        let o = kincal(
+            &[
+                "evaluate-designs",
+                "--runs",
+                "100000",
+                "--json",
+                "ro/r.json",
+            ],
+            dir.path(),
+        );
+        assert_eq!(code(&o), 2, "{}", stderr(&o));
+        assert!(stderr(&o).contains("--json 'ro/r.json'"), "{}", stderr(&o));
+        assert!(t.elapsed() < Duration::from_secs(5));
+    }
+    fs::set_permissions(&ro, fs::Permissions::from_mode(0o755)).unwrap();
+}
