@@ -123,6 +123,30 @@ pub fn weight(s: &str) -> Result<f64, String> {
     within(s, 1e-30, 1e30, "")
 }
 
+/// Parses a non-negative length [mm] of noise or error: 0 to 1e4 mm (10 m).
+pub fn amount_mm(s: &str) -> Result<f64, String> {
+    let v = non_negative(s)?;
+    if v <= 1e4 {
+        Ok(v)
+    } else {
+        Err(format!(
+            "{v:e} mm is implausible: expected a value within [0, 1e4] mm"
+        ))
+    }
+}
+
+/// Parses a non-negative angle [deg] of noise or error: 0 to 180°.
+pub fn amount_deg(s: &str) -> Result<f64, String> {
+    let v = non_negative(s)?;
+    if v <= 180.0 {
+        Ok(v)
+    } else {
+        Err(format!(
+            "{v:e}° is implausible: expected a value within [0, 180]°"
+        ))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -138,5 +162,9 @@ mod tests {
         assert_eq!(weight("2"), Ok(2.0));
         assert!(weight("1e300").is_err());
         assert!(weight("0").is_err());
+        assert_eq!(amount_mm("0"), Ok(0.0));
+        assert!(amount_mm("1e300").is_err());
+        assert_eq!(amount_deg("5"), Ok(5.0));
+        assert!(amount_deg("1e300").is_err());
     }
 }

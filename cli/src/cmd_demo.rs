@@ -19,7 +19,7 @@ use kincal::{JointState, ParamIndex, Robot, Transform};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
-use crate::args::{non_negative, positive};
+use crate::args::positive;
 use crate::calibration::{self, Calibration, Settings};
 use crate::cmd_validate::{Evaluation, Targets, evaluate, fmt_err, summary_table};
 use crate::data::{self, DataOptions};
@@ -76,10 +76,10 @@ pub struct Args {
     #[arg(long, value_name = "S", default_value_t = 1)]
     pub seed: u64,
     /// Position noise, 1σ per axis [mm]
-    #[arg(long, value_name = "MM", default_value = "0.1", value_parser = non_negative)]
+    #[arg(long, value_name = "MM", default_value = "0.1", value_parser = crate::args::amount_mm)]
     pub noise_pos_mm: f64,
     /// Orientation noise, 1σ per axis [deg]
-    #[arg(long, value_name = "DEG", default_value = "0.02", value_parser = non_negative)]
+    #[arg(long, value_name = "DEG", default_value = "0.02", value_parser = crate::args::amount_deg)]
     pub noise_rot_deg: f64,
     /// OPT1 interval half-width for lengths [mm]
     #[arg(long, value_name = "MM", default_value = "5", value_parser = positive)]

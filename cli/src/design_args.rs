@@ -112,23 +112,23 @@ pub struct SetupArgs {
 #[derive(clap::Args, Debug, Clone)]
 pub struct ScenarioArgs {
     /// Random robots: each identified length off by up to ± this [mm] (uniform)
-    #[arg(long, default_value_t = 5.0, value_name = "MM", value_parser = crate::args::non_negative)]
+    #[arg(long, default_value_t = 5.0, value_name = "MM", value_parser = crate::args::amount_mm)]
     pub length_error_mm: f64,
     /// … and each identified angle off by up to ± this [deg]
-    #[arg(long, default_value_t = 5.0, value_name = "DEG", value_parser = crate::args::non_negative)]
+    #[arg(long, default_value_t = 5.0, value_name = "DEG", value_parser = crate::args::amount_deg)]
     pub angle_error_deg: f64,
     /// Measurement noise (instrument) or seating noise (tool), 1σ per position axis [mm]
-    #[arg(long, default_value_t = 0.05, value_name = "MM", value_parser = crate::args::non_negative)]
+    #[arg(long, default_value_t = 0.05, value_name = "MM", value_parser = crate::args::amount_mm)]
     pub noise_pos_mm: f64,
     /// … and per rotation axis [deg]
-    #[arg(long, default_value_t = 0.02, value_name = "DEG", value_parser = crate::args::non_negative)]
+    #[arg(long, default_value_t = 0.02, value_name = "DEG", value_parser = crate::args::amount_deg)]
     pub noise_rot_deg: f64,
     /// Tool designs: manufacturing error of each reference pose, uniform in ± this per
     /// position axis [mm]
-    #[arg(long, default_value_t = 0.05, value_name = "MM", value_parser = crate::args::non_negative)]
+    #[arg(long, default_value_t = 0.05, value_name = "MM", value_parser = crate::args::amount_mm)]
     pub tool_tol_mm: f64,
     /// … and per rotation axis [deg]
-    #[arg(long, default_value_t = 0.02, value_name = "DEG", value_parser = crate::args::non_negative)]
+    #[arg(long, default_value_t = 0.02, value_name = "DEG", value_parser = crate::args::amount_deg)]
     pub tool_tol_deg: f64,
 }
 

@@ -689,14 +689,15 @@ fn a_bad_option_is_blamed_on_the_option() {
             "--weight-pos",
             "1e300",
         ][..],
+        &["evaluate-designs", "--length-error-mm", "1e300"][..],
+        &["demo", "--out", "demo", "--noise-pos-mm", "1e300"][..],
     ] {
         let o = kincal(args, dir.path());
         assert_eq!(code(&o), 2, "{args:?}: {}", stderr(&o));
         let e = stderr(&o);
-        assert!(
-            e.contains("--sigma-pos-mm") || e.contains("--weight-pos"),
-            "{e}"
-        );
+        let bad = args.iter().position(|a| a.starts_with("1e")).unwrap();
+        let option = args[bad - 1];
+        assert!(e.contains(option), "{option}: {e}");
         assert!(e.contains("implausible"), "{e}");
         assert!(!e.contains("d.csv"), "blamed on the data: {e}");
     }
