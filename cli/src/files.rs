@@ -217,7 +217,13 @@ fn remove_stale_temporaries(dir: &Path, name: &str) {
         else {
             continue;
         };
-        let Some(pid) = rest.split('-').next().and_then(|p| p.parse::<u32>().ok()) else {
+        // Exactly `<pid>-<random>.tmp` (the random part has no '-'), so that the file of
+        // another output whose name extends this one (`a` and `a-5`) is never taken.
+        let mut parts = rest.split('-');
+        let (Some(pid), Some(_), None) = (parts.next(), parts.next(), parts.next()) else {
+            continue;
+        };
+        let Ok(pid) = pid.parse::<u32>() else {
             continue;
         };
         let alive = Path::new("/proc").join(pid.to_string()).exists();

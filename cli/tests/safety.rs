@@ -160,7 +160,9 @@ fn temporary_files_are_named_after_the_output_and_stale_ones_are_removed() {
     let stale = ".kincal-out.csv-4000000000-AbCdEf.tmp".to_string();
     let live = format!(".kincal-out.csv-{}-XyZ123.tmp", std::process::id());
     let other = ".kincal-other.csv-4000000000-AbCdEf.tmp".to_string();
-    for f in [&stale, &live, &other] {
+    // The temporary file of an output named `out.csv-4000000000` (a live process 1).
+    let longer = ".kincal-out.csv-4000000000-1-AbCdEf.tmp".to_string();
+    for f in [&stale, &live, &other, &longer] {
         fs::write(dir.path().join(f), "partial").unwrap();
     }
     let mut seen = String::new();
@@ -188,6 +190,7 @@ fn temporary_files_are_named_after_the_output_and_stale_ones_are_removed() {
         left.contains(&other),
         "another output's file was removed: {left:?}"
     );
+    assert!(left.contains(&longer), "{left:?}");
     assert!(left.contains(&"out.csv".to_string()));
 }
 
