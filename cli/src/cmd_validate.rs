@@ -86,7 +86,6 @@ pub struct Evaluation {
     pub summary: ErrorSummary,
 }
 
-/// Per-pose errors of `robot` on `meas` (orientation errors zero for position-only rows).
 /// Refuses errors that overflowed (no table, JSON or figure may carry them), naming the
 /// first row.
 fn refuse_non_finite(
@@ -111,6 +110,7 @@ fn refuse_non_finite(
     }
 }
 
+/// Per-pose errors of `robot` on `meas` (orientation errors zero for position-only rows).
 pub fn evaluate<const N: usize>(
     name: &str,
     robot: &Robot<N>,

@@ -179,10 +179,12 @@ fn kind_of(m: &fs::Metadata) -> &'static str {
     }
 }
 
+/// The read/write/execute bits (setuid, setgid and sticky are not carried over to the new
+/// file).
 #[cfg(unix)]
 fn mode_of(m: &fs::Metadata) -> Option<u32> {
     use std::os::unix::fs::PermissionsExt;
-    Some(m.permissions().mode() & 0o7777)
+    Some(m.permissions().mode() & 0o777)
 }
 
 #[cfg(not(unix))]
