@@ -1106,3 +1106,33 @@ fn an_output_in_a_read_only_folder_is_refused_before_any_work() {
     }
     fs::set_permissions(&ro, fs::Permissions::from_mode(0o755)).unwrap();
 }
+
+/// A character device like /dev/null, made in a temporary folder (needs root; skipped
+/// otherwise): refused, and still a device afterwards.
+#[cfg(unix)]
+#[test]
+fn a_character_device_output_is_refused() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = tempfile::tempdir().unwrap();
+    let dev = dir.path().join("null");
+    let made = Command::new("mknod")
+        .arg(&dev)
+        .args(["c", "1", "3"])
+        .stderr(std::process::Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if !made {
+        return;
+    }
+    let o = kincal(&["select-poses", "--out", "null"], dir.path());
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(stderr(&o).contains("character device"), "{}", stderr(&o));
+    let e = write_atomic(&dev, &[], |w| put(w, "x")).unwrap_err();
+    assert!(e.to_string().contains("character device"), "{e}");
+    assert!(
+        fs::symlink_metadata(&dev)
+            .unwrap()
+            .file_type()
+            .is_char_device()
+    );
+}
