@@ -29,6 +29,9 @@
 //! 7. *Where* ([`Location`]): the geometric calibration's residuals by axis, by octant of
 //!    the data's bounding box, and their correlation with each joint angle, gravity
 //!    torque, approach direction and the temperature.
+//! 8. *Explainable at all?* ([`SmoothCheck`], `smooth.rs`): a library-free, cross-validated
+//!    smooth function of the joint angles fitted to the baseline's held-out residuals on
+//!    the same folds: how much of the gap any smooth function of q explains.
 //!
 //! # Decision rules
 //! Statistics (all on whitened held-out errors, so position and rotation rows count by
@@ -77,8 +80,10 @@ mod cv;
 mod folds;
 mod locate;
 mod noise;
+mod smooth;
 
 pub use locate::{Correlate, Location, QuantityKind, RegionStats};
+pub use smooth::{SmoothCheck, SmoothWorkspace};
 
 use crate::effects::{Effect, EffectSet};
 use crate::error::{Error, ParamIndex, Quantity, Result};
@@ -429,6 +434,7 @@ pub struct DiagWorkspace<const P: usize> {
     pub(crate) jac: [[f64; 6]; MAX_MODEL_PARAMS],
     pub(crate) a: [[f64; P]; 6],
     pub(crate) b: [f64; 6],
+    pub(crate) smooth: SmoothWorkspace,
 }
 
 impl<const P: usize> DiagWorkspace<P> {
@@ -462,6 +468,7 @@ impl<const P: usize> DiagWorkspace<P> {
             jac: [[0.0; 6]; MAX_MODEL_PARAMS],
             a: [[0.0; P]; 6],
             b: [0.0; 6],
+            smooth: SmoothWorkspace::new(),
         }
     }
 }
@@ -509,6 +516,8 @@ pub struct Diagnosis<const N: usize> {
     pub final_heldout_rms_rot_rad: f64,
     /// Where the geometric calibration's residual lies.
     pub location: Location,
+    /// How much of the held-out gap any smooth function of q explains (`smooth.rs`).
+    pub explainable: SmoothCheck,
 }
 
 impl<const N: usize> Diagnosis<N> {
@@ -547,6 +556,7 @@ impl<const N: usize> Diagnosis<N> {
             final_heldout_rms_pos_m: 0.0,
             final_heldout_rms_rot_rad: 0.0,
             location: Location::empty(),
+            explainable: SmoothCheck::default(),
         }
     }
 
@@ -1228,6 +1238,16 @@ pub fn diagnose_into<const N: usize, const P: usize>(
 
     // 7. Where.
     out.location = locate::locate(robot, data, poses, &noise);
+    // 8. Explainable at all? (library-free smooth model on the same folds.)
+    out.explainable = smooth::check(
+        data,
+        poses,
+        &noise,
+        &ws.acc[0],
+        cfg.folds,
+        cfg.z_significance,
+        &mut ws.smooth,
+    );
     Ok(())
 }
 
