@@ -1239,15 +1239,7 @@ pub fn diagnose_into<const N: usize, const P: usize>(
     // 7. Where.
     out.location = locate::locate(robot, data, poses, &noise);
     // 8. Explainable at all? (library-free smooth model on the same folds.)
-    out.explainable = smooth::check(
-        data,
-        poses,
-        &noise,
-        &ws.acc[0],
-        cfg.folds,
-        cfg.z_significance,
-        &mut ws.smooth,
-    );
+    out.explainable = smooth::check(robot, data, poses, &noise, &ws.acc[0], cfg, &mut ws.smooth);
     Ok(())
 }
 
