@@ -74,7 +74,8 @@
 //! No heap: fixed-capacity results ([`MAX_CANDIDATES`] candidates), caller slices for the
 //! per-pose outputs ([`PoseDiagnosis`]), and a caller-provided [`DiagWorkspace`] of
 //! capacity `P` columns (the union of all models' parameters: 71 for a 6-joint arm with
-//! every effect, so `P = 80` suffices there; `P = 144` for 9 joints).
+//! every effect, so `P = 80` suffices there; `P = 144` for 9 joints), which includes the
+//! fixed ~110 KiB of the smooth check ([`SmoothWorkspace`]).
 
 mod cv;
 mod folds;

@@ -131,7 +131,7 @@ pub struct SmoothCheck {
     pub significant: bool,
 }
 
-/// Working memory of the check (part of [`super::DiagWorkspace`]; about 80 KiB).
+/// Working memory of the check (part of [`super::DiagWorkspace`]; about 110 KiB).
 #[derive(Debug, Clone)]
 pub struct SmoothWorkspace {
     omega: [[f64; X]; M],
@@ -899,6 +899,9 @@ mod tests {
                 assert!((lhs - rhs).abs() < 1e-9 * (1.0 + rhs.abs()), "{i} {k}");
             }
         }
+        // The documented size (about 110 KiB).
+        let size = core::mem::size_of::<SmoothWorkspace>();
+        assert!((100 * 1024..120 * 1024).contains(&size), "{size}");
         // Not positive definite (λ = 0 with fewer rows than features): refused.
         ws.g_all[1] = [[0.0; M]; M];
         ws.g_out = [[0.0; M]; M];
