@@ -406,6 +406,8 @@ struct Report {
     baseline: BaselineJson,
     candidates: Vec<CandidateJson>,
     verdict: VerdictJson,
+    /// Library-free check: how much of the gap any smooth function of q explains.
+    explainable: ExplainableJson,
     #[serde(rename = "where")]
     where_: WhereJson,
     data: DataInfoJson,
@@ -487,6 +489,23 @@ struct VerdictJson {
     remaining_gap_z: Option<f64>,
     /// Identified effect parameters of the model (SI units) with standard errors.
     parameters: Vec<ParamValueJson>,
+}
+
+/// The "explainable at all?" check (kincal::diagnosis::SmoothCheck).
+#[derive(Serialize)]
+struct ExplainableJson {
+    evaluated: bool,
+    /// Share of the held-out gap (whitened position and rotation) a cross-validated
+    /// smooth function of the joint angles removes.
+    share_of_gap: f64,
+    share_pos: f64,
+    share_rot: f64,
+    heldout_rms_pos_mm: f64,
+    heldout_rms_rot_deg: f64,
+    /// Paired Wilcoxon z against the geometric model (positive: better).
+    z: Option<f64>,
+    significant: bool,
+    method: &'static str,
 }
 
 #[derive(Serialize)]
@@ -701,6 +720,20 @@ fn report_json<const N: usize>(
             heldout_rms_rot_deg: d.final_heldout_rms_rot_rad.to_degrees(),
             remaining_gap_z: finite(d.remaining.z),
             parameters,
+        },
+        explainable: {
+            let x = &d.explainable;
+            ExplainableJson {
+                evaluated: x.evaluated,
+                share_of_gap: x.share_of_gap,
+                share_pos: x.share_pos,
+                share_rot: x.share_rot,
+                heldout_rms_pos_mm: x.heldout_rms_pos_m * 1e3,
+                heldout_rms_rot_deg: x.heldout_rms_rot_rad.to_degrees(),
+                z: finite(x.z),
+                significant: x.significant,
+                method: "kernel ridge regression on (sin q, cos q): linear + random Fourier features of a squared-exponential kernel, nested cross-validation on the diagnosis folds",
+            }
         },
         where_: WhereJson {
             rms_axis: axis(&loc.rms_axis),
@@ -1094,6 +1127,24 @@ pub fn readable<const N: usize>(
         }
         let _ = writeln!(s, "  identified effect parameters (all rows):");
         s.push_str(&t.render("  "));
+    }
+    let x = &d.explainable;
+    if x.evaluated && v.status != Status::NoGap {
+        let _ = writeln!(
+            s,
+            "EXPLAINABLE AT ALL (library-free): a smooth function of the joint angles closes {:.0} % of the gap held out (position {:.0} %, rotation {:.0} %; held-out RMS {} mm, {}°; z = {}, {}).",
+            100.0 * x.share_of_gap,
+            100.0 * x.share_pos,
+            100.0 * x.share_rot,
+            mm(x.heldout_rms_pos_m),
+            deg(x.heldout_rms_rot_rad),
+            zfmt(x.z),
+            if x.significant {
+                "significant"
+            } else {
+                "not significant: what remains does not look like a function of q"
+            }
+        );
     }
     s
 }

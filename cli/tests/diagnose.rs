@@ -152,6 +152,14 @@ fn diagnose_finds_hidden_backlash_and_writes_the_contract() {
     let a = v["heldout_rms_pos_mm"].as_f64().unwrap();
     let floor = 3f64.sqrt() * sp;
     assert!((((b - a) / (b - floor)).clamp(0.0, 1.0) - f).abs() < 1e-9);
+    // The library-free check: backlash depends on the approach direction, not on q, so a
+    // smooth function of the joint angles explains little of it.
+    let x = &r["explainable"];
+    assert_eq!(x["evaluated"], true);
+    let share = x["share_of_gap"].as_f64().unwrap();
+    assert!((0.0..0.5).contains(&share), "{share}");
+    assert!(x["z"].is_number() && x["significant"].is_boolean());
+    assert!(x["heldout_rms_pos_mm"].as_f64().unwrap() > 0.0);
     assert!(r["where"].is_object());
     assert_eq!(
         r["where"]["per_pose"].as_array().unwrap().len(),
@@ -172,6 +180,11 @@ fn diagnose_finds_hidden_backlash_and_writes_the_contract() {
         fs::read_to_string(dir.path().join("out/REPORT.txt"))
             .unwrap()
             .contains("WHERE")
+    );
+    assert!(
+        fs::read_to_string(dir.path().join("out/REPORT.txt"))
+            .unwrap()
+            .contains("EXPLAINABLE AT ALL")
     );
     // The model: geometric + backlash, read by validate and predict.
     let model: Value =

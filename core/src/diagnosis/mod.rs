@@ -29,6 +29,9 @@
 //! 7. *Where* ([`Location`]): the geometric calibration's residuals by axis, by octant of
 //!    the data's bounding box, and their correlation with each joint angle, gravity
 //!    torque, approach direction and the temperature.
+//! 8. *Explainable at all?* ([`SmoothCheck`], `smooth.rs`): a library-free, cross-validated
+//!    smooth function of the joint angles fitted to the baseline's held-out residuals on
+//!    the same folds: how much of the gap any smooth function of q explains.
 //!
 //! # Decision rules
 //! Statistics (all on whitened held-out errors, so position and rotation rows count by
@@ -71,14 +74,17 @@
 //! No heap: fixed-capacity results ([`MAX_CANDIDATES`] candidates), caller slices for the
 //! per-pose outputs ([`PoseDiagnosis`]), and a caller-provided [`DiagWorkspace`] of
 //! capacity `P` columns (the union of all models' parameters: 71 for a 6-joint arm with
-//! every effect, so `P = 80` suffices there; `P = 144` for 9 joints).
+//! every effect, so `P = 80` suffices there; `P = 144` for 9 joints), which includes the
+//! fixed ~110 KiB of the smooth check ([`SmoothWorkspace`]).
 
 mod cv;
 mod folds;
 mod locate;
 mod noise;
+mod smooth;
 
 pub use locate::{Correlate, Location, QuantityKind, RegionStats};
+pub use smooth::{SmoothCheck, SmoothWorkspace};
 
 use crate::effects::{Effect, EffectSet};
 use crate::error::{Error, ParamIndex, Quantity, Result};
@@ -429,6 +435,7 @@ pub struct DiagWorkspace<const P: usize> {
     pub(crate) jac: [[f64; 6]; MAX_MODEL_PARAMS],
     pub(crate) a: [[f64; P]; 6],
     pub(crate) b: [f64; 6],
+    pub(crate) smooth: SmoothWorkspace,
 }
 
 impl<const P: usize> DiagWorkspace<P> {
@@ -462,6 +469,7 @@ impl<const P: usize> DiagWorkspace<P> {
             jac: [[0.0; 6]; MAX_MODEL_PARAMS],
             a: [[0.0; P]; 6],
             b: [0.0; 6],
+            smooth: SmoothWorkspace::new(),
         }
     }
 }
@@ -509,6 +517,8 @@ pub struct Diagnosis<const N: usize> {
     pub final_heldout_rms_rot_rad: f64,
     /// Where the geometric calibration's residual lies.
     pub location: Location,
+    /// How much of the held-out gap any smooth function of q explains (`smooth.rs`).
+    pub explainable: SmoothCheck,
 }
 
 impl<const N: usize> Diagnosis<N> {
@@ -547,6 +557,7 @@ impl<const N: usize> Diagnosis<N> {
             final_heldout_rms_pos_m: 0.0,
             final_heldout_rms_rot_rad: 0.0,
             location: Location::empty(),
+            explainable: SmoothCheck::default(),
         }
     }
 
@@ -1228,6 +1239,8 @@ pub fn diagnose_into<const N: usize, const P: usize>(
 
     // 7. Where.
     out.location = locate::locate(robot, data, poses, &noise);
+    // 8. Explainable at all? (library-free smooth model on the same folds.)
+    out.explainable = smooth::check(robot, data, poses, &noise, &ws.acc[0], cfg, &mut ws.smooth);
     Ok(())
 }
 

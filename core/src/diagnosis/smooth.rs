@@ -1,0 +1,910 @@
+//! "Explainable at all?": how much of the geometric calibration's held-out gap **any**
+//! smooth function of the joint angles explains, independent of the effect library.
+//!
+//! # Why this check
+//! The library's candidates can only explain what they model. When none closes the gap,
+//! the honest answers differ: either a smooth, repeatable function of the posture is left
+//! (an effect outside the library: link bending, a nonlinear compliance, a compliant
+//! mount, a scale error of the instrument, a flexing tool; compensable by a lookup or a
+//! new effect), or what is left is not a function of q at all (noise misstated, outliers,
+//! hysteresis, temperature; not compensable from the joint readings). A model-free
+//! regression on q, judged held out on the same folds as the candidates, separates the
+//! two and also says how much a perfect library entry could gain.
+//!
+//! # Method: kernel ridge regression on a fixed feature basis
+//! Gaussian-process regression (equivalently kernel ridge regression) is the standard
+//! nonparametric model of an unknown smooth function with a noise level: its posterior
+//! mean is the ridge solution in the kernel's feature space (Rasmussen & Williams 2006,
+//! ch. 2 and 6). The inputs are `x = (sin q_1, cos q_1, …, sin q_N, cos q_N)`, so
+//! revolute joints are periodic. The kernel is additive (Duvenaud et al. 2011): a linear
+//! kernel in `x` (first harmonics of each joint, the dominant part of most joint-level
+//! errors), a quadratic one in the task space of the nominal arm (tool position, its
+//! pairwise products, tool axis: also smooth functions of q, and the natural coordinates
+//! of errors that act in Cartesian space — instrument scale, a tilting mount, a flexing
+//! tool), plus the squared exponential
+//! `k(x, x') = exp(−|x − x'|²/(2ℓ²))`; since `|x − x'|² = Σ_i 4 sin²((q_i − q'_i)/2)`
+//! the latter is the product of the standard periodic kernels of the joints (MacKay
+//! 1998) and carries every interaction between joints. To keep memory fixed whatever the
+//! number of poses, the squared exponential is approximated by random Fourier features
+//! `φ_j(x) = √(2/M')·cos(ω_j·x/ℓ + b_j)`, `ω_j` standard normal, `b_j` uniform on
+//! [0, 2π) (Rahimi & Recht 2007, "Random features for large-scale kernel machines"; a
+//! fixed seed, so the check is deterministic). [`FEATURES`] = `M` features in all (the
+//! `2N` linear and [`TASK`] task-space ones first) turn the regression into an `M×M`
+//! ridge system:
+//! memory `O(M²)`, time `O(n·M²)` per Gram and `O(M³)` per solve, no heap.
+//!
+//! The check is generic, so it needs more data than the right parametric candidate for
+//! the same share: on 80 simulated poses it recovers 0.55–0.75 of the gap of a joint
+//! compliance or cyclic error the right candidate closes to 0.9–1 (tests/explainable.rs),
+//! and at high signal-to-noise (laser tracker, effects 10–100× the noise) its
+//! approximation error, not the noise, limits the share (tests/diagnosis_families.rs).
+//! Its share is therefore a conservative estimate of what a smooth function of q can
+//! explain.
+//!
+//! Targets are the baseline's held-out residuals (`PoseDiagnosis::heldout_baseline`)
+//! whitened by σ (each kernel part has `k(x, x) ≈ 1`, so the ridge strength `λ` is the
+//! inverse prior variance of each part in noise units: the grid [`RIDGES`] spans prior
+//! amplitudes from the noise level to ~30 σ). Position and rotation components each get their own
+//! output; the three outputs of a component type share the features and the ridge.
+//!
+//! # Cross-validation (nested)
+//! Outer folds are the diagnosis's folds (groups of `pose_id`, so repeats never straddle):
+//! for each fold, the model is fitted on the other folds' targets and predicts this fold's.
+//! The hyperparameters — the length scale `ℓ` from [`LENGTH_SCALES`] times the data's RMS
+//! pairwise input distance (the usual "median heuristic", with the RMS so no sorting is
+//! needed) and `λ` from [`RIDGES`] — are chosen per component type by an inner
+//! cross-validation over the training folds only (each training fold held out in turn);
+//! predicting zero (no smooth part) competes too, so pure noise mostly gives an exact zero
+//! model. The test fold never influences its own prediction's hyperparameters or
+//! coefficients. Its targets do enter the training targets indirectly, through the
+//! geometric fits of the other folds (each excludes only its own fold); that coupling is
+//! of the order of the geometric leverage (~p/rows, a few %) and, being a least-squares
+//! projection, biases the held-out prediction *against* the test residual, i.e. the check
+//! is slightly conservative.
+//!
+//! # Outputs ([`SmoothCheck`])
+//! Held-out RMS position/rotation after the smooth correction; `share_of_gap`, the
+//! fraction of the baseline's held-out excess over the noise floor that the correction
+//! removes, on whitened totals (position and rotation rows by their noise):
+//! `(√Q_B − √Q_S)/(√Q_B − √E)` clipped to [0, 1] with `Q_B`, `Q_S` the baseline's and the
+//! smooth model's held-out whitened totals and `E` their expectation at the noise floor
+//! (including the estimation inflation, as in the gap test); the same ratio per component
+//! type on RMS values against `√3·σ` (as `gap_closed_fraction`); and the paired
+//! Wilcoxon z over groups against the baseline (as the candidates' `improvement_z`).
+//!
+//! Poses that do not measure every component of the component types the data measure
+//! (mixed position-only and full-pose rows) are neither fitted nor corrected (their
+//! baseline residual counts unchanged, a conservative choice). The smooth model uses the
+//! joint readings only: backlash (approach direction) and thermal drift (temperature) are
+//! not functions of q and stay unexplained by design.
+
+use super::{Config, ModelAcc, NoiseFloor, PoseDiagnosis};
+use crate::any::MAX_JOINTS;
+use crate::identify::Measurement;
+use crate::math::{cos, sin_cos, sqrt};
+use crate::model::{JointState, Robot};
+use crate::rng::SplitMix64;
+
+/// Number of features `M`: the `2N` linear terms `(sin q_i, cos q_i)/√N` first, the
+/// [`TASK`] task-space terms, then `M − 2N − TASK` random Fourier features (24 for six
+/// joints).
+pub const FEATURES: usize = 48;
+/// Task-space terms: nominal tool position (3), its products (6), tool axis (3).
+pub const TASK: usize = 12;
+/// Length scales, in units of the data's RMS pairwise distance in `(sin q, cos q)` space.
+pub const LENGTH_SCALES: [f64; 2] = [1.0, 3.0];
+/// Ridge strengths λ (inverse prior variance of the smooth function, in noise units²).
+pub const RIDGES: [f64; 4] = [1.0, 0.1, 0.01, 1e-3];
+/// Seed of the random features.
+pub const FEATURE_SEED: u64 = 0x736d_6f6f_7468;
+
+const M: usize = FEATURES;
+const L: usize = LENGTH_SCALES.len();
+const R: usize = RIDGES.len();
+const X: usize = 2 * MAX_JOINTS;
+
+/// The model-free "explainable at all?" check (module documentation).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SmoothCheck {
+    /// Whether the check ran (false: fewer than 3 folds, fewer than two fitted poses per
+    /// fold, no measured component with a positive σ, or joint readings that do not vary).
+    pub evaluated: bool,
+    /// Share of the baseline's held-out excess over the noise floor (whitened position and
+    /// rotation together) that the smooth model removes, held out; in [0, 1].
+    pub share_of_gap: f64,
+    /// The same on the held-out RMS position error against `√3·σ_pos` (0 without a
+    /// position gap).
+    pub share_pos: f64,
+    /// The same on the held-out RMS rotation angle against `√3·σ_rot` (0 without a
+    /// rotation gap).
+    pub share_rot: f64,
+    /// Held-out RMS position error after the smooth correction \[m\].
+    pub heldout_rms_pos_m: f64,
+    /// Held-out RMS rotation angle after the smooth correction \[rad\].
+    pub heldout_rms_rot_rad: f64,
+    /// Held-out whitened total after the smooth correction.
+    pub heldout_chi2: f64,
+    /// Paired Wilcoxon z over groups against the baseline (positive: the smooth model has
+    /// the smaller held-out errors).
+    pub z: f64,
+    /// Whether `z` exceeds the configuration's `z_significance`.
+    pub significant: bool,
+}
+
+/// Working memory of the check (part of [`super::DiagWorkspace`]; about 110 KiB).
+#[derive(Debug, Clone)]
+pub struct SmoothWorkspace {
+    omega: [[f64; X]; M],
+    phase: [f64; M],
+    g_all: [[[f64; M]; M]; L],
+    r_all: [[[f64; 6]; M]; L],
+    g_out: [[f64; M]; M],
+    r_out: [[f64; 6]; M],
+    g_in: [[f64; M]; M],
+    r_in: [[f64; 6]; M],
+    chol: [[f64; M]; M],
+    beta: [[f64; 6]; M],
+    u: [f64; M],
+    n_linear: usize,
+    task_mean: [f64; 3],
+    task_scale: f64,
+    phi: [f64; M],
+}
+
+impl SmoothWorkspace {
+    /// A zeroed workspace.
+    #[must_use]
+    pub const fn new() -> Self {
+        SmoothWorkspace {
+            omega: [[0.0; X]; M],
+            phase: [0.0; M],
+            g_all: [[[0.0; M]; M]; L],
+            r_all: [[[0.0; 6]; M]; L],
+            g_out: [[0.0; M]; M],
+            r_out: [[0.0; 6]; M],
+            g_in: [[0.0; M]; M],
+            r_in: [[0.0; 6]; M],
+            chol: [[0.0; M]; M],
+            beta: [[0.0; 6]; M],
+            u: [0.0; M],
+            n_linear: 0,
+            task_mean: [0.0; 3],
+            task_scale: 0.0,
+            phi: [0.0; M],
+        }
+    }
+}
+
+impl Default for SmoothWorkspace {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Component types: position (rows 0..3) and rotation (3..6).
+const CLASSES: [core::ops::Range<usize>; 2] = [0..3, 3..6];
+
+/// Whitened held-out baseline residual of a pose (zero where not measured).
+fn target<const N: usize>(m: &Measurement<N>, p: &PoseDiagnosis, sw: &[f64; 6]) -> [f64; 6] {
+    let mut y = [0.0; 6];
+    for (k, (yk, (&r, &w))) in y
+        .iter_mut()
+        .zip(p.heldout_baseline.iter().zip(sw))
+        .enumerate()
+    {
+        if m.mask.has(k) {
+            *yk = r * w;
+        }
+    }
+    y
+}
+
+/// Whitened squared error of a pose with prediction `pred` (zero outside active classes),
+/// summed over the measured components in a fixed order (a zero prediction reproduces the
+/// baseline's value bit for bit).
+fn sq<const N: usize>(m: &Measurement<N>, y: &[f64; 6], pred: &[f64; 6]) -> f64 {
+    let mut s = 0.0;
+    for (k, (&yk, &pk)) in y.iter().zip(pred).enumerate() {
+        if m.mask.has(k) {
+            let v = yk - pk;
+            s += v * v;
+        }
+    }
+    s
+}
+
+/// Which component types are fitted: those some pose measures completely.
+fn active_classes<const N: usize>(data: &[Measurement<N>]) -> [bool; 2] {
+    let mut act = [false; 2];
+    for m in data {
+        for (a, c) in act.iter_mut().zip(CLASSES) {
+            *a |= c.clone().all(|k| m.mask.has(k));
+        }
+    }
+    act
+}
+
+/// Whether a pose measures every component of the active types (it is fitted and
+/// corrected).
+fn fits<const N: usize>(m: &Measurement<N>, act: &[bool; 2]) -> bool {
+    act.iter()
+        .zip(CLASSES)
+        .all(|(&a, c)| !a || c.clone().all(|k| m.mask.has(k)))
+}
+
+/// The ℓ-independent parts of a pose's features: the linear terms `x(q)/√N` into
+/// `ws.phi[..2N]`, the task-space terms (nominal tool position, centred and scaled, its
+/// pairwise products and the tool axis; [`TASK`] slots) after them, and the projections
+/// `u_j = ω_j·x(q)` of the Fourier slots into `ws.u`.
+fn project<const N: usize>(ws: &mut SmoothWorkspace, robot: &Robot<N>, state: &JointState<N>) {
+    let mut x = [0.0; X];
+    for (pair, &qi) in x.chunks_exact_mut(2).zip(state.q.iter()) {
+        let (s, c) = sin_cos(qi);
+        if let [a, b] = pair {
+            *a = s;
+            *b = c;
+        }
+    }
+    let nl = ws.n_linear;
+    for (u, w) in ws.u.iter_mut().zip(&ws.omega).skip(nl + TASK) {
+        *u = w.iter().zip(&x).map(|(a, b)| a * b).sum();
+    }
+    let norm = 1.0 / sqrt(N.max(1) as f64);
+    for (f, &v) in ws.phi.iter_mut().zip(&x).take(nl) {
+        *f = v * norm;
+    }
+    let task = task_terms(robot, state, &ws.task_mean, ws.task_scale);
+    for (f, &v) in ws.phi.iter_mut().skip(nl).zip(&task) {
+        *f = v;
+    }
+}
+
+/// Task-space terms of a pose, each of unit mean square over the data (about): the
+/// nominal tool position `s = (p − p̄)·scale`, the products `s_i·s_j` (i ≤ j) and the tool
+/// axis `z`, every group divided by √(its size) so each group has unit norm. Zero when the
+/// forward kinematics fails.
+fn task_terms<const N: usize>(
+    robot: &Robot<N>,
+    state: &JointState<N>,
+    mean: &[f64; 3],
+    scale: f64,
+) -> [f64; TASK] {
+    let mut t = [0.0; TASK];
+    let Ok(pose) = robot.fk(state) else {
+        return t;
+    };
+    let p = pose.translation.vector;
+    let r = pose.rotation.matrix();
+    let s = [
+        (p[0] - mean[0]) * scale,
+        (p[1] - mean[1]) * scale,
+        (p[2] - mean[2]) * scale,
+    ];
+    let (g1, g2) = (1.0 / sqrt(3.0), 1.0 / sqrt(6.0));
+    let mut k = 0;
+    for &v in &s {
+        t[k] = v * g1;
+        k += 1;
+    }
+    for i in 0..3 {
+        for j in i..3 {
+            t[k] = s[i] * s[j] * g2;
+            k += 1;
+        }
+    }
+    for i in 0..3 {
+        t[k] = r[(i, 2)] * g1;
+        k += 1;
+    }
+    t
+}
+
+/// The Fourier features at length-scale factor `inv_l = 1/ℓ` (slots from `2N` on) from
+/// the projections in `ws.u`; the linear slots stay as [`project`] wrote them.
+fn features(ws: &mut SmoothWorkspace, inv_l: f64) {
+    let nl = ws.n_linear + TASK;
+    let amp = sqrt(2.0 / (M - nl).max(1) as f64);
+    for ((f, &u), &b) in ws.phi.iter_mut().zip(&ws.u).zip(&ws.phase).skip(nl) {
+        *f = amp * cos(u * inv_l + b);
+    }
+}
+
+/// Adds `φ·φᵀ` (lower triangle) and `φ·yᵀ` to a Gram/right-hand side.
+fn accumulate(g: &mut [[f64; M]; M], r: &mut [[f64; 6]; M], phi: &[f64; M], y: &[f64; 6]) {
+    for (i, (gi, ri)) in g.iter_mut().zip(r.iter_mut()).enumerate() {
+        let pi = phi[i % M];
+        for (gij, &pj) in gi.iter_mut().zip(phi).take(i + 1) {
+            *gij += pi * pj;
+        }
+        for (rik, &yk) in ri.iter_mut().zip(y) {
+            *rik += pi * yk;
+        }
+    }
+}
+
+/// Gram and right-hand side over the fitted poses of fold `fold` at length scale `inv_l`
+/// into `ws.g_out`/`r_out` (`inner = false`) or `ws.g_in`/`r_in`.
+#[allow(clippy::too_many_arguments)]
+fn fold_gram<const N: usize>(
+    ws: &mut SmoothWorkspace,
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    poses: &[PoseDiagnosis],
+    sw: &[f64; 6],
+    act: &[bool; 2],
+    fold: Option<usize>,
+    inv_l: f64,
+    inner: bool,
+) {
+    {
+        let (gm, rm) = if inner {
+            (&mut ws.g_in, &mut ws.r_in)
+        } else {
+            (&mut ws.g_out, &mut ws.r_out)
+        };
+        for row in gm.iter_mut() {
+            *row = [0.0; M];
+        }
+        for row in rm.iter_mut() {
+            *row = [0.0; 6];
+        }
+    }
+    for (m, p) in data.iter().zip(poses) {
+        if fold.is_some_and(|f| usize::from(p.fold) != f) || !fits(m, act) {
+            continue;
+        }
+        let y = target(m, p, sw);
+        project(ws, robot, &m.state);
+        features(ws, inv_l);
+        let SmoothWorkspace {
+            g_out,
+            r_out,
+            g_in,
+            r_in,
+            phi,
+            ..
+        } = ws;
+        if inner {
+            accumulate(g_in, r_in, phi, &y);
+        } else {
+            accumulate(g_out, r_out, phi, &y);
+        }
+    }
+}
+
+/// Cholesky factor of `G_all[li] − G_out − (G_in if inner) + λ·I` into `ws.chol`;
+/// false when not positive definite.
+fn factor(ws: &mut SmoothWorkspace, li: usize, inner: bool, lambda: f64) -> bool {
+    let SmoothWorkspace {
+        g_all,
+        g_out,
+        g_in,
+        chol,
+        ..
+    } = ws;
+    let Some(ga) = g_all.get(li) else {
+        return false;
+    };
+    for i in 0..M {
+        for j in 0..=i {
+            let mut s = ga[i][j] - g_out[i][j];
+            if inner {
+                s -= g_in[i][j];
+            }
+            if i == j {
+                s += lambda;
+            }
+            let (upper, lower) = chol.split_at_mut(i);
+            let ci = &mut lower[0];
+            if j < i {
+                let cj = &upper[j];
+                s -= ci[..j]
+                    .iter()
+                    .zip(&cj[..j])
+                    .map(|(a, b)| a * b)
+                    .sum::<f64>();
+                ci[j] = s / cj[j];
+            } else {
+                s -= ci[..i].iter().map(|a| a * a).sum::<f64>();
+                if !(s > 0.0 && s.is_finite()) {
+                    return false;
+                }
+                ci[i] = sqrt(s);
+            }
+        }
+    }
+    true
+}
+
+/// Solves the factored system for the right-hand side `r_all[li] − r_out − (r_in)` into
+/// `ws.beta` (all six outputs).
+fn solve(ws: &mut SmoothWorkspace, li: usize, inner: bool) {
+    let SmoothWorkspace {
+        r_all,
+        r_out,
+        r_in,
+        chol,
+        beta,
+        ..
+    } = ws;
+    let Some(ra) = r_all.get(li) else {
+        return;
+    };
+    for i in 0..M {
+        for k in 0..6 {
+            let mut v = ra[i][k] - r_out[i][k];
+            if inner {
+                v -= r_in[i][k];
+            }
+            for c in 0..i {
+                v -= chol[i][c] * beta[c][k];
+            }
+            beta[i][k] = v / chol[i][i];
+        }
+    }
+    for i in (0..M).rev() {
+        for k in 0..6 {
+            let mut v = beta[i][k];
+            for c in (i + 1)..M {
+                v -= chol[c][i] * beta[c][k];
+            }
+            beta[i][k] = v / chol[i][i];
+        }
+    }
+}
+
+/// Prediction `φ·β` in the active component types (zero elsewhere).
+fn predict(ws: &SmoothWorkspace, act: &[bool; 2], use_class: &[bool; 2]) -> [f64; 6] {
+    let mut pred = [0.0; 6];
+    for (c, range) in CLASSES.iter().enumerate() {
+        if !(act[c] && use_class[c]) {
+            continue;
+        }
+        for k in range.clone() {
+            pred[k] = ws.phi.iter().zip(&ws.beta).map(|(f, b)| f * b[k]).sum();
+        }
+    }
+    pred
+}
+
+/// Squared whitened error per component type.
+fn class_sq(y: &[f64; 6], pred: &[f64; 6]) -> [f64; 2] {
+    let mut e = [0.0; 2];
+    for (ec, range) in e.iter_mut().zip(CLASSES) {
+        for k in range {
+            let v = y[k] - pred[k];
+            *ec += v * v;
+        }
+    }
+    e
+}
+
+/// Hyperparameters chosen for one component type: (length-scale index, ridge) or none
+/// (the zero model).
+type Choice = Option<(usize, f64)>;
+
+/// Inner cross-validation on the folds other than `f`: the best hyperparameters per
+/// component type (or the zero model when no smooth model beats it).
+#[allow(clippy::too_many_arguments)]
+fn choose<const N: usize>(
+    ws: &mut SmoothWorkspace,
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    poses: &[PoseDiagnosis],
+    sw: &[f64; 6],
+    act: &[bool; 2],
+    folds: usize,
+    f: usize,
+    inv_l0: f64,
+) -> [Choice; 2] {
+    // Zero model: the training targets' own squares.
+    let mut best = [(0.0, None::<(usize, f64)>); 2];
+    for (m, p) in data.iter().zip(poses) {
+        if usize::from(p.fold) != f && fits(m, act) {
+            let e = class_sq(&target(m, p, sw), &[0.0; 6]);
+            best[0].0 += e[0];
+            best[1].0 += e[1];
+        }
+    }
+    for (li, &scale) in LENGTH_SCALES.iter().enumerate() {
+        let inv_l = inv_l0 / scale;
+        fold_gram(ws, robot, data, poses, sw, act, Some(f), inv_l, false);
+        let mut err = [[0.0f64; 2]; R];
+        let mut ok = [true; R];
+        for g in (0..folds).filter(|&g| g != f) {
+            fold_gram(ws, robot, data, poses, sw, act, Some(g), inv_l, true);
+            for (ri, &lambda) in RIDGES.iter().enumerate() {
+                if !factor(ws, li, true, lambda) {
+                    ok[ri] = false;
+                    continue;
+                }
+                solve(ws, li, true);
+                for (m, p) in data.iter().zip(poses) {
+                    if usize::from(p.fold) != g || !fits(m, act) {
+                        continue;
+                    }
+                    let y = target(m, p, sw);
+                    project(ws, robot, &m.state);
+                    features(ws, inv_l);
+                    let e = class_sq(&y, &predict(ws, act, &[true; 2]));
+                    err[ri][0] += e[0];
+                    err[ri][1] += e[1];
+                }
+            }
+        }
+        for (ri, &lambda) in RIDGES.iter().enumerate() {
+            for c in 0..2 {
+                if ok[ri] && err[ri][c] < best[c].0 {
+                    best[c] = (err[ri][c], Some((li, lambda)));
+                }
+            }
+        }
+    }
+    [best[0].1, best[1].1]
+}
+
+/// The check on the diagnosis's held-out baseline residuals (`poses[l].heldout_baseline`,
+/// folds in `poses[l].fold`), with the nominal arm `robot` for the task-space terms:
+/// `base` is the baseline's accumulator (its expected totals at the noise floor); the
+/// folds and the significance threshold are the configuration's. Uses `poses[l].scratch`. Never fails: a check that cannot run is returned with `evaluated =
+/// false`.
+pub(crate) fn check<const N: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    poses: &mut [PoseDiagnosis],
+    noise: &NoiseFloor,
+    base: &ModelAcc,
+    cfg: &Config,
+    ws: &mut SmoothWorkspace,
+) -> SmoothCheck {
+    let (folds, z_significance) = (cfg.folds, cfg.z_significance);
+    let out = SmoothCheck::default();
+    let (sp, sr) = (noise.sigma_pos_m, noise.sigma_rot_rad);
+    if folds < 3 || data.len() != poses.len() || N > MAX_JOINTS || 2 * N + TASK + 4 > M {
+        return out;
+    }
+    ws.n_linear = 2 * N;
+    let wp = if sp > 0.0 && sp.is_finite() {
+        1.0 / sp
+    } else {
+        0.0
+    };
+    let wr = if sr > 0.0 && sr.is_finite() {
+        1.0 / sr
+    } else {
+        0.0
+    };
+    let sw = [wp, wp, wp, wr, wr, wr];
+    let mut act = active_classes(data);
+    act[0] &= wp > 0.0;
+    act[1] &= wr > 0.0;
+
+    // Input scale: RMS pairwise distance of x(q) = √(2·Σ var(x_i)).
+    let mut mean = [0.0; X];
+    let mut n_fit = 0usize;
+    for m in data.iter().filter(|m| fits(m, &act)) {
+        for (pair, &qi) in mean.chunks_exact_mut(2).zip(m.state.q.iter()) {
+            let (s, c) = sin_cos(qi);
+            if let [a, b] = pair {
+                *a += s;
+                *b += c;
+            }
+        }
+        n_fit += 1;
+    }
+    if n_fit < 2 * folds || !(act[0] || act[1]) {
+        return out;
+    }
+    for v in &mut mean {
+        *v /= n_fit as f64;
+    }
+    let mut var = 0.0;
+    for m in data.iter().filter(|m| fits(m, &act)) {
+        for (pair, &qi) in mean.chunks_exact(2).zip(m.state.q.iter()) {
+            let (s, c) = sin_cos(qi);
+            if let [a, b] = pair {
+                var += (s - a) * (s - a) + (c - b) * (c - b);
+            }
+        }
+    }
+    let d0 = sqrt(2.0 * var / n_fit as f64);
+    if !(d0 > 1e-9 && d0.is_finite()) {
+        return out;
+    }
+    let inv_l0 = 1.0 / d0;
+    // Task-space centring and scale: mean and RMS spread of the nominal tool position.
+    let (mut pm, mut count) = ([0.0; 3], 0usize);
+    for m in data.iter().filter(|m| fits(m, &act)) {
+        if let Ok(t) = robot.fk(&m.state) {
+            for (a, v) in pm.iter_mut().zip(t.translation.vector.iter()) {
+                *a += v;
+            }
+            count += 1;
+        }
+    }
+    let mut spread = 0.0;
+    if count > 0 {
+        for a in &mut pm {
+            *a /= count as f64;
+        }
+        for m in data.iter().filter(|m| fits(m, &act)) {
+            if let Ok(t) = robot.fk(&m.state) {
+                spread += t
+                    .translation
+                    .vector
+                    .iter()
+                    .zip(&pm)
+                    .map(|(v, a)| (v - a) * (v - a))
+                    .sum::<f64>();
+            }
+        }
+        spread = sqrt(spread / (3 * count) as f64);
+    }
+    ws.task_mean = pm;
+    ws.task_scale = if spread > 0.0 && spread.is_finite() {
+        1.0 / spread
+    } else {
+        0.0
+    };
+
+    // Random features (fixed seed).
+    let mut rng = SplitMix64::new(FEATURE_SEED);
+    for (w, b) in ws
+        .omega
+        .iter_mut()
+        .zip(ws.phase.iter_mut())
+        .skip(2 * N + TASK)
+    {
+        for (k, wk) in w.iter_mut().enumerate() {
+            // Draw every coordinate so the features do not depend on N's padding.
+            let z = rng.normal();
+            *wk = if k < 2 * N { z } else { 0.0 };
+        }
+        *b = 2.0 * core::f64::consts::PI * rng.uniform();
+    }
+
+    // Grams over all fitted poses, one per length scale.
+    for (li, &scale) in LENGTH_SCALES.iter().enumerate() {
+        fold_gram(
+            ws,
+            robot,
+            data,
+            poses,
+            &sw,
+            &act,
+            None,
+            inv_l0 / scale,
+            false,
+        );
+        if let (Some(g), Some(r)) = (ws.g_all.get_mut(li), ws.r_all.get_mut(li)) {
+            *g = ws.g_out;
+            *r = ws.r_out;
+        }
+    }
+
+    // Outer folds: choose, fit on the other folds, predict this one. `scratch` holds each
+    // pose's corrected whitened total; `delta` the change of each type's total.
+    for (m, p) in data.iter().zip(poses.iter_mut()) {
+        p.scratch = sq(m, &target(m, p, &sw), &[0.0; 6]);
+    }
+    let mut delta = [0.0; 2];
+    for f in 0..folds {
+        let choice = choose(ws, robot, data, poses, &sw, &act, folds, f, inv_l0);
+        // One fit per distinct choice (both types usually agree).
+        for c in 0..2 {
+            let Some((li, lambda)) = choice[c] else {
+                continue;
+            };
+            let same = choice[0] == choice[1];
+            if c == 1 && same {
+                continue;
+            }
+            let use_class = [c == 0 || same, c == 1 || same];
+            let inv_l = inv_l0 / LENGTH_SCALES.get(li).copied().unwrap_or(1.0);
+            fold_gram(ws, robot, data, poses, &sw, &act, Some(f), inv_l, false);
+            if !factor(ws, li, false, lambda) {
+                continue;
+            }
+            solve(ws, li, false);
+            for (m, p) in data.iter().zip(poses.iter_mut()) {
+                if usize::from(p.fold) != f || !fits(m, &act) {
+                    continue;
+                }
+                let y = target(m, p, &sw);
+                project(ws, robot, &m.state);
+                features(ws, inv_l);
+                let pred = predict(ws, &act, &use_class);
+                let (before, after) = (class_sq(&y, &[0.0; 6]), class_sq(&y, &pred));
+                for (cc, d) in delta.iter_mut().enumerate() {
+                    if use_class[cc] && act[cc] {
+                        p.scratch += after[cc] - before[cc];
+                        *d += after[cc] - before[cc];
+                    }
+                }
+            }
+        }
+    }
+    summarise(data, poses, noise, base, &sw, delta, z_significance)
+}
+
+/// The outputs from the per-pose corrected totals in `poses[l].scratch` and the change
+/// `delta` of each component type's whitened total.
+fn summarise<const N: usize>(
+    data: &[Measurement<N>],
+    poses: &mut [PoseDiagnosis],
+    noise: &NoiseFloor,
+    base: &ModelAcc,
+    sw: &[f64; 6],
+    delta: [f64; 2],
+    z_significance: f64,
+) -> SmoothCheck {
+    // The baseline's whitened totals, per type over completely measured poses (as the
+    // held-out RMS definitions), and overall.
+    let (mut b_type, mut n_type) = ([0.0; 2], [0usize; 2]);
+    let (mut q_base, mut q_smooth) = (0.0, 0.0);
+    for (m, p) in data.iter().zip(poses.iter()) {
+        let y = target(m, p, sw);
+        let b = class_sq(&y, &[0.0; 6]);
+        for (c, range) in CLASSES.iter().enumerate() {
+            if range.clone().all(|k| m.mask.has(k)) {
+                b_type[c] += b[c];
+                n_type[c] += 1;
+            }
+        }
+        q_base += sq(m, &y, &[0.0; 6]);
+        q_smooth += p.scratch;
+    }
+    let rms = |s: f64, n: usize, w: f64| {
+        if n == 0 || w <= 0.0 {
+            0.0
+        } else {
+            sqrt(s.max(0.0) / n as f64) / w
+        }
+    };
+    let share = |b: f64, a: f64, floor: f64| {
+        if b > floor && b.is_finite() {
+            ((b - a) / (b - floor)).clamp(0.0, 1.0)
+        } else {
+            0.0
+        }
+    };
+    let (bp, br) = (
+        rms(b_type[0], n_type[0], sw[0]),
+        rms(b_type[1], n_type[1], sw[3]),
+    );
+    let ap = rms(b_type[0] + delta[0], n_type[0], sw[0]);
+    let ar = rms(b_type[1] + delta[1], n_type[1], sw[3]);
+    let expected = base.expected_pos + base.expected_rot;
+    let z = group_wilcoxon(data, poses, sw);
+    SmoothCheck {
+        evaluated: true,
+        share_of_gap: share(
+            sqrt(q_base),
+            sqrt(q_smooth.max(0.0)),
+            sqrt(expected.max(0.0)),
+        ),
+        share_pos: share(bp, ap, noise.rms_pos_m()),
+        share_rot: share(br, ar, noise.rms_rot_rad()),
+        heldout_rms_pos_m: ap,
+        heldout_rms_rot_rad: ar,
+        heldout_chi2: q_smooth,
+        z,
+        significant: z > z_significance,
+    }
+}
+
+/// Paired Wilcoxon signed-rank z over groups of `D_g = S_g^baseline − S_g^smooth`
+/// (normal approximation, zero differences dropped, mid-ranks, tie correction), as
+/// `super::paired_z`. Overwrites `scratch` of group leaders with `D_g`. O(G²).
+fn group_wilcoxon<const N: usize>(
+    data: &[Measurement<N>],
+    poses: &mut [PoseDiagnosis],
+    sw: &[f64; 6],
+) -> f64 {
+    // Per pose D_l, then summed into the leader (leaders precede their members, so in
+    // reverse order a leader's members still hold their own D_l).
+    for (m, p) in data.iter().zip(poses.iter_mut()) {
+        p.scratch = sq(m, &target(m, p, sw), &[0.0; 6]) - p.scratch;
+    }
+    for l in (0..poses.len()).rev() {
+        if poses[l].leader as usize != l {
+            continue;
+        }
+        let mut d = poses[l].scratch;
+        for p in poses.iter().skip(l + 1) {
+            if p.leader as usize == l {
+                d += p.scratch;
+            }
+        }
+        poses[l].scratch = d;
+    }
+    let is_lead = |l: usize, p: &PoseDiagnosis| p.leader as usize == l && p.scratch != 0.0;
+    let (mut w_plus, mut ties, mut g) = (0.0, 0.0, 0usize);
+    for (i, pi) in poses.iter().enumerate() {
+        if !is_lead(i, pi) {
+            continue;
+        }
+        g += 1;
+        let x = pi.scratch.abs();
+        let (mut below, mut equal) = (0usize, 0usize);
+        for (j, pj) in poses.iter().enumerate() {
+            if !is_lead(j, pj) {
+                continue;
+            }
+            let y = pj.scratch.abs();
+            if y < x {
+                below += 1;
+            } else if y == x {
+                equal += 1;
+            }
+        }
+        if pi.scratch > 0.0 {
+            w_plus += below as f64 + 0.5 * (equal as f64 + 1.0);
+        }
+        let t = equal as f64;
+        ties += (t * t - 1.0) / 48.0;
+    }
+    if g == 0 {
+        return 0.0;
+    }
+    let nf = g as f64;
+    let mean = nf * (nf + 1.0) / 4.0;
+    let var = nf * (nf + 1.0) * (2.0 * nf + 1.0) / 24.0 - ties;
+    if var <= 0.0 {
+        return 0.0;
+    }
+    (w_plus - mean) / sqrt(var)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::boxed::Box;
+
+    /// The greedy-free Cholesky and the two triangular solves against the normal equations
+    /// themselves: `(G_all − G_out + λ·I)·β = r_all − r_out` with a full symmetric `G`.
+    #[test]
+    fn ridge_solve_satisfies_its_normal_equations() {
+        let mut ws = Box::new(SmoothWorkspace::new());
+        let mut rng = SplitMix64::new(5);
+        let mut full = [[0.0; M]; M];
+        let (mut phi, mut y) = ([0.0; M], [0.0; 6]);
+        for _ in 0..30 {
+            for v in phi.iter_mut() {
+                *v = rng.normal();
+            }
+            y = [rng.normal(), rng.normal(), 0.0, 1.0, -2.0, 0.5];
+            accumulate(&mut ws.g_all[1], &mut ws.r_all[1], &phi, &y);
+            for i in 0..M {
+                for j in 0..M {
+                    full[i][j] += phi[i] * phi[j];
+                }
+            }
+        }
+        // One "fold" removed: the last row.
+        let (mut g, mut r) = ([[0.0; M]; M], [[0.0; 6]; M]);
+        accumulate(&mut g, &mut r, &phi, &y);
+        ws.g_out = g;
+        ws.r_out = r;
+        let lambda = 0.1;
+        assert!(factor(&mut ws, 1, false, lambda));
+        solve(&mut ws, 1, false);
+        for i in 0..M {
+            for k in 0..6 {
+                let mut lhs = lambda * ws.beta[i][k];
+                for j in 0..M {
+                    lhs += (full[i][j] - phi[i] * phi[j]) * ws.beta[j][k];
+                }
+                let rhs = ws.r_all[1][i][k] - ws.r_out[i][k];
+                assert!((lhs - rhs).abs() < 1e-9 * (1.0 + rhs.abs()), "{i} {k}");
+            }
+        }
+        // The documented size (about 110 KiB).
+        let size = core::mem::size_of::<SmoothWorkspace>();
+        assert!((100 * 1024..120 * 1024).contains(&size), "{size}");
+        // Not positive definite (λ = 0 with fewer rows than features): refused.
+        ws.g_all[1] = [[0.0; M]; M];
+        ws.g_out = [[0.0; M]; M];
+        assert!(!factor(&mut ws, 1, false, 0.0));
+    }
+}

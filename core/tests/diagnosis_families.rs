@@ -1,0 +1,709 @@
+//! Hard case families for the sim-to-real diagnosis (issue #12, item 7): a measuring
+//! instrument for the decision rules, with its own seeded generator (`common/outside.rs`).
+//!
+//! Each family draws cases of one kind: a random ARIA (manufacturing errors within ±5 mm /
+//! ±5°), a hidden effect of realistic size (library effects via
+//! [`kincal::sim::add_effect`], size factor log-uniform in [0.05, 5]; effects OUTSIDE the
+//! library applied to the measured poses by this test, size factor log-uniform in
+//! [0.1, 5]; some of either below detectability), measured by a mocap (0.1 mm, 0.05°,
+//! full pose) or a laser tracker (0.02 mm, position only), on 60 random poses (20
+//! repeated) or the paper's regime (Table 2 measured ×3, plus 0, 10 or 30 poses), with σ
+//! stated truly, stated ×0.5 or ×2, or estimated from repeats, and 1–3 gross outliers.
+//!
+//! A case's size is its detectability ρ: the RMS residual a noise-free geometric
+//! calibration leaves on the same joint states over √3·σ (position; rotation too where
+//! measured; the larger). Detectable: ρ ≥ 3 (for a hidden pair: each effect's own ρ);
+//! undetectable: ρ < 0.3 (cases in between are reported but not scored).
+//!
+//! Per family: correct verdicts on detectable in-library cases (the hidden set named or
+//! listed as confounded, status explained or partially explained); false positives on
+//! undetectable cases (status other than `no_gap`); over-claims on detectable
+//! out-of-library cases (status `explained`); silent choices (a winner named while another
+//! candidate of as many effects is significant and not significantly worse than it — an
+//! independent paired Wilcoxon z < 3 over pose_id groups from the per-pose held-out errors
+//! — but not listed as confounded); the share of the gap closed against the truth on 30
+//! withheld noise-free poses, (B − A)/B of the RMS position error of the geometric and
+//! the final model; and the library-free smooth share (`Diagnosis::explainable`).
+//!
+//! `families_short` (default run: 10 cases per family, about 10–30 s in a debug build)
+//! prints the table and asserts the targets that hold today; `families_long` (`#[ignore]`,
+//! run in release: `cargo test -p kincal --release --test diagnosis_families --
+//! --ignored --nocapture`, about a minute) prints the table over 60 cases per family.
+
+#[path = "common/outside.rs"]
+mod outside;
+
+use std::panic::{AssertUnwindSafe, catch_unwind};
+
+use kincal::diagnosis::{Config, DiagWorkspace, Diagnosis, PoseDiagnosis, Status, diagnose};
+use kincal::rng::SplitMix64;
+use kincal::sim::{add_effect, only_effects, perturb_geometry};
+use kincal::{Effect, EffectSet, Robot, aria};
+use outside::{
+    Design, Instrument, LASER, MOCAP, Outside, OutsideEffect, add_outliers, detectability, measure,
+    states,
+};
+
+const DETECTABLE: f64 = 3.0;
+const UNDETECTABLE: f64 = 0.3;
+const WITHHELD: usize = 30;
+
+/// How σ reaches the diagnosis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Sigma {
+    /// Stated, times this factor (1 = true).
+    Stated(f64),
+    /// Not stated: estimated from repeats.
+    Missing,
+}
+
+/// What is hidden in a family's cases (drawn per case from the list, in turn).
+#[derive(Debug, Clone)]
+enum Hidden {
+    None,
+    Library(Vec<EffectSet>),
+    Outside(Vec<Outside>),
+    /// A library effect plus an out-of-library one.
+    Mixed(Vec<(Effect, Outside)>),
+}
+
+#[derive(Debug, Clone)]
+struct Family {
+    name: &'static str,
+    hidden: Hidden,
+    inst: Instrument,
+    design: Design,
+    sigma: Sigma,
+    outliers: usize,
+    /// Target group: 0 in-library ≥ 90 %, 1 misstated σ ≥ 85 %, 2 outliers ≥ 75 %.
+    group: usize,
+}
+
+const RANDOM: Design = Design::Random {
+    poses: 60,
+    repeated: 20,
+};
+
+fn singles(list: &[Effect]) -> Vec<EffectSet> {
+    list.iter().map(|&e| EffectSet::of(e)).collect()
+}
+
+/// Library effects that need no approach directions or temperatures (the Table 2 sessions
+/// record neither).
+const PLAIN: [Effect; 5] = [
+    Effect::BaseFrame,
+    Effect::ToolFrame,
+    Effect::JointCompliance,
+    Effect::JointScale,
+    Effect::JointCyclic,
+];
+
+fn families() -> Vec<Family> {
+    let lib = singles(&Effect::ALL);
+    let out = Outside::ALL.to_vec();
+    let f = |name, hidden, inst, design, sigma, outliers, group| Family {
+        name,
+        hidden,
+        inst,
+        design,
+        sigma,
+        outliers,
+        group,
+    };
+    let st = Sigma::Stated(1.0);
+    vec![
+        f("none/mocap", Hidden::None, MOCAP, RANDOM, st, 0, 0),
+        f("none/laser", Hidden::None, LASER, RANDOM, st, 0, 0),
+        f(
+            "library/mocap",
+            Hidden::Library(lib.clone()),
+            MOCAP,
+            RANDOM,
+            st,
+            0,
+            0,
+        ),
+        f(
+            "library/laser",
+            Hidden::Library(lib.clone()),
+            LASER,
+            RANDOM,
+            st,
+            0,
+            0,
+        ),
+        f(
+            "outside/mocap",
+            Hidden::Outside(out.clone()),
+            MOCAP,
+            RANDOM,
+            st,
+            0,
+            0,
+        ),
+        f(
+            "outside/laser",
+            Hidden::Outside(out.clone()),
+            LASER,
+            RANDOM,
+            st,
+            0,
+            0,
+        ),
+        f(
+            "paper/table2x3",
+            Hidden::Library(singles(&PLAIN)),
+            MOCAP,
+            Design::Table2 { times: 3, extra: 0 },
+            st,
+            0,
+            0,
+        ),
+        f(
+            "paper/table2x3+10",
+            Hidden::Library(singles(&PLAIN)),
+            MOCAP,
+            Design::Table2 {
+                times: 3,
+                extra: 10,
+            },
+            st,
+            0,
+            0,
+        ),
+        f(
+            "paper/table2x3+30",
+            Hidden::Library(singles(&PLAIN)),
+            MOCAP,
+            Design::Table2 {
+                times: 3,
+                extra: 30,
+            },
+            st,
+            0,
+            0,
+        ),
+        f(
+            "pairs/mocap",
+            Hidden::Library(vec![
+                EffectSet::of(Effect::BaseFrame).with(Effect::ToolFrame),
+                EffectSet::of(Effect::JointCompliance).with(Effect::JointScale),
+                EffectSet::of(Effect::JointCompliance).with(Effect::Backlash),
+                EffectSet::of(Effect::JointCyclic).with(Effect::Thermal),
+            ]),
+            MOCAP,
+            RANDOM,
+            st,
+            0,
+            0,
+        ),
+        f(
+            "mixed/mocap",
+            Hidden::Mixed(vec![
+                (Effect::JointCompliance, Outside::QuadraticCompliance),
+                (Effect::BaseFrame, Outside::CompliantMount),
+                (Effect::JointCyclic, Outside::ThirdHarmonic),
+                (Effect::ToolFrame, Outside::ToolFlex),
+            ]),
+            MOCAP,
+            RANDOM,
+            st,
+            0,
+            0,
+        ),
+        f(
+            "sigma_x0.5/mocap",
+            Hidden::Library(lib.clone()),
+            MOCAP,
+            RANDOM,
+            Sigma::Stated(0.5),
+            0,
+            1,
+        ),
+        f(
+            "sigma_x2/mocap",
+            Hidden::Library(lib.clone()),
+            MOCAP,
+            RANDOM,
+            Sigma::Stated(2.0),
+            0,
+            1,
+        ),
+        f(
+            "sigma_missing/mocap",
+            Hidden::Library(lib.clone()),
+            MOCAP,
+            RANDOM,
+            Sigma::Missing,
+            0,
+            1,
+        ),
+        f(
+            "outliers/mocap",
+            Hidden::Library(lib),
+            MOCAP,
+            RANDOM,
+            st,
+            3,
+            2,
+        ),
+    ]
+}
+
+/// One case's outcome.
+#[derive(Debug, Clone, Default)]
+struct Outcome {
+    crashed: bool,
+    error: Option<String>,
+    in_library: bool,
+    outside: bool,
+    /// Detectability of everything hidden together.
+    rho: f64,
+    /// The least detectability of the hidden library effects each alone (pairs).
+    rho_each: f64,
+    correct: bool,
+    positive: bool,
+    overclaim: bool,
+    named: bool,
+    silent: bool,
+    closed_truth: f64,
+    smooth_share: f64,
+    smooth_significant: bool,
+}
+
+fn log_uniform(rng: &mut SplitMix64, lo: f64, hi: f64) -> f64 {
+    (lo.ln() + rng.uniform() * (hi.ln() - lo.ln())).exp()
+}
+
+/// Paired Wilcoxon signed-rank z of models `a` and `b` (positive: a has the larger errors)
+/// over `pose_id` groups, from the per-pose held-out errors (independent of the crate's).
+fn wilcoxon(poses: &[PoseDiagnosis], groups: &[u32], a: usize, b: usize) -> f64 {
+    let mut ids: Vec<u32> = groups.to_vec();
+    ids.sort_unstable();
+    ids.dedup();
+    let d: Vec<f64> = ids
+        .iter()
+        .map(|&g| {
+            poses
+                .iter()
+                .zip(groups)
+                .filter(|(_, h)| **h == g)
+                .map(|(p, _)| p.heldout_sq(a) - p.heldout_sq(b))
+                .sum::<f64>()
+        })
+        .filter(|&v| v != 0.0)
+        .collect();
+    let n = d.len();
+    if n == 0 {
+        return 0.0;
+    }
+    let mut idx: Vec<usize> = (0..n).collect();
+    idx.sort_by(|&i, &j| d[i].abs().total_cmp(&d[j].abs()));
+    let mut rank = vec![0.0; n];
+    let mut ties = 0.0;
+    let mut i = 0;
+    while i < n {
+        let mut j = i;
+        while j + 1 < n && d[idx[j + 1]].abs() == d[idx[i]].abs() {
+            j += 1;
+        }
+        let r = (i + j) as f64 / 2.0 + 1.0;
+        for k in i..=j {
+            rank[idx[k]] = r;
+        }
+        let t = (j - i + 1) as f64;
+        ties += (t * t * t - t) / 48.0;
+        i = j + 1;
+    }
+    let w: f64 = (0..n).filter(|&k| d[k] > 0.0).map(|k| rank[k]).sum();
+    let nf = n as f64;
+    let var = nf * (nf + 1.0) * (2.0 * nf + 1.0) / 24.0 - ties;
+    if var <= 0.0 {
+        return 0.0;
+    }
+    (w - nf * (nf + 1.0) / 4.0) / var.sqrt()
+}
+
+/// A winner named while an equally good candidate of as many effects is not listed.
+fn silent_choice(d: &Diagnosis<6>, poses: &[PoseDiagnosis], groups: &[u32]) -> bool {
+    let Some(w) = d.verdict.candidate else {
+        return false;
+    };
+    let wc = &d.candidates[w];
+    d.candidates().iter().enumerate().any(|(c, s)| {
+        c != w
+            && s.evaluated
+            && s.significant
+            && s.effects.len() == wc.effects.len()
+            && !d.verdict.confounded().contains(&s.effects)
+            && wilcoxon(poses, groups, c + 1, w + 1) < 3.0
+    })
+}
+
+/// RMS position error of `model` against the true poses at `st`.
+fn rms_against(
+    model: &Robot<6>,
+    truth: &Robot<6>,
+    out: &[OutsideEffect],
+    st: &[(kincal::JointState<6>, u32)],
+) -> f64 {
+    let s: f64 = st
+        .iter()
+        .map(|(q, _)| {
+            let t = outside::true_pose(truth, out, q);
+            (t.translation.vector - model.fk(q).unwrap().translation.vector).norm_squared()
+        })
+        .sum();
+    (s / st.len() as f64).sqrt()
+}
+
+fn run_case(fam: &Family, k: usize, seed: u64, ws: &mut DiagWorkspace<80>) -> Outcome {
+    let mut rng = SplitMix64::new(seed);
+    let nominal = aria::nominal();
+    let mut truth = perturb_geometry(&nominal, 5e-3, 5f64.to_radians(), &mut rng).unwrap();
+    let mut out_effects = Vec::new();
+    let mut o = Outcome::default();
+    let mut hidden_lib = EffectSet::NONE;
+    match &fam.hidden {
+        Hidden::None => {}
+        Hidden::Library(list) => {
+            let set = list[k % list.len()];
+            for e in set.iter() {
+                let size = log_uniform(&mut rng, 0.05, 5.0);
+                add_effect(&mut truth, e, size, &mut rng).unwrap();
+            }
+            hidden_lib = set;
+        }
+        Hidden::Outside(list) => {
+            let kind = list[k % list.len()];
+            let size = log_uniform(&mut rng, 0.1, 5.0);
+            out_effects.push(OutsideEffect::draw(kind, size, &mut rng));
+        }
+        Hidden::Mixed(list) => {
+            let (e, kind) = list[k % list.len()];
+            let size = log_uniform(&mut rng, 0.05, 5.0);
+            add_effect(&mut truth, e, size, &mut rng).unwrap();
+            hidden_lib = EffectSet::of(e);
+            let size = log_uniform(&mut rng, 0.1, 5.0);
+            out_effects.push(OutsideEffect::draw(kind, size, &mut rng));
+        }
+    }
+    let st = states(&truth, fam.design, &mut rng);
+    let (mut data, groups) = measure(&truth, &out_effects, &st, &fam.inst, true, &mut rng);
+    if fam.outliers > 0 {
+        let n_out = 1 + rng.below(fam.outliers);
+        add_outliers(&mut data, n_out, &mut rng);
+    }
+    let rho_of = |t: &Robot<6>, oe: &[OutsideEffect]| {
+        let (p, r) = detectability(t, oe, &st, &fam.inst);
+        if fam.inst.mask.has(3) { p.max(r) } else { p }
+    };
+    o.rho = rho_of(&truth, &out_effects);
+    o.rho_each = o.rho;
+    if hidden_lib.len() > 1 && out_effects.is_empty() {
+        // A set is detectable when each of its effects is (as the blind suite).
+        o.rho_each = hidden_lib
+            .iter()
+            .map(|e| rho_of(&only_effects(&truth, EffectSet::of(e)), &[]))
+            .fold(f64::INFINITY, f64::min);
+    }
+    if std::env::var("FAM_DEBUG").is_ok() {
+        println!("  {} case {k}: rho {:.3}", fam.name, o.rho);
+    }
+    // The out-of-library part alone (what the library cannot explain).
+    let rho_out = if out_effects.is_empty() {
+        0.0
+    } else {
+        rho_of(&only_effects(&truth, EffectSet::NONE), &out_effects)
+    };
+    o.in_library = out_effects.is_empty() && !hidden_lib.is_empty();
+    o.outside = rho_out >= DETECTABLE;
+    let cfg = match fam.sigma {
+        Sigma::Stated(f) => Config {
+            sigma_pos_m: Some(fam.inst.sigma_pos_m * f),
+            sigma_rot_rad: Some(fam.inst.sigma_rot_rad * f),
+            ..Config::default()
+        },
+        Sigma::Missing => Config::default(),
+    };
+    let mut poses = vec![PoseDiagnosis::default(); data.len()];
+    let res = catch_unwind(AssertUnwindSafe(|| {
+        diagnose(&nominal, &data, &groups, &cfg, &mut poses, ws)
+    }));
+    let d = match res {
+        Err(_) => {
+            o.crashed = true;
+            return o;
+        }
+        Ok(Err(e)) => {
+            o.error = Some(format!("{}: {e:?}", fam.name));
+            return o;
+        }
+        Ok(Ok(d)) => d,
+    };
+    let status = d.verdict.status;
+    o.named = !d.verdict.effects.is_empty();
+    o.correct = matches!(status, Status::Explained | Status::PartiallyExplained)
+        && (d.verdict.effects == hidden_lib || d.verdict.confounded().contains(&hidden_lib));
+    o.positive = status != Status::NoGap;
+    o.overclaim = status == Status::Explained;
+    o.silent = silent_choice(&d, &poses, &groups);
+    o.smooth_share = d.explainable.share_of_gap;
+    o.smooth_significant = d.explainable.significant;
+    // Against the truth on withheld poses.
+    let withheld = states(
+        &truth,
+        Design::Random {
+            poses: WITHHELD,
+            repeated: 0,
+        },
+        &mut rng,
+    );
+    let b = rms_against(&d.geometric, &truth, &out_effects, &withheld);
+    let a = rms_against(&d.model, &truth, &out_effects, &withheld);
+    o.closed_truth = if b > 0.0 { (b - a) / b } else { 0.0 };
+    o
+}
+
+/// Counts of one family (or a group of families).
+#[derive(Debug, Clone, Default)]
+struct Tally {
+    cases: usize,
+    crashes: usize,
+    errors: usize,
+    det_lib: usize,
+    correct: usize,
+    undet: usize,
+    false_pos: usize,
+    det_out: usize,
+    overclaim: usize,
+    named: usize,
+    silent: usize,
+    closed_sum: f64,
+    closed_n: usize,
+    smooth_sum: f64,
+    smooth_sig: usize,
+}
+
+impl Tally {
+    fn add(&mut self, o: &Outcome) {
+        self.cases += 1;
+        self.crashes += usize::from(o.crashed);
+        if let Some(e) = &o.error {
+            println!("  error: {e}");
+            self.errors += 1;
+            return;
+        }
+        if o.crashed {
+            return;
+        }
+        let detectable = o.rho >= DETECTABLE;
+        if o.in_library && o.rho_each >= DETECTABLE {
+            self.det_lib += 1;
+            self.correct += usize::from(o.correct);
+        }
+        if o.rho < UNDETECTABLE {
+            self.undet += 1;
+            self.false_pos += usize::from(o.positive);
+        }
+        if o.outside {
+            self.det_out += 1;
+            self.overclaim += usize::from(o.overclaim);
+            self.smooth_sum += o.smooth_share;
+            self.smooth_sig += usize::from(o.smooth_significant);
+        }
+        if o.named {
+            self.named += 1;
+            self.silent += usize::from(o.silent);
+        }
+        if detectable {
+            self.closed_sum += o.closed_truth;
+            self.closed_n += 1;
+        }
+    }
+    fn merge(&mut self, t: &Tally) {
+        self.cases += t.cases;
+        self.crashes += t.crashes;
+        self.errors += t.errors;
+        self.det_lib += t.det_lib;
+        self.correct += t.correct;
+        self.undet += t.undet;
+        self.false_pos += t.false_pos;
+        self.det_out += t.det_out;
+        self.overclaim += t.overclaim;
+        self.named += t.named;
+        self.silent += t.silent;
+        self.closed_sum += t.closed_sum;
+        self.closed_n += t.closed_n;
+        self.smooth_sum += t.smooth_sum;
+        self.smooth_sig += t.smooth_sig;
+    }
+}
+
+fn pct(a: usize, b: usize) -> String {
+    if b == 0 {
+        "   -  ".into()
+    } else {
+        format!("{:5.1}%", 100.0 * a as f64 / b as f64)
+    }
+}
+
+fn frac(a: usize, b: usize) -> f64 {
+    if b == 0 {
+        f64::NAN
+    } else {
+        a as f64 / b as f64
+    }
+}
+
+fn row(name: &str, t: &Tally) -> String {
+    format!(
+        "{:<20} {:>5} {:>5} {:>4} | {:>4} {} | {:>4} {} | {:>4} {} {:>6} {} | {:>4} {} | {:>6}",
+        name,
+        t.cases,
+        t.crashes,
+        t.errors,
+        t.det_lib,
+        pct(t.correct, t.det_lib),
+        t.undet,
+        pct(t.false_pos, t.undet),
+        t.det_out,
+        pct(t.overclaim, t.det_out),
+        if t.det_out > 0 {
+            format!("{:.2}", t.smooth_sum / t.det_out as f64)
+        } else {
+            "-".into()
+        },
+        pct(t.smooth_sig, t.det_out),
+        t.named,
+        pct(t.silent, t.named),
+        if t.closed_n > 0 {
+            format!("{:.2}", t.closed_sum / t.closed_n as f64)
+        } else {
+            "-".into()
+        },
+    )
+}
+
+/// Runs `per_family` cases of every family; prints the table; returns the tallies per
+/// target group (0 in-library, 1 misstated σ, 2 outliers) and the total.
+fn suite(per_family: usize, seed: u64) -> ([Tally; 3], Tally) {
+    // SAFETY: all-zero is a valid DiagWorkspace (documented).
+    let mut ws: Box<DiagWorkspace<80>> = unsafe { Box::new_zeroed().assume_init() };
+    let mut groups: [Tally; 3] = Default::default();
+    let mut total = Tally::default();
+    println!(
+        "{:<20} {:>5} {:>5} {:>4} | {:>4} {:>6} | {:>4} {:>6} | {:>4} {:>6} {:>6} {:>6} | {:>4} {:>6} | {:>6}",
+        "family",
+        "cases",
+        "crash",
+        "err",
+        "det",
+        "right",
+        "und",
+        "FP",
+        "out",
+        "over",
+        "smooth",
+        "sm.sig",
+        "named",
+        "silent",
+        "closed"
+    );
+    for (fi, fam) in families().iter().enumerate() {
+        let mut t = Tally::default();
+        for k in 0..per_family {
+            let s = seed
+                .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                .wrapping_add((fi as u64) << 32 | k as u64);
+            t.add(&run_case(fam, k, s, &mut ws));
+        }
+        println!("{}", row(fam.name, &t));
+        groups[fam.group].merge(&t);
+        total.merge(&t);
+    }
+    println!("{}", row("TOTAL", &total));
+    println!(
+        "columns: det = detectable in-library cases, right = correct verdicts among them; und = undetectable (rho < {UNDETECTABLE}), FP = status not no_gap; out = detectable out-of-library, over = status explained, smooth = mean library-free share, sm.sig = share of those where it is significant; named = cases with a verdict effect, silent = silent choices among them; closed = gap closed against the truth on withheld poses (detectable cases)"
+    );
+    (groups, total)
+}
+
+/// The issue's targets, printed with their figures; returns (name, figure, target, holds).
+fn targets(groups: &[Tally; 3], total: &Tally) -> Vec<(&'static str, f64, f64, bool)> {
+    let t = vec![
+        ("crashes", total.crashes as f64, 0.0, total.crashes == 0),
+        (
+            "over-claims <= 5 %",
+            frac(total.overclaim, total.det_out),
+            0.05,
+            frac(total.overclaim, total.det_out) <= 0.05,
+        ),
+        (
+            "false positives <= 5 %",
+            frac(total.false_pos, total.undet),
+            0.05,
+            frac(total.false_pos, total.undet) <= 0.05,
+        ),
+        (
+            "correct in-library >= 90 %",
+            frac(groups[0].correct, groups[0].det_lib),
+            0.9,
+            frac(groups[0].correct, groups[0].det_lib) >= 0.9,
+        ),
+        (
+            "correct misstated sigma >= 85 %",
+            frac(groups[1].correct, groups[1].det_lib),
+            0.85,
+            frac(groups[1].correct, groups[1].det_lib) >= 0.85,
+        ),
+        (
+            "correct with outliers >= 75 %",
+            frac(groups[2].correct, groups[2].det_lib),
+            0.75,
+            frac(groups[2].correct, groups[2].det_lib) >= 0.75,
+        ),
+        (
+            "silent choices <= 20 %",
+            frac(total.silent, total.named),
+            0.2,
+            frac(total.silent, total.named) <= 0.2,
+        ),
+    ];
+    for (name, v, target, ok) in &t {
+        println!(
+            "TARGET {name:<34} figure {v:.3} (target {target}): {}",
+            if *ok { "holds" } else { "FAILS" }
+        );
+    }
+    t
+}
+
+#[test]
+fn families_short() {
+    let (groups, total) = suite(10, 1);
+    let t = targets(&groups, &total);
+    // Asserted: the targets that hold with today's decision rules in this run and in
+    // `families_long` (the others are printed; the decision-rule work of issue #12 is to
+    // make them hold, then add them here).
+    let asserted = [
+        "crashes",
+        "correct misstated sigma >= 85 %",
+        "silent choices <= 20 %",
+    ];
+    for (name, _, _, ok) in &t {
+        if asserted.contains(name) {
+            assert!(ok, "{name}");
+        }
+    }
+    // The suite itself must measure something: every target group has scored cases.
+    assert!(groups[0].det_lib > 0 && total.det_out > 0 && total.undet > 0);
+}
+
+#[test]
+#[ignore]
+fn families_long() {
+    let (groups, total) = suite(60, 2);
+    targets(&groups, &total);
+    assert_eq!(total.crashes, 0);
+}
