@@ -173,12 +173,20 @@ fn run_diag(
     (d, poses)
 }
 
+fn names(set: EffectSet) -> String {
+    set.iter().map(|e| e.name()).collect::<Vec<_>>().join("+")
+}
+
 fn summary(d: &Diagnosis<6>) -> String {
     format!(
-        "{} {:?} conf {:?} closed pos {:.2} total {:.2} gap z {:.1} remaining z {:.1} ({:.1} pos, {:.1} rot) method {:?} reason {:?} suspects {:?} warnings {:?}",
+        "{} {} conf {:?} closed pos {:.2} total {:.2} gap z {:.1} remaining z {:.1} ({:.1} pos, {:.1} rot) method {:?} reason {:?} suspects {:?} warnings {:?}",
         d.verdict.status.name(),
-        d.verdict.effects,
-        d.verdict.confounded(),
+        names(d.verdict.effects),
+        d.verdict
+            .confounded()
+            .iter()
+            .map(|&c| names(c))
+            .collect::<Vec<_>>(),
         d.verdict.gap_closed_fraction,
         d.verdict
             .candidate
@@ -305,8 +313,7 @@ fn misstated_sigma_does_not_hide_a_clear_effect_and_is_flagged() {
     };
     let (d, _) = run_diag(&data, &groups, &cfg);
     let s = summary(&d);
-    let (de, _) = run_diag(&data, &groups, &Config::default());
-    eprintln!("estimated: {:?}", de.noise);
+    eprintln!("sigma stated 2x: {s}");
     assert!(d.gap.z < cfg.z_gap, "not the regime of the test: {s}");
     assert_ne!(d.verdict.status, Status::NoGap, "{s}");
     assert_eq!(
@@ -381,6 +388,7 @@ fn gross_outliers_are_named_and_do_not_spoil_the_verdict() {
     data[55].pose.translation.vector.x -= 3e-3;
     let (d, poses) = run_diag(&data, &groups, &Config::default());
     let s = summary(&d);
+    eprintln!("outliers: {s}\n  clean: {}", summary(&d0));
     assert_eq!(d.verdict.status, Status::Explained, "{s}");
     assert_eq!(
         d.verdict.effects,
@@ -450,6 +458,7 @@ fn table2_three_times_uses_the_nested_test_and_finds_compliance() {
         };
         let (d, _) = run_diag(&data, &groups, &cfg);
         let s = summary(&d);
+        eprintln!("table2x3 {seed}: {s}");
         assert_eq!(d.method, Method::InSampleNested, "{s}");
         assert!(
             matches!(

@@ -23,7 +23,8 @@
 //!    with the kept parameter each dropped one aligns with). A candidate none of whose
 //!    effect parameters the poses determine is *confounded with the geometric parameters*
 //!    and not evaluated.
-//! 4b. *Outliers* (with [`Config::screen_outliers`], see `screen.rs`): the union of all
+//!
+//!    *Outliers* (with [`Config::screen_outliers`], see `screen.rs`): the union of all
 //!    models fitted on the rows, each row's residual tested against robust scales; gross
 //!    outliers become *suspects* ([`Diagnosis::suspects`]), excluded from every fit, test
 //!    and the repeat noise estimate; the noise floor and the geometric calibration are
