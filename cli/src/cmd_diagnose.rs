@@ -9,7 +9,8 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use kincal::diagnosis::{
-    self, Config, DiagWorkspace, Diagnosis, ModelScore, PoseDiagnosis, QuantityKind, Status,
+    self, Config, DiagWorkspace, Diagnosis, Method, ModelScore, Part, PoseDiagnosis, QuantityKind,
+    Reason, Status, Warning,
 };
 use kincal::identify::{Algorithm, Measurement};
 use kincal::{Effect, EffectSet, ParamId, ParamIndex, ParamSet, Robot};
@@ -44,9 +45,16 @@ model is extended by that effect?
    the parameter-estimation error on held-out poses); a candidate is significant when it
    beats the geometric model; the smallest significant candidate not significantly worse
    than the best wins; same-size candidates as good are listed as confounded_with.
-   explained when it closes ≥ 80 % of the gap above the noise floor (gap_closed_fraction =
-   (B − A)/(B − √3·σ_pos), held-out RMS position before/after), partially_explained from
-   25 %, else unexplained.
+   explained when it closes ≥ 80 % of the gap above the noise floor (whitened held-out RMS
+   per row, position and rotation each by its noise, floor with the estimation error;
+   gap_closed_fraction = (B − A)/(B − √3·σ_pos) on the position and the same on rotation
+   are reported), its own remaining gap is not significant and it makes neither position
+   nor rotation significantly worse; partially_explained from 25 % (or when the remaining
+   gap is significant: the reason says where), else unexplained. A significant candidate
+   is a gap even when the gap test says no_gap (σ stated too large: a warning says so).
+   Gross outliers are screened first (suspect rows, named by CSV line, are left out); the
+   stated σ is checked against the repeats and the residuals. With fewer than 5 pose
+   groups per fold, in-sample nested tests replace cross-validation (method in the report).
 
 Writes REPORT.json (spec/cli.md fields plus details), a readable report (--report, default
 REPORT.txt next to it, also printed), three SVG plots next to REPORT.json (residual vectors
@@ -287,7 +295,7 @@ pub fn execute<const N: usize>(
     let plots = crate::diagnosis_plot::render_all::<N>(&d, &meas, &poses, &outputs)?;
     let json = report_json::<N>(&d, &meas, &set, &poses, &args.data, &outputs);
     let json_text = serde_json::to_string_pretty(&json).unwrap_or_default() + "\n";
-    let mut text = readable::<N>(name, &set.source, &d, &meas);
+    let mut text = readable::<N>(name, &set, &d, &meas);
     let _ = writeln!(
         text,
         "\nFiles: {} (report), {} (readable), {} (model: geometric{}), plots {}",
@@ -402,6 +410,12 @@ pub fn quantity_unit(q: QuantityKind) -> &'static str {
 
 #[derive(Serialize)]
 struct Report {
+    /// `cross_validation` or `in_sample_nested` (too few pose groups for held-out poses).
+    method: &'static str,
+    /// Things to know about the data or the stated noise.
+    warnings: Vec<WarningJson>,
+    /// Gross outliers excluded from every fit and test.
+    suspect_rows: Vec<SuspectJson>,
     noise_floor: NoiseJson,
     baseline: BaselineJson,
     candidates: Vec<CandidateJson>,
@@ -430,6 +444,23 @@ struct NoiseJson {
     /// √3·σ_pos: RMS position error of pure noise [mm].
     rms_pos_mm: f64,
     rms_rot_deg: f64,
+    /// σ per axis the repeats alone give (also when σ was stated) [mm], [°].
+    repeats_pos_mm: Option<f64>,
+    repeats_rot_deg: Option<f64>,
+}
+
+#[derive(Serialize)]
+struct WarningJson {
+    code: &'static str,
+    message: String,
+}
+
+#[derive(Serialize)]
+struct SuspectJson {
+    /// Zero-based row of the data.
+    index: usize,
+    line: u64,
+    pose_id: Option<String>,
 }
 
 #[derive(Serialize)]
@@ -444,6 +475,9 @@ struct BaselineJson {
     /// Observed over expected whitened held-out total, and its z (the gap test).
     gap_ratio: f64,
     gap_z: Option<f64>,
+    /// The gap test on the position rows alone and on the rotation rows alone.
+    gap_z_pos: Option<f64>,
+    gap_z_rot: Option<f64>,
     gap: bool,
     fitted_params: usize,
 }
@@ -466,7 +500,14 @@ struct CandidateJson {
     confounded_with_geometry: bool,
     improvement_z: Option<f64>,
     z_vs_best: Option<f64>,
+    /// Paired z of the improvement in position alone and in rotation alone (negative:
+    /// worse).
+    z_pos: Option<f64>,
+    z_rot: Option<f64>,
     gap_closed_fraction: f64,
+    gap_closed_rot_fraction: f64,
+    /// Whitened share (position and rotation by their noise): what the status is decided on.
+    gap_closed_total_fraction: f64,
     fitted_params: usize,
     distinctness: f64,
     least_distinct: Option<String>,
@@ -483,10 +524,24 @@ struct VerdictJson {
     /// The same, one list per confounded candidate.
     confounded_candidates: Vec<Vec<String>>,
     gap_closed_fraction: f64,
+    /// Share of the held-out RMS rotation angle's gap closed.
+    gap_closed_rot_fraction: f64,
+    /// Whitened share of the gap closed (position and rotation): the status's share.
+    gap_closed_total_fraction: f64,
+    /// Why the status: `closed`, `remaining_gap`, `worsens`, `small_share`,
+    /// `no_significant_candidate`, `at_noise_floor`.
+    reason: &'static str,
+    reason_text: String,
     heldout_rms_pos_mm: f64,
     heldout_rms_rot_deg: f64,
     /// z of what remains against the noise floor.
     remaining_gap_z: Option<f64>,
+    remaining_gap_z_pos: Option<f64>,
+    remaining_gap_z_rot: Option<f64>,
+    /// The remaining-gap test exceeds z_gap.
+    remaining_gap_significant: bool,
+    /// Held-out RMS of what remains per axis.
+    remaining_rms_axis: AxisJson,
     /// Identified effect parameters of the model (SI units) with standard errors.
     parameters: Vec<ParamValueJson>,
 }
@@ -550,6 +605,8 @@ struct PoseJson {
     heldout_final_mm: [f64; 3],
     heldout_geometric_norm_mm: f64,
     heldout_final_norm_mm: f64,
+    /// A gross outlier: excluded from every fit and test.
+    suspect: bool,
 }
 
 #[derive(Serialize)]
@@ -636,7 +693,11 @@ fn candidate_json<const N: usize>(c: &ModelScore) -> CandidateJson {
         confounded_with_geometry: !c.evaluated,
         improvement_z: c.evaluated.then_some(c.improvement_z).and_then(finite),
         z_vs_best: c.evaluated.then_some(c.z_vs_best).and_then(finite),
+        z_pos: c.evaluated.then_some(c.z_pos).and_then(finite),
+        z_rot: c.evaluated.then_some(c.z_rot).and_then(finite),
         gap_closed_fraction: c.gap_closed_fraction,
+        gap_closed_rot_fraction: c.gap_closed_rot_fraction,
+        gap_closed_total_fraction: c.gap_closed_total_fraction,
         fitted_params: c.fitted_params,
         distinctness: c.distinctness,
         least_distinct: c.least_distinct.map(|p| label::<N>(p.0)),
@@ -685,7 +746,17 @@ fn report_json<const N: usize>(
             std_error: d.fit.std_errors[i],
         })
         .collect();
+    let winner = d.verdict.candidate.and_then(|c| d.candidates().get(c));
     Report {
+        method: d.method.name(),
+        warnings: d
+            .warnings()
+            .map(|w| WarningJson {
+                code: w.code(),
+                message: warning_text(w),
+            })
+            .collect(),
+        suspect_rows: suspect_rows(d, set),
         noise_floor: NoiseJson {
             pos_mm: n.sigma_pos_m * 1e3,
             rot_deg: n.sigma_rot_rad.to_degrees(),
@@ -696,6 +767,8 @@ fn report_json<const N: usize>(
             repeat_subgroups: n.repeat_subgroups,
             rms_pos_mm: n.rms_pos_m() * 1e3,
             rms_rot_deg: n.rms_rot_rad().to_degrees(),
+            repeats_pos_mm: n.repeat_pos.map(|(s, _)| s * 1e3),
+            repeats_rot_deg: n.repeat_rot.map(|(s, _)| s.to_degrees()),
         },
         baseline: BaselineJson {
             heldout_rms_pos_mm: d.baseline.heldout_rms_pos_m * 1e3,
@@ -706,6 +779,8 @@ fn report_json<const N: usize>(
             expected_rms_rot_deg: d.gap.expected_rms_rot_rad.to_degrees(),
             gap_ratio: d.gap.ratio,
             gap_z: finite(d.gap.z),
+            gap_z_pos: finite(d.gap.z_pos),
+            gap_z_rot: finite(d.gap.z_rot),
             gap: d.verdict.status != Status::NoGap,
             fitted_params: d.baseline.fitted_params,
         },
@@ -716,9 +791,17 @@ fn report_json<const N: usize>(
             confounded_with: names(d.verdict.confounded_effects()),
             confounded_candidates: d.verdict.confounded().iter().map(|s| names(*s)).collect(),
             gap_closed_fraction: d.verdict.gap_closed_fraction,
+            gap_closed_rot_fraction: winner.map_or(0.0, |c| c.gap_closed_rot_fraction),
+            gap_closed_total_fraction: winner.map_or(0.0, |c| c.gap_closed_total_fraction),
+            reason: reason_code(&d.verdict.reason),
+            reason_text: reason_text(d),
             heldout_rms_pos_mm: d.final_heldout_rms_pos_m * 1e3,
             heldout_rms_rot_deg: d.final_heldout_rms_rot_rad.to_degrees(),
             remaining_gap_z: finite(d.remaining.z),
+            remaining_gap_z_pos: finite(d.remaining.z_pos),
+            remaining_gap_z_rot: finite(d.remaining.z_rot),
+            remaining_gap_significant: d.remaining.z > Config::default().z_gap,
+            remaining_rms_axis: axis(&d.final_rms_axis),
             parameters,
         },
         explainable: {
@@ -787,6 +870,7 @@ fn report_json<const N: usize>(
                     heldout_final_mm: mm3(&p.heldout_final[..3]),
                     heldout_geometric_norm_mm: norm3(&p.heldout_baseline[..3]) * 1e3,
                     heldout_final_norm_mm: norm3(&p.heldout_final[..3]) * 1e3,
+                    suspect: p.suspect,
                 })
                 .collect(),
         },
@@ -811,7 +895,14 @@ fn report_json<const N: usize>(
                 candidates: names(d.candidates().iter().fold(EffectSet::NONE, |acc, c| {
                     c.effects.iter().fold(acc, EffectSet::with)
                 })),
-                paired_test: "Wilcoxon signed-rank over pose_id groups of the whitened held-out squared errors",
+                paired_test: match d.method {
+                    Method::CrossValidation => {
+                        "Wilcoxon signed-rank over pose_id groups of the whitened held-out squared errors"
+                    }
+                    Method::InSampleNested => {
+                        "likelihood ratio against the geometric model (Wilson-Hilferty z); Vuong over pose_id groups between candidates"
+                    }
+                },
             }
         },
         files: FilesJson {
@@ -826,6 +917,117 @@ fn report_json<const N: usize>(
             .map(|p| p.display().to_string())
             .collect(),
         },
+    }
+}
+
+fn suspect_rows<const N: usize>(d: &Diagnosis<N>, set: &MeasurementSet) -> Vec<SuspectJson> {
+    d.suspects()
+        .iter()
+        .map(|&l| {
+            let row = set.rows.get(l as usize);
+            SuspectJson {
+                index: l as usize,
+                line: row.map_or(0, |r| r.line),
+                pose_id: row.and_then(|r| r.pose_id.clone()),
+            }
+        })
+        .collect()
+}
+
+fn part_text(p: Part) -> &'static str {
+    p.name()
+}
+
+/// The readable text of a warning.
+pub fn warning_text(w: &Warning) -> String {
+    let noise = |part: Part| match part {
+        Part::Rotation => "orientation",
+        _ => "position",
+    };
+    let factor = |ratio: f64| {
+        if ratio < 1.0 {
+            format!("{:.1}x quieter", 1.0 / ratio)
+        } else {
+            format!("{ratio:.1}x noisier")
+        }
+    };
+    match *w {
+        Warning::NoiseVsRepeats { part, ratio, z } => format!(
+            "the repeats are {} than the stated {} noise (z = {z:.1}): check --sigma-{}",
+            factor(ratio),
+            noise(part),
+            if part == Part::Rotation {
+                "rot-deg"
+            } else {
+                "pos-mm"
+            }
+        ),
+        Warning::NoiseVsResiduals { part, ratio, z } => format!(
+            "data are {} than the stated {} noise: the geometric calibration's residuals are below it (sqrt(chi2/dof) = {ratio:.2}, z = {z:.1})",
+            factor(ratio),
+            noise(part)
+        ),
+        Warning::GapDespiteGapTest { z_gap, z_candidate } => format!(
+            "the gap test finds no gap at the stated noise (z = {z_gap:.1}) but a candidate improves significantly (z = {z_candidate:.1}): there is a gap; the stated noise is probably too large"
+        ),
+        Warning::TooManySuspects { count } => format!(
+            "{count} rows fail the outlier test: too many to be gross outliers (heavy-tailed residuals, or an effect outside the library); none excluded"
+        ),
+    }
+}
+
+fn reason_code(r: &Reason) -> &'static str {
+    match r {
+        Reason::AtNoiseFloor => "at_noise_floor",
+        Reason::Closed => "closed",
+        Reason::RemainingGap { .. } => "remaining_gap",
+        Reason::Worsens { .. } => "worsens",
+        Reason::SmallShare => "small_share",
+        Reason::NoSignificantCandidate => "no_significant_candidate",
+    }
+}
+
+/// The axis (x, y, z, φx, φy, φz) whose remaining held-out RMS stands out most above its
+/// noise (by σ).
+fn worst_axis<const N: usize>(d: &Diagnosis<N>) -> &'static str {
+    const AXES: [&str; 6] = ["x", "y", "z", "φx", "φy", "φz"];
+    let sigma = |k: usize| {
+        if k < 3 {
+            d.noise.sigma_pos_m
+        } else {
+            d.noise.sigma_rot_rad
+        }
+    };
+    (0..6)
+        .max_by(|&a, &b| {
+            (d.final_rms_axis[a] / sigma(a)).total_cmp(&(d.final_rms_axis[b] / sigma(b)))
+        })
+        .map_or("", |k| AXES[k])
+}
+
+/// Why the verdict's status, in words.
+fn reason_text<const N: usize>(d: &Diagnosis<N>) -> String {
+    match d.verdict.reason {
+        Reason::AtNoiseFloor => {
+            "the geometric model's held-out error is consistent with the noise floor".into()
+        }
+        Reason::Closed => {
+            "the chosen effects close the gap; what remains is consistent with the noise floor"
+                .into()
+        }
+        Reason::RemainingGap { z, part } => format!(
+            "remaining gap significant (z = {z:.1}), in {} (largest on axis {}): part of the gap is not explained by the chosen effects",
+            part_text(part),
+            worst_axis(d)
+        ),
+        Reason::Worsens { z, part } => format!(
+            "the chosen effects make the {} significantly worse (z = {z:.1})",
+            part_text(part)
+        ),
+        Reason::SmallShare => "the chosen effects close only part of the gap".into(),
+        Reason::NoSignificantCandidate => {
+            "no candidate improves significantly on the geometric model".into()
+        }
     }
 }
 
@@ -861,18 +1063,25 @@ fn effects_text(s: EffectSet) -> String {
 /// The readable report.
 pub fn readable<const N: usize>(
     robot: &str,
-    source: &str,
+    set: &MeasurementSet,
     d: &Diagnosis<N>,
     meas: &[Measurement<N>],
 ) -> String {
     let mut s = String::new();
     let n = &d.noise;
+    let source = &set.source;
     let _ = writeln!(
         s,
-        "Sim-to-real diagnosis of '{robot}' from {source}: {} rows in {} pose groups, {}-fold cross-validation by pose_id\n",
+        "Sim-to-real diagnosis of '{robot}' from {source}: {} rows in {} pose groups, {}\n",
         meas.len(),
         d.groups,
-        d.folds
+        match d.method {
+            Method::CrossValidation => format!("{}-fold cross-validation by pose_id", d.folds),
+            Method::InSampleNested => format!(
+                "too few groups for {}-fold cross-validation: in-sample nested tests with the noise floor (likelihood ratio against the geometric model, Vuong between candidates)",
+                d.folds
+            ),
+        }
     );
     let src = |stated: bool, dof: f64| {
         if stated {
@@ -909,6 +1118,27 @@ pub fn readable<const N: usize>(
             "a gap above the noise floor"
         }
     );
+
+    if !d.suspects().is_empty() {
+        let _ = writeln!(
+            s,
+            "Suspect rows (gross outliers, excluded from every fit and test): {}\n",
+            suspect_rows(d, set)
+                .iter()
+                .map(|r| match &r.pose_id {
+                    Some(id) => format!("line {} (pose_id {id})", r.line),
+                    None => format!("line {}", r.line),
+                })
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    for w in d.warnings() {
+        let _ = writeln!(s, "WARNING: {}", warning_text(w));
+    }
+    if d.n_warnings > 0 {
+        s.push('\n');
+    }
 
     // Where.
     let loc = &d.location;
@@ -996,6 +1226,7 @@ pub fn readable<const N: usize>(
         "z vs geometric",
         "significant",
         "gap closed",
+        "rot. closed",
         "note",
     ]);
     t.row(vec![
@@ -1003,6 +1234,7 @@ pub fn readable<const N: usize>(
         d.baseline.fitted_params.to_string(),
         mm(d.baseline.heldout_rms_pos_m),
         deg(d.baseline.heldout_rms_rot_rad),
+        "".into(),
         "".into(),
         "".into(),
         "".into(),
@@ -1063,6 +1295,11 @@ pub fn readable<const N: usize>(
             } else {
                 "-".into()
             },
+            if c.evaluated {
+                format!("{:.0} %", 100.0 * c.gap_closed_rot_fraction)
+            } else {
+                "-".into()
+            },
             note,
         ]);
     }
@@ -1081,6 +1318,7 @@ pub fn readable<const N: usize>(
             _ => effects_text(v.effects),
         }
     );
+    let _ = writeln!(s, "  why: {}", reason_text(d));
     if !v.confounded().is_empty() {
         let _ = writeln!(
             s,
@@ -1095,7 +1333,7 @@ pub fn readable<const N: usize>(
     if !v.effects.is_empty() {
         let _ = writeln!(
             s,
-            "HOW FAR: held-out RMS {} → {} mm, {} → {}° (noise floor {} mm, {}°): {:.0} % of the gap above the noise floor closed; what remains: z = {}.",
+            "HOW FAR: held-out RMS {} → {} mm, {} → {}° (noise floor {} mm, {}°): {:.0} % of the position gap, {:.0} % of the rotation gap, {:.0} % of the whitened gap closed; what remains: z = {} (position {}, rotation {}).",
             mm(d.baseline.heldout_rms_pos_m),
             mm(d.final_heldout_rms_pos_m),
             deg(d.baseline.heldout_rms_rot_rad),
@@ -1103,7 +1341,17 @@ pub fn readable<const N: usize>(
             mm(n.rms_pos_m()),
             deg(n.rms_rot_rad()),
             100.0 * v.gap_closed_fraction,
-            zfmt(d.remaining.z)
+            100.0
+                * v.candidate
+                    .and_then(|c| d.candidates().get(c))
+                    .map_or(0.0, |c| c.gap_closed_rot_fraction),
+            100.0
+                * v.candidate
+                    .and_then(|c| d.candidates().get(c))
+                    .map_or(0.0, |c| c.gap_closed_total_fraction),
+            zfmt(d.remaining.z),
+            zfmt(d.remaining.z_pos),
+            zfmt(d.remaining.z_rot)
         );
         let mut t = Table::new(&["effect parameter", "value", "std error", "unit"]);
         let effect_params = v

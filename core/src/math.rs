@@ -37,3 +37,7 @@ pub(crate) fn ln(x: f64) -> f64 {
 pub(crate) fn exp(x: f64) -> f64 {
     libm::exp(x)
 }
+#[inline(always)]
+pub(crate) fn cbrt(x: f64) -> f64 {
+    libm::cbrt(x)
+}

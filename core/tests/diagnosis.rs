@@ -469,6 +469,10 @@ fn score(effects: EffectSet, params: usize, chi2: f64, z: f64, closed: f64) -> M
         z_vs_best: 0.0,
         z_vs_winner: 0.0,
         gap_closed_fraction: closed,
+        gap_closed_rot_fraction: 0.0,
+        gap_closed_total_fraction: closed,
+        z_pos: z,
+        z_rot: 0.0,
     }
 }
 
@@ -484,10 +488,14 @@ fn decision_rules_on_synthetic_scores() {
         EffectSet::of(Effect::JointCyclic),
         EffectSet::of(Effect::BaseFrame),
     );
-    // No gap.
-    let mut s = [score(a, 30, 100.0, 8.0, 0.95)];
+    // No gap: the gap test below its threshold and no significant candidate.
+    let mut s = [score(a, 30, 100.0, 2.5, 0.95)];
     let v = decide(&mut s, |_, _| 0.0, &GapTest { z: 2.9, ..gap }, &cfg);
     assert_eq!((v.status, v.effects), (Status::NoGap, EffectSet::NONE));
+    // A significant candidate is a gap whatever the gap test says (σ stated too large).
+    let mut s = [score(a, 30, 100.0, 8.0, 0.95)];
+    let v = decide(&mut s, |_, _| 0.0, &GapTest { z: 2.9, ..gap }, &cfg);
+    assert_eq!((v.status, v.effects), (Status::Explained, a));
     // Two indistinguishable singles: the one with fewer parameters wins even though the
     // other has the smaller held-out total; the other is confounded.
     let mut s = [

@@ -164,7 +164,7 @@ pub(crate) fn factor<const P: usize>(
 
 /// Solves the factored system for the current fold; writes the step of model `model` into
 /// `ws.delta[model]` (model column order, zero for dropped columns).
-fn solve<const P: usize>(ws: &mut DiagWorkspace<P>, model: usize, n: usize, fold: bool) {
+pub(crate) fn solve<const P: usize>(ws: &mut DiagWorkspace<P>, model: usize, n: usize, fold: bool) {
     for j in 0..ws.model_n[model] {
         ws.delta[model][j] = 0.0;
     }
@@ -261,7 +261,7 @@ pub(crate) fn cross_validate<const N: usize, const P: usize>(
     for f in 0..folds {
         ws.g_fold.reset(ws.n_u)?;
         for (l, m) in data.iter().enumerate() {
-            if usize::from(poses[l].fold) == f {
+            if usize::from(poses[l].fold) == f && !poses[l].suspect {
                 pose_rows(lin, m, sw, ws)?;
                 fold_rows(ws, true)?;
             }
@@ -274,42 +274,13 @@ pub(crate) fn cross_validate<const N: usize, const P: usize>(
             n_lev = n;
         }
         for (l, m) in data.iter().enumerate() {
-            if usize::from(poses[l].fold) != f {
+            if usize::from(poses[l].fold) != f || poses[l].suspect {
                 continue;
             }
             pose_rows(lin, m, sw, ws)?;
-            let n_pos = (0..3).filter(|&k| m.mask.has(k)).count();
-            let n_rot = (3..6).filter(|&k| m.mask.has(k)).count();
+            let (n_pos, n_rot) = measured(m);
             for model in order() {
-                let mut r = [0.0; 6];
-                let mut s = 0.0;
-                for k in 0..6 {
-                    let mut v = ws.b[k];
-                    for j in 0..ws.model_n[model] {
-                        let d = ws.delta[model][j];
-                        if d != 0.0 {
-                            v -= ws.a[k][ws.model_cols[model][j] as usize] * d;
-                        }
-                    }
-                    r[k] = if sw[k] > 0.0 && m.mask.has(k) {
-                        v / sw[k]
-                    } else {
-                        0.0
-                    };
-                    s += v * v;
-                }
-                poses[l].sq[model] = s;
-                let acc = &mut ws.acc[model];
-                acc.chi2 += s;
-                if n_pos == 3 {
-                    acc.pos2 += r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
-                    acc.n_pos += 1;
-                }
-                if n_rot == 3 {
-                    acc.rot2 += r[3] * r[3] + r[4] * r[4] + r[5] * r[5];
-                    acc.n_rot += 1;
-                }
-                acc.rows += n_pos + n_rot;
+                let r = record(ws, model, m, sw, &mut poses[l]);
                 if model == lev_model {
                     match pass {
                         Pass::Candidates => poses[l].heldout_baseline = r,
@@ -321,7 +292,137 @@ pub(crate) fn cross_validate<const N: usize, const P: usize>(
             let acc = &mut ws.acc[lev_model];
             acc.expected_pos += n_pos as f64 + hp;
             acc.expected_rot += n_rot as f64 + hr;
+            acc.var_pos += 2.0 * (n_pos as f64 + 2.0 * hp);
+            acc.var_rot += 2.0 * (n_rot as f64 + 2.0 * hr);
             acc.variance += 2.0 * ((n_pos + n_rot) as f64 + 2.0 * (hp + hr));
+        }
+    }
+    Ok(())
+}
+
+/// Numbers of measured position and rotation components of `m`.
+fn measured<const N: usize>(m: &Measurement<N>) -> (usize, usize) {
+    (
+        (0..3).filter(|&k| m.mask.has(k)).count(),
+        (3..6).filter(|&k| m.mask.has(k)).count(),
+    )
+}
+
+/// The residual of the pose in `ws.a`/`ws.b` under model `model`'s step `ws.delta[model]`:
+/// its whitened squared error (total and rotation part) into `pose` and `ws.acc[model]`;
+/// returns the raw residual (zero in unmeasured components).
+fn record<const N: usize, const P: usize>(
+    ws: &mut DiagWorkspace<P>,
+    model: usize,
+    m: &Measurement<N>,
+    sw: &[f64; 6],
+    pose: &mut PoseDiagnosis,
+) -> [f64; 6] {
+    let (n_pos, n_rot) = measured(m);
+    let mut r = [0.0; 6];
+    let (mut s, mut s_rot) = (0.0, 0.0);
+    for k in 0..6 {
+        let mut v = ws.b[k];
+        for j in 0..ws.model_n[model] {
+            let d = ws.delta[model][j];
+            if d != 0.0 {
+                v -= ws.a[k][ws.model_cols[model][j] as usize] * d;
+            }
+        }
+        r[k] = if sw[k] > 0.0 && m.mask.has(k) {
+            v / sw[k]
+        } else {
+            0.0
+        };
+        s += v * v;
+        if k >= 3 {
+            s_rot += v * v;
+        }
+    }
+    pose.sq[model] = s;
+    pose.sq_rot[model] = s_rot;
+    let acc = &mut ws.acc[model];
+    acc.chi2 += s;
+    acc.chi2_rot += s_rot;
+    if n_pos == 3 {
+        acc.pos2 += r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+        acc.n_pos += 1;
+    }
+    if n_rot == 3 {
+        acc.rot2 += r[3] * r[3] + r[4] * r[4] + r[5] * r[5];
+        acc.n_rot += 1;
+    }
+    acc.rows += n_pos + n_rot;
+    acc.rows_pos += n_pos;
+    r
+}
+
+/// In-sample counterpart of [`cross_validate`] for data too small to hold poses out (the
+/// nested test of the module documentation): every model in `models` and the pass's model
+/// fitted (one linearised step at `lin`) on all clean rows, with `ws.g_all` accumulated
+/// there; per-pose in-sample whitened squared errors into `poses[l].sq`, totals into
+/// `ws.acc`. The expected totals under "the model is exact" are the χ² degrees of freedom
+/// `rows − p`, shared between position and rotation rows in proportion to their numbers.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn in_sample<const N: usize, const P: usize>(
+    lin: &Robot<N>,
+    data: &[Measurement<N>],
+    sw: &[f64; 6],
+    poses: &mut [PoseDiagnosis],
+    models: &[usize],
+    pass: Pass,
+    tol: f64,
+    ws: &mut DiagWorkspace<P>,
+) -> Result<()> {
+    let lev_model = match pass {
+        Pass::Candidates => 0,
+        Pass::Final(m) => m,
+    };
+    let order = || {
+        models
+            .iter()
+            .copied()
+            .filter(move |&m| m != lev_model)
+            .chain(core::iter::once(lev_model))
+    };
+    let mut kept = [0usize; MAX_MODELS];
+    for m in order() {
+        if m >= MAX_MODELS {
+            return Err(Error::CapacityExceeded {
+                needed: m + 1,
+                capacity: MAX_MODELS,
+            });
+        }
+        ws.acc[m] = ModelAcc::default();
+        let n = factor(ws, m, false, tol, None);
+        solve(ws, m, n, false);
+        kept[m] = n;
+    }
+    for (l, m) in data.iter().enumerate() {
+        if poses[l].suspect {
+            continue;
+        }
+        pose_rows(lin, m, sw, ws)?;
+        for model in order() {
+            let r = record(ws, model, m, sw, &mut poses[l]);
+            if model == lev_model {
+                match pass {
+                    Pass::Candidates => poses[l].heldout_baseline = r,
+                    Pass::Final(_) => poses[l].heldout_final = r,
+                }
+            }
+        }
+    }
+    for m in order() {
+        let acc = &mut ws.acc[m];
+        let rows = acc.rows as f64;
+        if rows > 0.0 {
+            let dof = (rows - kept[m] as f64).max(1.0);
+            acc.expected_pos = dof * acc.rows_pos as f64 / rows;
+            acc.expected_rot = dof - acc.expected_pos;
+            acc.var_pos = 2.0 * acc.expected_pos;
+            acc.var_rot = 2.0 * acc.expected_rot;
+            acc.variance = 2.0 * dof;
         }
     }
     Ok(())

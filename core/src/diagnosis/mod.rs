@@ -5,7 +5,10 @@
 //! # Flow of [`diagnose`]
 //! 1. *Groups and folds.* Rows sharing a `pose_id` (the caller's group id) form a group;
 //!    groups are dealt to `k` folds by a seeded hash of their id (balanced, order-free,
-//!    repeats always in the same fold).
+//!    repeats always in the same fold). With fewer than [`Config::min_groups_per_fold`]
+//!    groups per fold (default 5: 25 groups for 5 folds) held-out poses are too few for a
+//!    significant paired test, and every model is judged in-sample instead
+//!    ([`Method::InSampleNested`], rules below).
 //! 2. *Noise floor.* The stated σ (per axis) where given; otherwise the pooled per-axis
 //!    standard deviation of the residuals within repeat subgroups — rows of one group with
 //!    the same measured components, the same approach directions and temperatures within
@@ -20,6 +23,12 @@
 //!    with the kept parameter each dropped one aligns with). A candidate none of whose
 //!    effect parameters the poses determine is *confounded with the geometric parameters*
 //!    and not evaluated.
+//!
+//!    *Outliers* (with [`Config::screen_outliers`], see `screen.rs`): the union of all
+//!    models fitted on the rows, each row's residual tested against robust scales; gross
+//!    outliers become *suspects* ([`Diagnosis::suspects`]), excluded from every fit, test
+//!    and the repeat noise estimate; the noise floor and the geometric calibration are
+//!    then redone without them.
 //! 5. *Cross-validation* of all models at once, linearised (see `cv.rs`): per pose, the
 //!    whitened held-out squared error `s_l = Σ_k r_k²/σ_k²`; per model, the held-out RMS
 //!    position error and rotation angle (spec/effects.md definitions).
@@ -54,21 +63,44 @@
 //!   one pose a model extrapolates badly to would dominate a t statistic (seen in the
 //!   blind suite: a 90 % RMS improvement at t = 2.9).
 //! - A candidate is **significant** when `z(baseline, c) > z_significance` (default 3,
-//!   about Bonferroni 5 % over the 28 candidates).
+//!   about Bonferroni 5 % over the 28 candidates). A significant candidate is a gap
+//!   whatever the gap test says (a σ stated too large hides gaps from the gap test, not
+//!   from the paired test, which is scale-free): the candidates are then judged as usual
+//!   and [`Warning::GapDespiteGapTest`] is raised.
+//! - **In-sample nested** ([`Method::InSampleNested`]): every model fitted on all rows;
+//!   `z(baseline, c)` from the likelihood ratio `Δχ² = χ²_base − χ²_c` against χ² with
+//!   `Δp` degrees of freedom (Wilson–Hilferty z); between candidates, Vuong's statistic
+//!   over groups with the parameter-count correction; the gap test's expectation is the
+//!   χ² degrees of freedom `rows − p`.
 //! - **Winner**: among significant candidates not significantly worse than the best one
 //!   (`z(c, best) < z_equivalence`, default 3; best = least held-out total), the one with
 //!   the fewest effects, then the fewest fitted parameters, then the least held-out total.
-//! - **Confounded**: other significant candidates with as many effects as the winner, not
-//!   significantly worse than the best nor than the winner, that reach the winner's
-//!   status class (below) — they explain the data equally well; listed, never chosen at
-//!   random.
-//! - **Gap closed**: `(B − A)/(B − N)` clipped to [0, 1], B and A the baseline's and the
-//!   winner's held-out RMS position error, `N = √3·σ_pos` (spec/effects.md). When the
-//!   position shows no gap (B ≤ N) the same ratio of whitened RMS per row is used.
-//! - **Status**: `explained` when the winner closes ≥ [`Config::explained_fraction`]
-//!   (default 0.8) of the gap; `partially_explained` when it closes ≥
-//!   [`Config::partial_fraction`] (default 0.25); otherwise, or with no significant
-//!   candidate, `unexplained` (no effects).
+//! - **Confounded**: other significant candidates not significantly worse than the best
+//!   nor than the winner, whatever status class they would reach — they explain the data
+//!   equally well; listed, never chosen at random. Candidates that only add effects to
+//!   the winner or to one already listed are as good trivially and not listed.
+//! - **Gap closed** (spec/effects.md, reported): `(B − A)/(B − N)` clipped to [0, 1], B
+//!   and A the baseline's and the winner's held-out RMS position error, `N = √3·σ_pos`;
+//!   when the position shows no gap (B ≤ N) the same ratio of whitened RMS per row. The
+//!   same share of the RMS rotation angle (`N = √3·σ_rot`) is reported beside it.
+//! - **Status share**: the share of the *whitened* held-out RMS per row, position and
+//!   rotation each by its noise, with the floor `√(E/rows)` that includes the
+//!   parameter-estimation inflation (the leverage terms of the gap test): a gap that lives
+//!   in rotation counts as much as one in position, and a baseline just above √3·σ_pos
+//!   by inflation alone does not make the position share noise.
+//! - **Status**: `explained` when the winner's status share is ≥
+//!   [`Config::explained_fraction`] (default 0.8), the gap test on its own held-out
+//!   residuals (the *remaining gap*) is not significant, and it makes neither position
+//!   nor rotation significantly worse (paired z on those rows alone below
+//!   −`z_significance`); `partially_explained` when the share is ≥
+//!   [`Config::partial_fraction`] (default 0.25), or when it would be `explained` but the
+//!   remaining gap is significant ([`Reason::RemainingGap`], with where it lies) or a part
+//!   gets worse ([`Reason::Worsens`]); otherwise, or with no significant candidate,
+//!   `unexplained` (no effects). (A model-free check of how much any smooth function of
+//!   the joint angles could explain belongs with the remaining-gap reason.)
+//! - **Stated σ checked**: against the repeats (either way) and against the geometric
+//!   calibration's in-sample χ² per degree of freedom (significantly below 1: the data are
+//!   quieter than stated) — [`Warning::NoiseVsRepeats`], [`Warning::NoiseVsResiduals`].
 //!
 //! # Memory
 //! No heap: fixed-capacity results ([`MAX_CANDIDATES`] candidates), caller slices for the
@@ -82,6 +114,7 @@ mod folds;
 mod locate;
 mod noise;
 mod smooth;
+mod screen;
 
 pub use locate::{Correlate, Location, QuantityKind, RegionStats};
 pub use smooth::{SmoothCheck, SmoothWorkspace};
@@ -99,8 +132,15 @@ use crate::params::{ParamId, ParamSet};
 
 /// Largest number of candidate models: the 7 effects alone and their 21 pairs.
 pub const MAX_CANDIDATES: usize = 28;
-/// Models of a diagnosis: the geometric baseline (index 0) and the candidates.
-pub const MAX_MODELS: usize = MAX_CANDIDATES + 1;
+/// Model slots of a diagnosis: the geometric baseline (index 0), the candidates and the
+/// union of all of them used to screen outliers (last).
+pub const MAX_MODELS: usize = MAX_CANDIDATES + 2;
+/// Slot of the union model of the outlier screening.
+pub(crate) const SCREEN_MODEL: usize = MAX_CANDIDATES + 1;
+/// Suspect rows (gross outliers) listed and excluded at most.
+pub const MAX_SUSPECTS: usize = 16;
+/// Warnings stored at most.
+pub const MAX_WARNINGS: usize = 8;
 /// Dropped effect parameters stored per model (with their partners).
 pub const MAX_DROPPED: usize = 8;
 
@@ -135,12 +175,18 @@ pub struct Config {
     /// Rank tolerance of the data identifiability test (as
     /// [`IdentifyOptions::rank_tol`]).
     pub rank_tol: f64,
+    /// Cross-validation needs at least this many pose groups per fold; with fewer, the
+    /// in-sample nested test is used ([`Method::InSampleNested`]).
+    pub min_groups_per_fold: usize,
+    /// Screen gross outliers before judging the candidates (module documentation).
+    pub screen_outliers: bool,
 }
 
 impl Default for Config {
     /// Estimated noise, 5 folds, all effects with their inputs and their pairs, thresholds
     /// z = 3 / 3 / 3, explained at 80 % of the gap, partial at 25 %, repeats within 0.5 °C,
-    /// rank tolerance 1e-6.
+    /// rank tolerance 1e-6, cross-validation from 5 groups per fold (25 groups), outlier
+    /// screening on.
     fn default() -> Self {
         Config {
             sigma_pos_m: None,
@@ -156,6 +202,8 @@ impl Default for Config {
             partial_fraction: 0.25,
             repeat_temp_tol_c: 0.5,
             rank_tol: 1e-6,
+            min_groups_per_fold: 5,
+            screen_outliers: true,
         }
     }
 }
@@ -177,6 +225,11 @@ pub struct NoiseFloor {
     pub stated_pos: bool,
     /// Whether σ_rot was stated.
     pub stated_rot: bool,
+    /// Position σ per axis the repeats alone give \[m\] and its degrees of freedom (also
+    /// when σ_pos was stated: the check of [`Warning::NoiseVsRepeats`]).
+    pub repeat_pos: Option<(f64, f64)>,
+    /// Rotation σ per axis the repeats alone give \[rad\] and its degrees of freedom.
+    pub repeat_rot: Option<(f64, f64)>,
 }
 
 impl NoiseFloor {
@@ -246,8 +299,21 @@ pub struct ModelScore {
     pub z_vs_best: f64,
     /// Paired z against the verdict's candidate; 0 when not compared.
     pub z_vs_winner: f64,
-    /// Share of the gap above the noise floor this model closes.
+    /// Share of the gap above the noise floor this model closes: held-out RMS position
+    /// error (spec/effects.md); the whitened share when the position shows no gap.
     pub gap_closed_fraction: f64,
+    /// The same share of the held-out RMS rotation angle (floor √3·σ_rot); 0 when the
+    /// rotation shows no gap.
+    pub gap_closed_rot_fraction: f64,
+    /// The share of the whitened held-out RMS per row (position and rotation together,
+    /// each by its noise), floor including the parameter-estimation inflation: the share
+    /// the status is decided on.
+    pub gap_closed_total_fraction: f64,
+    /// Paired z of the improvement in position alone (positive: better); negative beyond
+    /// `z_significance`: this model makes the position significantly worse.
+    pub z_pos: f64,
+    /// Paired z of the improvement in rotation alone (positive: better).
+    pub z_rot: f64,
 }
 
 impl ModelScore {
@@ -271,6 +337,10 @@ impl ModelScore {
             z_vs_best: 0.0,
             z_vs_winner: 0.0,
             gap_closed_fraction: 0.0,
+            gap_closed_rot_fraction: 0.0,
+            gap_closed_total_fraction: 0.0,
+            z_pos: 0.0,
+            z_rot: 0.0,
         }
     }
 }
@@ -287,6 +357,10 @@ pub struct GapTest {
     pub expected_rms_pos_m: f64,
     /// Held-out RMS rotation angle expected at the noise floor \[rad\].
     pub expected_rms_rot_rad: f64,
+    /// The same test on the position rows alone (0 without position rows).
+    pub z_pos: f64,
+    /// The same test on the rotation rows alone (0 without rotation rows).
+    pub z_rot: f64,
 }
 
 /// The verdict's status (spec/cli.md).
@@ -331,6 +405,142 @@ pub struct Verdict {
     pub gap_closed_fraction: f64,
     /// Index of the chosen candidate in [`Diagnosis::candidates`].
     pub candidate: Option<usize>,
+    /// Why the status is what it is.
+    pub reason: Reason,
+}
+
+/// Where a gap lies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Part {
+    /// Position rows.
+    Position,
+    /// Rotation rows.
+    Rotation,
+    /// Both significantly.
+    Both,
+}
+
+impl Part {
+    /// `position`, `rotation`, `position and rotation`.
+    #[must_use]
+    pub const fn name(self) -> &'static str {
+        match self {
+            Part::Position => "position",
+            Part::Rotation => "rotation",
+            Part::Both => "position and rotation",
+        }
+    }
+}
+
+/// The reason of a verdict's status. A model-free check of how much of the gap any smooth
+/// function of the joint angles explains (an effect outside the library) belongs next to
+/// [`Reason::RemainingGap`] and [`Reason::SmallShare`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Reason {
+    /// `no_gap`: the geometric model's held-out error is consistent with the noise floor
+    /// and no candidate improves on it significantly.
+    AtNoiseFloor,
+    /// `explained`: the share closed reaches [`Config::explained_fraction`] and what
+    /// remains is consistent with the noise floor.
+    Closed,
+    /// `partially_explained`: the share closed would be `explained`, but the remaining gap
+    /// is still significant (its gap-test z, and where it lies).
+    RemainingGap {
+        /// z of the remaining gap test.
+        z: f64,
+        /// Where it lies.
+        part: Part,
+    },
+    /// `partially_explained`: the chosen effects make position or rotation significantly
+    /// worse (paired z, negative).
+    Worsens {
+        /// The paired z in that part.
+        z: f64,
+        /// Which part gets worse.
+        part: Part,
+    },
+    /// `partially_explained` / `unexplained`: the share closed is below the class's
+    /// threshold.
+    SmallShare,
+    /// `unexplained`: no candidate improves significantly on the geometric model.
+    NoSignificantCandidate,
+}
+
+/// How the candidates were judged.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Method {
+    /// k-fold cross-validation on held-out pose groups.
+    CrossValidation,
+    /// Too few pose groups for cross-validation ([`Config::min_groups_per_fold`]): every
+    /// model fitted on all rows, each candidate tested against the geometric model by the
+    /// likelihood-ratio test with the noise floor (Δχ² against χ² with Δp degrees of
+    /// freedom, as z by Wilson–Hilferty), candidates against each other by Vuong's test
+    /// with the parameter-count correction.
+    InSampleNested,
+}
+
+impl Method {
+    /// `cross_validation` or `in_sample_nested`.
+    #[must_use]
+    pub const fn name(self) -> &'static str {
+        match self {
+            Method::CrossValidation => "cross_validation",
+            Method::InSampleNested => "in_sample_nested",
+        }
+    }
+}
+
+/// Something the user should know about the data or the noise they stated.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Warning {
+    /// The repeats scatter `ratio` times the stated σ (per axis), significantly different
+    /// from 1 (`z` of ln ratio² with the repeats' degrees of freedom).
+    NoiseVsRepeats {
+        /// Position or rotation.
+        part: Part,
+        /// σ of the repeats over the stated σ.
+        ratio: f64,
+        /// z of the difference.
+        z: f64,
+    },
+    /// The geometric calibration's residuals are significantly smaller than the stated σ
+    /// allows: √(χ²/dof) = `ratio` < 1 (a gap can only add to them).
+    NoiseVsResiduals {
+        /// Position or rotation.
+        part: Part,
+        /// √(χ²/dof) of the geometric fit's residuals at the stated σ.
+        ratio: f64,
+        /// z of χ² against its degrees of freedom.
+        z: f64,
+    },
+    /// The gap test found no gap (`z_gap` below its threshold) but a candidate improves
+    /// significantly (`z_candidate`): a gap whatever σ says, and the candidates were
+    /// judged.
+    GapDespiteGapTest {
+        /// The baseline's gap-test z.
+        z_gap: f64,
+        /// The best candidate improvement z.
+        z_candidate: f64,
+    },
+    /// More rows failed the outlier test than outliers can be (`count`): none excluded.
+    TooManySuspects {
+        /// Rows that failed.
+        count: usize,
+    },
+}
+
+impl Warning {
+    /// A short code (`noise_vs_repeats`, `noise_vs_residuals`, `gap_despite_gap_test`,
+    /// `too_many_suspects`).
+    #[must_use]
+    pub const fn code(&self) -> &'static str {
+        match self {
+            Warning::NoiseVsRepeats { .. } => "noise_vs_repeats",
+            Warning::NoiseVsResiduals { .. } => "noise_vs_residuals",
+            Warning::GapDespiteGapTest { .. } => "gap_despite_gap_test",
+            Warning::TooManySuspects { .. } => "too_many_suspects",
+        }
+    }
 }
 
 impl Verdict {
@@ -363,12 +573,17 @@ pub struct PoseDiagnosis {
     /// Held-out residual of the geometric model (fitted without this pose's fold).
     pub heldout_baseline: [f64; 6],
     /// Held-out residual of the verdict's model (equals `heldout_baseline` without
-    /// effects).
+    /// effects). With [`Method::InSampleNested`] both are in-sample residuals; zero for
+    /// suspect rows.
     pub heldout_final: [f64; 6],
+    /// A gross outlier by the screening: excluded from every fit and test.
+    pub suspect: bool,
     pub(crate) leader: u32,
     pub(crate) sub_leader: u32,
     pub(crate) sq: [f64; MAX_MODELS],
+    pub(crate) sq_rot: [f64; MAX_MODELS],
     pub(crate) gsq: [f64; MAX_MODELS],
+    pub(crate) gsq_rot: [f64; MAX_MODELS],
     pub(crate) scratch: f64,
 }
 
@@ -380,10 +595,13 @@ impl PoseDiagnosis {
         residual: [0.0; 6],
         heldout_baseline: [0.0; 6],
         heldout_final: [0.0; 6],
+        suspect: false,
         leader: 0,
         sub_leader: 0,
         sq: [0.0; MAX_MODELS],
+        sq_rot: [0.0; MAX_MODELS],
         gsq: [0.0; MAX_MODELS],
+        gsq_rot: [0.0; MAX_MODELS],
         scratch: 0.0,
     };
     /// Whitened held-out squared error of model `model` (0 = baseline, c + 1 = candidate c).
@@ -403,14 +621,18 @@ impl Default for PoseDiagnosis {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub(crate) struct ModelAcc {
     pub chi2: f64,
+    pub chi2_rot: f64,
     pub pos2: f64,
     pub rot2: f64,
     pub n_pos: usize,
     pub n_rot: usize,
     pub rows: usize,
+    pub rows_pos: usize,
     pub expected_pos: f64,
     pub expected_rot: f64,
     pub variance: f64,
+    pub var_pos: f64,
+    pub var_rot: f64,
 }
 
 /// Working memory of [`diagnose`] for up to `P` parameter columns (the union of all
@@ -457,14 +679,18 @@ impl<const P: usize> DiagWorkspace<P> {
             delta: [[0.0; P]; MAX_MODELS],
             acc: [ModelAcc {
                 chi2: 0.0,
+                chi2_rot: 0.0,
                 pos2: 0.0,
                 rot2: 0.0,
                 n_pos: 0,
                 n_rot: 0,
                 rows: 0,
+                rows_pos: 0,
                 expected_pos: 0.0,
                 expected_rot: 0.0,
                 variance: 0.0,
+                var_pos: 0.0,
+                var_rot: 0.0,
             }; MAX_MODELS],
             jac: [[0.0; 6]; MAX_MODEL_PARAMS],
             a: [[0.0; P]; 6],
@@ -519,6 +745,20 @@ pub struct Diagnosis<const N: usize> {
     pub location: Location,
     /// How much of the held-out gap any smooth function of q explains (`smooth.rs`).
     pub explainable: SmoothCheck,
+    /// How the candidates were judged.
+    pub method: Method,
+    /// Suspect rows (indices into the data, ascending; first `n_suspects`): gross
+    /// outliers excluded from every fit and test.
+    pub suspects: [u32; MAX_SUSPECTS],
+    /// Number of suspect rows.
+    pub n_suspects: usize,
+    /// Warnings (first `n_warnings`).
+    pub warnings: [Option<Warning>; MAX_WARNINGS],
+    /// Number of warnings.
+    pub n_warnings: usize,
+    /// Held-out RMS of the verdict's residual per component (x, y, z \[m\], rx, ry, rz
+    /// \[rad\]) over the clean rows: where what remains lies.
+    pub final_rms_axis: [f64; 6],
 }
 
 impl<const N: usize> Diagnosis<N> {
@@ -534,6 +774,8 @@ impl<const N: usize> Diagnosis<N> {
                 repeat_subgroups: 0,
                 stated_pos: false,
                 stated_rot: false,
+                repeat_pos: None,
+                repeat_rot: None,
             },
             geometric: *robot,
             model: *robot,
@@ -552,12 +794,39 @@ impl<const N: usize> Diagnosis<N> {
                 n_confounded: 0,
                 gap_closed_fraction: 0.0,
                 candidate: None,
+                reason: Reason::NoSignificantCandidate,
             },
             remaining: GapTest::default(),
             final_heldout_rms_pos_m: 0.0,
             final_heldout_rms_rot_rad: 0.0,
             location: Location::empty(),
             explainable: SmoothCheck::default(),
+            method: Method::CrossValidation,
+            suspects: [0; MAX_SUSPECTS],
+            n_suspects: 0,
+            warnings: [None; MAX_WARNINGS],
+            n_warnings: 0,
+            final_rms_axis: [0.0; 6],
+        }
+    }
+
+    /// The suspect rows (indices into the data).
+    #[must_use]
+    pub fn suspects(&self) -> &[u32] {
+        self.suspects
+            .get(..self.n_suspects.min(MAX_SUSPECTS))
+            .unwrap_or(&[])
+    }
+
+    /// The warnings.
+    pub fn warnings(&self) -> impl Iterator<Item = &Warning> {
+        self.warnings.iter().flatten()
+    }
+
+    fn warn(&mut self, w: Warning) {
+        if let Some(slot) = self.warnings.get_mut(self.n_warnings) {
+            *slot = Some(w);
+            self.n_warnings += 1;
         }
     }
 
@@ -608,18 +877,38 @@ pub fn candidate_sets(
     n
 }
 
+/// Which rows of a pose a paired test compares.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Rows {
+    /// All measured components (whitened).
+    All,
+    /// Position components only.
+    Pos,
+    /// Rotation components only.
+    Rot,
+}
+
+/// Group total of model `m` over the selected rows (group leaders only).
+fn group_sq(p: &PoseDiagnosis, m: usize, rows: Rows) -> f64 {
+    match rows {
+        Rows::All => p.gsq[m],
+        Rows::Pos => p.gsq[m] - p.gsq_rot[m],
+        Rows::Rot => p.gsq_rot[m],
+    }
+}
+
 /// Paired z of models `a` and `b` over groups (see the module documentation): the
 /// Wilcoxon signed-rank statistic of `D_g = S_g^a − S_g^b` in its normal approximation,
 /// zero differences dropped, mid-ranks and the tie correction for equal |D|. Ranks are
 /// counted in O(G²) (no memory); data sets have tens to hundreds of groups.
-pub(crate) fn paired_z(poses: &mut [PoseDiagnosis], a: usize, b: usize) -> f64 {
+pub(crate) fn paired_z(poses: &mut [PoseDiagnosis], a: usize, b: usize, rows: Rows) -> f64 {
     // Compact the non-zero group differences into the first slots' scratch.
     let mut g = 0;
     for l in 0..poses.len() {
         if poses[l].leader as usize != l {
             continue;
         }
-        let d = poses[l].gsq[a] - poses[l].gsq[b];
+        let d = group_sq(&poses[l], a, rows) - group_sq(&poses[l], b, rows);
         if d != 0.0 {
             poses[g].scratch = d;
             g += 1;
@@ -657,6 +946,63 @@ pub(crate) fn paired_z(poses: &mut [PoseDiagnosis], a: usize, b: usize) -> f64 {
     (w_plus - mean) / sqrt(var)
 }
 
+/// In-sample comparison of models `a` and `b` with `p_a`, `p_b` fitted parameters
+/// (Vuong's test with the parameter-count correction): over groups, `D_g = S_g^a − S_g^b`
+/// of in-sample whitened totals; `z = (Σ D_g − (p_b − p_a)) / (√G · sd(D))` (the
+/// correction only for all rows). Positive: `a` fits worse than its parameter count
+/// explains.
+pub(crate) fn vuong_z(
+    poses: &[PoseDiagnosis],
+    (a, p_a): (usize, usize),
+    (b, p_b): (usize, usize),
+    rows: Rows,
+) -> f64 {
+    let diffs = || {
+        poses
+            .iter()
+            .enumerate()
+            .filter(|&(l, p)| p.leader as usize == l)
+            .map(|(_, p)| group_sq(p, a, rows) - group_sq(p, b, rows))
+    };
+    let g = diffs().count();
+    if g < 2 {
+        return 0.0;
+    }
+    let sum: f64 = diffs().sum();
+    let mean = sum / g as f64;
+    let ss: f64 = diffs().map(|d| (d - mean) * (d - mean)).sum();
+    let penalty = if rows == Rows::All {
+        p_b as f64 - p_a as f64
+    } else {
+        0.0
+    };
+    let sd = sqrt(ss * g as f64 / (g - 1) as f64);
+    if sd > 0.0 { (sum - penalty) / sd } else { 0.0 }
+}
+
+/// z of a likelihood-ratio statistic `Δχ²` with `dp` degrees of freedom (Wilson–Hilferty:
+/// `(Δχ²/dp)^(1/3)` is nearly normal with mean `1 − 2/(9dp)` and variance `2/(9dp)`).
+pub(crate) fn lr_z(dchi2: f64, dp: usize) -> f64 {
+    if dp == 0 {
+        return 0.0;
+    }
+    let k = dp as f64;
+    let v = 2.0 / (9.0 * k);
+    (crate::math::cbrt(dchi2.max(0.0) / k) - (1.0 - v)) / sqrt(v)
+}
+
+/// z of ln(Q/E) with variance `var/E²` plus `2/dof` for an estimated σ (0 when empty).
+fn log_ratio_z(q: f64, e: f64, var: f64, dof: f64) -> f64 {
+    if e <= 0.0 || q <= 0.0 {
+        return 0.0;
+    }
+    let mut v = var / (e * e);
+    if dof.is_finite() && dof > 0.0 {
+        v += 2.0 / dof;
+    }
+    if v > 0.0 { ln(q / e) / sqrt(v) } else { 0.0 }
+}
+
 /// The gap test of a model's totals (`acc` with its leverage terms).
 fn gap_test(acc: &ModelAcc, noise: &NoiseFloor) -> GapTest {
     let e = acc.expected_pos + acc.expected_rot;
@@ -689,23 +1035,100 @@ fn gap_test(acc: &ModelAcc, noise: &NoiseFloor) -> GapTest {
         z,
         expected_rms_pos_m: per(acc.expected_pos, acc.n_pos, noise.sigma_pos_m),
         expected_rms_rot_rad: per(acc.expected_rot, acc.n_rot, noise.sigma_rot_rad),
+        z_pos: log_ratio_z(
+            acc.chi2 - acc.chi2_rot,
+            acc.expected_pos,
+            acc.var_pos,
+            noise.dof_pos,
+        ),
+        z_rot: log_ratio_z(acc.chi2_rot, acc.expected_rot, acc.var_rot, noise.dof_rot),
     }
 }
 
-/// Share of the gap closed, from the baseline's and the model's totals.
-fn gap_closed(base: &ModelAcc, model: &ModelAcc, noise: &NoiseFloor) -> f64 {
-    let rms = |s: f64, n: usize| if n == 0 { 0.0 } else { sqrt(s / n as f64) };
-    let b = rms(base.pos2, base.n_pos);
-    let a = rms(model.pos2, model.n_pos);
-    let floor = noise.rms_pos_m();
-    let f = if base.n_pos > 0 && b > floor {
-        (b - a) / (b - floor)
+/// Where a significant gap (`gap`) lies: the part(s) whose own test exceeds `z`, else the
+/// part with the larger z.
+fn gap_part(gap: &GapTest, z: f64) -> Part {
+    match (gap.z_pos > z, gap.z_rot > z) {
+        (true, true) => Part::Both,
+        (true, false) => Part::Position,
+        (false, true) => Part::Rotation,
+        (false, false) if gap.z_rot > gap.z_pos => Part::Rotation,
+        (false, false) => Part::Position,
+    }
+}
+
+fn rms_of(s: f64, n: usize) -> f64 {
+    if n == 0 { 0.0 } else { sqrt(s / n as f64) }
+}
+
+/// `(B − A)/(B − N)` clipped to [0, 1]; 0 when `B ≤ N` (no gap in this measure).
+fn share(b: f64, a: f64, floor: f64) -> f64 {
+    if b > floor {
+        ((b - a) / (b - floor)).clamp(0.0, 1.0)
     } else {
-        let b = rms(base.chi2, base.rows);
-        let a = rms(model.chi2, model.rows);
-        if b > 1.0 { (b - a) / (b - 1.0) } else { 0.0 }
+        0.0
+    }
+}
+
+/// Share of the gap closed, from the baseline's and the model's totals (spec/effects.md:
+/// held-out RMS position error; the whitened RMS per row when the position shows no gap).
+fn gap_closed(base: &ModelAcc, model: &ModelAcc, noise: &NoiseFloor) -> f64 {
+    let b = rms_of(base.pos2, base.n_pos);
+    let a = rms_of(model.pos2, model.n_pos);
+    let floor = noise.rms_pos_m();
+    if base.n_pos > 0 && b > floor {
+        share(b, a, floor)
+    } else {
+        share(
+            rms_of(base.chi2, base.rows),
+            rms_of(model.chi2, model.rows),
+            1.0,
+        )
+    }
+}
+
+/// The share of the held-out RMS rotation angle closed (floor √3·σ_rot).
+fn gap_closed_rot(base: &ModelAcc, model: &ModelAcc, noise: &NoiseFloor) -> f64 {
+    share(
+        rms_of(base.rot2, base.n_rot),
+        rms_of(model.rot2, model.n_rot),
+        noise.rms_rot_rad(),
+    )
+}
+
+/// The share of the whitened held-out RMS per row closed, the floor `√(E/rows)` including
+/// the parameter-estimation inflation (the model's own expectation where computed, else
+/// the baseline's). When the baseline is already below that floor (σ stated too large)
+/// but the model still improves, the whole share is closed: only a significant candidate
+/// gets there, and what remains is below the floor.
+fn gap_closed_total(base: &ModelAcc, model: &ModelAcc) -> f64 {
+    let e_model = model.expected_pos + model.expected_rot;
+    let e = if e_model > 0.0 {
+        e_model
+    } else {
+        base.expected_pos + base.expected_rot
     };
-    f.clamp(0.0, 1.0)
+    let b = rms_of(base.chi2, base.rows);
+    let a = rms_of(model.chi2, model.rows);
+    let floor = rms_of(e, base.rows);
+    if b > floor {
+        share(b, a, floor)
+    } else if a < b {
+        1.0
+    } else {
+        0.0
+    }
+}
+
+/// The part a model makes significantly worse (paired z below −`z_significance`).
+fn worsens(s: &ModelScore, cfg: &Config) -> Option<(f64, Part)> {
+    let (p, r) = (s.z_pos < -cfg.z_significance, s.z_rot < -cfg.z_significance);
+    match (p, r) {
+        (true, true) => Some((s.z_pos.min(s.z_rot), Part::Both)),
+        (true, false) => Some((s.z_pos, Part::Position)),
+        (false, true) => Some((s.z_rot, Part::Rotation)),
+        (false, false) => None,
+    }
 }
 
 /// The decision rules of the module documentation, from the candidates' scores, a paired
@@ -725,13 +1148,16 @@ pub fn decide(
         n_confounded: 0,
         gap_closed_fraction: 0.0,
         candidate: None,
+        reason: Reason::NoSignificantCandidate,
     };
-    if gap.z < cfg.z_gap {
-        v.status = Status::NoGap;
-        return v;
-    }
     let n = candidates.len().min(MAX_CANDIDATES);
     let cands = &mut candidates[..n];
+    // A significant improvement is a gap whatever σ was stated.
+    if gap.z < cfg.z_gap && !cands.iter().any(|c| c.evaluated && c.significant) {
+        v.status = Status::NoGap;
+        v.reason = Reason::AtNoiseFloor;
+        return v;
+    }
     let Some(best) = (0..n)
         .filter(|&c| cands[c].evaluated)
         .min_by(|&a, &b| cands[a].heldout_chi2.total_cmp(&cands[b].heldout_chi2))
@@ -752,23 +1178,39 @@ pub fn decide(
     }) else {
         return v;
     };
-    let f = cands[w].gap_closed_fraction;
-    let class = |f: f64| status_class(f, cfg);
-    v.status = class(f);
+    v.status = status_class(cands[w].gap_closed_total_fraction, cfg);
     if v.status == Status::Unexplained {
+        v.reason = Reason::SmallShare;
         return v;
     }
+    v.reason = if v.status == Status::Explained {
+        Reason::Closed
+    } else {
+        Reason::SmallShare
+    };
+    if let Some((z, part)) = worsens(&cands[w], cfg) {
+        v.status = Status::PartiallyExplained;
+        v.reason = Reason::Worsens { z, part };
+    }
     v.effects = cands[w].effects;
-    v.gap_closed_fraction = f;
+    v.gap_closed_fraction = cands[w].gap_closed_fraction;
     v.candidate = Some(w);
+    // Equally good alternatives, whatever status class they would reach. A candidate that
+    // adds effects to the winner or to an alternative already listed is as good trivially
+    // and not listed (singles come before pairs).
+    let winner = cands[w].effects;
+    let contains = |big: EffectSet, small: EffectSet| small.iter().all(|e| big.contains(e));
     for c in 0..n {
-        if c == w || !eligible(&cands[c]) || cands[c].effects.len() != cands[w].effects.len() {
+        let set = cands[c].effects;
+        let redundant = contains(set, winner)
+            || v.confounded_with[..v.n_confounded]
+                .iter()
+                .any(|&k| contains(set, k));
+        if c == w || !eligible(&cands[c]) || redundant {
             continue;
         }
         cands[c].z_vs_winner = paired(c, w);
-        if cands[c].z_vs_winner < cfg.z_equivalence
-            && class(cands[c].gap_closed_fraction) == v.status
-        {
+        if cands[c].z_vs_winner < cfg.z_equivalence && v.n_confounded < MAX_CANDIDATES {
             v.confounded_with[v.n_confounded] = cands[c].effects;
             v.n_confounded += 1;
         }
@@ -930,14 +1372,16 @@ pub fn diagnose_into<const N: usize, const P: usize>(
         *p = PoseDiagnosis::EMPTY;
     }
 
-    // 1–2. Groups, folds, noise floor.
+    // 1–2. Groups, folds, method, noise floor.
     let n_groups = folds::assign(groups, cfg.folds, cfg.fold_seed, poses)?;
-    let noise = noise::noise_floor(robot, data, poses, cfg)?;
-    let (wp, wr) = (
-        1.0 / (noise.sigma_pos_m * noise.sigma_pos_m),
-        1.0 / (noise.sigma_rot_rad * noise.sigma_rot_rad),
-    );
-    let sw = [sqrt(wp), sqrt(wp), sqrt(wp), sqrt(wr), sqrt(wr), sqrt(wr)];
+    let method = if n_groups < cfg.folds.saturating_mul(cfg.min_groups_per_fold) {
+        Method::InSampleNested
+    } else {
+        Method::CrossValidation
+    };
+    out.method = method;
+    let mut noise = noise::noise_floor(robot, data, poses, cfg)?;
+    let (mut wp, mut wr, mut sw) = whitening(&noise);
 
     // 3. Geometric calibration on all rows.
     let mut opts = IdentifyOptions::new(Algorithm::Ols, robot.geometric_param_set());
@@ -947,13 +1391,7 @@ pub fn diagnose_into<const N: usize, const P: usize>(
     opts.allow_data_deficiency = true;
     // In place: a returned Identification would be a second copy in this frame.
     crate::identify::identify_in_place(robot, data, &opts, &mut ws.id, &mut out.fit)?;
-    let lin = out.fit.robot;
-    out.geometric = lin;
-    out.model = lin;
-    out.geometric_residuals = out.fit.fitted;
-    out.noise = noise;
-    out.groups = n_groups;
-    out.folds = cfg.folds;
+    let mut lin = out.fit.robot;
 
     // 4. Candidates and their columns.
     let effects = match cfg.candidates {
@@ -1051,11 +1489,63 @@ pub fn diagnose_into<const N: usize, const P: usize>(
         sc.structural = structural_set;
     }
 
-    // 5a. Whitened Gram of all rows at the geometric calibration; in-sample residuals.
+    // 4b. Gross outliers: screened with the union model, then the noise floor and the
+    // geometric calibration again without them.
+    let mut suspects = [0u32; MAX_SUSPECTS];
+    let mut n_susp = 0;
+    if cfg.screen_outliers {
+        ws.model_n[SCREEN_MODEL] = n_u;
+        for k in 0..n_u {
+            ws.model_cols[SCREEN_MODEL][k] = k as u8;
+        }
+        match screen::screen(&lin, data, &sw, poses, MAX_SUSPECTS, cfg.rank_tol, ws)? {
+            screen::Screening::TooMany(count) => out.warn(Warning::TooManySuspects { count }),
+            screen::Screening::Suspects(0) => {}
+            screen::Screening::Suspects(_) => {
+                for (l, _) in poses.iter().enumerate().filter(|(_, p)| p.suspect) {
+                    if let Some(slot) = suspects.get_mut(n_susp) {
+                        *slot = l as u32;
+                        n_susp += 1;
+                    }
+                }
+                noise = noise::noise_floor(robot, data, poses, cfg)?;
+                (wp, wr, sw) = whitening(&noise);
+                opts.weight_pos = wp;
+                opts.weight_rot = wr;
+                opts.excluded = &suspects[..n_susp];
+                crate::identify::identify_in_place(robot, data, &opts, &mut ws.id, &mut out.fit)?;
+                lin = out.fit.robot;
+            }
+        }
+    }
+    out.suspects = suspects;
+    out.n_suspects = n_susp;
+    out.geometric = lin;
+    out.model = lin;
+    out.geometric_residuals = out.fit.fitted;
+    out.noise = noise;
+    out.groups = n_groups;
+    out.folds = cfg.folds;
+
+    // 5a. Whitened Gram of the clean rows at the geometric calibration; in-sample
+    // residuals (of every row) and their whitened totals per part (the σ check).
     ws.g_all.reset(n_u)?;
+    let mut insample = ModelAcc::default();
     for (l, m) in data.iter().enumerate() {
         let mut e = cv::pose_rows(&lin, m, &sw, ws)?;
-        cv::fold_rows(ws, false)?;
+        if !poses[l].suspect {
+            cv::fold_rows(ws, false)?;
+            for k in (0..6).filter(|&k| m.mask.has(k)) {
+                let b2 = ws.b[k] * ws.b[k];
+                insample.chi2 += b2;
+                insample.rows += 1;
+                if k < 3 {
+                    insample.rows_pos += 1;
+                } else {
+                    insample.chi2_rot += b2;
+                }
+            }
+        }
         // Components the pose does not measure have no residual (the where-analysis and the
         // reports must not see the model's unmeasured orientation).
         for (k, v) in e.iter_mut().enumerate() {
@@ -1123,55 +1613,100 @@ pub fn diagnose_into<const N: usize, const P: usize>(
             n_list += 1;
         }
     }
-    cv::cross_validate(
-        &lin,
-        data,
-        &sw,
-        poses,
-        cfg.folds,
-        &list[..n_list],
-        cv::Pass::Candidates,
-        cfg.rank_tol,
-        ws,
-    )?;
+    match method {
+        Method::CrossValidation => cv::cross_validate(
+            &lin,
+            data,
+            &sw,
+            poses,
+            cfg.folds,
+            &list[..n_list],
+            cv::Pass::Candidates,
+            cfg.rank_tol,
+            ws,
+        )?,
+        Method::InSampleNested => cv::in_sample(
+            &lin,
+            data,
+            &sw,
+            poses,
+            &list[..n_list],
+            cv::Pass::Candidates,
+            cfg.rank_tol,
+            ws,
+        )?,
+    }
 
     // 6. Statistics and decision.
     for l in 0..n {
         let lead = poses[l].leader as usize;
         for mdl in 0..=n_cand {
-            let s = poses[l].sq[mdl];
+            let (s, r) = (poses[l].sq[mdl], poses[l].sq_rot[mdl]);
             poses[lead].gsq[mdl] += s;
+            poses[lead].gsq_rot[mdl] += r;
         }
     }
-    let rms = |s: f64, k: usize| if k == 0 { 0.0 } else { sqrt(s / k as f64) };
+    let model_n = ws.model_n;
+    // Paired z of models a and b (positive: a has the larger errors) by the method.
+    let pair = |poses: &mut [PoseDiagnosis], a: usize, b: usize, rows: Rows| match method {
+        Method::CrossValidation => paired_z(poses, a, b, rows),
+        Method::InSampleNested => vuong_z(poses, (a, model_n[a]), (b, model_n[b]), rows),
+    };
     for mdl in 0..=n_cand {
         if !score(out, mdl).evaluated {
             continue;
         }
         let acc = ws.acc[mdl];
-        let improvement = if mdl > 0 {
-            paired_z(poses, 0, mdl)
+        let (improvement, z_pos, z_rot) = if mdl > 0 {
+            let all = match method {
+                Method::CrossValidation => paired_z(poses, 0, mdl, Rows::All),
+                Method::InSampleNested => lr_z(
+                    ws.acc[0].chi2 - acc.chi2,
+                    model_n[mdl].saturating_sub(model_n[0]),
+                ),
+            };
+            (
+                all,
+                pair(poses, 0, mdl, Rows::Pos),
+                pair(poses, 0, mdl, Rows::Rot),
+            )
         } else {
-            0.0
+            (0.0, 0.0, 0.0)
         };
         let s = score(out, mdl);
-        s.heldout_rms_pos_m = rms(acc.pos2, acc.n_pos);
-        s.heldout_rms_rot_rad = rms(acc.rot2, acc.n_rot);
+        s.heldout_rms_pos_m = rms_of(acc.pos2, acc.n_pos);
+        s.heldout_rms_rot_rad = rms_of(acc.rot2, acc.n_rot);
         s.heldout_chi2 = acc.chi2;
         if mdl > 0 {
             s.improvement_z = improvement;
+            s.z_pos = z_pos;
+            s.z_rot = z_rot;
             s.significant = s.improvement_z > cfg.z_significance;
             s.gap_closed_fraction = gap_closed(&ws.acc[0], &acc, &noise);
+            s.gap_closed_rot_fraction = gap_closed_rot(&ws.acc[0], &acc, &noise);
+            s.gap_closed_total_fraction = gap_closed_total(&ws.acc[0], &acc);
         }
     }
     let gap = gap_test(&ws.acc[0], &noise);
     out.gap = gap;
     let verdict = decide(
         &mut out.candidates[..n_cand],
-        |a, b| paired_z(&mut *poses, a + 1, b + 1),
+        |a, b| pair(&mut *poses, a + 1, b + 1, Rows::All),
         &gap,
         cfg,
     );
+    if gap.z < cfg.z_gap && verdict.status != Status::NoGap {
+        let z_candidate = out
+            .candidates()
+            .iter()
+            .filter(|c| c.evaluated)
+            .map(|c| c.improvement_z)
+            .fold(f64::NEG_INFINITY, f64::max);
+        out.warn(Warning::GapDespiteGapTest {
+            z_gap: gap.z,
+            z_candidate,
+        });
+    }
 
     // 6b. The verdict's model on all rows, and its held-out residuals, re-linearised at
     // that fit (the first pass's one Gauss–Newton step from the geometric calibration
@@ -1188,32 +1723,66 @@ pub fn diagnose_into<const N: usize, const P: usize>(
         model_analysis(ws, mdl, score(out, mdl), cfg.rank_tol, &mut fit.analysis)?;
         crate::identify::identify_into(data, &o, &mut ws.id, &mut fit)?;
         ws.g_all.reset(n_u)?;
-        for m in data {
-            cv::pose_rows(&fit.robot, m, &sw, ws)?;
-            cv::fold_rows(ws, false)?;
+        for (l, m) in data.iter().enumerate() {
+            if !poses[l].suspect {
+                cv::pose_rows(&fit.robot, m, &sw, ws)?;
+                cv::fold_rows(ws, false)?;
+            }
         }
-        cv::cross_validate(
-            &fit.robot,
-            data,
-            &sw,
-            poses,
-            cfg.folds,
-            &[],
-            cv::Pass::Final(mdl),
-            cfg.rank_tol,
-            ws,
-        )?;
+        match method {
+            Method::CrossValidation => cv::cross_validate(
+                &fit.robot,
+                data,
+                &sw,
+                poses,
+                cfg.folds,
+                &[],
+                cv::Pass::Final(mdl),
+                cfg.rank_tol,
+                ws,
+            )?,
+            Method::InSampleNested => cv::in_sample(
+                &fit.robot,
+                data,
+                &sw,
+                poses,
+                &[],
+                cv::Pass::Final(mdl),
+                cfg.rank_tol,
+                ws,
+            )?,
+        }
         let acc = ws.acc[mdl];
         let closed = gap_closed(&ws.acc[0], &acc, &noise);
         let cand = &mut out.candidates[c];
-        cand.heldout_rms_pos_m = rms(acc.pos2, acc.n_pos);
-        cand.heldout_rms_rot_rad = rms(acc.rot2, acc.n_rot);
+        cand.heldout_rms_pos_m = rms_of(acc.pos2, acc.n_pos);
+        cand.heldout_rms_rot_rad = rms_of(acc.rot2, acc.n_rot);
         cand.heldout_chi2 = acc.chi2;
         cand.gap_closed_fraction = closed;
+        cand.gap_closed_rot_fraction = gap_closed_rot(&ws.acc[0], &acc, &noise);
+        cand.gap_closed_total_fraction = gap_closed_total(&ws.acc[0], &acc);
         verdict.gap_closed_fraction = closed;
-        verdict.status = status_class(closed, cfg);
+        verdict.status = status_class(cand.gap_closed_total_fraction, cfg);
+        let remaining = gap_test(&acc, &noise);
+        verdict.reason = match verdict.status {
+            Status::Explained if remaining.z > cfg.z_gap => {
+                verdict.status = Status::PartiallyExplained;
+                Reason::RemainingGap {
+                    z: remaining.z,
+                    part: gap_part(&remaining, cfg.z_gap),
+                }
+            }
+            Status::Explained => Reason::Closed,
+            _ => Reason::SmallShare,
+        };
+        if verdict.status != Status::Unexplained
+            && let Some((z, part)) = worsens(cand, cfg)
+        {
+            verdict.status = Status::PartiallyExplained;
+            verdict.reason = Reason::Worsens { z, part };
+        }
         if verdict.status != Status::Unexplained {
-            out.remaining = gap_test(&acc, &noise);
+            out.remaining = remaining;
             out.final_heldout_rms_pos_m = cand.heldout_rms_pos_m;
             out.final_heldout_rms_rot_rad = cand.heldout_rms_rot_rad;
             out.fit = fit;
@@ -1236,12 +1805,90 @@ pub fn diagnose_into<const N: usize, const P: usize>(
         out.final_heldout_rms_rot_rad = out.baseline.heldout_rms_rot_rad;
     }
     out.verdict = verdict;
+    out.final_rms_axis = rms_axis(data, poses);
+    check_stated_noise(out, &insample, model_n[0]);
 
     // 7. Where.
     out.location = locate::locate(robot, data, poses, &noise);
     // 8. Explainable at all? (library-free smooth model on the same folds.)
     out.explainable = smooth::check(robot, data, poses, &noise, &ws.acc[0], cfg, &mut ws.smooth);
     Ok(())
+}
+
+/// Row weights `1/σ²` and their square roots per component for the noise floor.
+fn whitening(noise: &NoiseFloor) -> (f64, f64, [f64; 6]) {
+    let wp = 1.0 / (noise.sigma_pos_m * noise.sigma_pos_m);
+    let wr = 1.0 / (noise.sigma_rot_rad * noise.sigma_rot_rad);
+    let (sp, sr) = (sqrt(wp), sqrt(wr));
+    (wp, wr, [sp, sp, sp, sr, sr, sr])
+}
+
+/// RMS of the verdict's held-out residual per component over the clean rows measuring it.
+fn rms_axis<const N: usize>(data: &[Measurement<N>], poses: &[PoseDiagnosis]) -> [f64; 6] {
+    let mut out = [0.0; 6];
+    for (k, o) in out.iter_mut().enumerate() {
+        let (mut s, mut c) = (0.0, 0usize);
+        for (m, p) in data.iter().zip(poses) {
+            if m.mask.has(k) && !p.suspect {
+                s += p.heldout_final[k] * p.heldout_final[k];
+                c += 1;
+            }
+        }
+        *o = rms_of(s, c);
+    }
+    out
+}
+
+/// |z| beyond which a stated σ disagrees with the data.
+const NOISE_CHECK_Z: f64 = 3.0;
+/// … and only when it is off by more than this factor either way.
+const NOISE_CHECK_RATIO: f64 = 1.25;
+
+/// Checks a stated σ against the repeats (either way) and against the geometric
+/// calibration's in-sample residuals (`insample`, whitened at the stated σ; `p` fitted
+/// parameters): residuals significantly below the stated noise mean the data are quieter
+/// than stated (a gap can only add to them).
+fn check_stated_noise<const N: usize>(out: &mut Diagnosis<N>, insample: &ModelAcc, p: usize) {
+    let noise = out.noise;
+    let parts = [
+        (
+            Part::Position,
+            noise.stated_pos,
+            noise.repeat_pos,
+            noise.sigma_pos_m,
+            insample.chi2 - insample.chi2_rot,
+            insample.rows_pos,
+        ),
+        (
+            Part::Rotation,
+            noise.stated_rot,
+            noise.repeat_rot,
+            noise.sigma_rot_rad,
+            insample.chi2_rot,
+            insample.rows - insample.rows_pos,
+        ),
+    ];
+    for (part, stated, repeats, sigma, chi2, rows) in parts {
+        if !stated || rows == 0 {
+            continue;
+        }
+        let off = |ratio: f64| !(1.0 / NOISE_CHECK_RATIO..=NOISE_CHECK_RATIO).contains(&ratio);
+        if let Some((s, dof)) = repeats {
+            let ratio = s / sigma;
+            let z = ln(ratio * ratio) / sqrt(2.0 / dof);
+            if z.abs() > NOISE_CHECK_Z && off(ratio) {
+                out.warn(Warning::NoiseVsRepeats { part, ratio, z });
+            }
+        }
+        let dof = rows as f64 * (1.0 - p as f64 / insample.rows.max(1) as f64);
+        if dof > 0.0 {
+            let z = (chi2 - dof) / sqrt(2.0 * dof);
+            let ratio = sqrt(chi2 / dof);
+            if z < -NOISE_CHECK_Z && off(ratio) {
+                out.warn(Warning::NoiseVsResiduals { part, ratio, z });
+            }
+        }
+    }
 }
 
 /// Label of a parameter (`compliance_2`, …) for reports.

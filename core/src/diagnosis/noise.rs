@@ -23,7 +23,14 @@ fn pooled<const N: usize>(
     }
     pooled_repeat_scatter(
         data.len(),
-        |l| poses[l].sub_leader as usize,
+        // Suspect rows (gross outliers) belong to no subgroup.
+        |l| {
+            if poses[l].suspect {
+                usize::MAX
+            } else {
+                poses[l].sub_leader as usize
+            }
+        },
         |l| data[l].mask,
         |l| {
             let t = data[l].model_pose(reference)?;
@@ -68,7 +75,12 @@ pub(crate) fn noise_floor<const N: usize>(
     };
     let (sp, np) = pick(cfg.sigma_pos_m, ss_p, dof_p, any_pos)?;
     let (sr, nr) = pick(cfg.sigma_rot_rad, ss_r, dof_r, any_rot)?;
+    let repeats = |ss: f64, dof: usize| {
+        (dof > 0 && ss > 0.0).then(|| (crate::math::sqrt(ss / dof as f64), dof as f64))
+    };
     Ok(NoiseFloor {
+        repeat_pos: repeats(ss_p, dof_p),
+        repeat_rot: repeats(ss_r, dof_r),
         sigma_pos_m: sp,
         sigma_rot_rad: sr,
         dof_pos: np,

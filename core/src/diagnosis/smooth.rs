@@ -350,7 +350,7 @@ fn fold_gram<const N: usize>(
         }
     }
     for (m, p) in data.iter().zip(poses) {
-        if fold.is_some_and(|f| usize::from(p.fold) != f) || !fits(m, act) {
+        if p.suspect || fold.is_some_and(|f| usize::from(p.fold) != f) || !fits(m, act) {
             continue;
         }
         let y = target(m, p, sw);
@@ -500,7 +500,7 @@ fn choose<const N: usize>(
     // Zero model: the training targets' own squares.
     let mut best = [(0.0, None::<(usize, f64)>); 2];
     for (m, p) in data.iter().zip(poses) {
-        if usize::from(p.fold) != f && fits(m, act) {
+        if !p.suspect && usize::from(p.fold) != f && fits(m, act) {
             let e = class_sq(&target(m, p, sw), &[0.0; 6]);
             best[0].0 += e[0];
             best[1].0 += e[1];
@@ -520,7 +520,7 @@ fn choose<const N: usize>(
                 }
                 solve(ws, li, true);
                 for (m, p) in data.iter().zip(poses) {
-                    if usize::from(p.fold) != g || !fits(m, act) {
+                    if p.suspect || usize::from(p.fold) != g || !fits(m, act) {
                         continue;
                     }
                     let y = target(m, p, sw);
@@ -707,7 +707,7 @@ pub(crate) fn check<const N: usize>(
             }
             solve(ws, li, false);
             for (m, p) in data.iter().zip(poses.iter_mut()) {
-                if usize::from(p.fold) != f || !fits(m, &act) {
+                if p.suspect || usize::from(p.fold) != f || !fits(m, &act) {
                     continue;
                 }
                 let y = target(m, p, &sw);
@@ -742,7 +742,7 @@ fn summarise<const N: usize>(
     // held-out RMS definitions), and overall.
     let (mut b_type, mut n_type) = ([0.0; 2], [0usize; 2]);
     let (mut q_base, mut q_smooth) = (0.0, 0.0);
-    for (m, p) in data.iter().zip(poses.iter()) {
+    for (m, p) in data.iter().zip(poses.iter()).filter(|(_, p)| !p.suspect) {
         let y = target(m, p, sw);
         let b = class_sq(&y, &[0.0; 6]);
         for (c, range) in CLASSES.iter().enumerate() {
@@ -804,7 +804,12 @@ fn group_wilcoxon<const N: usize>(
     // Per pose D_l, then summed into the leader (leaders precede their members, so in
     // reverse order a leader's members still hold their own D_l).
     for (m, p) in data.iter().zip(poses.iter_mut()) {
-        p.scratch = sq(m, &target(m, p, sw), &[0.0; 6]) - p.scratch;
+        // Suspect rows (gross outliers) take no part, as in every other test.
+        p.scratch = if p.suspect {
+            0.0
+        } else {
+            sq(m, &target(m, p, sw), &[0.0; 6]) - p.scratch
+        };
     }
     for l in (0..poses.len()).rev() {
         if poses[l].leader as usize != l {

@@ -181,6 +181,19 @@ pub(crate) fn residual<const N: usize>(
     Ok(pose_error(&m.pose, &t, form))
 }
 
+/// The rows that take part in a fit: positive weight, not excluded by `opts`.
+pub(crate) fn active_rows<'d, const N: usize>(
+    data: &'d [Measurement<N>],
+    opts: &IdentifyOptions<'_>,
+) -> impl Iterator<Item = &'d Measurement<N>> {
+    let excluded = opts.excluded;
+    data.iter().enumerate().filter_map(move |(l, m)| {
+        let out = m.weight > 0.0
+            && u32::try_from(l).map_or(true, |l| excluded.binary_search(&l).is_err());
+        out.then_some(m)
+    })
+}
+
 /// Row weight of component `k`.
 fn weight(opts: &IdentifyOptions<'_>, k: usize) -> f64 {
     if k < 3 {
@@ -197,7 +210,7 @@ pub(crate) fn cost<const N: usize>(
     opts: &IdentifyOptions<'_>,
 ) -> Result<f64> {
     let mut c = 0.0;
-    for m in data.iter().filter(|m| m.weight > 0.0) {
+    for m in active_rows(data, opts) {
         let e = residual(robot, m, opts.orientation)?;
         for (k, v) in e.iter().enumerate() {
             if m.mask.has(k) {
@@ -220,7 +233,7 @@ pub(crate) fn accumulate<const N: usize, const P: usize>(
     ws.lsq.reset(n_cols)?;
     ws.to_gram = false;
     let mut c = 0.0;
-    for m in data.iter().filter(|m| m.weight > 0.0) {
+    for m in active_rows(data, opts) {
         c += add_rows(robot, m, true, opts, n_cols, ws)?;
     }
     Ok(c)
@@ -238,7 +251,7 @@ pub(crate) fn accumulate_jacobian<const N: usize, const P: usize>(
 ) -> Result<()> {
     ws.lsq.reset(n_cols)?;
     ws.to_gram = false;
-    for m in data.iter().filter(|m| m.weight > 0.0) {
+    for m in active_rows(data, opts) {
         add_rows(robot, m, false, opts, n_cols, ws)?;
     }
     Ok(())
@@ -256,7 +269,7 @@ pub(crate) fn accumulate_gram<const N: usize, const P: usize>(
     ws.to_gram = true;
     let mut c = 0.0;
     let mut folded = Ok(());
-    for m in data.iter().filter(|m| m.weight > 0.0) {
+    for m in active_rows(data, opts) {
         match add_rows(robot, m, true, opts, n_cols, ws) {
             Ok(v) => c += v,
             Err(e) => {
@@ -362,11 +375,11 @@ pub fn residual_stats<const N: usize>(
     opts: &IdentifyOptions<'_>,
 ) -> Result<ResidualStats> {
     let mut s = ResidualStats {
-        poses: data.iter().filter(|m| m.weight > 0.0).count(),
+        poses: active_rows(data, opts).count(),
         ..ResidualStats::default()
     };
     let (mut np, mut nr, mut sp, mut sr) = (0usize, 0usize, 0.0, 0.0);
-    for m in data.iter().filter(|m| m.weight > 0.0) {
+    for m in active_rows(data, opts) {
         let t = m.model_pose(robot)?;
         let ex = pose_error(&m.pose, &t, OrientationError::Exact);
         // The cost's form is usually the exact one too: one rotation log then.

@@ -4,8 +4,9 @@
 //! in a fixed priority order (links before base and tool frames before effects, each in
 //! flat-index order): a column is kept when the part of it outside the span of the columns
 //! already kept is at least a tolerance long.
-//! 1. *Structural*: on many generic configurations (a Halton sequence over the joint
-//!    limits, with the data's measured components), which parameters are redundant in the
+//! 1. *Structural*: on many generic configurations (seeded uniform joint angles within the
+//!    limits, independent approach signs taking both values for every joint, random
+//!    temperatures; the data's measured components), which parameters are redundant in the
 //!    model itself (e.g. base-frame parameters that duplicate link 1, compliance of a joint
 //!    that carries no gravity torque). These are removed and reported.
 //! 2. *Data*: of the structurally identifiable parameters, which the given poses determine.
@@ -23,6 +24,7 @@ use crate::linalg::dot;
 use crate::math::sqrt;
 use crate::model::{JointState, Robot};
 use crate::params::ParamSet;
+use crate::rng::SplitMix64;
 
 /// Tolerance of the structural test (generic configurations): redundant columns leave
 /// residuals at rounding level (~1e-14), identifiable ones far above this.
@@ -60,16 +62,35 @@ pub struct Identifiability {
     pub partner: [Option<Partner>; MAX_MODEL_PARAMS],
 }
 
-const PRIMES: [u32; 12] = [2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37];
+/// Seed of the generic configurations of the structural test (fixed: the test's outcome
+/// must not depend on the call).
+const STRUCTURAL_SEED: u64 = 0x7374_7275_6374;
 
-fn halton(index: u32, base: u32) -> f64 {
-    let (mut f, mut r, mut i) = (1.0, 0.0, index);
-    while i > 0 {
-        f /= f64::from(base);
-        r += f * f64::from(i % base);
-        i /= base;
+/// Number of generic configurations for `p` requested parameters: rows (6 per sample)
+/// outnumber the parameters about twice over, and at least 16 samples so that every
+/// joint's approach direction takes both signs several times.
+pub(crate) fn structural_samples(p: usize) -> usize {
+    (8 + p / 3).max(16)
+}
+
+/// Approach directions of generic sample `s`: independent uniform signs per joint for
+/// even `s`, their negation for the following odd `s` (antithetic pairs). Every joint
+/// thus takes both signs in any two consecutive samples, and signs of different joints
+/// stay independent — unlike a Halton digit test `halton(s, base) < 0.5`, which for a
+/// large base is −1 for the first `base/2` samples (backlash of the last joint then looked
+/// redundant with its zero offset).
+pub(crate) fn approach_signs<const N: usize>(s: usize, rng: &mut SplitMix64, signs: &mut [f64; N]) {
+    if s.is_multiple_of(2) {
+        let mut bits = rng.next_u64();
+        for v in signs.iter_mut() {
+            *v = if bits & 1 == 0 { -1.0 } else { 1.0 };
+            bits = bits.rotate_right(1);
+        }
+    } else {
+        for v in signs.iter_mut() {
+            *v = -*v;
+        }
     }
-    r
 }
 
 /// Runs the analysis for `opts.requested` on `data` at `robot`'s current parameters. The
@@ -148,7 +169,7 @@ pub(crate) fn analyze_into<const N: usize, const P: usize>(
     }
     let mut union = 0u8;
     let (mut any_approach, mut any_temp) = (false, false);
-    for m in data.iter().filter(|m| m.weight > 0.0) {
+    for m in super::data::active_rows(data, opts) {
         union |= m.mask.0;
         any_approach |= m.state.approach.is_some();
         any_temp |= m.state.temp_c.is_some();
@@ -252,28 +273,23 @@ pub(crate) fn structural_step<const N: usize, const P: usize>(
     ws.lsq.reset(p)?;
     ws.to_gram = false;
     // Rows (6 per sample) outnumber the parameters about twice over: generic enough.
-    let samples = 8 + p as u32 / 3;
+    let samples = structural_samples(p);
     let limits = robot.limits();
-    for s in 1..=samples {
+    let mut rng = SplitMix64::new(STRUCTURAL_SEED);
+    let mut signs = [1.0; N];
+    for s in 0..samples {
         let mut st = JointState::new([0.0; N]);
-        for j in 0..N {
+        for (j, q) in st.q.iter_mut().enumerate() {
             let lo = limits[j].lower.max(-core::f64::consts::PI);
             let hi = limits[j].upper.min(core::f64::consts::PI);
-            st.q[j] = lo + halton(s, PRIMES[j % PRIMES.len()]) * (hi - lo);
+            *q = rng.range(lo, hi);
         }
         if any_approach {
-            let mut a = [0.0; N];
-            for (j, v) in a.iter_mut().enumerate() {
-                *v = if halton(s, PRIMES[(j + N) % PRIMES.len()]) < 0.5 {
-                    -1.0
-                } else {
-                    1.0
-                };
-            }
-            st.approach = Some(a);
+            approach_signs(s, &mut rng, &mut signs);
+            st.approach = Some(signs);
         }
         if any_temp {
-            st.temp_c = Some(40.0 * halton(s, 41));
+            st.temp_c = Some(rng.range(0.0, 40.0));
         }
         let origin = [None];
         let points = if points.is_empty() {
@@ -428,4 +444,39 @@ fn best_partner<const P: usize>(
         }
     }
     best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every joint's approach sign takes both values within the samples of even the
+    /// smallest structural test, for up to 9 joints (regression: the Halton digit test
+    /// gave joint 6 of a 6-joint arm the sign −1 in every sample).
+    #[test]
+    fn every_joint_approach_sign_takes_both_values() {
+        fn check<const N: usize>() {
+            let samples = structural_samples(1);
+            let mut rng = SplitMix64::new(STRUCTURAL_SEED);
+            let (mut neg, mut pos) = ([0usize; N], [0usize; N]);
+            let mut signs = [1.0; N];
+            for s in 0..samples {
+                approach_signs(s, &mut rng, &mut signs);
+                for j in 0..N {
+                    if signs[j] < 0.0 {
+                        neg[j] += 1;
+                    } else {
+                        pos[j] += 1;
+                    }
+                }
+            }
+            for j in 0..N {
+                assert_eq!(neg[j], pos[j], "joint {} of {N}", j + 1);
+                assert!(neg[j] >= samples / 2, "joint {} of {N}", j + 1);
+            }
+        }
+        check::<6>();
+        check::<7>();
+        check::<9>();
+    }
 }

@@ -161,6 +161,9 @@ pub struct IdentifyOptions<'a> {
     /// fitted model). Off, they are reported as 0 / none: for repeated fits that only need
     /// the parameters, e.g. a Monte-Carlo study.
     pub covariance: bool,
+    /// Indices of rows left out of the fit as if their weight were 0 (sorted ascending):
+    /// e.g. the suspect rows of a diagnosis, whose data the caller shares read-only.
+    pub excluded: &'a [u32],
 }
 
 impl IdentifyOptions<'_> {
@@ -181,6 +184,7 @@ impl IdentifyOptions<'_> {
             bounds: None,
             allow_data_deficiency: false,
             covariance: true,
+            excluded: &[],
         }
     }
 }

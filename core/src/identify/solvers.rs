@@ -140,9 +140,7 @@ pub(crate) fn identify_into<const N: usize, const P: usize>(
             capacity: P,
         });
     }
-    let rows: usize = data
-        .iter()
-        .filter(|m| m.weight > 0.0)
+    let rows: usize = super::data::active_rows(data, opts)
         .map(|m| (0..6).filter(|&k| m.mask.has(k)).count())
         .sum();
     if n == 0 || (!analysis.data_deficient.is_empty() && !opts.allow_data_deficiency) {
