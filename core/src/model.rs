@@ -369,8 +369,8 @@ impl<const N: usize> Robot<N> {
     #[must_use]
     pub fn auto_length_params(&self) -> [LengthParam; N] {
         let mut out = [LengthParam::D; N];
-        for (i, lp) in out.iter_mut().enumerate().take(N.saturating_sub(1)) {
-            let [ca, _, cb, _] = self.geom.link_cs[i];
+        let links = out.iter_mut().zip(self.geom.link_cs.iter());
+        for (lp, &[ca, _, cb, _]) in links.take(N.saturating_sub(1)) {
             // Angle between z_{i-1} and z_i: z_i = Rx(α)Ry(β)·e_z in frame i−1 (after Rz),
             // whose z component is cos α·cos β.
             let cos_angle = (ca * cb).abs().min(1.0);
