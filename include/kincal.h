@@ -57,6 +57,21 @@
 #define KINCAL_WORKSPACE_ALIGN 16
 
 /*
+ Largest `kincal_ik_options.max_iterations`.
+ */
+#define KINCAL_IK_MAX_ITERATIONS 1000
+
+/*
+ Largest `kincal_ik_options.extra_seeds`.
+ */
+#define KINCAL_IK_MAX_EXTRA_SEEDS 256
+
+/*
+ Largest `(1 + extra_seeds) * max_iterations` of `kincal_ik_options`.
+ */
+#define KINCAL_IK_MAX_TOTAL_ITERATIONS 20000
+
+/*
  Largest `frames_len` of `kincal_fk_frames`: 16·(`KINCAL_MAX_JOINTS` + 2).
  */
 #define KINCAL_MAX_FRAMES_LEN 176
@@ -245,6 +260,13 @@ enum kincal_status
      A parameter fitted under bounds ended outside them (`index`, `value`).
      */
     KINCAL_STATUS_BOUND_VIOLATED = 203,
+    /*
+     Every input was finite but a result is not (NaN or infinite): the inputs are too large
+     for double precision, e.g. link lengths near 1e308 (`argument` = the output, `index` =
+     its first bad element, `value`). Nothing is written: an OK call never leaves a
+     non-finite number in an output.
+     */
+    KINCAL_STATUS_NON_FINITE_RESULT = 204,
     /*
      The core reported an error this version of the C ABI does not know: a bug, please
      report it.
@@ -1037,30 +1059,35 @@ typedef struct kincal_identify_report {
 } kincal_identify_report;
 
 /*
- Options of `kincal_ik`; get the defaults from `kincal_ik_options_default`.
+ Options of `kincal_ik` and `kincal_prepared_ik`; get the defaults from
+ `kincal_ik_options_default`. Every field is checked against its bounds before any work
+ (INVALID_ARGUMENT naming the field, e.g. `opts->extra_seeds`, and its value), and so is
+ the budget (1 + extra_seeds)·max_iterations <= `KINCAL_IK_MAX_TOTAL_ITERATIONS` (20000,
+ about 6x the defaults' 3400), so every call ends in bounded time.
  */
 typedef struct kincal_ik_options {
     /*
-     Iterations per seed (default 200).
+     Iterations per seed, 1..=`KINCAL_IK_MAX_ITERATIONS` (1000; default 200).
      */
     uint32_t max_iterations;
     /*
-     Non-zero: stop at the first seed that converges (faster; the answer is then the
-     solution reached from the earliest converging seed rather than the nearest to the
-     caller's seed). Default 0.
+     1: stop at the first seed that converges (faster; the answer is then the solution
+     reached from the earliest converging seed rather than the nearest to the caller's
+     seed); 0: try every seed (default). Other values are INVALID_ARGUMENT.
      */
     uint32_t first_solution;
     /*
      Seeds tried after the caller's: a deterministic Halton sequence over the limits clipped
-     to ±π (default 16).
+     to ±π, 0..=`KINCAL_IK_MAX_EXTRA_SEEDS` (256; default 16), within the budget above
+     (INVALID_ARGUMENT names `opts->extra_seeds` when the budget is exceeded).
      */
     size_t extra_seeds;
     /*
-     Convergence: position residual below this [m], finite and > 0 (default 1e-11).
+     Convergence: position residual below this [m], in (0, 1] (default 1e-11).
      */
     double tol_pos_m;
     /*
-     Convergence: orientation residual below this [rad], finite and > 0 (default 1e-11).
+     Convergence: orientation residual below this [rad], in (0, π] (default 1e-11).
      */
     double tol_rot_rad;
 } kincal_ik_options;
@@ -1630,8 +1657,9 @@ kincal_status kincal_ik_options_default(struct kincal_ik_options *opts_out,
 
  Returns OK, UNREACHABLE (no seed converged; `residual_pos_m`/`residual_rot_rad` give the
  best residual found), NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE,
- INVALID_TRANSFORM, INVALID_ARGUMENT (an approach direction or tolerance), MISSING_INPUT or
- any status of `kincal_robot_validate`. With `std` the call runs in a catch_unwind
+ INVALID_TRANSFORM, INVALID_ARGUMENT (an approach direction, or an option outside the
+ bounds documented in `kincal_ik_options`), MISSING_INPUT or any status of
+ `kincal_robot_validate`. With `std` the call runs in a catch_unwind
  boundary; the no_std build is proved panic-free at link time.
 
  # Safety
@@ -1718,7 +1746,8 @@ kincal_status kincal_fk_frames(const struct kincal_robot *robot,
  - `t_base_tool_out`, `t_base_tool_len`: the pose at `q` (16 doubles, column-major), or NULL.
 
  Every column is written (the caller need not zero the buffer). On failure the contents of
- `jac_out` are unspecified. Other arguments and statuses as `kincal_fk`.
+ `jac_out` are unspecified; NON_FINITE_RESULT when a column overflowed (finite parameters
+ too large for double precision). Other arguments and statuses as `kincal_fk`.
 
  # Safety
  Non-NULL pointers must be valid for their stated lengths; `jac_out` must not overlap the
@@ -2520,8 +2549,10 @@ size_t kincal_error_describe(const struct kincal_error *error,
 
  Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE, INVALID_TRANSFORM,
  INVALID_ARGUMENT (`pose` set for a partial mask or bad approach direction; a target not
- positive), MISSING_INPUT, TOO_FEW_DATA or any status of `kincal_robot_validate`. Outputs
- are written on success only; `errors_out` must not overlap the inputs.
+ positive), MISSING_INPUT, TOO_FEW_DATA, NON_FINITE_RESULT (an error or the summary
+ overflowed: `argument` names which, `pose` the pose) or any status of
+ `kincal_robot_validate`. `summary_out` is written on success only, `errors_out` row by row
+ (on failure it may hold the rows before the failing pose); it must not overlap the inputs.
 
  # Safety
  Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.

@@ -141,6 +141,14 @@ pub enum Error {
         /// The joint.
         joint: JointIndex,
     },
+    /// An option of an algorithm outside its documented bounds (e.g. an IK iteration count
+    /// that would never return, a NaN tolerance).
+    InvalidOption {
+        /// The option's field name, e.g. `"extra_seeds"`.
+        option: &'static str,
+        /// Its value (as a float for counts).
+        value: f64,
+    },
 }
 
 impl fmt::Display for Error {
@@ -195,6 +203,9 @@ impl fmt::Display for Error {
             Error::BadPose { pose } => write!(f, "pose {} cannot be used", pose.0 + 1),
             Error::BoundViolated { param, value } => {
                 write!(f, "parameter {} = {value} violates its bound", param.0)
+            }
+            Error::InvalidOption { option, value } => {
+                write!(f, "option {option} = {value} is outside its bounds")
             }
             Error::DegenerateAxis { joint } => {
                 write!(f, "joint {} axis has a zero direction", joint.0 + 1)

@@ -4,26 +4,41 @@
 //! [`Robot::fk`] of the returned readings.
 
 use core::f64::consts::PI;
+use core::num::NonZeroU32;
 
-use nalgebra::{Cholesky, SMatrix, SVector, Vector3, Vector6};
+use nalgebra::{Cholesky, SMatrix, SVector, Vector6};
 
 use crate::error::{Error, Quantity, Result, check_finite};
 use crate::kinematics::Frames;
 use crate::model::{JointState, Robot};
 use crate::params::CyclicTerm;
+
+// `joint_jacobian` destructures a joint's cyclic terms in this order.
+const _: () = assert!(
+    CyclicTerm::Sin1 as usize == 0
+        && CyclicTerm::Cos1 as usize == 1
+        && CyclicTerm::Sin2 as usize == 2
+        && CyclicTerm::Cos2 as usize == 3
+);
 use crate::pose::{Transform, rotation_log};
 
-/// Options of [`solve_ik`].
+/// Options of [`solve_ik`]. [`IkOptions::validate`] (run by [`solve_ik`]) bounds every field
+/// and the total budget `(1 + extra_seeds) · max_iterations` <=
+/// [`IkOptions::MAX_TOTAL_ITERATIONS`], so one call's worst case is bounded: a control loop
+/// gets an error for absurd options, not a call that never returns.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IkOptions {
-    /// Iterations per seed.
+    /// Iterations per seed, 1..=[`IkOptions::MAX_ITERATIONS`].
     pub max_iterations: u32,
-    /// Convergence: position residual below this \[m\].
+    /// Convergence: position residual below this \[m\], in
+    /// (0, [`IkOptions::MAX_TOL_POS_M`]].
     pub tol_pos_m: f64,
-    /// Convergence: orientation residual below this \[rad\].
+    /// Convergence: orientation residual below this \[rad\], in
+    /// (0, [`IkOptions::MAX_TOL_ROT_RAD`]].
     pub tol_rot_rad: f64,
     /// Seeds tried after the caller's (a deterministic Halton sequence over the limits,
-    /// clipped to ±π).
+    /// clipped to ±π), 0..=[`IkOptions::MAX_EXTRA_SEEDS`], and
+    /// `(1 + extra_seeds) · max_iterations` <= [`IkOptions::MAX_TOTAL_ITERATIONS`].
     pub extra_seeds: usize,
     /// Stop at the first seed that converges (faster; the answer is then the solution
     /// reached from the earliest converging seed rather than the nearest of all).
@@ -42,6 +57,53 @@ impl Default for IkOptions {
     }
 }
 
+impl IkOptions {
+    /// Largest `max_iterations`: 5x the default; a descent that has not converged by then
+    /// is stuck (a control loop must get an error, not a watchdog reset).
+    pub const MAX_ITERATIONS: u32 = 1000;
+    /// Largest `extra_seeds`: 16x the default (with `max_iterations` small enough for
+    /// [`IkOptions::MAX_TOTAL_ITERATIONS`]).
+    pub const MAX_EXTRA_SEEDS: usize = 256;
+    /// Largest `(1 + extra_seeds) · max_iterations`: about 6x the default's 3,400 damped
+    /// steps (each a few FK evaluations), so a call that never converges still ends in a
+    /// bounded time (measured in kincal-ffi's `ik_at_the_bounds_finishes_in_bounded_time`).
+    pub const MAX_TOTAL_ITERATIONS: u64 = 20_000;
+    /// Largest position tolerance \[m\] (a looser one accepts any pose).
+    pub const MAX_TOL_POS_M: f64 = 1.0;
+    /// Largest orientation tolerance \[rad\].
+    pub const MAX_TOL_ROT_RAD: f64 = core::f64::consts::PI;
+
+    /// Checks every field against its documented bounds: [`Error::InvalidOption`] naming
+    /// the field and its value otherwise (a NaN or infinite tolerance included).
+    pub fn validate(&self) -> Result<()> {
+        let bad = |option: &'static str, value: f64| Err(Error::InvalidOption { option, value });
+        if !(1..=Self::MAX_ITERATIONS).contains(&self.max_iterations) {
+            return bad("max_iterations", f64::from(self.max_iterations));
+        }
+        if self.extra_seeds > Self::MAX_EXTRA_SEEDS {
+            // (usize as f64 rounds for huge counts; it only reports the value)
+            #[allow(clippy::cast_precision_loss)]
+            return bad("extra_seeds", self.extra_seeds as f64);
+        }
+        // `!(x > 0 && x <= max)` also refuses NaN.
+        let total = (self.extra_seeds as u64)
+            .saturating_add(1)
+            .saturating_mul(u64::from(self.max_iterations));
+        if total > Self::MAX_TOTAL_ITERATIONS {
+            // (the budget names the seeds: the more likely of the two to be raised)
+            #[allow(clippy::cast_precision_loss)]
+            return bad("extra_seeds", self.extra_seeds as f64);
+        }
+        if !(self.tol_pos_m > 0.0 && self.tol_pos_m <= Self::MAX_TOL_POS_M) {
+            return bad("tol_pos_m", self.tol_pos_m);
+        }
+        if !(self.tol_rot_rad > 0.0 && self.tol_rot_rad <= Self::MAX_TOL_ROT_RAD) {
+            return bad("tol_rot_rad", self.tol_rot_rad);
+        }
+        Ok(())
+    }
+}
+
 /// A solution of [`solve_ik`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IkSolution<const N: usize> {
@@ -57,14 +119,28 @@ pub struct IkSolution<const N: usize> {
     pub seed_index: usize,
 }
 
-const PRIMES: [u32; 20] = [
-    2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53, 59, 61, 67, 71,
-];
+/// The Halton bases, one per joint (cycled): non-zero by type, so `%` and `/` by them have no
+/// division-by-zero panic path for the optimiser to prove away.
+const PRIMES: [NonZeroU32; 20] = {
+    let p = [
+        2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53, 59, 61, 67, 71,
+    ];
+    let mut out = [NonZeroU32::MIN; 20];
+    let mut k = 0;
+    while k < 20 {
+        out[k] = match NonZeroU32::new(p[k]) {
+            Some(v) => v,
+            None => panic!("Halton bases are primes"),
+        };
+        k += 1;
+    }
+    out
+};
 
-fn halton(index: u32, base: u32) -> f64 {
+fn halton(index: u32, base: NonZeroU32) -> f64 {
     let (mut f, mut r, mut i) = (1.0, 0.0, index);
     while i > 0 {
-        f /= f64::from(base);
+        f /= f64::from(base.get());
         r += f * f64::from(i % base);
         i /= base;
     }
@@ -77,7 +153,7 @@ fn halton(index: u32, base: u32) -> f64 {
 /// effects, the approach directions and temperature to compensate. Returns the converged
 /// configuration nearest to `seed.q` (joints whose range spans more than 2π are shifted by
 /// ±2π towards the seed when that stays within limits), or [`Error::Unreachable`] with the
-/// best residual found.
+/// best residual found. Options outside their bounds are [`Error::InvalidOption`].
 ///
 /// ```
 /// use kincal::{aria, ik::{solve_ik, IkOptions}, JointState};
@@ -96,7 +172,9 @@ pub fn solve_ik<const N: usize>(
     let t = target.translation.vector;
     check_finite(t.as_slice(), Quantity::Position)?;
     check_finite(target.rotation.matrix().as_slice(), Quantity::Orientation)?;
+    // (a NaN tolerance stays NonFinite, as every other non-finite input)
     check_finite(&[opts.tol_pos_m, opts.tol_rot_rad], Quantity::Setting)?;
+    opts.validate()?;
     let limits = robot.limits();
     let mut best: Option<IkSolution<N>> = None;
     let mut best_dist = f64::INFINITY;
@@ -104,14 +182,16 @@ pub fn solve_ik<const N: usize>(
     for s in 0..=opts.extra_seeds {
         let mut start = seed.q;
         if s > 0 {
-            for (j, v) in start.iter_mut().enumerate() {
-                let lo = limits[j].lower.max(-PI);
-                let hi = limits[j].upper.min(PI);
-                let u = halton(s as u32, PRIMES[j % PRIMES.len()]);
+            let bases = PRIMES.iter().cycle();
+            for ((v, lim), &base) in start.iter_mut().zip(limits.iter()).zip(bases) {
+                let lo = lim.lower.max(-PI);
+                let hi = lim.upper.min(PI);
+                // (s <= MAX_EXTRA_SEEDS, validated: the cast is exact)
+                let u = halton(s as u32, base);
                 *v = if hi > lo {
                     lo + u * (hi - lo)
                 } else {
-                    limits[j].lower
+                    lim.lower
                 };
             }
         }
@@ -149,15 +229,18 @@ pub fn solve_ik<const N: usize>(
 /// Joints with a scale error are left alone: Δθ_j = k_j·q_j is not 2π-periodic, so the
 /// shifted reading would reach a different pose.
 fn shift_towards<const N: usize>(q: &mut [f64; N], seed: &[f64; N], robot: &Robot<N>) {
-    for j in 0..N {
-        if robot.effect_params().scale[j] != 0.0 {
+    let joints = seed
+        .iter()
+        .zip(robot.limits().iter())
+        .zip(robot.effect_params().scale.iter());
+    for (qj, ((&seed_j, lim), &scale)) in q.iter_mut().zip(joints) {
+        if scale != 0.0 {
             continue;
         }
-        let lim = robot.limits()[j];
         for k in [-2.0 * PI, 2.0 * PI] {
-            let cand = q[j] + k;
-            if lim.contains(cand) && (cand - seed[j]).abs() < (q[j] - seed[j]).abs() {
-                q[j] = cand;
+            let cand = *qj + k;
+            if lim.contains(cand) && (cand - seed_j).abs() < (*qj - seed_j).abs() {
+                *qj = cand;
             }
         }
     }
@@ -223,8 +306,8 @@ fn descend<const N: usize>(
             };
             let dq: SVector<f64, N> = j.transpose() * chol.solve(&e);
             let mut trial = state;
-            for (k, v) in trial.q.iter_mut().enumerate() {
-                *v += dq[k];
+            for (v, d) in trial.q.iter_mut().zip(dq.iter()) {
+                *v += d;
             }
             clamp(&mut trial.q);
             let mut f2 = Frames::default();
@@ -257,37 +340,29 @@ pub(crate) fn joint_jacobian<const N: usize>(
     let pe = f.t_base_ee.translation.vector;
     let e = robot.effect_params();
     let mut j = SMatrix::<f64, 6, N>::zeros();
-    for i in 0..N {
-        let (p_prev, z_prev): (Vector3<f64>, Vector3<f64>) = if i == 0 {
-            (
-                f.t_base_0.translation.vector,
-                f.t_base_0.rotation.matrix().column(2).into_owned(),
-            )
-        } else {
-            (
-                f.t_base_link[i - 1].translation.vector,
-                f.t_base_link[i - 1]
-                    .rotation
-                    .matrix()
-                    .column(2)
-                    .into_owned(),
-            )
-        };
-        let q = state.q[i];
-        let c = &e.cyclic[i];
+    // Iterators over the joints and the Jacobian's column arrays (`data.0`, column-major)
+    // rather than `t_base_link[i - 1]`, `q[i]` and `fixed_view_mut(0, i)`: their bounds
+    // checks stay (as panic paths) where the optimiser does not inline (opt-level s/z).
+    let mut prev = &f.t_base_0;
+    let joints = f
+        .t_base_link
+        .iter()
+        .zip(state.q.iter().zip(e.cyclic.iter()).zip(e.scale.iter()));
+    for (column, (ti, ((&q, c), &scale))) in j.data.0.iter_mut().zip(joints) {
+        let p_prev = prev.translation.vector;
+        let z_prev = crate::math::column3(prev.rotation.matrix(), 2);
+        prev = ti;
         let dcyclic = if c.iter().any(|&v| v != 0.0) {
             let (s1, c1) = crate::math::sin_cos(q);
-            c[CyclicTerm::Sin1 as usize] * c1 - c[CyclicTerm::Cos1 as usize] * s1
-                + 2.0 * c[CyclicTerm::Sin2 as usize] * (c1 * c1 - s1 * s1)
-                - 4.0 * c[CyclicTerm::Cos2 as usize] * s1 * c1
+            let [sin1, cos1, sin2, cos2] = *c;
+            sin1 * c1 - cos1 * s1 + 2.0 * sin2 * (c1 * c1 - s1 * s1) - 4.0 * cos2 * s1 * c1
         } else {
             0.0
         };
-        let dtheta = 1.0 + e.scale[i] + dcyclic;
+        let dtheta = 1.0 + scale + dcyclic;
         let lin = z_prev.cross(&(pe - p_prev)) * dtheta;
         let ang = z_prev * dtheta;
-        j.fixed_view_mut::<3, 1>(0, i).copy_from(&lin);
-        j.fixed_view_mut::<3, 1>(3, i).copy_from(&ang);
+        *column = [lin.x, lin.y, lin.z, ang.x, ang.y, ang.z];
     }
     j
 }

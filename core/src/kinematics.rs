@@ -4,6 +4,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 use crate::error::{Error, Result};
+use crate::math::column3;
 use crate::model::{Geometry, JointState, Robot};
 use crate::params::{CyclicTerm, FrameParam, LinkParam, ParamId};
 use crate::pose::{Transform, so3_left_jacobian, transform};
@@ -245,25 +246,16 @@ impl<const N: usize> Robot<N> {
         let pe = f.t_base_ee.translation.vector;
         let col = |lin: Vector3<f64>, ang: Vector3<f64>| [lin.x, lin.y, lin.z, ang.x, ang.y, ang.z];
         let zero = Vector3::zeros();
-        for i in 0..N {
-            let (p_prev, z_prev) = if i == 0 {
-                (
-                    f.t_base_0.translation.vector,
-                    f.t_base_0.rotation.matrix().column(2).into_owned(),
-                )
-            } else {
-                (
-                    f.t_base_link[i - 1].translation.vector,
-                    f.t_base_link[i - 1]
-                        .rotation
-                        .matrix()
-                        .column(2)
-                        .into_owned(),
-                )
-            };
-            let pi = f.t_base_link[i].translation.vector;
-            let yi = f.t_base_link[i].rotation.matrix().column(1).into_owned();
-            let xm = f.x_mid[i];
+        // Frame i (before joint i+1) walks along with link i: iterators and `column3` rather
+        // than `t_base_link[i - 1]` and `column(k)`, whose bounds checks stay (as panic paths)
+        // where the optimiser does not inline (opt-level s/z).
+        let mut prev = &f.t_base_0;
+        for (i, (ti, xm)) in f.t_base_link.iter().zip(f.x_mid.iter()).enumerate() {
+            let p_prev = prev.translation.vector;
+            let z_prev = column3(prev.rotation.matrix(), 2);
+            let pi = ti.translation.vector;
+            let yi = column3(ti.rotation.matrix(), 1);
+            let xm = *xm;
             let idx = |k: LinkParam| ParamId::Link { link: i, kind: k }.index(N).0;
             put(
                 jac,
@@ -274,6 +266,7 @@ impl<const N: usize> Robot<N> {
             put(jac, idx(LinkParam::A), col(xm * scale, zero));
             put(jac, idx(LinkParam::Alpha), col(xm.cross(&(pe - pi)), xm));
             put(jac, idx(LinkParam::Beta), col(yi.cross(&(pe - pi)), yi));
+            prev = ti;
         }
         if links_only {
             return Ok(f.t_base_ee);
@@ -303,12 +296,12 @@ impl<const N: usize> Robot<N> {
             let ax = k as usize % 3;
             let (b, t) = if (k as usize) < 3 {
                 (
-                    col(Vector3::ith(ax, 1.0), zero),
-                    col(r_n.column(ax).into_owned(), zero),
+                    col(column3(&Matrix3::identity(), ax), zero),
+                    col(column3(&r_n, ax), zero),
                 )
             } else {
-                let w = jl_base.column(ax).into_owned();
-                let wt = r_e * jr_tool.column(ax);
+                let w = column3(&jl_base, ax);
+                let wt = r_e * column3(&jr_tool, ax);
                 (col(w.cross(&(pe - base_p)), w), col(zero, wt))
             };
             put(jac, ParamId::Base(k).index(N).0, b);
@@ -327,7 +320,9 @@ impl<const N: usize> Robot<N> {
         let approach = state.approach.unwrap_or([0.0; N]);
         let scaled = |c: JacobianColumn, f: f64| c.map(|v| v * f);
         let mut thermal = [0.0; 6];
-        for j in 0..N {
+        // Iterators rather than `q[j]`, `tau[j]`, …: no bounds check left to the optimiser.
+        let per_joint = state.q.iter().zip(tau.iter()).zip(approach.iter());
+        for (j, ((&q, &tau_j), &approach_j)) in per_joint.enumerate() {
             let th = col_at(
                 jac,
                 ParamId::Link {
@@ -337,25 +332,18 @@ impl<const N: usize> Robot<N> {
                 .index(N)
                 .0,
             );
-            let q = state.q[j];
             let (s1, c1) = crate::math::sin_cos(q);
             let terms = [s1, c1, 2.0 * s1 * c1, c1 * c1 - s1 * s1];
-            put(jac, ParamId::Compliance(j).index(N).0, scaled(th, tau[j]));
+            put(jac, ParamId::Compliance(j).index(N).0, scaled(th, tau_j));
             put(jac, ParamId::Scale(j).index(N).0, scaled(th, q));
-            for t in CyclicTerm::ALL {
-                put(
-                    jac,
-                    ParamId::Cyclic(j, t).index(N).0,
-                    scaled(th, terms[t as usize]),
-                );
+            for (t, term) in CyclicTerm::ALL.into_iter().zip(terms) {
+                put(jac, ParamId::Cyclic(j, t).index(N).0, scaled(th, term));
             }
-            put(
-                jac,
-                ParamId::Backlash(j).index(N).0,
-                scaled(th, approach[j]),
-            );
+            put(jac, ParamId::Backlash(j).index(N).0, scaled(th, approach_j));
             // The d and a columns carry the factor `scale`; ∂/∂(scaled length) = col/scale.
-            let l = &self.geom.links[j];
+            let Some(l) = self.geom.links.get(j) else {
+                continue;
+            };
             let dcol = col_at(
                 jac,
                 ParamId::Link {
@@ -374,8 +362,8 @@ impl<const N: usize> Robot<N> {
                 .index(N)
                 .0,
             );
-            for r in 0..6 {
-                thermal[r] += (l.d * dcol[r] + l.a * acol[r]) / scale;
+            for ((th, d), a) in thermal.iter_mut().zip(dcol).zip(acol) {
+                *th += (l.d * d + l.a * a) / scale;
             }
         }
         let dt = state

@@ -41,3 +41,13 @@ pub(crate) fn exp(x: f64) -> f64 {
 pub(crate) fn cbrt(x: f64) -> f64 {
     libm::cbrt(x)
 }
+
+/// Column `k` (0, 1 or 2) of a 3×3 matrix, read from its column-major array; zeros for any
+/// other `k`. nalgebra's `column(k)` asserts `k < 3` at run time, and where the optimiser does
+/// not inline it (opt-level s/z, the firmware target) that assertion is a panic path.
+#[inline]
+pub(crate) fn column3(m: &nalgebra::Matrix3<f64>, k: usize) -> nalgebra::Vector3<f64> {
+    m.data.0.get(k).map_or_else(nalgebra::Vector3::zeros, |c| {
+        nalgebra::Vector3::new(c[0], c[1], c[2])
+    })
+}

@@ -369,8 +369,8 @@ impl<const N: usize> Robot<N> {
     #[must_use]
     pub fn auto_length_params(&self) -> [LengthParam; N] {
         let mut out = [LengthParam::D; N];
-        for (i, lp) in out.iter_mut().enumerate().take(N.saturating_sub(1)) {
-            let [ca, _, cb, _] = self.geom.link_cs[i];
+        let links = out.iter_mut().zip(self.geom.link_cs.iter());
+        for (lp, &[ca, _, cb, _]) in links.take(N.saturating_sub(1)) {
             // Angle between z_{i-1} and z_i: z_i = Rx(α)Ry(β)·e_z in frame i−1 (after Rz),
             // whose z component is cos α·cos β.
             let cos_angle = (ca * cb).abs().min(1.0);
@@ -481,11 +481,17 @@ impl<const N: usize> Robot<N> {
     pub fn param(&self, i: ParamIndex) -> Result<f64> {
         Ok(match ParamId::from_index(i, N)? {
             ParamId::Link { link, kind } => self.geom.links.get(link).map_or(0.0, |l| l.get(kind)),
-            ParamId::Base(k) => self.geom.base[k as usize],
-            ParamId::Tool(k) => self.geom.tool[k as usize],
+            ParamId::Base(k) => self.geom.base.get(k as usize).copied().unwrap_or(0.0),
+            ParamId::Tool(k) => self.geom.tool.get(k as usize).copied().unwrap_or(0.0),
             ParamId::Compliance(j) => self.effects.compliance.get(j).copied().unwrap_or(0.0),
             ParamId::Scale(j) => self.effects.scale.get(j).copied().unwrap_or(0.0),
-            ParamId::Cyclic(j, t) => self.effects.cyclic.get(j).map_or(0.0, |c| c[t as usize]),
+            ParamId::Cyclic(j, t) => self
+                .effects
+                .cyclic
+                .get(j)
+                .and_then(|c| c.get(t as usize))
+                .copied()
+                .unwrap_or(0.0),
             ParamId::Backlash(j) => self.effects.backlash.get(j).copied().unwrap_or(0.0),
             ParamId::Thermal => self.effects.thermal_kappa,
         })
@@ -512,18 +518,18 @@ impl<const N: usize> Robot<N> {
                 }
             }
             ParamId::Base(k) => {
-                self.geom.base[k as usize] = value;
+                set_at(&mut self.geom.base, k as usize, value);
                 self.geom.t_base = pose_from_vector6(&self.geom.base);
             }
             ParamId::Tool(k) => {
-                self.geom.tool[k as usize] = value;
+                set_at(&mut self.geom.tool, k as usize, value);
                 self.geom.t_tool = pose_from_vector6(&self.geom.tool);
             }
             ParamId::Compliance(j) => set_at(&mut self.effects.compliance, j, value),
             ParamId::Scale(j) => set_at(&mut self.effects.scale, j, value),
             ParamId::Cyclic(j, t) => {
                 if let Some(c) = self.effects.cyclic.get_mut(j) {
-                    c[t as usize] = value;
+                    set_at(c, t as usize, value);
                 }
             }
             ParamId::Backlash(j) => set_at(&mut self.effects.backlash, j, value),

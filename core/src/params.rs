@@ -191,34 +191,56 @@ impl ParamId {
 
     /// The parameter at flat index `i` of an `n`-joint model.
     pub fn from_index(i: ParamIndex, n: usize) -> Result<ParamId> {
-        let i = i.0;
-        let id = if i < 5 * n {
-            ParamId::Link {
-                link: i / 5,
-                kind: LinkParam::ALL[i % 5],
-            }
-        } else if i < 5 * n + 6 {
-            ParamId::Base(FrameParam::ALL[i - 5 * n])
-        } else if i < 5 * n + 12 {
-            ParamId::Tool(FrameParam::ALL[i - 5 * n - 6])
-        } else if i < 6 * n + 12 {
-            ParamId::Compliance(i - 5 * n - 12)
-        } else if i < 7 * n + 12 {
-            ParamId::Scale(i - 6 * n - 12)
-        } else if i < 11 * n + 12 {
-            let k = i - 7 * n - 12;
-            ParamId::Cyclic(k / 4, CyclicTerm::ALL[k % 4])
-        } else if i < 12 * n + 12 {
-            ParamId::Backlash(i - 11 * n - 12)
-        } else if i == 12 * n + 12 {
-            ParamId::Thermal
-        } else {
-            return Err(Error::DimensionMismatch {
-                expected: num_params(n),
-                found: i + 1,
-            });
+        let out_of_range = Error::DimensionMismatch {
+            expected: num_params(n),
+            found: i.0.saturating_add(1),
         };
-        Ok(id)
+        // Walks the layout block by block, subtracting each block's size: no product that
+        // could overflow and no array index the compiler must prove in bounds (a panic path
+        // on the firmware target otherwise).
+        let mut r = i.0;
+        let links = n.saturating_mul(5);
+        if r < links {
+            let kind = LinkParam::ALL.get(r % 5).copied().ok_or(out_of_range)?;
+            return Ok(ParamId::Link { link: r / 5, kind });
+        }
+        r -= links;
+        if r < 6 {
+            return FrameParam::ALL
+                .get(r)
+                .map(|&k| ParamId::Base(k))
+                .ok_or(out_of_range);
+        }
+        r -= 6;
+        if r < 6 {
+            return FrameParam::ALL
+                .get(r)
+                .map(|&k| ParamId::Tool(k))
+                .ok_or(out_of_range);
+        }
+        r -= 6;
+        if r < n {
+            return Ok(ParamId::Compliance(r));
+        }
+        r -= n;
+        if r < n {
+            return Ok(ParamId::Scale(r));
+        }
+        r -= n;
+        let cyclic = n.saturating_mul(4);
+        if r < cyclic {
+            let term = CyclicTerm::ALL.get(r % 4).copied().ok_or(out_of_range)?;
+            return Ok(ParamId::Cyclic(r / 4, term));
+        }
+        r -= cyclic;
+        if r < n {
+            return Ok(ParamId::Backlash(r));
+        }
+        r -= n;
+        if r == 0 {
+            return Ok(ParamId::Thermal);
+        }
+        Err(out_of_range)
     }
 
     /// Parses a label such as `theta0_3`, `beta_2`, `base_px`, `compliance_2`,

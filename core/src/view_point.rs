@@ -196,7 +196,7 @@ pub fn moved_to_point(pose: &Transform, point_m: &[f64; 3]) -> Transform {
 
 fn origin_and_axis(t: &Transform, axis: Axis) -> (Vector3<f64>, Vector3<f64>) {
     let r = t.rotation.matrix();
-    (t.translation.vector, r.column(axis.index()).into_owned())
+    (t.translation.vector, crate::math::column3(r, axis.index()))
 }
 
 #[cfg(test)]

@@ -168,6 +168,19 @@ pub(crate) fn finite(v: &[f64], name: &'static CStr) -> FfiResult {
     }
 }
 
+/// Every element of a result finite, else `NON_FINITE_RESULT` naming the output and the
+/// element: finite inputs can still overflow (lengths near 1e308), and an OK call must never
+/// hand a NaN or infinity to a controller.
+pub(crate) fn finite_result(v: &[f64], name: &'static CStr) -> FfiResult {
+    match v.iter().position(|x| !x.is_finite()) {
+        None => Ok(()),
+        Some(i) => Err(kincal_error::new(kincal_status::NonFiniteResult)
+            .arg(name)
+            .at(i)
+            .value(v.get(i).copied().unwrap_or(f64::NAN))),
+    }
+}
+
 /// A NUL-terminated UTF-8 string. A string that is not UTF-8 cannot be a label or name, so it
 /// reports `UNKNOWN_LABEL`.
 ///
@@ -188,6 +201,7 @@ pub(crate) unsafe fn c_str<'a>(p: *const c_char, name: &'static CStr) -> FfiResu
 pub(crate) struct Out<T> {
     ptr: *mut T,
     len: usize,
+    name: &'static CStr,
 }
 
 impl<T: Copy> Out<T> {
@@ -209,7 +223,7 @@ impl<T: Copy> Out<T> {
                 len,
             ));
         }
-        Ok(Out { ptr, len })
+        Ok(Out { ptr, len, name })
     }
 
     /// Copies `src` (exactly `len` elements by construction) into the buffer.
@@ -241,5 +255,24 @@ impl<T: Copy> Out<T> {
     pub(crate) unsafe fn as_mut_slice<'a>(&mut self) -> &'a mut [T] {
         // SAFETY: forwarded contract; length checked in `new`.
         unsafe { core::slice::from_raw_parts_mut(self.ptr, self.len) }
+    }
+}
+
+impl Out<f64> {
+    /// `NON_FINITE_RESULT` naming this output if `src` holds a NaN or infinity: call it for
+    /// every output before writing any (outputs are written on success only).
+    pub(crate) fn check_finite(&self, src: &[f64]) -> FfiResult {
+        finite_result(src, self.name)
+    }
+
+    /// [`Out::check_finite`], then [`Out::write`]: the one output of a call.
+    ///
+    /// # Safety
+    /// As [`Out::write`].
+    pub(crate) unsafe fn write_finite(&self, src: &[f64]) -> FfiResult {
+        self.check_finite(src)?;
+        // SAFETY: forwarded contract.
+        unsafe { self.write(src) };
+        Ok(())
     }
 }

@@ -82,7 +82,7 @@ pub unsafe extern "C" fn kincal_aria_tool_pose(
                 .counts(KINCAL_ARIA_NUM_TOOL_POSES, index),
         )?;
         // SAFETY: checked by `arg_out!`; writable by contract.
-        unsafe { out.write(&crate::pose::to_matrix(&t)) };
+        unsafe { out.write_finite(&crate::pose::to_matrix(&t)) }?;
         Ok(())
     })
 }
@@ -102,7 +102,7 @@ pub unsafe extern "C" fn kincal_aria_tool_seed(
     ffi_boundary!(err = err; {
         let out = arg_out!(q_out, q_len, KINCAL_ARIA_NUM_JOINTS);
         // SAFETY: checked by `arg_out!`; writable by contract.
-        unsafe { out.write(&aria::TOOL_SEED_Q) };
+        unsafe { out.write_finite(&aria::TOOL_SEED_Q) }?;
         Ok(())
     })
 }

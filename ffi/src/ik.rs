@@ -8,25 +8,40 @@ use crate::kinematics::{CALL_AUX, joint_state, kincal_joint_aux, robot_and_q};
 use crate::robot::{KINCAL_MAX_JOINTS, kincal_robot};
 use crate::status::{FfiResult, kincal_error, kincal_status};
 
-/// Options of `kincal_ik`; get the defaults from `kincal_ik_options_default`.
+/// Options of `kincal_ik` and `kincal_prepared_ik`; get the defaults from
+/// `kincal_ik_options_default`. Every field is checked against its bounds before any work
+/// (INVALID_ARGUMENT naming the field, e.g. `opts->extra_seeds`, and its value), and so is
+/// the budget (1 + extra_seeds)·max_iterations <= `KINCAL_IK_MAX_TOTAL_ITERATIONS` (20000,
+/// about 6x the defaults' 3400), so every call ends in bounded time.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[allow(non_camel_case_types)]
 pub struct kincal_ik_options {
-    /// Iterations per seed (default 200).
+    /// Iterations per seed, 1..=`KINCAL_IK_MAX_ITERATIONS` (1000; default 200).
     pub max_iterations: u32,
-    /// Non-zero: stop at the first seed that converges (faster; the answer is then the
-    /// solution reached from the earliest converging seed rather than the nearest to the
-    /// caller's seed). Default 0.
+    /// 1: stop at the first seed that converges (faster; the answer is then the solution
+    /// reached from the earliest converging seed rather than the nearest to the caller's
+    /// seed); 0: try every seed (default). Other values are INVALID_ARGUMENT.
     pub first_solution: u32,
     /// Seeds tried after the caller's: a deterministic Halton sequence over the limits clipped
-    /// to ±π (default 16).
+    /// to ±π, 0..=`KINCAL_IK_MAX_EXTRA_SEEDS` (256; default 16), within the budget above
+    /// (INVALID_ARGUMENT names `opts->extra_seeds` when the budget is exceeded).
     pub extra_seeds: usize,
-    /// Convergence: position residual below this [m], finite and > 0 (default 1e-11).
+    /// Convergence: position residual below this [m], in (0, 1] (default 1e-11).
     pub tol_pos_m: f64,
-    /// Convergence: orientation residual below this [rad], finite and > 0 (default 1e-11).
+    /// Convergence: orientation residual below this [rad], in (0, π] (default 1e-11).
     pub tol_rot_rad: f64,
 }
+
+/// Largest `kincal_ik_options.max_iterations`.
+pub const KINCAL_IK_MAX_ITERATIONS: u32 = 1000;
+/// Largest `kincal_ik_options.extra_seeds`.
+pub const KINCAL_IK_MAX_EXTRA_SEEDS: usize = 256;
+/// Largest `(1 + extra_seeds) * max_iterations` of `kincal_ik_options`.
+pub const KINCAL_IK_MAX_TOTAL_ITERATIONS: u64 = 20_000;
+const _: () = assert!(KINCAL_IK_MAX_ITERATIONS == IkOptions::MAX_ITERATIONS);
+const _: () = assert!(KINCAL_IK_MAX_TOTAL_ITERATIONS == IkOptions::MAX_TOTAL_ITERATIONS);
+const _: () = assert!(KINCAL_IK_MAX_EXTRA_SEEDS == IkOptions::MAX_EXTRA_SEEDS);
 
 impl From<IkOptions> for kincal_ik_options {
     fn from(o: IkOptions) -> Self {
@@ -40,25 +55,30 @@ impl From<IkOptions> for kincal_ik_options {
     }
 }
 
+/// The core's options from the C struct, every field checked against its bounds (the core's
+/// [`IkOptions::validate`]; `first_solution` must be 0 or 1).
 pub(crate) fn options(o: &kincal_ik_options) -> FfiResult<IkOptions> {
-    for (v, name) in [
-        (o.tol_pos_m, c"opts->tol_pos_m"),
-        (o.tol_rot_rad, c"opts->tol_rot_rad"),
-    ] {
-        crate::args::finite(&[v], name)?;
-        if v <= 0.0 {
+    let first_solution = match o.first_solution {
+        0 => false,
+        1 => true,
+        v => {
             return Err(kincal_error::new(kincal_status::InvalidArgument)
-                .arg(name)
-                .value(v));
+                .arg(c"opts->first_solution")
+                .value(f64::from(v)));
         }
-    }
-    Ok(IkOptions {
+    };
+    // A NaN or infinite tolerance stays NON_FINITE (as every other double argument).
+    crate::args::finite(&[o.tol_pos_m], c"opts->tol_pos_m")?;
+    crate::args::finite(&[o.tol_rot_rad], c"opts->tol_rot_rad")?;
+    let opts = IkOptions {
         max_iterations: o.max_iterations,
         tol_pos_m: o.tol_pos_m,
         tol_rot_rad: o.tol_rot_rad,
         extra_seeds: o.extra_seeds,
-        first_solution: o.first_solution != 0,
-    })
+        first_solution,
+    };
+    opts.validate()?;
+    Ok(opts)
 }
 
 /// What `kincal_ik` found besides the readings.
@@ -134,8 +154,9 @@ pub(crate) fn ik_of<const N: usize>(
 ///
 /// Returns OK, UNREACHABLE (no seed converged; `residual_pos_m`/`residual_rot_rad` give the
 /// best residual found), NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE,
-/// INVALID_TRANSFORM, INVALID_ARGUMENT (an approach direction or tolerance), MISSING_INPUT or
-/// any status of `kincal_robot_validate`. With `std` the call runs in a catch_unwind
+/// INVALID_TRANSFORM, INVALID_ARGUMENT (an approach direction, or an option outside the
+/// bounds documented in `kincal_ik_options`), MISSING_INPUT or any status of
+/// `kincal_robot_validate`. With `std` the call runs in a catch_unwind
 /// boundary; the no_std build is proved panic-free at link time.
 ///
 /// # Safety
@@ -168,7 +189,7 @@ pub unsafe extern "C" fn kincal_ik(
         let (q, info_v) = with_any_robot!(&any, r => ik_of(r, &target, &seed, aux.as_ref(), &opts))?;
         // SAFETY: checked by `arg_out!`/`arg_out1!`; writable by contract.
         unsafe {
-            out.write(&q);
+            out.write_finite(&q)?;
             if let Some(i) = info {
                 i.put(info_v);
             }

@@ -169,7 +169,7 @@ pub unsafe extern "C" fn kincal_fk(
         let out = arg_out!(t_base_tool_out, t_base_tool_len, 16);
         let t = with_any_robot!(&any, r => fk_of(r, &q, aux.as_ref()))?;
         // SAFETY: checked by `arg_out!`; writable by contract.
-        unsafe { out.write(&crate::pose::to_matrix(&t)) };
+        unsafe { out.write_finite(&crate::pose::to_matrix(&t)) }?;
         Ok(())
     })
 }
@@ -195,7 +195,7 @@ pub unsafe extern "C" fn kincal_fk_pq(
         let out = arg_out!(pq_out, pq_len, 7);
         let t = with_any_robot!(&any, r => fk_of(r, &q, aux.as_ref()))?;
         // SAFETY: checked by `arg_out!`; writable by contract.
-        unsafe { out.write(&crate::pose::to_pq(&t)) };
+        unsafe { out.write_finite(&crate::pose::to_pq(&t)) }?;
         Ok(())
     })
 }
@@ -245,7 +245,7 @@ pub unsafe extern "C" fn kincal_fk_frames(
         let mut buf = [0.0; KINCAL_MAX_FRAMES_LEN];
         with_any_robot!(&any, r => frames_of(r, &q, aux.as_ref(), &mut buf))?;
         // SAFETY: checked by `arg_out!`; writable by contract.
-        unsafe { out.write(&buf) };
+        unsafe { out.write_finite(&buf) }?;
         Ok(())
     })
 }
@@ -260,7 +260,8 @@ pub unsafe extern "C" fn kincal_fk_frames(
 /// - `t_base_tool_out`, `t_base_tool_len`: the pose at `q` (16 doubles, column-major), or NULL.
 ///
 /// Every column is written (the caller need not zero the buffer). On failure the contents of
-/// `jac_out` are unspecified. Other arguments and statuses as `kincal_fk`.
+/// `jac_out` are unspecified; NON_FINITE_RESULT when a column overflowed (finite parameters
+/// too large for double precision). Other arguments and statuses as `kincal_fk`.
 ///
 /// # Safety
 /// Non-NULL pointers must be valid for their stated lengths; `jac_out` must not overlap the
@@ -292,9 +293,11 @@ pub unsafe extern "C" fn kincal_jacobian(
         let flat = unsafe { jac.as_mut_slice() };
         let (columns, _) = flat.as_chunks_mut::<6>();
         let t = with_any_robot!(&any, r => jacobian_of(r, &q, aux.as_ref(), columns))?;
+        // Finite lengths near 1e308 overflow the columns: never OK with an infinity in them.
+        crate::args::finite_result(flat, c"jac_out")?;
         if let Some(o) = t_out {
             // SAFETY: checked by `arg_out_opt!`; writable by contract.
-            unsafe { o.write(&crate::pose::to_matrix(&t)) };
+            unsafe { o.write_finite(&crate::pose::to_matrix(&t)) }?;
         }
         Ok(())
     })
@@ -339,7 +342,7 @@ pub unsafe extern "C" fn kincal_gravity_torques(
         let out = arg_out!(tau_out, tau_len, any.n_joints());
         let tau = with_any_robot!(&any, r => gravity_of(r, &q))?;
         // SAFETY: checked by `arg_out!`; writable by contract.
-        unsafe { out.write(&tau) };
+        unsafe { out.write_finite(&tau) }?;
         Ok(())
     })
 }
@@ -366,7 +369,7 @@ pub unsafe extern "C" fn kincal_joint_angles(
         let out = arg_out!(angles_out, angles_len, any.n_joints());
         let angles = with_any_robot!(&any, r => angles_of(r, &q, aux.as_ref()))?;
         // SAFETY: checked by `arg_out!`; writable by contract.
-        unsafe { out.write(&angles) };
+        unsafe { out.write_finite(&angles) }?;
         Ok(())
     })
 }

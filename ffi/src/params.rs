@@ -271,7 +271,7 @@ pub unsafe extern "C" fn kincal_robot_get_params(
         let dst = p.get_mut(..num_params(n)).ok_or(kincal_error::new(kincal_status::Internal))?;
         with_any_robot!(&any, r => r.read_params(dst))?;
         // SAFETY: checked by `arg_out!`; writable by contract.
-        unsafe { out.write(&p) };
+        unsafe { out.write_finite(&p) }?;
         Ok(())
     })
 }

@@ -140,7 +140,7 @@ pub unsafe extern "C" fn kincal_pose_error(
         let out = arg_out!(error_out, error_len, 6);
         let e = pose_error(&a, &b, f);
         // SAFETY: checked by `arg_out!`; writable by contract.
-        unsafe { out.write(&e) };
+        unsafe { out.write_finite(&e) }?;
         Ok(())
     })
 }
@@ -168,7 +168,7 @@ pub unsafe extern "C" fn kincal_pose_error_pq(
         let out = arg_out!(error_out, error_len, 6);
         let e = pose_error(&a, &b, f);
         // SAFETY: checked by `arg_out!`; writable by contract.
-        unsafe { out.write(&e) };
+        unsafe { out.write_finite(&e) }?;
         Ok(())
     })
 }
@@ -191,7 +191,7 @@ pub unsafe extern "C" fn kincal_pose_from_pq(
         let t = from_pq(arg_slice!(pq, pq_len, 7), c"pq")?;
         let out = arg_out!(t_out, t_len, 16);
         // SAFETY: checked by `arg_out!`; writable by contract.
-        unsafe { out.write(&to_matrix(&t)) };
+        unsafe { out.write_finite(&to_matrix(&t)) }?;
         Ok(())
     })
 }
@@ -214,7 +214,7 @@ pub unsafe extern "C" fn kincal_pose_to_pq(
         let t = from_matrix(arg_slice!(t, t_len, 16), c"t")?;
         let out = arg_out!(pq_out, pq_len, 7);
         // SAFETY: checked by `arg_out!`; writable by contract.
-        unsafe { out.write(&to_pq(&t)) };
+        unsafe { out.write_finite(&to_pq(&t)) }?;
         Ok(())
     })
 }
@@ -240,7 +240,7 @@ pub unsafe extern "C" fn kincal_pose_from_xyz_rpy(
         let out = arg_out!(t_out, t_len, 16);
         let t = pose_from_xyz_rpy([x, y, z], [roll, pitch, yaw]);
         // SAFETY: checked by `arg_out!`; writable by contract.
-        unsafe { out.write(&to_matrix(&t)) };
+        unsafe { out.write_finite(&to_matrix(&t)) }?;
         Ok(())
     })
 }
@@ -265,7 +265,7 @@ pub unsafe extern "C" fn kincal_pose_to_xyz_rpy(
         let p = t.translation.vector;
         let [roll, pitch, yaw] = matrix_to_rpy(t.rotation.matrix());
         // SAFETY: checked by `arg_out!`; writable by contract.
-        unsafe { out.write(&[p.x, p.y, p.z, roll, pitch, yaw]) };
+        unsafe { out.write_finite(&[p.x, p.y, p.z, roll, pitch, yaw]) }?;
         Ok(())
     })
 }

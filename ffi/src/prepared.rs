@@ -439,7 +439,7 @@ pub unsafe extern "C" fn kincal_prepared_fk(
         let out = arg_out!(t_base_tool_out, t_base_tool_len, 16);
         let t = with_prepared_robot!(model, r => fk_of(r, &q, aux.as_ref()))?;
         // SAFETY: checked by `arg_out!`; writable by contract.
-        unsafe { out.write(&crate::pose::to_matrix(&t)) };
+        unsafe { out.write_finite(&crate::pose::to_matrix(&t)) }?;
         Ok(())
     })
 }
@@ -465,7 +465,7 @@ pub unsafe extern "C" fn kincal_prepared_fk_pq(
         let out = arg_out!(pq_out, pq_len, 7);
         let t = with_prepared_robot!(model, r => fk_of(r, &q, aux.as_ref()))?;
         // SAFETY: checked by `arg_out!`; writable by contract.
-        unsafe { out.write(&crate::pose::to_pq(&t)) };
+        unsafe { out.write_finite(&crate::pose::to_pq(&t)) }?;
         Ok(())
     })
 }
@@ -492,7 +492,7 @@ pub unsafe extern "C" fn kincal_prepared_joint_angles(
         let out = arg_out!(angles_out, angles_len, model.n_joints());
         let angles = with_prepared_robot!(model, r => angles_of(r, &q, aux.as_ref()))?;
         // SAFETY: checked by `arg_out!`; writable by contract.
-        unsafe { out.write(&angles) };
+        unsafe { out.write_finite(&angles) }?;
         Ok(())
     })
 }
@@ -539,7 +539,7 @@ pub unsafe extern "C" fn kincal_prepared_ik(
             with_prepared_robot!(model, r => ik_of(r, &target, &seed, aux.as_ref(), &opts))?;
         // SAFETY: checked by `arg_out!`/`arg_out1!`; writable by contract.
         unsafe {
-            out.write(&q);
+            out.write_finite(&q)?;
             if let Some(i) = info {
                 i.put(info_v);
             }

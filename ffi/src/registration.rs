@@ -246,7 +246,7 @@ pub unsafe extern "C" fn kincal_t_base_ee(
         let e = crate::pose::from_matrix(arg_slice!(t_mocap_ee, t_mocap_ee_len, 16), c"t_mocap_ee")?;
         let out = arg_out!(t_base_ee_out, t_base_ee_len, 16);
         // SAFETY: checked by `arg_out!`; writable by contract.
-        unsafe { out.write(&crate::pose::to_matrix(&t_base_ee(&b, &e))) };
+        unsafe { out.write_finite(&crate::pose::to_matrix(&t_base_ee(&b, &e))) }?;
         Ok(())
     })
 }

@@ -70,6 +70,11 @@ pub enum kincal_status {
     RankDeficient = 202,
     /// A parameter fitted under bounds ended outside them (`index`, `value`).
     BoundViolated = 203,
+    /// Every input was finite but a result is not (NaN or infinite): the inputs are too large
+    /// for double precision, e.g. link lengths near 1e308 (`argument` = the output, `index` =
+    /// its first bad element, `value`). Nothing is written: an OK call never leaves a
+    /// non-finite number in an output.
+    NonFiniteResult = 204,
     /// The core reported an error this version of the C ABI does not know: a bug, please
     /// report it.
     Internal = 900,
@@ -80,7 +85,7 @@ pub enum kincal_status {
 
 impl kincal_status {
     /// Every status, in numeric order (used by the tests and `kincal_status_str`).
-    pub(crate) const ALL: [kincal_status; 25] = [
+    pub(crate) const ALL: [kincal_status; 26] = [
         kincal_status::Ok,
         kincal_status::NullPointer,
         kincal_status::BadLength,
@@ -104,6 +109,7 @@ impl kincal_status {
         kincal_status::NotConverged,
         kincal_status::RankDeficient,
         kincal_status::BoundViolated,
+        kincal_status::NonFiniteResult,
         kincal_status::Internal,
         kincal_status::Panic,
     ];
@@ -174,6 +180,9 @@ impl kincal_status {
             }
             kincal_status::BoundViolated => {
                 c"KINCAL_STATUS_BOUND_VIOLATED: a bounded parameter ended outside its bounds"
+            }
+            kincal_status::NonFiniteResult => {
+                c"KINCAL_STATUS_NON_FINITE_RESULT: a result overflowed to NaN or infinity (inputs too large)"
             }
             kincal_status::Internal => {
                 c"KINCAL_STATUS_INTERNAL: unexpected core error (a bug, please report it)"
@@ -395,6 +404,9 @@ impl From<Error> for kincal_error {
             Error::BoundViolated { param, value } => {
                 kincal_error::new(S::BoundViolated).at(param.0).value(value)
             }
+            Error::InvalidOption { option, value } => kincal_error::new(S::InvalidArgument)
+                .arg(option_name(option))
+                .value(value),
             Error::DegenerateAxis { joint } => {
                 let mut k = kincal_error::new(S::DegenerateAxis);
                 k.joint = joint.0;
@@ -404,6 +416,19 @@ impl From<Error> for kincal_error {
             // `every_core_error_variant_has_a_status` names it.
             _ => kincal_error::new(S::Internal),
         }
+    }
+}
+
+/// The header's name of a core option (`kincal_error.argument`): the options structs are
+/// passed as `opts`, so a field is `opts->field`.
+fn option_name(option: &str) -> &'static CStr {
+    match option {
+        "max_iterations" => c"opts->max_iterations",
+        "extra_seeds" => c"opts->extra_seeds",
+        "tol_pos_m" => c"opts->tol_pos_m",
+        "tol_rot_rad" => c"opts->tol_rot_rad",
+        "first_solution" => c"opts->first_solution",
+        _ => c"opts",
     }
 }
 

@@ -6,6 +6,7 @@ mod abi;
 mod calibration;
 mod fuzz_regressions;
 mod header;
+mod hostile;
 mod observability;
 mod prepared;
 mod view_point;

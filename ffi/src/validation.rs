@@ -67,6 +67,11 @@ fn validate_robot<const N: usize>(
         let [x, y, z] = e.pos_m;
         let [a, b, c] = e.rot_rad;
         let row = [x, y, z, a, b, c, e.pos_norm_m, e.rot_norm_rad];
+        // Finite but huge measurements or lengths overflow the error norms.
+        crate::args::finite_result(&row, c"errors_out").map_err(|mut k| {
+            k.pose = l;
+            k
+        })?;
         let start = l * KINCAL_POSE_ERRORS_LEN;
         if let Some(dst) = errors.get_mut(start..start + KINCAL_POSE_ERRORS_LEN) {
             dst.copy_from_slice(&row);
@@ -85,8 +90,10 @@ fn validate_robot<const N: usize>(
 ///
 /// Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE, INVALID_TRANSFORM,
 /// INVALID_ARGUMENT (`pose` set for a partial mask or bad approach direction; a target not
-/// positive), MISSING_INPUT, TOO_FEW_DATA or any status of `kincal_robot_validate`. Outputs
-/// are written on success only; `errors_out` must not overlap the inputs.
+/// positive), MISSING_INPUT, TOO_FEW_DATA, NON_FINITE_RESULT (an error or the summary
+/// overflowed: `argument` names which, `pose` the pose) or any status of
+/// `kincal_robot_validate`. `summary_out` is written on success only, `errors_out` row by row
+/// (on failure it may hold the rows before the failing pose); it must not overlap the inputs.
 ///
 /// # Safety
 /// Non-NULL pointers must be valid for their stated lengths; `err` NULL or writable.
@@ -133,6 +140,11 @@ pub unsafe extern "C" fn kincal_validate(
             pos_ok: u32::from(verdict.pos_ok),
             rot_ok: u32::from(verdict.rot_ok),
         };
+        // The sums of squares can overflow even when every row is finite.
+        crate::args::finite_result(
+            &[s.rms_pos_m, s.max_pos_m, s.rms_rot_rad, s.max_rot_rad],
+            c"summary_out",
+        )?;
         // SAFETY: checked by `arg_out1!`; writable by contract.
         unsafe { out.put(s) };
         Ok(())
@@ -158,6 +170,7 @@ pub unsafe extern "C" fn kincal_biopsy_allowed_rotation(
     ffi_boundary!(err = err; {
         let out = arg_out1!(rotation_out);
         let v = biopsy_allowed_rotation_rad(r_t_m, d_m, l_max_m)?;
+        crate::args::finite_result(&[v], c"rotation_out")?;
         // SAFETY: checked by `arg_out1!`; writable by contract.
         unsafe { out.put(v) };
         Ok(())

@@ -132,6 +132,12 @@ pub unsafe extern "C" fn kincal_view_point(
             miss_max_m: v.miss_max_m,
             miss_max_pose: v.miss_max_pose,
         };
+        let [x, y, z] = r.point_m;
+        crate::args::finite_result(
+            &[x, y, z, r.mean_distance_m, r.min_distance_m, r.max_distance_m, r.miss_rms_m,
+              r.miss_max_m],
+            c"view_point_out",
+        )?;
         // SAFETY: checked by `arg_out1!`; writable by contract.
         unsafe { out.put(r) };
         Ok(())
@@ -174,7 +180,7 @@ pub unsafe extern "C" fn kincal_moved_to_point(
         let out = arg_out!(t_out, t_out_len, 16);
         let m = crate::pose::to_matrix(&moved_to_point(&pose, &point3));
         // SAFETY: checked by `arg_out!`; writable by contract.
-        unsafe { out.write(&m) };
+        unsafe { out.write_finite(&m) }?;
         Ok(())
     })
 }

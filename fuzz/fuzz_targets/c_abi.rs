@@ -14,10 +14,13 @@ use kincal_ffi::identify::{
     kincal_identify, kincal_identify_options, kincal_identify_options_default,
     kincal_identify_report, kincal_identify_workspace_size, kincal_measurements,
 };
-use kincal_ffi::ik::{kincal_ik, kincal_ik_info, kincal_ik_options, kincal_ik_options_default};
+use kincal_ffi::ik::{
+    KINCAL_IK_MAX_EXTRA_SEEDS, KINCAL_IK_MAX_ITERATIONS, KINCAL_IK_MAX_TOTAL_ITERATIONS, kincal_ik,
+    kincal_ik_info, kincal_ik_options, kincal_ik_options_default,
+};
 use kincal_ffi::kinematics::kincal_joint_aux;
 use kincal_ffi::kinematics::{kincal_fk, kincal_gravity_torques, kincal_jacobian};
-use kincal_ffi::params::kincal_robot_set_params;
+use kincal_ffi::params::{kincal_robot_get_params, kincal_robot_set_params};
 use kincal_ffi::pose::kincal_pose_error;
 use kincal_ffi::prepared::{
     kincal_prepare, kincal_prepared, kincal_prepared_fk, kincal_prepared_ik,
@@ -53,6 +56,10 @@ struct Input {
     /// Number of poses for the view point (cut from the pool).
     n_view: u8,
     view_axis: u32,
+    /// Raw IK options (every field of `kincal_ik_options`): used as given when any is outside
+    /// its documented bounds (the call must refuse them: INVALID_ARGUMENT or NON_FINITE, never
+    /// OK, never a hang), else with the iteration budget cut to keep executions fast.
+    ik_raw: Option<(u32, u32, usize, f64, f64)>,
 }
 
 struct Pool<'a> {
@@ -98,6 +105,54 @@ fn finite(what: &str, v: &[f64]) {
         v.iter().all(|x| x.is_finite()),
         "{what}: OK with a non-finite output {v:?}"
     );
+}
+
+/// Hostile IK options from the raw fields: `(options, within the documented bounds)`. Out of
+/// bounds they are passed as they are; within, the iteration budget is cut to at most
+/// 16 x 2 so the target stays fast.
+fn ik_options(raw: Option<(u32, u32, usize, f64, f64)>, max_iterations: u8) -> (kincal_ik_options, bool) {
+    let mut o = kincal_ik_options {
+        max_iterations: 200,
+        first_solution: 0,
+        extra_seeds: 16,
+        tol_pos_m: 1e-11,
+        tol_rot_rad: 1e-11,
+    };
+    let Some((iters, first, seeds, tol_p, tol_r)) = raw else {
+        o.max_iterations = u32::from(max_iterations % 16);
+        o.extra_seeds = 1;
+        return (o, o.max_iterations >= 1);
+    };
+    o = kincal_ik_options {
+        max_iterations: iters,
+        first_solution: first,
+        extra_seeds: seeds,
+        tol_pos_m: tol_p,
+        tol_rot_rad: tol_r,
+    };
+    let within = (1..=KINCAL_IK_MAX_ITERATIONS).contains(&iters)
+        && first <= 1
+        && seeds <= KINCAL_IK_MAX_EXTRA_SEEDS
+        && (seeds as u64 + 1) * u64::from(iters) <= KINCAL_IK_MAX_TOTAL_ITERATIONS
+        && tol_p > 0.0
+        && tol_p <= 1.0
+        && tol_r > 0.0
+        && tol_r <= core::f64::consts::PI;
+    if within {
+        o.max_iterations = 1 + iters % 16;
+        o.extra_seeds = seeds % 2;
+    }
+    (o, within)
+}
+
+/// An IK status under hostile options: out of bounds they must be refused (argument errors
+/// that are checked first, such as a bad length, may come before the options).
+fn ik_status(what: &str, s: kincal_status, within_bounds: bool) -> bool {
+    let success = ok(what, s);
+    if !within_bounds {
+        assert!(!success, "{what}: OK with options outside their bounds");
+    }
+    success
 }
 
 fuzz_target!(|inp: Input| {
@@ -186,7 +241,7 @@ fuzz_target!(|inp: Input| {
     } else {
         (buf2.as_mut_ptr(), jac_len)
     };
-    let _ = ok("jacobian", unsafe {
+    if ok("jacobian", unsafe {
         kincal_jacobian(
             &robot,
             buf.as_ptr(),
@@ -198,7 +253,11 @@ fuzz_target!(|inp: Input| {
             16,
             &mut err,
         )
-    });
+    }) {
+        finite("jacobian t_base_tool_out", &out);
+        // SAFETY: the call succeeded, so it wrote j_len doubles at j_ptr.
+        finite("jacobian jac_out", unsafe { core::slice::from_raw_parts(j_ptr, j_len) });
+    }
     let mut tau = vec![0.0; n];
     if ok("gravity", unsafe {
         kincal_gravity_torques(
@@ -220,7 +279,7 @@ fuzz_target!(|inp: Input| {
     } else {
         out.as_mut_ptr()
     };
-    let _ = ok("pose_error", unsafe {
+    if ok("pose_error", unsafe {
         kincal_pose_error(
             poses.as_ptr(),
             len(16, d[6]).min(16),
@@ -231,17 +290,18 @@ fuzz_target!(|inp: Input| {
             6,
             &mut err,
         )
-    });
+    }) {
+        // SAFETY: the call succeeded, so it wrote 6 doubles at e_ptr.
+        finite("pose_error", unsafe { core::slice::from_raw_parts(e_ptr, 6) });
+    }
 
     // IK (few iterations) with a hostile target.
     if inp.ops & 32 != 0 {
-        let mut opts: kincal_ik_options = unsafe { core::mem::zeroed() };
-        if ok("ik_options", unsafe {
-            kincal_ik_options_default(&mut opts, &mut err)
-        }) {
-            opts.max_iterations = u32::from(inp.max_iterations % 16);
-            opts.extra_seeds = 1;
-        }
+        let mut defaults: kincal_ik_options = unsafe { core::mem::zeroed() };
+        assert!(ok("ik_options", unsafe {
+            kincal_ik_options_default(&mut defaults, &mut err)
+        }));
+        let (opts, within) = ik_options(inp.ik_raw, inp.max_iterations);
         let target = pool.take(16);
         let seed = pool.take(n);
         let mut q_out = vec![0.0; n];
@@ -251,7 +311,7 @@ fuzz_target!(|inp: Input| {
         } else {
             q_out.as_mut_ptr()
         };
-        let _ = ok("ik", unsafe {
+        if ik_status("ik", unsafe {
             kincal_ik(
                 &robot,
                 target.as_ptr(),
@@ -265,7 +325,11 @@ fuzz_target!(|inp: Input| {
                 &mut info,
                 &mut err,
             )
-        });
+        }, within) {
+            // SAFETY: the call succeeded, so it wrote n doubles at q_out_ptr.
+            finite("ik q_out", unsafe { core::slice::from_raw_parts(q_out_ptr, n) });
+            finite("ik info", &[info.residual_pos_m, info.residual_rot_rad]);
+        }
     }
 
     // Identification and validation on hostile measurement sets.
@@ -316,7 +380,7 @@ fuzz_target!(|inp: Input| {
             let ws_len = len(ws_bytes, d[11]).min(ws.len() * 8);
             let mut fitted: kincal_robot = unsafe { core::mem::zeroed() };
             let mut report: kincal_identify_report = unsafe { core::mem::zeroed() };
-            let _ = ok("identify", unsafe {
+            if ok("identify", unsafe {
                 kincal_identify(
                     &robot,
                     &data,
@@ -327,11 +391,17 @@ fuzz_target!(|inp: Input| {
                     &mut report,
                     &mut err,
                 )
-            });
+            }) {
+                let mut p = vec![0.0; 12 * n + 13];
+                assert!(ok("identify get_params", unsafe {
+                    kincal_robot_get_params(&fitted, p.as_mut_ptr(), p.len(), &mut err)
+                }));
+                finite("identify fitted params", &p);
+            }
         }
         let mut errors = vec![0.0; 2 * l];
         let mut summary: kincal_validation_summary = unsafe { core::mem::zeroed() };
-        let _ = ok("validate", unsafe {
+        if ok("validate", unsafe {
             kincal_validate(
                 &robot,
                 &data,
@@ -346,7 +416,14 @@ fuzz_target!(|inp: Input| {
                 &mut summary,
                 &mut err,
             )
-        });
+        }) {
+            finite("validate errors_out", &errors);
+            let s = &summary;
+            finite(
+                "validate summary_out",
+                &[s.rms_pos_m, s.max_pos_m, s.rms_rot_rad, s.max_rot_rad],
+            );
+        }
     }
 
     // The prepared handle: built from the robot, possibly corrupted; then FK and IK through
@@ -390,16 +467,14 @@ fuzz_target!(|inp: Input| {
             finite("prepared_fk", &t);
         }
         if inp.ops & 32 != 0 {
-            let mut opts: kincal_ik_options = unsafe { core::mem::zeroed() };
-            let _ = ok("ik_options", unsafe {
-                kincal_ik_options_default(&mut opts, &mut err)
-            });
-            opts.max_iterations = u32::from(inp.max_iterations % 16);
-            opts.extra_seeds = 0;
+            let (mut opts, within) = ik_options(inp.ik_raw, inp.max_iterations);
+            if within {
+                opts.extra_seeds = 0;
+            }
             let target = pool.take(16);
             let mut q_out = vec![0.0; n];
             let mut info: kincal_ik_info = unsafe { core::mem::zeroed() };
-            let _ = ok("prepared_ik", unsafe {
+            if ik_status("prepared_ik", unsafe {
                 kincal_prepared_ik(
                     &h,
                     target.as_ptr(),
@@ -413,7 +488,10 @@ fuzz_target!(|inp: Input| {
                     &mut info,
                     &mut err,
                 )
-            });
+            }, within) {
+                finite("prepared_ik q_out", &q_out);
+                finite("prepared_ik info", &[info.residual_pos_m, info.residual_rot_rad]);
+            }
         }
     }
 

@@ -143,6 +143,7 @@ fn status_numbers_are_fixed() {
         (S::NotConverged, 201),
         (S::RankDeficient, 202),
         (S::BoundViolated, 203),
+        (S::NonFiniteResult, 204),
         (S::Internal, 900),
         (S::Panic, 999),
     ];
@@ -171,7 +172,7 @@ fn status_str_is_static_and_names_the_code() {
             s as u32
         );
     }
-    for unknown in [1, 99, 118, 204, 901, 1000, u32::MAX] {
+    for unknown in [1, 99, 118, 205, 901, 1000, u32::MAX] {
         let text = unsafe { CStr::from_ptr(kincal_status_str(unknown)) };
         assert_eq!(text.to_str().unwrap(), "unknown kincal status code");
     }
@@ -268,6 +269,13 @@ fn every_core_error_is_mapped() {
                 joint: JointIndex(2),
             },
             S::DegenerateAxis,
+        ));
+        v.push((
+            Error::InvalidOption {
+                option: "extra_seeds",
+                value: 1e6,
+            },
+            S::InvalidArgument,
         ));
         v
     };

@@ -98,3 +98,46 @@ fn header_contains_the_conventions() {
         assert!(h.contains(needle), "generated header lacks {needle:?}");
     }
 }
+
+/// The exports `kincal-...` named in `text`, sorted and deduplicated.
+fn export_names(text: &str) -> Vec<String> {
+    let mut names: Vec<String> = text
+        .split(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+        .filter(|w| w.starts_with("kincal_") && w.len() > "kincal_".len())
+        .map(str::to_owned)
+        .collect();
+    names.sort();
+    names.dedup();
+    names
+}
+
+#[test]
+fn unproven_exports_are_documented() {
+    // tests/cpp/panic_never.sh reads the list file; ffi/README.md documents it: one list.
+    let list = std::fs::read_to_string(crate_dir().join("../tests/cpp/not_panic_proven.txt"))
+        .expect("tests/cpp/not_panic_proven.txt");
+    let listed: String = list
+        .lines()
+        .map(|l| l.split('#').next().unwrap_or("").trim())
+        .filter(|l| !l.is_empty())
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let readme = std::fs::read_to_string(crate_dir().join("README.md")).expect("ffi/README.md");
+    let documented = readme
+        .split("<!-- not-panic-proven")
+        .nth(1)
+        .and_then(|rest| rest.split("<!-- /not-panic-proven -->").next())
+        .and_then(|rest| rest.split("-->").nth(1))
+        .expect("ffi/README.md has the not-panic-proven block");
+    let listed = export_names(&listed);
+    assert!(!listed.is_empty());
+    assert_eq!(export_names(documented), listed);
+    // Every listed name is an export of the header (a stale entry would hide nothing).
+    let header = std::fs::read_to_string(crate_dir().join("../include/kincal.h")).unwrap();
+    for name in &listed {
+        assert!(
+            header.contains(&format!(" {name}(")),
+            "{name} is not in include/kincal.h"
+        );
+    }
+}
