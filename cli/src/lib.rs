@@ -14,6 +14,7 @@ pub mod cmd_demo;
 pub mod cmd_design_tool;
 pub mod cmd_diagnose;
 pub mod cmd_evaluate;
+pub mod cmd_export;
 pub mod cmd_import;
 pub mod cmd_markers;
 pub mod cmd_observed_point;
