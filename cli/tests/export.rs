@@ -1,0 +1,640 @@
+//! `kincal export`: the URDF read back by this test's own minimal URDF reader (origin/axis
+//! chain and 4×4 products, not `urdf.rs`) reproduces the model file's FK on random
+//! configurations, for a model calibrated by `kincal calibrate` on simulated ARIA data and
+//! for a perturbed 7R arm; the mDH table (CSV, YAML) reads back to the model file's exact
+//! parameters; bad input exits 2/3 with a reason.
+
+use std::f64::consts::FRAC_PI_2;
+use std::fs;
+use std::path::Path;
+use std::process::{Command, Output};
+
+use kincal::model::{JointLimits, Link};
+use kincal::pose::matrix_to_quaternion;
+use kincal::{ParamId, Robot, aria};
+use kincal_cli::model_file::{self, ModelFile};
+
+const BIN: &str = env!("CARGO_BIN_EXE_kincal");
+/// FK agreement of the exported URDF with the model [m] and rotation-matrix entries.
+const FK_TOL: f64 = 1e-12;
+
+type M4 = [[f64; 4]; 4];
+
+fn kincal(args: &[&str], dir: &Path) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run kincal")
+}
+
+fn code(o: &Output) -> i32 {
+    o.status.code().expect("exit code")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A small deterministic generator (64-bit LCG), uniform in [0, 1).
+struct Lcg(u64);
+
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn within(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next()
+    }
+}
+
+fn random_q<const N: usize>(r: &Robot<N>, rng: &mut Lcg) -> [f64; N] {
+    let lim = r.limits();
+    std::array::from_fn(|i| {
+        let lo = lim[i].lower.max(-3.0);
+        let hi = lim[i].upper.min(3.0);
+        rng.within(lo, hi)
+    })
+}
+
+// ---------- an independent minimal URDF reader ----------
+
+fn mul(a: &M4, b: &M4) -> M4 {
+    std::array::from_fn(|i| std::array::from_fn(|j| (0..4).map(|k| a[i][k] * b[k][j]).sum()))
+}
+
+fn identity() -> M4 {
+    std::array::from_fn(|i| std::array::from_fn(|j| if i == j { 1.0 } else { 0.0 }))
+}
+
+/// URDF `<origin>`: Trans(xyz)·Rz(yaw)·Ry(pitch)·Rx(roll), written out by hand.
+fn origin(xyz: [f64; 3], rpy: [f64; 3]) -> M4 {
+    let (sr, cr) = rpy[0].sin_cos();
+    let (sp, cp) = rpy[1].sin_cos();
+    let (sy, cy) = rpy[2].sin_cos();
+    [
+        [
+            cy * cp,
+            cy * sp * sr - sy * cr,
+            cy * sp * cr + sy * sr,
+            xyz[0],
+        ],
+        [
+            sy * cp,
+            sy * sp * sr + cy * cr,
+            sy * sp * cr - cy * sr,
+            xyz[1],
+        ],
+        [-sp, cp * sr, cp * cr, xyz[2]],
+        [0.0, 0.0, 0.0, 1.0],
+    ]
+}
+
+/// Rotation by `q` about the unit axis `k` (Rodrigues).
+fn axis_rotation(k: [f64; 3], q: f64) -> M4 {
+    let n = (k[0] * k[0] + k[1] * k[1] + k[2] * k[2]).sqrt();
+    let [x, y, z] = k.map(|v| v / n);
+    let (s, c) = q.sin_cos();
+    let t = 1.0 - c;
+    [
+        [t * x * x + c, t * x * y - s * z, t * x * z + s * y, 0.0],
+        [t * x * y + s * z, t * y * y + c, t * y * z - s * x, 0.0],
+        [t * x * z - s * y, t * y * z + s * x, t * z * z + c, 0.0],
+        [0.0, 0.0, 0.0, 1.0],
+    ]
+}
+
+/// The value of attribute `name` in the first tag `<tag …>` of `text`.
+fn attr(text: &str, tag: &str, name: &str) -> Option<String> {
+    let start = text.find(&format!("<{tag} "))?;
+    let end = start + text[start..].find('>')?;
+    let t = &text[start..end];
+    let key = format!(" {name}=\"");
+    let a = t.find(&key)? + key.len();
+    let b = a + t[a..].find('"')?;
+    Some(t[a..b].to_string())
+}
+
+fn three(s: &str) -> [f64; 3] {
+    let v: Vec<f64> = s
+        .split_whitespace()
+        .map(|x| x.parse().expect("number"))
+        .collect();
+    [v[0], v[1], v[2]]
+}
+
+#[derive(Debug)]
+struct UrdfJoint {
+    kind: String,
+    parent: String,
+    child: String,
+    origin: M4,
+    axis: [f64; 3],
+}
+
+fn read_joints(urdf: &str) -> Vec<UrdfJoint> {
+    urdf.split("<joint ")
+        .skip(1)
+        .map(|chunk| {
+            let body = &chunk[..chunk.find("</joint>").expect("closed joint")];
+            let body = format!("<joint {body}");
+            UrdfJoint {
+                kind: attr(&body, "joint", "type").expect("type"),
+                parent: attr(&body, "parent", "link").expect("parent"),
+                child: attr(&body, "child", "link").expect("child"),
+                origin: origin(
+                    three(&attr(&body, "origin", "xyz").unwrap_or("0 0 0".into())),
+                    three(&attr(&body, "origin", "rpy").unwrap_or("0 0 0".into())),
+                ),
+                axis: three(&attr(&body, "axis", "xyz").unwrap_or("1 0 0".into())),
+            }
+        })
+        .collect()
+}
+
+/// The tip link in the base link for the movable joints' values `q` (in chain order).
+fn urdf_fk(joints: &[UrdfJoint], base: &str, tip: &str, q: &[f64]) -> M4 {
+    let mut t = identity();
+    let mut link = base.to_string();
+    let mut k = 0;
+    while link != tip {
+        let j = joints
+            .iter()
+            .find(|j| j.parent == link)
+            .unwrap_or_else(|| panic!("no joint below {link}"));
+        t = mul(&t, &j.origin);
+        if j.kind != "fixed" {
+            assert_eq!(j.kind, "revolute");
+            t = mul(&t, &axis_rotation(j.axis, q[k]));
+            k += 1;
+        }
+        link = j.child.clone();
+    }
+    assert_eq!(k, q.len(), "movable joints on the chain");
+    t
+}
+
+fn assert_urdf_matches_model<const N: usize>(urdf: &str, model: &Robot<N>, seed: u64) {
+    let joints = read_joints(urdf);
+    let mut rng = Lcg(seed);
+    let mut worst = 0.0f64;
+    for _ in 0..200 {
+        let q = random_q(model, &mut rng);
+        let want = model.fk_q(&q).unwrap();
+        let got = urdf_fk(&joints, "base_link", "tool0", &q);
+        let m = want.to_homogeneous();
+        for (i, row) in got.iter().enumerate() {
+            for (j, v) in row.iter().enumerate() {
+                worst = worst.max((v - m[(i, j)]).abs());
+            }
+        }
+    }
+    assert!(
+        worst < FK_TOL,
+        "URDF FK differs from the model by {worst:e}"
+    );
+    assert!(worst.is_finite());
+    eprintln!("URDF vs model FK, {N} joints: worst difference {worst:e} over 200 configurations");
+}
+
+// ---------- fixtures ----------
+
+/// A measurement CSV of the ARIA truth's exact poses at 30 random configurations.
+fn aria_data(rng: &mut Lcg) -> String {
+    let truth = aria::virtual_truth();
+    let mut s = String::from("pose_id,q1,q2,q3,q4,q5,q6,x,y,z,qw,qx,qy,qz\n");
+    for l in 0..30 {
+        let q = random_q(&truth, rng);
+        let t = truth.fk_q(&q).unwrap();
+        let p = t.translation.vector;
+        let quat = matrix_to_quaternion(t.rotation.matrix());
+        let mut cells = vec![format!("p{l}")];
+        cells.extend(
+            q.iter()
+                .chain(&[p.x, p.y, p.z])
+                .chain(&quat)
+                .map(|v| format!("{v}")),
+        );
+        s.push_str(&cells.join(","));
+        s.push('\n');
+    }
+    s
+}
+
+/// A model file of ARIA calibrated by `kincal calibrate` on simulated data.
+fn calibrated_aria(dir: &Path) -> ModelFile {
+    fs::write(dir.join("data.csv"), aria_data(&mut Lcg(7))).unwrap();
+    let o = kincal(
+        &[
+            "calibrate",
+            "data.csv",
+            "--robot",
+            "aria",
+            "--out",
+            "model.json",
+        ],
+        dir,
+    );
+    assert_eq!(code(&o), 0, "calibrate: {}", stderr(&o));
+    read_model(&dir.join("model.json"))
+}
+
+fn read_model(path: &Path) -> ModelFile {
+    model_file::parse(&fs::read_to_string(path).unwrap(), "model").unwrap()
+}
+
+/// A 7R arm (Franka-like) with every link parameter, the base and the tool perturbed.
+fn arm_7r() -> Robot<7> {
+    let mut rng = Lcg(42);
+    let nominal = [
+        (0.333, 0.0, 0.0),
+        (0.0, 0.0, -FRAC_PI_2),
+        (0.316, 0.0, FRAC_PI_2),
+        (0.0, 0.0825, FRAC_PI_2),
+        (0.384, -0.0825, -FRAC_PI_2),
+        (0.0, 0.0, FRAC_PI_2),
+        (0.107, 0.088, FRAC_PI_2),
+    ];
+    let links = nominal.map(|(d, a, alpha)| Link {
+        theta0: rng.within(-0.01, 0.01),
+        d: d + rng.within(-0.002, 0.002),
+        a: a + rng.within(-0.002, 0.002),
+        alpha: alpha + rng.within(-0.005, 0.005),
+        beta: 0.0,
+    });
+    let limits = [JointLimits::new(-2.8, 2.8); 7];
+    let mut r = Robot::new(links, limits)
+        .unwrap()
+        .with_base([0.1, -0.2, 0.05, 0.01, -0.02, 0.3])
+        .unwrap()
+        .with_tool([0.0, 0.01, 0.1034, 0.0, 0.0, -0.785])
+        .unwrap();
+    // A nonzero β where the model identifies β (parallel neighbour axes, if any).
+    for (i, lp) in r.length_params().clone().iter().enumerate() {
+        if *lp == kincal::model::LengthParam::Beta {
+            let id = ParamId::Link {
+                link: i,
+                kind: kincal::params::LinkParam::Beta,
+            };
+            r.set_param(id.index(7), 0.003).unwrap();
+        }
+    }
+    r
+}
+
+// ---------- URDF round trips ----------
+
+#[test]
+fn urdf_of_a_calibrated_aria_reproduces_its_fk() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = calibrated_aria(dir.path());
+    let model = file.robot.robot::<6>().unwrap();
+    assert_ne!(
+        model.links(),
+        aria::nominal().links(),
+        "the calibration moved the model off the nominal"
+    );
+    let o = kincal(&["export", "model.json", "--urdf", "aria.urdf"], dir.path());
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let urdf = fs::read_to_string(dir.path().join("aria.urdf")).unwrap();
+    assert_urdf_matches_model(&urdf, &model, 1);
+}
+
+#[test]
+fn urdf_of_a_7r_arm_reproduces_its_fk() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = arm_7r();
+    fs::write(
+        dir.path().join("arm7.json"),
+        ModelFile::nominal("arm7", &r).to_json(),
+    )
+    .unwrap();
+    let o = kincal(
+        &[
+            "export",
+            "arm7.json",
+            "--urdf",
+            "arm7.urdf",
+            "--base-link",
+            "base_link",
+        ],
+        dir.path(),
+    );
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let urdf = fs::read_to_string(dir.path().join("arm7.urdf")).unwrap();
+    assert_urdf_matches_model(
+        &urdf,
+        &read_model(&dir.path().join("arm7.json"))
+            .robot
+            .robot::<7>()
+            .unwrap(),
+        2,
+    );
+    assert_urdf_matches_model(&urdf, &r, 3);
+}
+
+#[test]
+fn the_independent_reader_sees_a_wrong_urdf() {
+    // The check can fail: a URDF of another robot does not match the model.
+    let dir = tempfile::tempdir().unwrap();
+    let o = kincal(&["export", "aria", "--urdf", "nominal.urdf"], dir.path());
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let urdf = fs::read_to_string(dir.path().join("nominal.urdf")).unwrap();
+    let joints = read_joints(&urdf);
+    let truth = aria::virtual_truth();
+    let q = [0.3, -0.2, 0.5, 1.0, -0.7, 0.4];
+    let got = urdf_fk(&joints, "base_link", "tool0", &q);
+    let want = truth.fk_q(&q).unwrap().to_homogeneous();
+    let diff = (0..3)
+        .map(|i| (got[i][3] - want[(i, 3)]).abs())
+        .fold(0.0, f64::max);
+    assert!(diff > 1e-4, "nominal vs truth differ by {diff:e} m only");
+    let nominal = aria::nominal().fk_q(&q).unwrap().to_homogeneous();
+    let same = (0..3)
+        .map(|i| (got[i][3] - nominal[(i, 3)]).abs())
+        .fold(0.0, f64::max);
+    assert!(same < FK_TOL, "{same:e}");
+}
+
+// ---------- mDH table round trips ----------
+
+/// The model file's label for a CSV/YAML (frame, column) cell.
+fn label_of(frame: &str, column: &str) -> String {
+    let kind = column.rsplit_once('_').map_or(column, |(k, _)| k);
+    match frame {
+        "base" | "tool" => format!("{frame}_{kind}"),
+        link if column == "value" => link.to_string(),
+        link => format!("{kind}_{link}"),
+    }
+}
+
+/// (label, value, std_error) of every number of a CSV table.
+fn read_csv_table(text: &str) -> Vec<(String, f64, Option<f64>)> {
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let mut out = Vec::new();
+    for line in lines {
+        let cells: Vec<&str> = line.split(',').collect();
+        assert_eq!(cells.len(), header.len(), "{line}");
+        let frame = cells[0];
+        for (col, cell) in header.iter().zip(&cells).skip(1) {
+            if cell.is_empty()
+                || col.starts_with("std_")
+                || ["length_param", "lower_rad", "upper_rad", "unit"].contains(col)
+            {
+                continue;
+            }
+            let std_col = format!("std_{col}");
+            let std = header
+                .iter()
+                .position(|h| *h == std_col)
+                .and_then(|k| cells[k].parse::<f64>().ok());
+            out.push((label_of(frame, col), cell.parse().unwrap(), std));
+        }
+    }
+    out
+}
+
+/// (label, value, std_error) of every number of the YAML table's links, base and tool.
+fn read_yaml_table(text: &str) -> Vec<(String, f64, Option<f64>)> {
+    let mut out = Vec::new();
+    for line in text.lines() {
+        let (frame, body) = if let Some(b) = line.strip_prefix("  - {link: ") {
+            let (n, rest) = b.split_once(',').unwrap();
+            (n.to_string(), rest)
+        } else if let Some(b) = line.strip_prefix("base: ") {
+            ("base".to_string(), b)
+        } else if let Some(b) = line.strip_prefix("tool: ") {
+            ("tool".to_string(), b)
+        } else {
+            continue;
+        };
+        let (values, std) = body.split_once("std_error:").unwrap_or((body, ""));
+        let pairs = |s: &str| -> Vec<(String, f64)> {
+            s.split([',', '{', '}'])
+                .filter_map(|kv| kv.split_once(':'))
+                .filter_map(|(k, v)| Some((k.trim().to_string(), v.trim().parse().ok()?)))
+                .filter(|(k, _)| k != "lower_rad" && k != "upper_rad")
+                .collect()
+        };
+        let std = pairs(std);
+        for (k, v) in pairs(values) {
+            let s = std.iter().find(|(c, _)| *c == k).map(|(_, s)| *s);
+            out.push((label_of(&frame, &k), v, s));
+        }
+    }
+    out
+}
+
+fn assert_table_is_the_model(table: &[(String, f64, Option<f64>)], file: &ModelFile, what: &str) {
+    let geometric: Vec<_> = file
+        .robot
+        .parameters
+        .iter()
+        .filter(|p| {
+            matches!(
+                ParamId::parse(&p.label, file.robot.n_joints),
+                Some(ParamId::Link { .. } | ParamId::Base(_) | ParamId::Tool(_))
+            )
+        })
+        .collect();
+    assert_eq!(
+        table.len(),
+        geometric.len(),
+        "{what}: one cell per parameter"
+    );
+    let mut with_std = 0;
+    for p in geometric {
+        let (_, v, s) = table
+            .iter()
+            .find(|(l, _, _)| *l == p.label)
+            .unwrap_or_else(|| panic!("{what}: {} missing", p.label));
+        assert_eq!(v.to_bits(), p.value.to_bits(), "{what}: {}", p.label);
+        assert_eq!(
+            s.map(f64::to_bits),
+            p.std_error.map(f64::to_bits),
+            "{what}: std error of {}",
+            p.label
+        );
+        with_std += usize::from(s.is_some());
+    }
+    assert!(
+        with_std > 0,
+        "{what}: the calibrated model has standard errors"
+    );
+}
+
+#[test]
+fn mdh_tables_read_back_to_the_exact_parameters() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = calibrated_aria(dir.path());
+    let o = kincal(
+        &[
+            "export",
+            "model.json",
+            "--mdh-table",
+            "t.csv",
+            "--urdf",
+            "t.urdf",
+        ],
+        dir.path(),
+    );
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let o = kincal(
+        &["export", "model.json", "--mdh-table", "t.yaml"],
+        dir.path(),
+    );
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let csv = fs::read_to_string(dir.path().join("t.csv")).unwrap();
+    assert!(csv.starts_with("frame,theta0_rad,d_m,a_m,alpha_rad,beta_rad,"));
+    assert_table_is_the_model(&read_csv_table(&csv), &file, "CSV");
+    let yaml = fs::read_to_string(dir.path().join("t.yaml")).unwrap();
+    assert_table_is_the_model(&read_yaml_table(&yaml), &file, "YAML");
+}
+
+#[test]
+fn yaml_numbers_are_floats_for_yaml_1_1_and_read_back() {
+    use kincal_cli::cmd_export::yaml_number;
+    for v in [1e-7, -2.5e-9, 1e20, 0.1, 1.0 / 3.0, -0.0048, 0.0, 6.02e23] {
+        let s = yaml_number(v);
+        assert_eq!(s.parse::<f64>().unwrap().to_bits(), v.to_bits(), "{s}");
+        if s.contains('e') {
+            assert!(
+                s.contains('.') && (s.contains("e-") || s.contains("e+")),
+                "{s}"
+            );
+        }
+    }
+}
+
+#[test]
+fn effects_appear_in_the_table_and_block_the_urdf_unless_dropped() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = aria::nominal();
+    let mut file = ModelFile::nominal("aria", &r);
+    file.robot.effects = vec!["joint_compliance".into()];
+    for p in &mut file.robot.parameters {
+        if p.label == "compliance_2" {
+            p.value = 2.5e-5;
+        }
+    }
+    fs::write(dir.path().join("m.json"), file.to_json()).unwrap();
+    let o = kincal(&["export", "m.json", "--urdf", "m.urdf"], dir.path());
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    assert!(stderr(&o).contains("joint_compliance"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--drop-effects"), "{}", stderr(&o));
+    assert!(!dir.path().join("m.urdf").exists());
+    let o = kincal(
+        &[
+            "export",
+            "m.json",
+            "--urdf",
+            "m.urdf",
+            "--drop-effects",
+            "--mdh-table",
+            "m.csv",
+        ],
+        dir.path(),
+    );
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let csv = fs::read_to_string(dir.path().join("m.csv")).unwrap();
+    let rows: Vec<&str> = csv
+        .lines()
+        .filter(|l| l.starts_with("compliance_"))
+        .collect();
+    assert_eq!(
+        rows.len(),
+        6,
+        "every compliance parameter of the listed effect"
+    );
+    let c2: Vec<&str> = rows
+        .iter()
+        .find(|l| l.starts_with("compliance_2,"))
+        .unwrap()
+        .split(',')
+        .collect();
+    assert_eq!(c2[15].parse::<f64>().unwrap(), 2.5e-5, "{csv}");
+    assert_eq!(c2[16], "rad/(N·m)");
+    assert!(
+        !csv.contains("backlash_"),
+        "effects the model lacks are left out"
+    );
+}
+
+// ---------- bad input ----------
+
+#[test]
+fn bad_input_exits_with_a_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    fs::write(
+        d.join("m.json"),
+        ModelFile::nominal("aria", &aria::nominal()).to_json(),
+    )
+    .unwrap();
+    let cases: [(&[&str], i32, &str); 6] = [
+        (&["export", "m.json"], 2, "nothing to export"),
+        (
+            &["export", "m.json", "--urdf", "m.json"],
+            2,
+            "names the same file as the input MODEL",
+        ),
+        (
+            &["export", "m.json", "--mdh-table", "./m.json"],
+            2,
+            "names the same file as the input MODEL",
+        ),
+        (
+            &["export", "m.json", "--mdh-table", "t.txt"],
+            2,
+            ".csv, .yaml or .yml",
+        ),
+        (
+            &[
+                "export",
+                "m.json",
+                "--urdf",
+                "m.urdf",
+                "--mdh-table",
+                "m.urdf",
+            ],
+            2,
+            "name the same file",
+        ),
+        (
+            &["export", "m.json", "--urdf", "out.urdf", "--from", "m.json"],
+            2,
+            "not supported yet",
+        ),
+    ];
+    for (args, want, reason) in cases {
+        let o = kincal(args, d);
+        assert_eq!(code(&o), want, "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(reason), "{args:?}: {}", stderr(&o));
+    }
+    // --from naming the output is refused before anything else.
+    let o = kincal(
+        &["export", "m.json", "--urdf", "r.urdf", "--from", "r.urdf"],
+        d,
+    );
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    let text = fs::read_to_string(d.join("m.json")).unwrap();
+    fs::write(
+        d.join("new.json"),
+        text.replace("\"schema_version\": \"1.0\"", "\"schema_version\": \"2.0\""),
+    )
+    .unwrap();
+    let o = kincal(&["export", "new.json", "--urdf", "n.urdf"], d);
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    assert!(stderr(&o).contains("newer"), "{}", stderr(&o));
+    assert!(!d.join("n.urdf").exists());
+    assert_eq!(
+        fs::read_to_string(d.join("m.json")).unwrap(),
+        text,
+        "input untouched"
+    );
+}
