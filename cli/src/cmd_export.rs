@@ -1,5 +1,6 @@
-//! `kincal export MODEL [--urdf OUT.urdf] [--mdh-table OUT.csv|OUT.yaml]`: the calibrated
-//! model in the forms a controller, ROS or the Matlab Robotics Toolbox reads.
+//! `kincal export MODEL [--urdf OUT.urdf] [--mdh-table OUT.csv|OUT.yaml] [--c-header OUT.h]`:
+//! the calibrated model in the forms ROS, a controller, firmware or the Matlab Robotics
+//! Toolbox reads.
 
 use std::collections::BTreeMap;
 use std::io::{self, Write};
@@ -40,12 +41,17 @@ for every value column: the standard error of an identified parameter (empty whe
 model file has none). The YAML holds the same numbers as lists and maps. Every number is
 written in the shortest decimal form that reads back to the same double.
 
+--c-header OUT.h: a C header defining the model (effects included) as
+`static const kincal_robot IDENT = {…}` (C11 designated initializers over include/kincal.h;
+IDENT from --c-name), for firmware without a file system: pass &IDENT to kincal_fk.
+
 Outputs are written atomically and never overwrite MODEL.";
 
 pub const EXAMPLE: &str = "\
 Examples:
   kincal export aria-model.json --urdf aria-calibrated.urdf
-  kincal export aria-model.json --mdh-table aria-mdh.csv --urdf aria.urdf --drop-effects";
+  kincal export aria-model.json --mdh-table aria-mdh.csv --urdf aria.urdf --drop-effects
+  kincal export aria-model.json --c-header aria_model.h --c-name aria_model";
 
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
@@ -70,6 +76,12 @@ pub struct Args {
     /// Write the mDH/Hayati table (.csv or .yaml/.yml)
     #[arg(long, value_name = "OUT.csv|OUT.yaml")]
     pub mdh_table: Option<PathBuf>,
+    /// Write a C header defining the model as a `static const kincal_robot`
+    #[arg(long, value_name = "OUT.h")]
+    pub c_header: Option<PathBuf>,
+    /// Name of the C variable in --c-header (a C identifier)
+    #[arg(long, value_name = "IDENT", default_value = "kincal_calibrated_robot")]
+    pub c_name: String,
 }
 
 /// Format of `--mdh-table`, from its extension.
@@ -97,10 +109,16 @@ pub fn table_format(path: &Path) -> Result<TableFormat, CliError> {
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
-    if args.urdf.is_none() && args.mdh_table.is_none() {
+    if args.urdf.is_none() && args.mdh_table.is_none() && args.c_header.is_none() {
         return Err(CliError::usage(
-            "nothing to export: give --urdf OUT.urdf and/or --mdh-table OUT.csv|OUT.yaml",
+            "nothing to export: give --urdf OUT.urdf, --mdh-table OUT.csv|OUT.yaml and/or --c-header OUT.h",
         ));
+    }
+    if args.c_header.is_some() && !is_c_identifier(&args.c_name) {
+        return Err(CliError::usage(format!(
+            "--c-name '{}': not a C identifier (letters, digits and _, not starting with a digit)",
+            args.c_name
+        )));
     }
     if let Some(from) = &args.from {
         return Err(CliError::usage(format!(
@@ -125,6 +143,19 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         Some(f) => Some(mdh_table_text(&model.file, f, &args.model)?),
         None => None,
     };
+    let header_text = match &args.c_header {
+        Some(_) => Some(c_header_text(
+            &model.robot,
+            &model.file,
+            &args.c_name,
+            &args.model,
+        )?),
+        None => None,
+    };
+    if let (Some(out), Some(text)) = (&args.c_header, &header_text) {
+        crate::files::write_atomic(out, &inputs, |w| w.write_all(text.as_bytes()))?;
+        eprintln!("C header written to {}", out.display());
+    }
     if let (Some(out), Some(text)) = (&args.urdf, &urdf_text) {
         crate::files::write_atomic(out, &inputs, |w| w.write_all(text.as_bytes()))?;
         eprintln!("URDF written to {}", out.display());
@@ -463,4 +494,104 @@ fn write_yaml(w: &mut dyn Write, file: &ModelFile, rows: &BTreeMap<Row, Cells>) 
         }
     }
     Ok(())
+}
+
+/// Whether `s` is a C identifier (ASCII letters, digits, `_`; no leading digit).
+pub fn is_c_identifier(s: &str) -> bool {
+    let mut chars = s.chars();
+    matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
+        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
+/// A double as a C literal that strtod reads back to the same value.
+fn c_number(v: f64) -> String {
+    let s = format_f64(v);
+    if s.contains(['.', 'e']) {
+        s
+    } else {
+        format!("{s}.0")
+    }
+}
+
+fn c_list(values: &[f64]) -> String {
+    values
+        .iter()
+        .map(|v| c_number(*v))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// A C header defining the model as a `static const kincal_robot` initializer
+/// (`include/kincal.h`; C11 designated initializers, entries beyond N are zero).
+pub fn c_header_text(
+    robot: &kincal::any::AnyRobot,
+    file: &ModelFile,
+    name: &str,
+    source: &str,
+) -> Result<String, CliError> {
+    kincal::with_any_robot!(robot, r => c_header_generic(r, file, name, source))
+}
+
+fn c_header_generic<const N: usize>(
+    r: &kincal::Robot<N>,
+    file: &ModelFile,
+    name: &str,
+    source: &str,
+) -> Result<String, CliError> {
+    let bad = |m: String| CliError::input(format!("{source}: robot: {m}"));
+    let mut params = vec![0.0; kincal::Robot::<N>::NUM_PARAMS];
+    r.read_params(&mut params).map_err(|e| bad(e.to_string()))?;
+    let nominal_robot = file.robot.nominal_robot::<N>().map_err(bad)?;
+    let mut nominal = vec![0.0; kincal::Robot::<N>::NUM_PARAMS];
+    nominal_robot
+        .read_params(&mut nominal)
+        .map_err(|e| bad(e.to_string()))?;
+    nominal.truncate(kincal::Robot::<N>::NUM_GEOMETRIC_PARAMS);
+    let length: Vec<String> = r
+        .length_params()
+        .iter()
+        .map(|lp| match lp {
+            kincal::model::LengthParam::D => "KINCAL_LENGTH_PARAM_D".to_string(),
+            kincal::model::LengthParam::Beta => "KINCAL_LENGTH_PARAM_BETA".to_string(),
+        })
+        .collect();
+    let lower: Vec<f64> = r.limits().iter().map(|l| l.lower).collect();
+    let upper: Vec<f64> = r.limits().iter().map(|l| l.upper).collect();
+    let mass = r.mass();
+    let guard = format!("{}_H", name.to_ascii_uppercase());
+    let model_name = serde_json::to_string(&file.robot.name).unwrap_or_default();
+    Ok(format!(
+        "/* Generated by kincal {version} (`kincal export --c-header`) from the model {model_name}.
+   The calibrated model as a kincal_robot initializer (include/kincal.h): pass &{name} to
+   kincal_fk & co. Units: metres, radians, kilograms. Every number reads back to the
+   model file's double. Do not edit: export again after a new calibration. */
+#ifndef {guard}
+#define {guard}
+
+#include \"kincal.h\"
+
+static const kincal_robot {name} = {{
+    .n_joints = {N},
+    .length_param = {{{length}}},
+    .params = {{{params}}},
+    .nominal = {{{nominal}}},
+    .limits_lower = {{{lower}}},
+    .limits_upper = {{{upper}}},
+    .link_masses_kg = {{{masses}}},
+    .tool_mass_kg = {tool_mass},
+    .gravity = {{{gravity}}},
+}};
+
+#endif /* {guard} */
+",
+        version = env!("CARGO_PKG_VERSION"),
+        length = length.join(", "),
+        params = c_list(&params),
+        nominal = c_list(&nominal),
+        lower = c_list(&lower),
+        upper = c_list(&upper),
+        masses = c_list(&mass.link_masses_kg),
+        tool_mass = c_number(mass.tool_mass_kg),
+        gravity = c_list(&mass.gravity),
+    ))
 }

@@ -277,4 +277,5 @@ pub fn export(a: &crate::cmd_export::Args) -> FilePlan {
     }
     p.output_opt("--urdf", a.urdf.as_deref())
         .output_opt("--mdh-table", a.mdh_table.as_deref())
+        .output_opt("--c-header", a.c_header.as_deref())
 }

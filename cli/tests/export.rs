@@ -638,3 +638,130 @@ fn bad_input_exits_with_a_reason() {
         "input untouched"
     );
 }
+
+// ---------- C header ----------
+
+/// The C program printing every field of the exported initializer with 17 significant
+/// digits (enough to read back the exact double).
+const C_MAIN: &str = r#"#include <stdio.h>
+#include "robot.h"
+int main(void) {
+    const kincal_robot *r = &exported_robot;
+    size_t i;
+    printf("n %u\n", (unsigned)r->n_joints);
+    for (i = 0; i < KINCAL_MAX_JOINTS; i++) printf("length %u\n", (unsigned)r->length_param[i]);
+    for (i = 0; i < KINCAL_MAX_PARAMS; i++) printf("params %.17g\n", r->params[i]);
+    for (i = 0; i < KINCAL_MAX_GEOMETRIC_PARAMS; i++) printf("nominal %.17g\n", r->nominal[i]);
+    for (i = 0; i < KINCAL_MAX_JOINTS; i++) printf("lower %.17g\n", r->limits_lower[i]);
+    for (i = 0; i < KINCAL_MAX_JOINTS; i++) printf("upper %.17g\n", r->limits_upper[i]);
+    for (i = 0; i < KINCAL_MAX_JOINTS; i++) printf("mass %.17g\n", r->link_masses_kg[i]);
+    printf("tool_mass %.17g\n", r->tool_mass_kg);
+    for (i = 0; i < 3; i++) printf("gravity %.17g\n", r->gravity[i]);
+    return 0;
+}
+"#;
+
+/// Compiles the exported header with a strict C11 compiler and returns the printed fields.
+fn compile_and_print(dir: &Path) -> Vec<(String, f64)> {
+    fs::write(dir.join("main.c"), C_MAIN).unwrap();
+    let include = Path::new(env!("CARGO_MANIFEST_DIR")).join("../include");
+    let o = Command::new("cc")
+        .args(["-std=c11", "-Wall", "-Wextra", "-Werror", "-pedantic", "-I"])
+        .arg(&include)
+        .args(["-I", ".", "main.c", "-o", "print_robot"])
+        .current_dir(dir)
+        .output()
+        .expect("a C compiler `cc`");
+    assert!(o.status.success(), "cc: {}", stderr(&o));
+    let o = Command::new(dir.join("print_robot")).output().unwrap();
+    assert!(o.status.success());
+    String::from_utf8(o.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            let (k, v) = l.split_once(' ').unwrap();
+            (k.to_string(), v.parse().unwrap())
+        })
+        .collect()
+}
+
+fn field(printed: &[(String, f64)], key: &str) -> Vec<f64> {
+    printed
+        .iter()
+        .filter(|(k, _)| k == key)
+        .map(|(_, v)| *v)
+        .collect()
+}
+
+#[test]
+fn c_header_compiles_strictly_and_holds_the_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = calibrated_aria(dir.path());
+    let model = file.robot.robot::<6>().unwrap();
+    let o = kincal(
+        &[
+            "export",
+            "model.json",
+            "--c-header",
+            "robot.h",
+            "--c-name",
+            "exported_robot",
+        ],
+        dir.path(),
+    );
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let printed = compile_and_print(dir.path());
+    assert_eq!(field(&printed, "n"), [6.0]);
+    let mut want = vec![0.0; Robot::<6>::NUM_PARAMS];
+    model.read_params(&mut want).unwrap();
+    let params = field(&printed, "params");
+    for (i, (got, w)) in params.iter().zip(&want).enumerate() {
+        assert_eq!(got.to_bits(), w.to_bits(), "params[{i}]");
+    }
+    assert!(params[want.len()..].iter().all(|v| *v == 0.0));
+    let lengths = field(&printed, "length");
+    for (i, lp) in model.length_params().iter().enumerate() {
+        let want = f64::from(u8::from(*lp == kincal::model::LengthParam::Beta));
+        assert_eq!(lengths[i], want, "length_param[{i}]");
+    }
+    let lower = field(&printed, "lower");
+    let upper = field(&printed, "upper");
+    for (i, l) in model.limits().iter().enumerate() {
+        assert_eq!((lower[i], upper[i]), (l.lower, l.upper), "limits[{i}]");
+    }
+    // The robot rebuilt from the printed numbers has the model's FK exactly.
+    let mut rebuilt = aria::nominal();
+    rebuilt.write_params(&params[..want.len()]).unwrap();
+    let mut rng = Lcg(11);
+    for _ in 0..50 {
+        let q = random_q(&model, &mut rng);
+        assert_eq!(
+            rebuilt.fk_q(&q).unwrap().to_homogeneous(),
+            model.fk_q(&q).unwrap().to_homogeneous()
+        );
+    }
+    let nominal = field(&printed, "nominal");
+    let mut nominal_want = vec![0.0; Robot::<6>::NUM_PARAMS];
+    file.robot
+        .nominal_robot::<6>()
+        .unwrap()
+        .read_params(&mut nominal_want)
+        .unwrap();
+    assert_eq!(
+        nominal[..Robot::<6>::NUM_GEOMETRIC_PARAMS],
+        nominal_want[..Robot::<6>::NUM_GEOMETRIC_PARAMS]
+    );
+    let o = kincal(
+        &[
+            "export",
+            "model.json",
+            "--c-header",
+            "x.h",
+            "--c-name",
+            "2bad",
+        ],
+        dir.path(),
+    );
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(stderr(&o).contains("not a C identifier"));
+}
