@@ -12,7 +12,8 @@ use crate::error::CliError;
 use crate::measurements::format_f64;
 use crate::model_file::{LengthChoice, ModelFile, ParamJson};
 use crate::robot_arg;
-use crate::urdf::{UrdfExport, export_urdf};
+use crate::urdf::{ChainSelection, UrdfExport, export_urdf};
+use crate::urdf_update::update_urdf;
 
 pub const LONG_ABOUT: &str = "\
 Writes MODEL (a model file written by `kincal calibrate`, or a ROBOT for its nominal model)
@@ -28,8 +29,15 @@ same joint values q. Links are named --base-link (default base_link), link1..lin
 written; effort and velocity limits are unknown to the model and written as 0. Effects
 (joint compliance, scale, cyclic errors, backlash, thermal) have no URDF form: a model with
 effects is refused unless --drop-effects is given (they are then left out, so the URDF is
-the model's geometry alone). Updating the joints of your own URDF (--from) is not
-supported yet and is refused.
+the model's geometry alone).
+
+--urdf OUT.urdf --from ROBOT.urdf [--base-link L --tip-link T]: your own URDF (the one the
+model was calibrated from) with the calibrated geometry: each chain link keeps its offset
+from the model's joint frame as in the nominal model, so meshes, inertials and branches
+move with the identified axes; only the <origin> of the chain's revolute joints and of the
+last fixed joint before the tip link (the tool frame) change, everything else is kept byte
+for byte. Refused (exit 3) when the chain's revolute joint count differs from the model's
+or a URDF joint axis is not the nominal model's axis.
 
 --mdh-table OUT.csv | OUT.yaml: the identified mDH/Hayati table. The CSV has one row per
 frame: `base`, links 1..N, `tool`, then one row per effect parameter (its label). Columns
@@ -61,15 +69,18 @@ pub struct Args {
     /// Write the chain as a standalone URDF
     #[arg(long, value_name = "OUT.urdf")]
     pub urdf: Option<PathBuf>,
-    /// Your own URDF whose chain joints would be updated (not supported yet: refused)
+    /// Your own URDF (the one the model was calibrated from): its chain joints' origins are
+    /// updated, everything else kept
     #[arg(long, value_name = "ROBOT.urdf", requires = "urdf")]
     pub from: Option<PathBuf>,
-    /// Name of the URDF's base link
-    #[arg(long, value_name = "L", default_value = "base_link")]
-    pub base_link: String,
-    /// Name of the URDF's tip (tool) link
-    #[arg(long, value_name = "T", default_value = "tool0")]
-    pub tip_link: String,
+    /// Base link: of the written URDF (default base_link), or of the --from chain (default:
+    /// its root)
+    #[arg(long, value_name = "L")]
+    pub base_link: Option<String>,
+    /// Tip (tool) link: of the written URDF (default tool0), or of the --from chain
+    /// (default: its single leaf)
+    #[arg(long, value_name = "T")]
+    pub tip_link: Option<String>,
     /// Leave the model's effects out of the URDF instead of refusing the export
     #[arg(long)]
     pub drop_effects: bool,
@@ -118,12 +129,6 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         return Err(CliError::usage(format!(
             "--c-name '{}': not a C identifier (letters, digits and _, not starting with a digit)",
             args.c_name
-        )));
-    }
-    if let Some(from) = &args.from {
-        return Err(CliError::usage(format!(
-            "--from '{}': updating the joints of an existing URDF is not supported yet; omit --from to write a standalone URDF of the calibrated chain",
-            from.display()
         )));
     }
     let format = args.mdh_table.as_deref().map(table_format).transpose()?;
@@ -190,12 +195,29 @@ fn urdf_text(
             names.join(", ")
         )));
     }
+    if let Some(from) = &args.from {
+        let text = std::fs::read_to_string(from)
+            .map_err(|e| CliError::input(format!("{}: cannot read: {e}", from.display())))?;
+        let sel = ChainSelection {
+            base_link: args.base_link.as_deref(),
+            tip_link: args.tip_link.as_deref(),
+        };
+        let shown = from.display().to_string();
+        return kincal::with_any_robot!(robot, r => {
+            let nominal = file
+                .robot
+                .nominal_robot()
+                .map_err(|m| CliError::input(format!("{}: robot: {m}", args.model)))?;
+            update_urdf(&text, &shown, &sel, &nominal, r)
+                .map_err(|e| CliError::input(e.to_string()))
+        });
+    }
     export_urdf(
         robot,
         &UrdfExport {
             robot_name: &file.robot.name,
-            base_link: &args.base_link,
-            tip_link: &args.tip_link,
+            base_link: args.base_link.as_deref().unwrap_or("base_link"),
+            tip_link: args.tip_link.as_deref().unwrap_or("tool0"),
             joint_names: None,
             allow_dropping_effects: args.drop_effects,
         },

@@ -42,3 +42,4 @@ pub mod study_plot;
 pub mod tool_file;
 pub mod units;
 pub mod urdf;
+pub mod urdf_update;

@@ -136,56 +136,73 @@ struct UrdfJoint {
     axis: [f64; 3],
 }
 
+/// The kinematic joints (a `<joint>` with a type, parent and child; transmission joints are
+/// skipped).
 fn read_joints(urdf: &str) -> Vec<UrdfJoint> {
     urdf.split("<joint ")
         .skip(1)
-        .map(|chunk| {
-            let body = &chunk[..chunk.find("</joint>").expect("closed joint")];
+        .filter_map(|chunk| {
+            let body = &chunk[..chunk.find("</joint>")?];
             let body = format!("<joint {body}");
-            UrdfJoint {
-                kind: attr(&body, "joint", "type").expect("type"),
-                parent: attr(&body, "parent", "link").expect("parent"),
-                child: attr(&body, "child", "link").expect("child"),
+            Some(UrdfJoint {
+                kind: attr(&body, "joint", "type")?,
+                parent: attr(&body, "parent", "link")?,
+                child: attr(&body, "child", "link")?,
                 origin: origin(
                     three(&attr(&body, "origin", "xyz").unwrap_or("0 0 0".into())),
                     three(&attr(&body, "origin", "rpy").unwrap_or("0 0 0".into())),
                 ),
                 axis: three(&attr(&body, "axis", "xyz").unwrap_or("1 0 0".into())),
-            }
+            })
         })
         .collect()
 }
 
 /// The tip link in the base link for the movable joints' values `q` (in chain order).
 fn urdf_fk(joints: &[UrdfJoint], base: &str, tip: &str, q: &[f64]) -> M4 {
-    let mut t = identity();
-    let mut link = base.to_string();
-    let mut k = 0;
-    while link != tip {
+    let mut path = Vec::new();
+    let mut link = tip.to_string();
+    while link != base {
         let j = joints
             .iter()
-            .find(|j| j.parent == link)
-            .unwrap_or_else(|| panic!("no joint below {link}"));
+            .find(|j| j.child == link)
+            .unwrap_or_else(|| panic!("no joint above {link}"));
+        path.push(j);
+        link = j.parent.clone();
+    }
+    path.reverse();
+    let mut t = identity();
+    let mut k = 0;
+    for j in path {
         t = mul(&t, &j.origin);
         if j.kind != "fixed" {
-            assert_eq!(j.kind, "revolute");
+            assert!(j.kind == "revolute" || j.kind == "continuous", "{}", j.kind);
             t = mul(&t, &axis_rotation(j.axis, q[k]));
             k += 1;
         }
-        link = j.child.clone();
     }
     assert_eq!(k, q.len(), "movable joints on the chain");
     t
 }
 
 fn assert_urdf_matches_model<const N: usize>(urdf: &str, model: &Robot<N>, seed: u64) {
+    assert_chain_matches_model(urdf, "base_link", "tool0", model, seed);
+}
+
+fn assert_chain_matches_model<const N: usize>(
+    urdf: &str,
+    base: &str,
+    tip: &str,
+    model: &Robot<N>,
+    seed: u64,
+) {
     let joints = read_joints(urdf);
     let mut rng = Lcg(seed);
     let mut worst = 0.0f64;
     for _ in 0..200 {
         let q = random_q(model, &mut rng);
         let want = model.fk_q(&q).unwrap();
-        let got = urdf_fk(&joints, "base_link", "tool0", &q);
+        let got = urdf_fk(&joints, base, tip, &q);
         let m = want.to_homogeneous();
         for (i, row) in got.iter().enumerate() {
             for (j, v) in row.iter().enumerate() {
@@ -606,9 +623,16 @@ fn bad_input_exits_with_a_reason() {
             "name the same file",
         ),
         (
-            &["export", "m.json", "--urdf", "out.urdf", "--from", "m.json"],
+            &[
+                "export",
+                "m.json",
+                "--mdh-table",
+                "t.csv",
+                "--from",
+                "x.urdf",
+            ],
             2,
-            "not supported yet",
+            "--urdf",
         ),
     ];
     for (args, want, reason) in cases {
@@ -764,4 +788,246 @@ fn c_header_compiles_strictly_and_holds_the_model() {
     );
     assert_eq!(code(&o), 2, "{}", stderr(&o));
     assert!(stderr(&o).contains("not a C identifier"));
+}
+
+// ---------- --from: the user's own URDF updated ----------
+
+/// A 4R arm with a fixed mount, parallel axes (j2, j3), a camera branch, a mesh, a comment and
+/// a gazebo tag, all of which must survive the update.
+const OWN_URDF: &str = r#"<?xml version="1.0"?>
+<robot name="own">
+  <!-- a comment that must stay -->
+  <link name="base_link"/>
+  <link name="mount"/>
+  <link name="l1"/>
+  <link name="l2">
+    <visual><origin xyz="0.2 0 0" rpy="0 1.5 0"/><geometry><mesh filename="package://own/l2.stl"/></geometry></visual>
+    <inertial><origin xyz="0.2 0 0" rpy="0 0 0"/><mass value="2.5"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.03"/></inertial>
+  </link>
+  <link name="l3"/>
+  <link name="cam"/>
+  <link name="l4"/>
+  <link name="tool0"/>
+  <joint name="mount_joint" type="fixed"><parent link="base_link"/><child link="mount"/><origin xyz="0 0 0.1" rpy="0 0 0.3"/></joint>
+  <joint name="j1" type="revolute"><parent link="mount"/><child link="l1"/><origin xyz="0 0 0.2" rpy="0 0 0"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="10" velocity="1"/></joint>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0.1 0.3" rpy="0.1 0 0"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="10" velocity="1"/></joint>
+  <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/><origin xyz="0.4 0 0" rpy="0 0 0"/><axis xyz="0 1 0"/><limit lower="-2.5" upper="2.5" effort="10" velocity="1"/></joint>
+  <joint name="cam_joint" type="fixed"><parent link="l3"/><child link="cam"/><origin xyz="0.05 0.05 0" rpy="0 0 1"/></joint>
+  <joint name="j4" type="revolute"><parent link="l3"/><child link="l4"/><origin xyz="0.3 0 0.05" rpy="0 0 0"/><axis xyz="1 0 0"/><limit lower="-3" upper="3" effort="10" velocity="1"/></joint>
+  <joint name="tool_joint" type="fixed"><parent link="l4"/><child link="tool0"/><origin xyz="0.1 0 0" rpy="0 1.2 0"/></joint>
+  <gazebo reference="l2"><material>Gazebo/Orange</material></gazebo>
+</robot>
+"#;
+
+/// Every `<origin …/>` tag removed: what an update must leave exactly as it was.
+fn without_origins(text: &str) -> String {
+    let mut out = String::new();
+    let mut rest = text;
+    while let Some(i) = rest.find("<origin") {
+        out.push_str(&rest[..i]);
+        rest = &rest[i + rest[i..].find("/>").unwrap() + 2..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// Exports a perturbed model of the chain `base`→`tip` of `text` with --from and checks FK
+/// and that nothing but chain joint origins changed.
+fn check_from<const N: usize>(
+    nominal: &Robot<N>,
+    text: &str,
+    base: &str,
+    tip: &str,
+    seed: u64,
+) -> usize {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    fs::write(d.join("own.urdf"), text).unwrap();
+    let mut rng = Lcg(seed);
+    let mut model = *nominal;
+    let mut file = ModelFile::nominal("own", nominal);
+    for i in 0..Robot::<N>::NUM_GEOMETRIC_PARAMS {
+        let idx = kincal::ParamIndex(i);
+        let v = model.param(idx).unwrap() + rng.within(-2e-3, 2e-3);
+        model.set_param(idx, v).unwrap();
+    }
+    for p in &mut file.robot.parameters {
+        let id = ParamId::parse(&p.label, N).unwrap();
+        p.value = model.param(id.index(N)).unwrap();
+    }
+    fs::write(d.join("m.json"), file.to_json()).unwrap();
+    let o = kincal(
+        &[
+            "export",
+            "m.json",
+            "--urdf",
+            "out.urdf",
+            "--from",
+            "own.urdf",
+            "--base-link",
+            base,
+            "--tip-link",
+            tip,
+        ],
+        d,
+    );
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let out = fs::read_to_string(d.join("out.urdf")).unwrap();
+    let model = read_model(&d.join("m.json")).robot.robot::<N>().unwrap();
+    assert_chain_matches_model(&out, base, tip, &model, seed);
+    assert_eq!(
+        without_origins(&out),
+        without_origins(text),
+        "only origins change"
+    );
+    // The nominal URDF does not match the perturbed model: the check can fail.
+    let joints = read_joints(text);
+    let q = [0.2; N];
+    let got = urdf_fk(&joints, base, tip, &q);
+    let want = model.fk_q(&q).unwrap().to_homogeneous();
+    assert!((0..3).any(|i| (got[i][3] - want[(i, 3)]).abs() > 1e-5));
+    out.lines()
+        .zip(text.lines())
+        .filter(|(a, b)| a != b)
+        .count()
+}
+
+/// The nominal robot of an imported URDF chain as a `Robot<N>` (parameters, length choices
+/// and limits copied).
+fn import<const N: usize>(text: &str, base: Option<&str>, tip: &str) -> Robot<N> {
+    let imp = kincal_cli::urdf::import_urdf_str(
+        text,
+        "own.urdf",
+        &kincal_cli::urdf::ChainSelection {
+            base_link: base,
+            tip_link: Some(tip),
+        },
+    )
+    .unwrap();
+    let any = imp.robot;
+    kincal::with_any_robot!(&any, r => {
+        let mut out = Robot::<N>::new(
+            [Link { theta0: 0.0, d: 0.0, a: 0.0, alpha: 0.0, beta: 0.0 }; N],
+            [JointLimits::new(-3.0, 3.0); N],
+        )
+        .unwrap();
+        assert_eq!(r.links().len(), N);
+        let mut p = vec![0.0; Robot::<N>::NUM_PARAMS];
+        for (i, v) in p.iter_mut().enumerate() {
+            *v = r.param(kincal::ParamIndex(i)).unwrap();
+        }
+        for (l, lp) in r.length_params().iter().enumerate() {
+            out.set_length_param(l, *lp).unwrap();
+        }
+        out.write_params(&p).unwrap();
+        out.set_limits(std::array::from_fn(|i| r.limits()[i])).unwrap();
+        out
+    })
+}
+
+#[test]
+fn from_updates_only_the_chain_origins_of_the_users_urdf() {
+    let nominal = import::<4>(OWN_URDF, Some("base_link"), "tool0");
+    let changed = check_from(&nominal, OWN_URDF, "base_link", "tool0", 5);
+    assert_eq!(changed, 5, "j1..j4 and tool_joint lines");
+}
+
+#[test]
+fn from_works_on_real_urdfs() {
+    let Some(dir) = std::env::var_os("KINCAL_REALDATA")
+        .map(std::path::PathBuf::from)
+        .or_else(|| {
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .ancestors()
+                .skip(2)
+                .map(|a| a.join("shared/realdata"))
+                .find(|p| p.is_dir())
+        })
+    else {
+        eprintln!("shared/realdata not found: real URDFs not checked");
+        return;
+    };
+    let ur = fs::read_to_string(dir.join("figaroh-ur10e/robot_ur10e.urdf")).unwrap();
+    let nominal = import::<6>(&ur, Some("base_link"), "tool0");
+    check_from(&nominal, &ur, "base_link", "tool0", 8);
+    let panda = fs::read_to_string(dir.join("mukca/urdf/panda.urdf")).unwrap();
+    let nominal = import::<7>(&panda, None, "ball_link");
+    let root = read_joints(&panda)
+        .iter()
+        .map(|j| j.parent.clone())
+        .find(|p| !read_joints(&panda).iter().any(|j| j.child == *p))
+        .unwrap();
+    check_from(&nominal, &panda, &root, "ball_link", 9);
+}
+
+#[test]
+fn from_refuses_a_chain_that_is_not_the_models() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    fs::write(d.join("own.urdf"), OWN_URDF).unwrap();
+    fs::write(
+        d.join("m.json"),
+        ModelFile::nominal("aria", &aria::nominal()).to_json(),
+    )
+    .unwrap();
+    let o = kincal(
+        &[
+            "export",
+            "m.json",
+            "--urdf",
+            "o.urdf",
+            "--from",
+            "own.urdf",
+            "--tip-link",
+            "tool0",
+        ],
+        d,
+    );
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("has 4 revolute joints, the model has 6"),
+        "{}",
+        stderr(&o)
+    );
+    // Same joint count, other geometry: the axes do not match.
+    let nominal4 = import::<4>(OWN_URDF, Some("base_link"), "tool0");
+    let mut moved = nominal4;
+    moved.set_param(kincal::ParamIndex(2), 0.05).unwrap();
+    fs::write(
+        d.join("m4.json"),
+        ModelFile::nominal("own", &moved).to_json(),
+    )
+    .unwrap();
+    let o = kincal(
+        &[
+            "export",
+            "m4.json",
+            "--urdf",
+            "o.urdf",
+            "--from",
+            "own.urdf",
+            "--tip-link",
+            "tool0",
+        ],
+        d,
+    );
+    assert_eq!(code(&o), 3, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("not calibrated from this URDF"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!d.join("o.urdf").exists());
+    let o = kincal(
+        &[
+            "export", "m4.json", "--urdf", "own.urdf", "--from", "own.urdf",
+        ],
+        d,
+    );
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("names the same file as the input --from"),
+        "{}",
+        stderr(&o)
+    );
 }
