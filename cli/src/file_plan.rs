@@ -268,3 +268,14 @@ pub fn observed_point(a: &crate::cmd_observed_point::Args) -> FilePlan {
         .input("DATA", &a.data)
         .output("--out", &a.out)
 }
+
+/// `export`.
+pub fn export(a: &crate::cmd_export::Args) -> FilePlan {
+    let mut p = FilePlan::new().input_if_file("MODEL", &a.model);
+    if let Some(f) = &a.from {
+        p = p.input("--from", f);
+    }
+    p.output_opt("--urdf", a.urdf.as_deref())
+        .output_opt("--mdh-table", a.mdh_table.as_deref())
+        .output_opt("--c-header", a.c_header.as_deref())
+}

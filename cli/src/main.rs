@@ -1,8 +1,8 @@
 //! `kincal`: the command-line tool of the kincal calibration toolkit (spec/cli.md).
 
 use kincal_cli::{
-    cmd_calibrate, cmd_crossval, cmd_demo, cmd_design_tool, cmd_diagnose, cmd_evaluate, cmd_import,
-    cmd_markers, cmd_observed_point, cmd_predict, cmd_select, cmd_validate, file_plan,
+    cmd_calibrate, cmd_crossval, cmd_demo, cmd_design_tool, cmd_diagnose, cmd_evaluate, cmd_export,
+    cmd_import, cmd_markers, cmd_observed_point, cmd_predict, cmd_select, cmd_validate, file_plan,
 };
 
 use std::process::ExitCode;
@@ -70,6 +70,10 @@ enum Command {
     /// the measurement is precise)
     #[command(name = "observed-point", long_about = cmd_observed_point::LONG_ABOUT, after_help = cmd_observed_point::EXAMPLE)]
     ObservedPoint(cmd_observed_point::Args),
+    /// The model as a URDF and/or an mDH/Hayati table (CSV, YAML) for ROS, controllers and
+    /// Matlab
+    #[command(long_about = cmd_export::LONG_ABOUT, after_help = cmd_export::EXAMPLE)]
+    Export(cmd_export::Args),
 }
 
 fn main() -> ExitCode {
@@ -101,6 +105,7 @@ fn plan(command: &Command) -> file_plan::FilePlan {
         Command::Crossval(a) => file_plan::crossval(a),
         Command::Markers(a) => file_plan::markers(a),
         Command::ObservedPoint(a) => file_plan::observed_point(a),
+        Command::Export(a) => file_plan::export(a),
     }
 }
 
@@ -118,5 +123,6 @@ fn run(command: &Command) -> Result<(), kincal_cli::error::CliError> {
         Command::Crossval(a) => cmd_crossval::run(a),
         Command::Markers(a) => cmd_markers::run(a),
         Command::ObservedPoint(a) => cmd_observed_point::run(a),
+        Command::Export(a) => cmd_export::run(a),
     }
 }

@@ -6,7 +6,8 @@
 #  2. C++17 consumer (tests/cpp/consumer.cpp, -Wall -Wextra -Werror -pedantic) against the
 #     release staticlib and cdylib (both under ASan/UBSan when the compiler has them) and the
 #     debug test-panic staticlib (checks that a panic comes back as KINCAL_STATUS_PANIC);
-#  3. the header as C99 and C11 (-pedantic);
+#  3. the header as C99 and C11 (-pedantic); a `kincal export --c-header` of ARIA compiled as
+#     strict C11 and linked: its kincal_fk equals kincal_robot_aria's bit for bit;
 #  4. ffi/install.sh into a temporary prefix, then the ffi/README.md example built through
 #     pkg-config (shared and static) and through CMake find_package(kincal) (static, shared);
 #  5. the panic-never proof (tests/cpp/panic_never.sh): the no_std build for
@@ -100,6 +101,14 @@ for std in c99 c11; do
     "$CC" -std=$std -Wall -Wextra -Werror -pedantic -I"$root/include" -c "$work/example.c" \
         -o "$work/example_$std.o"
 done
+
+step "kincal export --c-header: the exported ARIA as strict C11, FK through kincal_fk"
+cargo build -q -p kincal-cli --bin kincal
+"$target/debug/kincal" export aria --c-header "$work/exported_aria.h" --c-name exported_aria
+"$CC" -std=c11 -Wall -Wextra -Werror -pedantic -I"$root/include" -I"$work" \
+    "$here/exported_model.c" "$target/release/libkincal.a" "${native_libs[@]}" \
+    -o "$work/exported_model"
+"$work/exported_model"
 
 if have_tool pkg-config pkg-config; then
     step "README example through pkg-config (kincal: shared, kincal-static: static)"
