@@ -9,8 +9,8 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use kincal::diagnosis::{
-    self, Config, DiagWorkspace, Diagnosis, Method, ModelScore, Part, PoseDiagnosis, QuantityKind,
-    Reason, Status, Warning,
+    self, BeyondLibrary, Config, DiagWorkspace, Diagnosis, Method, ModelScore, Part, PoseDiagnosis,
+    QuantityKind, Reason, Status, Warning,
 };
 use kincal::identify::{Algorithm, Measurement};
 use kincal::{Effect, EffectSet, ParamId, ParamIndex, ParamSet, Robot};
@@ -422,6 +422,9 @@ struct Report {
     verdict: VerdictJson,
     /// Library-free check: how much of the gap any smooth function of q explains.
     explainable: ExplainableJson,
+    /// The same check on the verdict's held-out residuals (evaluated only when the
+    /// verdict would otherwise be `explained`).
+    remaining_structure: ExplainableJson,
     #[serde(rename = "where")]
     where_: WhereJson,
     data: DataInfoJson,
@@ -532,6 +535,9 @@ struct VerdictJson {
     /// `no_significant_candidate`, `at_noise_floor`.
     reason: &'static str,
     reason_text: String,
+    /// What lies beyond the library when the gap stays open (the smooth check):
+    /// `smooth_effect`, `not_a_function_of_q` or `not_applicable`.
+    beyond_library: &'static str,
     heldout_rms_pos_mm: f64,
     heldout_rms_rot_deg: f64,
     /// z of what remains against the noise floor.
@@ -795,6 +801,7 @@ fn report_json<const N: usize>(
             gap_closed_total_fraction: winner.map_or(0.0, |c| c.gap_closed_total_fraction),
             reason: reason_code(&d.verdict.reason),
             reason_text: reason_text(d),
+            beyond_library: d.beyond_library().name(),
             heldout_rms_pos_mm: d.final_heldout_rms_pos_m * 1e3,
             heldout_rms_rot_deg: d.final_heldout_rms_rot_rad.to_degrees(),
             remaining_gap_z: finite(d.remaining.z),
@@ -804,20 +811,8 @@ fn report_json<const N: usize>(
             remaining_rms_axis: axis(&d.final_rms_axis),
             parameters,
         },
-        explainable: {
-            let x = &d.explainable;
-            ExplainableJson {
-                evaluated: x.evaluated,
-                share_of_gap: x.share_of_gap,
-                share_pos: x.share_pos,
-                share_rot: x.share_rot,
-                heldout_rms_pos_mm: x.heldout_rms_pos_m * 1e3,
-                heldout_rms_rot_deg: x.heldout_rms_rot_rad.to_degrees(),
-                z: finite(x.z),
-                significant: x.significant,
-                method: "kernel ridge regression on (sin q, cos q): linear + random Fourier features of a squared-exponential kernel, nested cross-validation on the diagnosis folds",
-            }
-        },
+        explainable: explainable_json(&d.explainable),
+        remaining_structure: explainable_json(&d.remaining_structure),
         where_: WhereJson {
             rms_axis: axis(&loc.rms_axis),
             mean_axis: axis(&loc.mean_axis),
@@ -976,11 +971,27 @@ pub fn warning_text(w: &Warning) -> String {
     }
 }
 
+/// The JSON form of a smooth check.
+fn explainable_json(x: &diagnosis::SmoothCheck) -> ExplainableJson {
+    ExplainableJson {
+        evaluated: x.evaluated,
+        share_of_gap: x.share_of_gap,
+        share_pos: x.share_pos,
+        share_rot: x.share_rot,
+        heldout_rms_pos_mm: x.heldout_rms_pos_m * 1e3,
+        heldout_rms_rot_deg: x.heldout_rms_rot_rad.to_degrees(),
+        z: finite(x.z),
+        significant: x.significant,
+        method: "kernel ridge regression on (sin q, cos q): linear + random Fourier features of a squared-exponential kernel, nested cross-validation on the diagnosis folds",
+    }
+}
+
 fn reason_code(r: &Reason) -> &'static str {
     match r {
         Reason::AtNoiseFloor => "at_noise_floor",
         Reason::Closed => "closed",
         Reason::RemainingGap { .. } => "remaining_gap",
+        Reason::RemainingStructure { .. } => "remaining_structure",
         Reason::Worsens { .. } => "worsens",
         Reason::SmallShare => "small_share",
         Reason::NoSignificantCandidate => "no_significant_candidate",
@@ -1005,8 +1016,28 @@ fn worst_axis<const N: usize>(d: &Diagnosis<N>) -> &'static str {
         .map_or("", |k| AXES[k])
 }
 
-/// Why the verdict's status, in words.
+/// Why the verdict's status, in words, with what lies beyond the library when a gap stays
+/// open.
 fn reason_text<const N: usize>(d: &Diagnosis<N>) -> String {
+    let mut text = status_reason_text(d);
+    match d.beyond_library() {
+        BeyondLibrary::NotApplicable => {}
+        BeyondLibrary::SmoothEffect { share } => {
+            let _ = write!(
+                text,
+                "; a library-free smooth function of the joint angles closes {:.0} % of the gap held out: not explained by the library (an effect outside it)",
+                100.0 * share
+            );
+        }
+        BeyondLibrary::NotAFunctionOfQ => text.push_str(
+            "; no smooth function of the joint angles explains what remains either (noise-like, drift or set-up changes, not a function of q)",
+        ),
+    }
+    text
+}
+
+/// Why the verdict's status, in words.
+fn status_reason_text<const N: usize>(d: &Diagnosis<N>) -> String {
     match d.verdict.reason {
         Reason::AtNoiseFloor => {
             "the geometric model's held-out error is consistent with the noise floor".into()
@@ -1019,6 +1050,9 @@ fn reason_text<const N: usize>(d: &Diagnosis<N>) -> String {
             "remaining gap significant (z = {z:.1}), in {} (largest on axis {}): part of the gap is not explained by the chosen effects",
             part_text(part),
             worst_axis(d)
+        ),
+        Reason::RemainingStructure { z } => format!(
+            "what the chosen effects leave is near the noise floor but not noise-like: a library-free smooth function of the joint angles still explains part of it held out (z = {z:.1}); part of the gap is not explained by the chosen effects"
         ),
         Reason::Worsens { z, part } => format!(
             "the chosen effects make the {} significantly worse (z = {z:.1})",

@@ -113,8 +113,8 @@ mod cv;
 mod folds;
 mod locate;
 mod noise;
-mod smooth;
 mod screen;
+mod smooth;
 
 pub use locate::{Correlate, Location, QuantityKind, RegionStats};
 pub use smooth::{SmoothCheck, SmoothWorkspace};
@@ -230,6 +230,12 @@ pub struct NoiseFloor {
     pub repeat_pos: Option<(f64, f64)>,
     /// Rotation σ per axis the repeats alone give \[rad\] and its degrees of freedom.
     pub repeat_rot: Option<(f64, f64)>,
+    /// The stated σ_pos \[m\] when the repeats showed the data significantly noisier
+    /// (z > 3 and over 1.25×): the floor then uses the repeats' σ (repeatability is a lower
+    /// bound of the instrument noise, so a smaller stated σ cannot be right).
+    pub overruled_pos: Option<f64>,
+    /// The same for σ_rot \[rad\].
+    pub overruled_rot: Option<f64>,
 }
 
 impl NoiseFloor {
@@ -450,6 +456,12 @@ pub enum Reason {
         z: f64,
         /// Where it lies.
         part: Part,
+    },
+    /// `partially_explained`: what the chosen effects leave is small but not noise-like: a
+    /// library-free smooth function of q explains part of it held out (its paired z).
+    RemainingStructure {
+        /// Paired z of the smooth model on the verdict's held-out residuals.
+        z: f64,
     },
     /// `partially_explained`: the chosen effects make position or rotation significantly
     /// worse (paired z, negative).
@@ -745,6 +757,9 @@ pub struct Diagnosis<const N: usize> {
     pub location: Location,
     /// How much of the held-out gap any smooth function of q explains (`smooth.rs`).
     pub explainable: SmoothCheck,
+    /// The same check on the verdict's held-out residuals, run when the verdict would be
+    /// `explained` (otherwise not evaluated).
+    pub remaining_structure: SmoothCheck,
     /// How the candidates were judged.
     pub method: Method,
     /// Suspect rows (indices into the data, ascending; first `n_suspects`): gross
@@ -759,6 +774,35 @@ pub struct Diagnosis<const N: usize> {
     /// Held-out RMS of the verdict's residual per component (x, y, z \[m\], rx, ry, rz
     /// \[rad\]) over the clean rows: where what remains lies.
     pub final_rms_axis: [f64; 6],
+}
+
+/// What the library-free smooth check ([`SmoothCheck`]) says about a gap the library's
+/// effects leave open (status `partially_explained` or `unexplained`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum BeyondLibrary {
+    /// Nothing to say: no gap, the gap is explained, or the check did not run.
+    NotApplicable,
+    /// A smooth function of the joint angles closes significantly more of the held-out gap
+    /// than the verdict's effects: an effect outside the library (its share of the gap).
+    SmoothEffect {
+        /// Share of the gap the smooth model closes, held out.
+        share: f64,
+    },
+    /// The smooth model does not improve significantly on the geometric model either: what
+    /// is left is not a smooth function of q (noise-like, drift, set-up changes, ...).
+    NotAFunctionOfQ,
+}
+
+impl BeyondLibrary {
+    /// The public name (`not_applicable`, `smooth_effect`, `not_a_function_of_q`).
+    #[must_use]
+    pub const fn name(self) -> &'static str {
+        match self {
+            BeyondLibrary::NotApplicable => "not_applicable",
+            BeyondLibrary::SmoothEffect { .. } => "smooth_effect",
+            BeyondLibrary::NotAFunctionOfQ => "not_a_function_of_q",
+        }
+    }
 }
 
 impl<const N: usize> Diagnosis<N> {
@@ -776,6 +820,8 @@ impl<const N: usize> Diagnosis<N> {
                 stated_rot: false,
                 repeat_pos: None,
                 repeat_rot: None,
+                overruled_pos: None,
+                overruled_rot: None,
             },
             geometric: *robot,
             model: *robot,
@@ -801,6 +847,7 @@ impl<const N: usize> Diagnosis<N> {
             final_heldout_rms_rot_rad: 0.0,
             location: Location::empty(),
             explainable: SmoothCheck::default(),
+            remaining_structure: SmoothCheck::default(),
             method: Method::CrossValidation,
             suspects: [0; MAX_SUSPECTS],
             n_suspects: 0,
@@ -808,6 +855,39 @@ impl<const N: usize> Diagnosis<N> {
             n_warnings: 0,
             final_rms_axis: [0.0; 6],
         }
+    }
+
+    /// What lies beyond the library: read only when the verdict leaves a gap open
+    /// (`partially_explained`, `unexplained`). A smooth effect needs the smooth check to be
+    /// significant against the geometric model and to close a larger share of the gap than
+    /// the verdict's own combined share.
+    #[must_use]
+    pub fn beyond_library(&self) -> BeyondLibrary {
+        let open = matches!(
+            self.verdict.status,
+            Status::PartiallyExplained | Status::Unexplained
+        );
+        let x = &self.explainable;
+        if !open || !x.evaluated {
+            BeyondLibrary::NotApplicable
+        } else if x.significant && x.share_of_gap > self.verdict_share() {
+            BeyondLibrary::SmoothEffect {
+                share: x.share_of_gap,
+            }
+        } else if x.significant {
+            BeyondLibrary::NotApplicable
+        } else {
+            BeyondLibrary::NotAFunctionOfQ
+        }
+    }
+
+    /// The verdict's combined (position and rotation) share of the gap closed; 0 without a
+    /// chosen candidate.
+    fn verdict_share(&self) -> f64 {
+        self.verdict
+            .candidate
+            .and_then(|c| self.candidates().get(c))
+            .map_or(0.0, |c| c.gap_closed_total_fraction)
     }
 
     /// The suspect rows (indices into the data).
@@ -1812,6 +1892,20 @@ pub fn diagnose_into<const N: usize, const P: usize>(
     out.location = locate::locate(robot, data, poses, &noise);
     // 8. Explainable at all? (library-free smooth model on the same folds.)
     out.explainable = smooth::check(robot, data, poses, &noise, &ws.acc[0], cfg, &mut ws.smooth);
+    // 9. Structure left in what the verdict's effects leave: `explained` needs the remainder
+    // to be noise-like, not only small (an out-of-library effect a candidate absorbs in part
+    // can leave a total near the floor while a smooth function of q still finds it).
+    if out.verdict.status == Status::Explained
+        && let Some(c) = out.verdict.candidate
+    {
+        let acc = ws.acc.get(c + 1).copied().unwrap_or(ws.acc[0]);
+        let rest = smooth::check_remaining(robot, data, poses, &noise, &acc, cfg, &mut ws.smooth);
+        out.remaining_structure = rest;
+        if rest.evaluated && rest.significant {
+            out.verdict.status = Status::PartiallyExplained;
+            out.verdict.reason = Reason::RemainingStructure { z: rest.z };
+        }
+    }
     Ok(())
 }
 
@@ -1840,9 +1934,9 @@ fn rms_axis<const N: usize>(data: &[Measurement<N>], poses: &[PoseDiagnosis]) ->
 }
 
 /// |z| beyond which a stated σ disagrees with the data.
-const NOISE_CHECK_Z: f64 = 3.0;
+pub(crate) const NOISE_CHECK_Z: f64 = 3.0;
 /// … and only when it is off by more than this factor either way.
-const NOISE_CHECK_RATIO: f64 = 1.25;
+pub(crate) const NOISE_CHECK_RATIO: f64 = 1.25;
 
 /// Checks a stated σ against the repeats (either way) and against the geometric
 /// calibration's in-sample residuals (`insample`, whitened at the stated σ; `p` fitted
@@ -1868,10 +1962,14 @@ fn check_stated_noise<const N: usize>(out: &mut Diagnosis<N>, insample: &ModelAc
             insample.rows - insample.rows_pos,
         ),
     ];
-    for (part, stated, repeats, sigma, chi2, rows) in parts {
+    let overruled = [noise.overruled_pos, noise.overruled_rot];
+    for ((part, stated, repeats, sigma, chi2, rows), overruled) in parts.into_iter().zip(overruled)
+    {
         if !stated || rows == 0 {
             continue;
         }
+        // Judged against what the user stated, also when the floor overruled it.
+        let sigma = overruled.unwrap_or(sigma);
         let off = |ratio: f64| !(1.0 / NOISE_CHECK_RATIO..=NOISE_CHECK_RATIO).contains(&ratio);
         if let Some((s, dof)) = repeats {
             let ratio = s / sigma;

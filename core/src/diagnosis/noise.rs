@@ -39,6 +39,30 @@ fn pooled<const N: usize>(
     )
 }
 
+/// A stated σ the repeats show significantly too small (their σ over 1.25× the stated one
+/// at z > 3, z of ln ratio² with the repeats' degrees of freedom) gives way to the repeats':
+/// the floor cannot lie below the repeatability. Returns σ, its degrees of freedom and the
+/// overruled stated σ.
+fn overrule(
+    stated: bool,
+    sigma: f64,
+    dof: f64,
+    repeats: Option<(f64, f64)>,
+) -> (f64, f64, Option<f64>) {
+    match repeats {
+        Some((s_rep, n_rep)) if stated && sigma > 0.0 => {
+            let ratio = s_rep / sigma;
+            let z = crate::math::ln(ratio * ratio) / crate::math::sqrt(2.0 / n_rep);
+            if ratio > super::NOISE_CHECK_RATIO && z > super::NOISE_CHECK_Z {
+                (s_rep, n_rep, Some(sigma))
+            } else {
+                (sigma, dof, None)
+            }
+        }
+        _ => (sigma, dof, None),
+    }
+}
+
 /// The noise floor of a diagnosis: stated σ where given (infinite degrees of freedom),
 /// otherwise pooled from repeats. Fails with [`Error::MissingInput`] (`Quantity::NoiseFloor`)
 /// when a measured component has neither.
@@ -78,7 +102,12 @@ pub(crate) fn noise_floor<const N: usize>(
     let repeats = |ss: f64, dof: usize| {
         (dof > 0 && ss > 0.0).then(|| (crate::math::sqrt(ss / dof as f64), dof as f64))
     };
+    let (sp, np, overruled_pos) = overrule(cfg.sigma_pos_m.is_some(), sp, np, repeats(ss_p, dof_p));
+    let (sr, nr, overruled_rot) =
+        overrule(cfg.sigma_rot_rad.is_some(), sr, nr, repeats(ss_r, dof_r));
     Ok(NoiseFloor {
+        overruled_pos,
+        overruled_rot,
         repeat_pos: repeats(ss_p, dof_p),
         repeat_rot: repeats(ss_r, dof_r),
         sigma_pos_m: sp,

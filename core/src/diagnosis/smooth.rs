@@ -727,6 +727,31 @@ pub(crate) fn check<const N: usize>(
     summarise(data, poses, noise, base, &sw, delta, z_significance)
 }
 
+/// [`check`] on the verdict's held-out residuals (`heldout_final`) instead of the geometric
+/// model's: does a smooth function of q still explain part of what the chosen effects leave?
+/// (`base` is then the verdict's accumulator.) The per-pose residual fields are swapped for
+/// the run and restored, so every helper of [`check`] reads one field.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn check_remaining<const N: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    poses: &mut [PoseDiagnosis],
+    noise: &NoiseFloor,
+    base: &ModelAcc,
+    cfg: &Config,
+    ws: &mut SmoothWorkspace,
+) -> SmoothCheck {
+    let swap = |poses: &mut [PoseDiagnosis]| {
+        for p in poses.iter_mut() {
+            core::mem::swap(&mut p.heldout_baseline, &mut p.heldout_final);
+        }
+    };
+    swap(poses);
+    let out = check(robot, data, poses, noise, base, cfg, ws);
+    swap(poses);
+    out
+}
+
 /// The outputs from the per-pose corrected totals in `poses[l].scratch` and the change
 /// `delta` of each component type's whitened total.
 fn summarise<const N: usize>(
