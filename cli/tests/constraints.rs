@@ -355,6 +355,45 @@ fn bad_contact_input_exits_3_naming_file_line_and_column() {
         &cal,
         "contacts.csv:5: column 'session': session \"alone\" has 1 row(s)",
     );
+    // A constraints file with an unknown key names its line.
+    let f = fixture(6, 1, 4);
+    fs::write(
+        f.dir.path().join("constraints.toml"),
+        "[[distance]]\nbetween = [\"t0\", \"t1\"]\nm = 0.05\n\n[[target]]\nid = \"t2\"\nxyz = [0, 0, 0]\n",
+    )
+    .unwrap();
+    assert_refused(f.dir.path(), &cal, "constraints.toml:7");
+    // Instrument rows in two sessions: one base frame per session is not implemented.
+    let f = fixture(6, 1, 4);
+    let truth = aria::virtual_truth();
+    let mut csv = String::from("q1,q2,q3,q4,q5,q6,x,y,z,session\n");
+    for k in 0..8 {
+        let mut q = aria::TOOL_SEED_Q;
+        q[0] += 0.05 * k as f64;
+        let p = truth.fk(&JointState::new(q)).unwrap().translation.vector;
+        let cells: Vec<String> = q.iter().map(|v| format!("{v}")).collect();
+        csv.push_str(&format!(
+            "{},{},{},{},s{}\n",
+            cells.join(","),
+            p.x,
+            p.y,
+            p.z,
+            k / 4
+        ));
+    }
+    fs::write(f.dir.path().join("inst.csv"), csv).unwrap();
+    assert_refused(
+        f.dir.path(),
+        &[
+            "calibrate",
+            "inst.csv",
+            "--robot",
+            "aria",
+            "--out",
+            "m.json",
+        ],
+        "inst.csv:6: column 'session'",
+    );
     // Collinear plane contacts: plane "edge" touched at five points along a line.
     let f = fixture(6, 1, 4);
     let truth = aria::virtual_truth();

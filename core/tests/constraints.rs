@@ -7,8 +7,9 @@ mod common;
 
 use common::{SplitMix64, arm7};
 use kincal::identify::{
-    Algorithm, ConstraintData, Contact, Distance, Group, GroupKind, IdentifyOptions, Workspace,
-    analyze_constrained, distance_estimate, group_estimate, identify_constrained,
+    Algorithm, ComponentMask, ConstraintData, Contact, Distance, Group, GroupKind, IdentifyOptions,
+    Measurement, Workspace, analyze_constrained, distance_estimate, group_estimate,
+    identify_constrained,
 };
 use kincal::ik::{IkOptions, solve_ik};
 use kincal::params::{ParamId, ParamSet};
@@ -292,4 +293,200 @@ fn without_a_distance_one_length_is_the_scale_gauge() {
     assert!(a2.gauge.iter().all(
         |i| !ParamId::from_index(ParamIndex(i), 7).unwrap().is_length() || !(5..35).contains(&i)
     ));
+}
+
+/// `n` joint states holding the true tool point at `p + noise` (σ per axis, metres) in
+/// orientations tilted up to 0.4 rad from the orientation at `q0`.
+fn noisy_holds(
+    robot: &Robot<7>,
+    p: [f64; 3],
+    q0: [f64; 7],
+    n: usize,
+    sigma: f64,
+    rng: &mut SplitMix64,
+) -> Vec<Contact<7>> {
+    let r0 = robot.fk(&JointState::new(q0)).expect("fk").rotation;
+    let mut out = Vec::new();
+    while out.len() < n {
+        // Box–Muller normals.
+        let mut g = [0.0; 3];
+        for v in &mut g {
+            let (u1, u2) = (rng.uniform(1e-12, 1.0), rng.unit());
+            *v = sigma * (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
+        }
+        let q = [p[0] + g[0], p[1] + g[1], p[2] + g[2]];
+        out.extend(holds(robot, q, r0, q0, 1, 0.4, rng));
+    }
+    out
+}
+
+#[test]
+fn noisy_estimates_lie_within_their_standard_errors() {
+    let truth = truth(7);
+    let sigma = 1e-4;
+    let mut z2 = Vec::new();
+    let mut outside_3 = 0;
+    for seed in 0..12u64 {
+        let mut rng = SplitMix64::new(1000 + seed);
+        let mut set = Set {
+            contacts: vec![],
+            groups: vec![],
+            distances: vec![],
+            targets: vec![],
+        };
+        for _ in 0..16 {
+            let q0 = rng.q_within(truth.limits()).map(|v| 0.6 * v);
+            let t0 = truth
+                .fk(&JointState::new(q0))
+                .expect("fk")
+                .translation
+                .vector;
+            let p = [t0.x, t0.y, t0.z];
+            let c = noisy_holds(&truth, p, q0, 8, sigma, &mut rng);
+            set.groups.push(Group {
+                kind: GroupKind::Target,
+                start: set.contacts.len(),
+                len: c.len(),
+            });
+            set.contacts.extend(c);
+            set.targets.push(p);
+        }
+        set.distances.push(Distance {
+            a: 0,
+            b: 1,
+            m: dist(set.targets[0], set.targets[1]),
+            weight: 1.0,
+        });
+        let mut ws = workspace();
+        let opts = IdentifyOptions::new(Algorithm::Ols, geometric());
+        let fit = identify_constrained(&nominal(), &data(&set), &opts, &mut ws).expect("identify");
+        // σ² estimates the noise variance per coordinate (dof corrected).
+        assert!(
+            (fit.sigma2.sqrt() / sigma - 1.0).abs() < 0.25,
+            "seed {seed}: σ {} vs {sigma}",
+            fit.sigma2.sqrt()
+        );
+        for i in fit.analysis.identifiable.iter() {
+            let se = fit.std_errors[i];
+            let e = fit.robot.param(ParamIndex(i)).unwrap() - truth.param(ParamIndex(i)).unwrap();
+            let z = e / se;
+            z2.push(z * z);
+            if z.abs() > 3.0 {
+                outside_3 += 1;
+            }
+        }
+    }
+    let mean = z2.iter().sum::<f64>() / z2.len() as f64;
+    // E[z²] = 1; over ~250 estimates (correlated within a seed) a mean within 0.6..1.6.
+    assert!(
+        (0.6..1.6).contains(&mean),
+        "mean z² {mean} over {}",
+        z2.len()
+    );
+    assert!(
+        outside_3 as f64 <= 0.02 * z2.len() as f64,
+        "{outside_3} of {} beyond 3 se",
+        z2.len()
+    );
+}
+
+#[test]
+fn known_targets_known_plane_and_partial_coordinates_make_the_base_observable() {
+    // The base's z offset and rotation about z duplicate d and θ0 of link 1 (structurally
+    // redundant, held): the truth differs in θ0 and d of link 1 instead.
+    let mut truth = truth(5);
+    truth.set_param(ParamIndex(37), 0.0).unwrap();
+    truth.set_param(ParamIndex(40), 0.0).unwrap();
+    truth.set_param(ParamIndex(0), 0.02).unwrap();
+    let d1 = truth.param(ParamIndex(1)).unwrap();
+    truth.set_param(ParamIndex(1), d1 + 0.004).unwrap();
+    let mut set = synthetic(&truth, 8, 0, 6, 21);
+    set.distances.clear();
+    let mut rng = SplitMix64::new(77);
+    // Three known targets, one contact each.
+    for _ in 0..3 {
+        let q0 = rng.q_within(truth.limits()).map(|v| 0.6 * v);
+        let t = truth
+            .fk(&JointState::new(q0))
+            .expect("fk")
+            .translation
+            .vector;
+        set.groups.push(Group {
+            kind: GroupKind::KnownTarget([t.x, t.y, t.z]),
+            start: set.contacts.len(),
+            len: 1,
+        });
+        set.contacts.push(Contact::new(q0));
+    }
+    // A known plane z = 0.3 touched at 5 points.
+    let start = set.contacts.len();
+    let q0 = rng.q_within(truth.limits()).map(|v| 0.6 * v);
+    let r0 = truth.fk(&JointState::new(q0)).expect("fk").rotation;
+    let t0 = truth
+        .fk(&JointState::new(q0))
+        .expect("fk")
+        .translation
+        .vector;
+    for k in 0..5 {
+        let p = [
+            t0.x + 0.05 * (k % 3) as f64,
+            t0.y + 0.04 * (k / 2) as f64,
+            0.3,
+        ];
+        set.contacts
+            .extend(holds(&truth, p, r0, q0, 1, 0.3, &mut rng));
+    }
+    set.groups.push(Group {
+        kind: GroupKind::KnownPlane {
+            normal: [0.0, 0.0, 2.0],
+            offset_m: 0.3,
+        },
+        start,
+        len: 5,
+    });
+    // Two instrument rows measuring x only.
+    let inst: Vec<Measurement<7>> = (0..2)
+        .map(|_| {
+            let q = rng.q_within(truth.limits()).map(|v| 0.6 * v);
+            let t = truth.fk(&JointState::new(q)).expect("fk");
+            let mut m = Measurement::new(q, t);
+            m.mask = ComponentMask(0b001);
+            m
+        })
+        .collect();
+    let d = ConstraintData {
+        instrument: &inst,
+        contacts: &set.contacts,
+        groups: &set.groups,
+        distances: &[],
+    };
+    let mut ws = workspace();
+    let opts = IdentifyOptions::new(Algorithm::Ols, geometric());
+    let fit = identify_constrained(&nominal(), &d, &opts, &mut ws).expect("identify");
+    let a = &fit.analysis;
+    assert!(
+        a.gauge.is_empty(),
+        "{:?}",
+        a.gauge.iter().map(name).collect::<Vec<_>>()
+    );
+    assert!(
+        a.identifiable
+            .iter()
+            .filter(|&i| (35..41).contains(&i))
+            .count()
+            >= 3
+    );
+    assert!(fit.fitted.rms_pos_m < 1e-10, "{:?}", fit.fitted);
+    // With a reference, the fitted tool points equal the truth's (not just a rigid image).
+    for c in set.contacts.iter().take(10) {
+        let (a, b) = (
+            c.tool_point(&fit.robot).unwrap(),
+            c.tool_point(&truth).unwrap(),
+        );
+        assert!(dist(a, b) < 1e-9, "{a:?} vs {b:?}");
+    }
+    // The plane estimate of a known plane is the given one, normalised.
+    let e = group_estimate(&fit.robot, &d, set.groups.len() - 1).unwrap();
+    assert_eq!(e.normal, [0.0, 0.0, 1.0]);
+    assert!((e.offset_m - 0.3).abs() < 1e-15 && e.max_m < 1e-10);
 }

@@ -1094,3 +1094,326 @@ pub fn identify_constrained<const N: usize, const P: usize>(
     super::solvers::identify_into(data, opts, ws, &mut out)?;
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests {
+    //! The reduced rows against finite differences: `Jᵀe` (the normal-equation right-hand
+    //! side) is `−½∇cost` for every kind of row (exact for targets and distances, and for
+    //! planes by the eigenvalue derivative), and for targets the Gram matrix equals `JᵀJ`
+    //! of the finite-difference Jacobian of the centred residuals; the Givens path gives
+    //! the same normal equations as the Gram path.
+    use super::*;
+    use crate::aria;
+    use crate::identify::Algorithm;
+    use crate::params::ParamSet;
+    extern crate std;
+    use std::boxed::Box;
+
+    type Ws = Workspace<48>;
+
+    fn ws() -> Box<Ws> {
+        // SAFETY: all-zero is a valid Workspace (documented).
+        unsafe { Box::<Ws>::new_zeroed().assume_init() }
+    }
+
+    /// Deterministic joint readings around ARIA's tool seed.
+    fn q(k: usize) -> [f64; 6] {
+        let mut q = aria::TOOL_SEED_Q;
+        for (j, v) in q.iter_mut().enumerate() {
+            *v += 0.4 * libm::sin(1.7 * k as f64 + 2.3 * j as f64);
+        }
+        q
+    }
+
+    fn contact(k: usize, point: [f64; 3]) -> Contact<6> {
+        Contact {
+            point,
+            ..Contact::new(q(k))
+        }
+    }
+
+    struct Case {
+        instrument: [Measurement<6>; 2],
+        contacts: [Contact<6>; 20],
+        groups: [Group; 5],
+        distances: [Distance; 1],
+    }
+
+    /// Two targets with a distance, an unknown plane, a known plane, a known target, and
+    /// two partial-coordinate instrument rows; the predicted points are inconsistent (the
+    /// readings do not hold anything), so every residual is non-zero.
+    fn case() -> Case {
+        let p = [0.01, -0.02, 0.05];
+        let contacts = core::array::from_fn(|k| contact(k, if k % 2 == 0 { p } else { [0.0; 3] }));
+        let mut m0 = Measurement::new(q(40), Transform::identity());
+        m0.pose.translation.vector.x = 0.4;
+        m0.mask = ComponentMask(0b001);
+        let mut m1 = Measurement::new(q(41), Transform::identity());
+        m1.pose.translation.vector.y = 0.1;
+        m1.pose.translation.vector.z = 0.3;
+        m1.mask = ComponentMask(0b110);
+        Case {
+            instrument: [m0, m1],
+            contacts,
+            groups: [
+                Group {
+                    kind: GroupKind::Target,
+                    start: 0,
+                    len: 4,
+                },
+                Group {
+                    kind: GroupKind::Target,
+                    start: 4,
+                    len: 5,
+                },
+                Group {
+                    kind: GroupKind::Plane,
+                    start: 9,
+                    len: 5,
+                },
+                Group {
+                    kind: GroupKind::KnownPlane {
+                        normal: [0.1, 0.2, 1.0],
+                        offset_m: 0.3,
+                    },
+                    start: 14,
+                    len: 3,
+                },
+                Group {
+                    kind: GroupKind::KnownTarget([0.5, 0.1, 0.4]),
+                    start: 17,
+                    len: 3,
+                },
+            ],
+            distances: [Distance {
+                a: 0,
+                b: 1,
+                m: 0.05,
+                weight: 2.0,
+            }],
+        }
+    }
+
+    fn data(c: &Case) -> ConstraintData<'_, 6> {
+        ConstraintData {
+            instrument: &c.instrument,
+            contacts: &c.contacts,
+            groups: &c.groups,
+            distances: &c.distances,
+        }
+    }
+
+    fn params() -> ParamSet {
+        let mut s = ParamSet::new();
+        for i in 0..Robot::<6>::NUM_GEOMETRIC_PARAMS {
+            s.insert(i).unwrap();
+        }
+        s
+    }
+
+    fn fold_all(robot: &Robot<6>, d: &ConstraintData<'_, 6>, gram: bool, ws: &mut Ws) -> f64 {
+        let opts = IdentifyOptions::new(Algorithm::Ols, params());
+        let n = params().len();
+        for (k, i) in params().iter().enumerate() {
+            ws.cols[k] = i;
+            ws.colscale[k] = 1.0;
+        }
+        if gram {
+            ws.gram.reset(n).unwrap();
+            ws.to_gram = true;
+        } else {
+            ws.lsq.reset(n).unwrap();
+            ws.to_gram = false;
+        }
+        let c = d.fold(robot, true, &opts, n, ws).unwrap();
+        ws.to_gram = false;
+        c
+    }
+
+    #[test]
+    fn gradient_matches_finite_differences_for_every_kind_of_row() {
+        let robot = aria::nominal();
+        let c = case();
+        let d = data(&c);
+        d.validate().unwrap();
+        let mut ws = ws();
+        let opts = IdentifyOptions::new(Algorithm::Ols, params());
+        let cost = fold_all(&robot, &d, true, &mut ws);
+        assert!((cost - d.cost(&robot, &opts).unwrap()).abs() <= 1e-12 * cost);
+        assert!(cost > 1e-4, "residuals must not vanish: {cost}");
+        for (k, i) in params().iter().enumerate() {
+            let h = 1e-6;
+            let at = |x: f64| {
+                let mut r = robot;
+                r.set_param(ParamIndex(i), x).unwrap();
+                d.cost(&r, &opts).unwrap()
+            };
+            let v = robot.param(ParamIndex(i)).unwrap();
+            let fd = -(at(v + h) - at(v - h)) / (4.0 * h);
+            let an = ws.gram.atb()[k];
+            let scale = an.abs().max(fd.abs()).max(1e-6);
+            assert!(
+                (an - fd).abs() <= 1e-6 * scale,
+                "param {i}: Jᵀe {an} vs FD {fd}"
+            );
+        }
+    }
+
+    #[test]
+    fn target_gram_matches_the_finite_difference_jacobian_and_the_givens_path() {
+        let robot = aria::nominal();
+        let c = case();
+        // Targets and the known target only (their rows are linear in the tool points).
+        let groups = [c.groups[0], c.groups[1]];
+        let d = ConstraintData {
+            instrument: &[],
+            contacts: &c.contacts[..9],
+            groups: &groups,
+            distances: &[],
+        };
+        let mut ws = ws();
+        fold_all(&robot, &d, true, &mut ws);
+        let gram = *ws.gram.gram();
+        fold_all(&robot, &d, false, &mut ws);
+        let n = params().len();
+        // FD Jacobian of the centred residuals p_i − p̄ of each group.
+        let residuals = |r: &Robot<6>| -> [[f64; 3]; 9] {
+            let mut out = [[0.0; 3]; 9];
+            for g in &groups {
+                let pts: [[f64; 3]; 5] = core::array::from_fn(|k| {
+                    c.contacts
+                        .get(g.start + k)
+                        .filter(|_| k < g.len)
+                        .map_or([0.0; 3], |x| x.tool_point(r).unwrap())
+                });
+                let mut mean = [0.0; 3];
+                for p in pts.iter().take(g.len) {
+                    for a in 0..3 {
+                        mean[a] += p[a] / g.len as f64;
+                    }
+                }
+                for (k, p) in pts.iter().take(g.len).enumerate() {
+                    for a in 0..3 {
+                        out[g.start + k][a] = p[a] - mean[a];
+                    }
+                }
+            }
+            out
+        };
+        let mut jac = [[[0.0; 3]; 9]; 48];
+        for (k, i) in params().iter().enumerate() {
+            let h = 1e-6;
+            let v = robot.param(ParamIndex(i)).unwrap();
+            let mut rp = robot;
+            rp.set_param(ParamIndex(i), v + h).unwrap();
+            let mut rm = robot;
+            rm.set_param(ParamIndex(i), v - h).unwrap();
+            let (a, b) = (residuals(&rp), residuals(&rm));
+            for row in 0..9 {
+                for x in 0..3 {
+                    jac[k][row][x] = (a[row][x] - b[row][x]) / (2.0 * h);
+                }
+            }
+        }
+        let r = ws.lsq.r();
+        for a in 0..n {
+            for b in a..n {
+                let fd: f64 = (0..9)
+                    .map(|row| (0..3).map(|x| jac[a][row][x] * jac[b][row][x]).sum::<f64>())
+                    .sum();
+                let givens: f64 = (0..=a).map(|i| r[i][a] * r[i][b]).sum();
+                let scale = gram[a][a].abs().max(gram[b][b].abs()).sqrt().max(1e-3);
+                let scale = scale * scale;
+                assert!(
+                    (gram[a][b] - fd).abs() <= 1e-6 * scale,
+                    "G[{a}][{b}] {} vs FD {fd}",
+                    gram[a][b]
+                );
+                assert!(
+                    (gram[a][b] - givens).abs() <= 1e-9 * scale,
+                    "G[{a}][{b}] {} vs Givens {givens}",
+                    gram[a][b]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn layout_errors_name_the_group_and_distance() {
+        let c = case();
+        let mut groups = c.groups;
+        groups[2].start += 1;
+        let d = ConstraintData {
+            groups: &groups,
+            ..data(&c)
+        };
+        assert_eq!(d.validate(), Err(Error::BadGroup { group: 2 }));
+        let mut groups = c.groups;
+        groups[0].len = 1;
+        groups[1].start = 1;
+        groups[1].len = 8;
+        let d = ConstraintData {
+            groups: &groups,
+            ..data(&c)
+        };
+        assert_eq!(d.validate(), Err(Error::BadGroup { group: 0 }));
+        let distances = [Distance {
+            a: 0,
+            b: 2,
+            m: 0.05,
+            weight: 1.0,
+        }];
+        let d = ConstraintData {
+            distances: &distances,
+            ..data(&c)
+        };
+        assert_eq!(d.validate(), Err(Error::BadDistance { distance: 0 }));
+        // Collinear plane contacts.
+        let line: [Contact<6>; 4] = core::array::from_fn(|_| contact(0, [0.0; 3]));
+        let groups = [Group {
+            kind: GroupKind::Plane,
+            start: 0,
+            len: 4,
+        }];
+        let d = ConstraintData {
+            instrument: &[],
+            contacts: &line,
+            groups: &groups,
+            distances: &[],
+        };
+        assert_eq!(
+            group_estimate(&aria::nominal(), &d, 0),
+            Err(Error::DegenerateGroup { group: 0 })
+        );
+    }
+
+    #[test]
+    fn smallest_eigenvector_of_a_known_scatter() {
+        // Points spread in x (10) and y (1), thin in z (0.01), then rotated.
+        let s = [[100.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1e-4]];
+        let (ev, n) = sym3_smallest(s);
+        assert!(
+            (ev[0] - 1e-4).abs() < 1e-15
+                && (ev[1] - 1.0).abs() < 1e-12
+                && (ev[2] - 100.0).abs() < 1e-12
+        );
+        assert_eq!(n, [0.0, 0.0, 1.0]);
+        let (c, si) = (libm::cos(0.3), libm::sin(0.3));
+        let r = [
+            [c, -si, 0.0],
+            [si * 0.6, c * 0.6, -0.8],
+            [si * 0.8, c * 0.8, 0.6],
+        ];
+        let mut rs = [[0.0; 3]; 3];
+        for a in 0..3 {
+            for b in 0..3 {
+                rs[a][b] = (0..3).map(|k| r[a][k] * s[k][k] * r[b][k]).sum();
+            }
+        }
+        let (ev, n) = sym3_smallest(rs);
+        assert!((ev[0] - 1e-4).abs() < 1e-12);
+        let want = [r[0][2], r[1][2], r[2][2]];
+        let dot = (n[0] * want[0] + n[1] * want[1] + n[2] * want[2]).abs();
+        assert!((dot - 1.0).abs() < 1e-12, "{n:?} vs {want:?}");
+    }
+}
