@@ -73,6 +73,15 @@ the ROBOT's frames; when those are far off (more than a few cm or degrees), --in
 first estimates both frames from the data with the nominal geometry (hand-eye equation for
 full poses, alternating rigid fits for positions; kincal::frames) and starts from there.
 
+Instrument-free data (docs/constraints.md): rows with a `target` id hold the tool point (a
+ball centre, identified as the tool translation) at an unknown fixed point, rows with a
+`plane` id on a plane; --constraints FILE (TOML) gives known distances between targets,
+known targets and known planes. The 3 unknowns of each target/plane are eliminated, so many
+targets cost little. Without an instrument row, known target or known plane the base frame is
+not observable, and without a known distance neither is the scale: the report names what it
+holds ('not observable (gauge)') and adds the consistency per target (scatter of the
+predicted tool point, mm) and every known distance's error; the model file records them.
+
 Exit status: 0 success, 2 usage, 3 bad input (file:line, column and reason), 4 numerical
 failure (rank too low, no convergence).";
 

@@ -57,7 +57,15 @@ the 99.99 % χ² quantile); the identifiability of the calibrated model on all p
 --plot FILE.svg draws the held-out |e_p| (and |e_φ|) of every pose for both models on one
 scale. --robot-out ROBOT.toml writes the ROBOT's nominal geometry with the base and tool
 frames of the calibrated fit on all poses (a starting model for `kincal diagnose`, whose
-baseline fits the geometry but not the frames).";
+baseline fits the geometry but not the frames).
+
+Data with target/plane rows (docs/constraints.md; --constraints FILE): folds hold out whole
+groups, --group-by target|session|pose_id (default: session when the data have sessions,
+else target): training on one placement and testing on it overfits. A held-out row is
+scored by the distance of its predicted tool point from its target (plane) re-estimated
+from the held-out rows only; known distances whose targets are held out are scored too.
+Printed and in --json: mean |e|, RMS and max [mm] and the mean distance error, nominal vs
+calibrated (geometry kinds of --geometry, --effects, and the tool translation).";
 
 pub const EXAMPLE: &str = "\
 Example:

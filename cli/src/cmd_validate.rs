@@ -35,7 +35,12 @@ nominal model only.
 errors [mm] above and orientation errors [deg] below; columns NOM, OLS, OPT1, OPT2 (those
 present), rows e_x, e_y, e_z and the norm, against the pose index. The dashed red line in the
 norm rows is the target (drawn when the errors reach 5% of it). --json writes every
-number (SI units, full precision).";
+number (SI units, full precision).
+
+Data with target/plane rows (docs/constraints.md; --constraints FILE for known distances,
+targets, planes): reports instead the consistency per target and plane — the scatter of the
+predicted tool points about the target (plane) each model estimates from them: mean RMS and
+max [mm] — and the error of every known distance [mm], for the model and its variants.";
 
 pub const EXAMPLE: &str = "\
 Example:
