@@ -377,6 +377,10 @@ fn noisy_estimates_lie_within_their_standard_errors() {
         }
     }
     let mean = z2.iter().sum::<f64>() / z2.len() as f64;
+    eprintln!(
+        "{} estimates: mean z² {mean:.3}, {outside_3} beyond 3 se",
+        z2.len()
+    );
     // E[z²] = 1; over ~250 estimates (correlated within a seed) a mean within 0.6..1.6.
     assert!(
         (0.6..1.6).contains(&mean),
