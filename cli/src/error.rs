@@ -102,6 +102,9 @@ pub fn core_error(
             "the computation overflowed while fitting {file} ({e}): the data or the robot hold numbers too large to fit"
         )),
         E::BadPose { pose } => CliError::input(format!("{}: {e}", at(pose.0))),
+        E::BadGroup { .. } | E::DegenerateGroup { .. } | E::BadDistance { .. } => {
+            CliError::input(format!("{file}: {e}"))
+        }
         E::OutOfLimits { .. } | E::MissingInput { .. } | E::DimensionMismatch { .. } => {
             CliError::input(format!("{file}: {e}"))
         }

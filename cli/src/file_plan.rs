@@ -41,6 +41,14 @@ impl FilePlan {
         self
     }
 
+    /// An optional input file.
+    pub fn input_opt(self, flag: &str, path: Option<&Path>) -> Self {
+        match path {
+            Some(p) => self.input(flag, p),
+            None => self,
+        }
+    }
+
     /// A ROBOT or MODEL argument: an input when it names an existing file (a built-in
     /// name such as `aria` is not a file).
     pub fn input_if_file(self, flag: &str, arg: &str) -> Self {
@@ -158,6 +166,7 @@ pub fn calibrate(a: &crate::cmd_calibrate::Args) -> FilePlan {
     FilePlan::new()
         .input("DATA", &a.data)
         .input_if_file("--robot", &a.robot)
+        .input_opt("--constraints", a.constraints.as_deref())
         .output("--out", &a.out)
 }
 
@@ -174,6 +183,7 @@ pub fn validate(a: &crate::cmd_validate::Args) -> FilePlan {
     FilePlan::new()
         .input_if_file("MODEL", &a.model)
         .input("DATA", &a.data)
+        .input_opt("--constraints", a.constraints.as_deref())
         .output_opt("--plot", a.plot.as_deref())
         .output_opt("--json", a.json.as_deref())
 }
@@ -236,6 +246,7 @@ pub fn crossval(a: &crate::cmd_crossval::Args) -> FilePlan {
     FilePlan::new()
         .input("DATA", &a.data)
         .input_if_file("--robot", &a.robot)
+        .input_opt("--constraints", a.constraints.as_deref())
         .output_opt("--json", a.json.as_deref())
         .output_opt("--plot", a.plot.as_deref())
         .output_opt("--robot-out", a.robot_out.as_deref())
