@@ -83,7 +83,7 @@ echo "== figaroh-ur10e leave-one-out and joint offsets only:"
 grep -h "held-out RMS" "$D/crossval-loo.txt" "$D/crossval-theta0.txt" | sed 's/^/   /'
 
 # Sets that are not usable as they are: the refusal and its reason.
-for NAME in figaroh-tiago-mocap figaroh-mate-planes mukca hilti-jaibot-stationing; do
+for NAME in figaroh-tiago-mocap hilti-jaibot-stationing; do
     "$K" import-dataset "$NAME" "$DATA/$NAME" --out "$OUT/unused.csv" 2>> "$OUT/refused.txt" \
         && echo "unexpected: $NAME imported" >&2 || true
 done

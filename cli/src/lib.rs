@@ -22,6 +22,7 @@ pub mod cmd_select;
 pub mod cmd_validate;
 pub mod data;
 pub mod datasets;
+pub mod datasets_contact;
 pub mod design_args;
 pub mod designs;
 pub mod diagnosis_plot;

@@ -324,8 +324,6 @@ fn positioner_imports_and_unusable_sets_are_refused_with_reasons() {
     assert!(out.contains("205 poses, 2 joints, full poses"), "{out}");
     for (name, why) in [
         ("figaroh-tiago-mocap", "prismatic"),
-        ("figaroh-mate-planes", "whether the data are real"),
-        ("mukca", "ball-in-socket"),
         ("hilti-jaibot-stationing", "non-commercial"),
     ] {
         let src = root.join(name);
@@ -343,4 +341,289 @@ fn positioner_imports_and_unusable_sets_are_refused_with_reasons() {
         assert!(text(&o).contains(why), "{name}: {}", text(&o));
         assert!(!dir.path().join("x.csv").exists());
     }
+}
+
+/// `import-dataset mukca --robot-id ID` into `dir` as ID.csv / ID.toml / ID-constraints.toml.
+fn import_mukca(root: &Path, id: &str, dir: &Path) -> String {
+    let src = root.join("mukca");
+    let (csv, toml, cons) = (
+        format!("{id}.csv"),
+        format!("{id}.toml"),
+        format!("{id}-constraints.toml"),
+    );
+    let o = kincal(
+        &[
+            "import-dataset",
+            "mukca",
+            src.to_str().unwrap(),
+            "--robot-id",
+            id,
+            "--out",
+            &csv,
+            "--robot-out",
+            &toml,
+            "--constraints-out",
+            &cons,
+        ],
+        dir,
+    );
+    assert!(o.status.success(), "{id}: {}", text(&o));
+    text(&o)
+}
+
+/// The data rows of a written CSV (header, then rows), comments skipped.
+fn csv_rows(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let body = std::fs::read_to_string(path).unwrap();
+    let mut lines = body.lines().filter(|l| !l.starts_with('#'));
+    let header = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    let rows = lines
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    (header, rows)
+}
+
+#[test]
+fn mukca_imports_every_robot_with_sessions_targets_and_distances() {
+    let Some(root) = realdata() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    // (id, joints, locations, rows: the hole_0 + hole_1 lines of its folders)
+    for (id, n, locations, rows) in [
+        ("panda_1", 7, 3, 182),
+        ("panda_1_with_sensor", 7, 2, 120),
+        ("kuka_14", 7, 3, 180),
+        ("dinova_1", 6, 4, 137),
+        ("dinova_2", 6, 4, 181),
+    ] {
+        let out = import_mukca(&root, id, dir.path());
+        assert!(
+            out.contains(&format!("{rows} rows ({locations} locations")),
+            "{id}: {out}"
+        );
+        let (header, data) = csv_rows(&dir.path().join(format!("{id}.csv")));
+        let mut want = vec!["pose_id", "session", "target"]
+            .into_iter()
+            .map(str::to_string)
+            .collect::<Vec<_>>();
+        want.extend((1..=n).map(|k| format!("q{k}")));
+        assert_eq!(header, want, "{id}");
+        assert_eq!(data.len(), rows, "{id}");
+        // Every row against its raw line: pose_id LOCATION/sK/LINE names hole_K.csv's line.
+        for r in data.iter().step_by(7) {
+            let parts: Vec<&str> = r[0].split('/').collect();
+            let (loc, socket, line) = (parts[0], parts[1], parts[2].parse::<usize>().unwrap());
+            assert_eq!(r[1], loc, "{id}: session");
+            assert_eq!(r[2], format!("{loc}/{socket}"), "{id}: target");
+            let raw = std::fs::read_to_string(
+                root.join(format!("mukca/data/{id}/{loc}/hole_{}.csv", &socket[1..])),
+            )
+            .unwrap();
+            let raw_q: Vec<f64> = raw
+                .lines()
+                .nth(line - 1)
+                .unwrap()
+                .split(',')
+                .map(|v| v.trim().parse().unwrap())
+                .collect();
+            let got: Vec<f64> = r[3..].iter().map(|v| v.parse().unwrap()).collect();
+            assert_eq!(got, raw_q, "{id}: {} differs from the raw file", r[0]);
+        }
+        let cons =
+            std::fs::read_to_string(dir.path().join(format!("{id}-constraints.toml"))).unwrap();
+        let t: toml::Value = toml::from_str(&cons).unwrap();
+        let d = t["distance"].as_array().unwrap();
+        assert_eq!(d.len(), locations, "{id}");
+        for e in d {
+            assert_eq!(e["m"].as_float(), Some(0.05));
+            let b = e["between"].as_array().unwrap();
+            let (s0, s1) = (b[0].as_str().unwrap(), b[1].as_str().unwrap());
+            assert_eq!(
+                s0.strip_suffix("/s0"),
+                s1.strip_suffix("/s1"),
+                "{id}: {s0} {s1}"
+            );
+        }
+    }
+    // The robot file is the URDF chain up to the ball: panda.urdf's ball_joint (30.1 mm below
+    // the TCP) is the tool point.
+    let robot = std::fs::read_to_string(dir.path().join("panda_1.toml")).unwrap();
+    assert!(robot.contains("panda.urdf"), "{robot}");
+}
+
+#[test]
+fn mukca_refuses_missing_ids_files_and_bad_numbers() {
+    let Some(root) = realdata() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let src = root.join("mukca");
+    let run = |args: &[&str]| {
+        let mut a = vec!["import-dataset", "mukca"];
+        a.extend_from_slice(args);
+        kincal(&a, dir.path())
+    };
+    let s = src.to_str().unwrap();
+    let o = run(&[s, "--out", "x.csv", "--constraints-out", "c.toml"]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("--robot-id is required") && text(&o).contains("panda_1"));
+    let o = run(&[
+        s,
+        "--robot-id",
+        "panda_9",
+        "--out",
+        "x.csv",
+        "--constraints-out",
+        "c.toml",
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", text(&o));
+    assert!(text(&o).contains("panda_9"), "{}", text(&o));
+    let o = run(&[s, "--robot-id", "panda_1", "--out", "x.csv"]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("--constraints-out"), "{}", text(&o));
+    // A copy with a missing hole_1.csv and one with a bad number.
+    let copy = dir.path().join("mukca");
+    let loc = copy.join("data/panda_1/front");
+    std::fs::create_dir_all(&loc).unwrap();
+    std::fs::create_dir_all(copy.join("urdf")).unwrap();
+    std::fs::copy(src.join("urdf/panda.urdf"), copy.join("urdf/panda.urdf")).unwrap();
+    let raw = std::fs::read_to_string(src.join("data/panda_1/front/hole_0.csv")).unwrap();
+    std::fs::write(loc.join("hole_0.csv"), &raw).unwrap();
+    let c = copy.to_str().unwrap();
+    let args = [
+        c,
+        "--robot-id",
+        "panda_1",
+        "--out",
+        "x.csv",
+        "--constraints-out",
+        "c.toml",
+    ];
+    let o = run(&args);
+    assert_eq!(o.status.code(), Some(3), "{}", text(&o));
+    assert!(text(&o).contains("hole_1.csv"), "{}", text(&o));
+    let bad = raw.replacen(',', ",nan_x,", 1);
+    std::fs::write(loc.join("hole_1.csv"), raw.clone()).unwrap();
+    std::fs::write(loc.join("hole_0.csv"), bad).unwrap();
+    let o = run(&args);
+    assert_eq!(o.status.code(), Some(3), "{}", text(&o));
+    assert!(text(&o).contains("hole_0.csv:1: 8 values"), "{}", text(&o));
+    let bad = raw.replacen("e+00,", "e+00,x", 1);
+    std::fs::write(loc.join("hole_0.csv"), bad).unwrap();
+    let o = run(&args);
+    assert!(
+        text(&o).contains("hole_0.csv:1:2: expected a finite joint reading"),
+        "{}",
+        text(&o)
+    );
+    assert!(!dir.path().join("x.csv").exists());
+}
+
+#[test]
+fn mate_imports_single_coordinate_contacts_and_poses() {
+    let Some(root) = realdata() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let out = import(&root, "figaroh-mate-planes", dir.path());
+    assert!(out.contains("40 rows (30 plane contacts"), "{out}");
+    let (header, rows) = csv_rows(&dir.path().join("data.csv"));
+    assert_eq!(
+        header,
+        [
+            "pose_id",
+            "q1",
+            "q2",
+            "q3",
+            "x",
+            "y",
+            "z",
+            "roll_deg",
+            "pitch_deg",
+            "yaw_deg"
+        ]
+    );
+    // Raw first rows: x: 0.3044,102.93,18.17,55.512 (deg); z: -0.004,-35.02,45.84,113.976.
+    let x2 = &rows[0];
+    assert_eq!(x2[0], "x/2");
+    assert!((x2[1].parse::<f64>().unwrap() - 102.93_f64.to_radians()).abs() < 1e-15);
+    assert_eq!(
+        (x2[4].as_str(), x2[5].as_str(), x2[6].as_str()),
+        ("0.3044", "", "")
+    );
+    let z2 = rows.iter().find(|r| r[0] == "z/2").unwrap();
+    assert!((z2[3].parse::<f64>().unwrap() - 113.976_f64.to_radians()).abs() < 1e-15);
+    assert_eq!(
+        (z2[4].as_str(), z2[5].as_str(), z2[6].as_str()),
+        ("", "", "-0.004")
+    );
+    let p = rows.iter().filter(|r| r[0].starts_with("pose/")).count();
+    assert_eq!(p, 10);
+}
+
+#[test]
+fn urdf_robot_arguments_take_base_and_tip_links() {
+    let Some(root) = realdata() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = root.join("mukca/urdf/panda.urdf");
+    let u = urdf.to_str().unwrap();
+    std::fs::write(
+        dir.path().join("q.csv"),
+        "q1,q2,q3,q4,q5,q6,q7\n0,0,0,-1.5,0,1.5,0\n",
+    )
+    .unwrap();
+    // Without a tip link the Panda's tree (fingers, ball) is refused, naming the leaves.
+    let o = kincal(&["predict", u, "q.csv", "--out", "p.csv"], dir.path());
+    assert_eq!(o.status.code(), Some(3), "{}", text(&o));
+    assert!(text(&o).contains("choose a tip link") && text(&o).contains("ball_link"));
+    let o = kincal(
+        &[
+            "predict",
+            u,
+            "q.csv",
+            "--out",
+            "p.csv",
+            "--tip-link",
+            "ball_link",
+        ],
+        dir.path(),
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let (_, rows) = csv_rows(&dir.path().join("p.csv"));
+    // (The 4×4 FK agreement of this chain is checked in the URDF unit tests.)
+    assert_eq!(rows.len(), 1);
+    // A chain that does not exist: exit 3, naming both links and the URDF line.
+    let o = kincal(
+        &[
+            "predict",
+            u,
+            "q.csv",
+            "--out",
+            "p.csv",
+            "--base-link",
+            "panda_hand",
+            "--tip-link",
+            "panda_link3",
+        ],
+        dir.path(),
+    );
+    assert_eq!(o.status.code(), Some(3), "{}", text(&o));
+    let t = text(&o);
+    assert!(
+        t.contains("panda_link3") && t.contains("panda_hand") && t.contains("panda.urdf:"),
+        "{t}"
+    );
+    // The flags on a robot that is not a URDF: a usage error.
+    let o = kincal(
+        &[
+            "predict",
+            "aria",
+            "q.csv",
+            "--out",
+            "p.csv",
+            "--tip-link",
+            "x",
+        ],
+        dir.path(),
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
 }
