@@ -229,6 +229,20 @@ enum kincal_status
      */
     KINCAL_STATUS_BAD_HANDLE = 117,
     /*
+     A group of constraint rows (target or plane) cannot be used: not contiguous, too
+     few rows, or a bad known normal (`index` = group).
+     */
+    KINCAL_STATUS_BAD_GROUP = 118,
+    /*
+     A plane's contact points are collinear: its normal is undetermined (`index` = group).
+     */
+    KINCAL_STATUS_DEGENERATE_GROUP = 119,
+    /*
+     A known distance names a missing or non-target group, or has a bad length or
+     weight (`index` = distance).
+     */
+    KINCAL_STATUS_BAD_DISTANCE = 120,
+    /*
      Inverse kinematics found no configuration within the limits that reaches the pose
      (`residual_pos_m`, `residual_rot_rad`: the best residual found).
      */

@@ -319,6 +319,10 @@ fn row(id: String, q: &[f64; N], t: &Transform) -> MeasurementRow {
         approach: None,
         temp_c: None,
         extras: Vec::new(),
+        partial_m: None,
+        target: None,
+        plane: None,
+        session: None,
     }
 }
 
@@ -332,6 +336,9 @@ fn write_set(path: &Path, comments: &[String], rows: Vec<MeasurementRow>) -> Res
         orientation_form: Some(OrientationForm::Quaternion),
         has_position: true,
         has_point: false,
+        has_target: false,
+        has_plane: false,
+        has_session: false,
         has_approach: false,
         has_temperature: false,
         sha256: String::new(),

@@ -780,6 +780,9 @@ fn markers<const N: usize>(robot: &Robot<N>, args: &Args) -> Result<(), CliError
         orientation_form: (!args.points).then_some(OrientationForm::Quaternion),
         has_position: true,
         has_point: args.points,
+        has_target: false,
+        has_plane: false,
+        has_session: false,
         has_approach: joints.has_approach,
         has_temperature: joints.has_temperature,
         sha256: String::new(),
@@ -820,6 +823,10 @@ fn joint_row(r: &MeasurementRow, label: &str) -> MeasurementRow {
         approach: r.approach.clone(),
         temp_c: r.temp_c,
         extras: r.extras.clone(),
+        partial_m: None,
+        target: None,
+        plane: None,
+        session: None,
     }
 }
 

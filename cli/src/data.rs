@@ -87,6 +87,24 @@ pub fn measured_pose(
     row: &MeasurementRow,
     source: &str,
 ) -> Result<Option<(Transform, ComponentMask)>, CliError> {
+    if let (None, Some(c)) = (row.position_m, row.partial_m) {
+        // Some coordinates only: the mask says which (spec: empty components).
+        let mut mask = 0u8;
+        let mut p = [0.0; 3];
+        for (k, v) in c.iter().enumerate() {
+            if let Some(v) = v {
+                p[k] = *v;
+                mask |= 1 << k;
+            }
+        }
+        return Ok(Some((
+            transform(
+                nalgebra::Matrix3::identity(),
+                Vector3::new(p[0], p[1], p[2]),
+            ),
+            ComponentMask(mask),
+        )));
+    }
     let Some(p) = row.position_m else {
         return Ok(None);
     };
@@ -127,6 +145,19 @@ pub fn measurements<const N: usize>(set: &MeasurementSet) -> Result<Vec<Measurem
     set.rows
         .iter()
         .map(|row| {
+            if let Some(id) = row.target.as_ref().or(row.plane.as_ref()) {
+                let col = if row.target.is_some() {
+                    "target"
+                } else {
+                    "plane"
+                };
+                return Err(CliError::input(format!(
+                    "{}:{}: column '{col}': contact row ({col} {id:?}) where this command \
+                     expects measured poses: expected x, y, z (contact rows are read by \
+                     calibrate, validate, crossval and predict)",
+                    set.source, row.line
+                )));
+            }
             let (pose, mask) = measured_pose(row, &set.source)?.ok_or_else(|| {
                 CliError::input(format!(
                     "{}:{}: missing column 'x': expected measured poses (x, y, z)",

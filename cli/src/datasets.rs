@@ -201,6 +201,10 @@ fn row(id: String, q: Vec<f64>, p: [f64; 3], orientation: Option<Orientation>) -
         approach: None,
         temp_c: None,
         extras: Vec::new(),
+        partial_m: None,
+        target: None,
+        plane: None,
+        session: None,
     }
 }
 
@@ -247,6 +251,9 @@ impl Parts<'_> {
                 orientation_form: self.form,
                 has_position: true,
                 has_point: false,
+                has_target: false,
+                has_plane: false,
+                has_session: false,
                 has_approach: false,
                 has_temperature: false,
                 sha256: String::new(),

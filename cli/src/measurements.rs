@@ -101,6 +101,47 @@ pub struct MeasurementRow {
     pub temp_c: Option<f64>,
     /// Values of the `extra_` columns, in the order of `MeasurementSet::extra_columns`.
     pub extras: Vec<String>,
+    /// Some but not all of x, y, z (the others left empty: not measured on this row);
+    /// `position_m` is then `None`. `None` when all three or none are given.
+    pub partial_m: Option<[Option<f64>; 3]>,
+    /// `target` id: the row's tool point is held at this unknown (or known) point; the row
+    /// has no pose.
+    pub target: Option<String>,
+    /// `plane` id: the row's tool point lies on this plane; the row has no pose.
+    pub plane: Option<String>,
+    /// `session` id (set-up sharing one base frame).
+    pub session: Option<String>,
+}
+
+impl MeasurementRow {
+    /// A row with joint readings only (everything else absent).
+    pub fn joints_only(line: u64, q_rad: Vec<f64>) -> Self {
+        MeasurementRow {
+            line,
+            pose_id: None,
+            q_rad,
+            position_m: None,
+            orientation: None,
+            point_m: None,
+            approach: None,
+            temp_c: None,
+            extras: Vec::new(),
+            partial_m: None,
+            target: None,
+            plane: None,
+            session: None,
+        }
+    }
+
+    /// Whether the row is a constraint row (`target` or `plane`).
+    pub fn is_constraint(&self) -> bool {
+        self.target.is_some() || self.plane.is_some()
+    }
+
+    /// Whether the row measures anything (a coordinate, a target or a plane).
+    pub fn measures_something(&self) -> bool {
+        self.position_m.is_some() || self.partial_m.is_some() || self.is_constraint()
+    }
 }
 
 /// A whole measurement file.
@@ -118,6 +159,12 @@ pub struct MeasurementSet {
     pub has_position: bool,
     /// The file has the `point_x, point_y, point_z` columns.
     pub has_point: bool,
+    /// The file has a `target` column.
+    pub has_target: bool,
+    /// The file has a `plane` column.
+    pub has_plane: bool,
+    /// The file has a `session` column.
+    pub has_session: bool,
     pub has_approach: bool,
     pub has_temperature: bool,
     /// Lower-case hex SHA-256 of the file's bytes.
@@ -368,6 +415,9 @@ enum Unit {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Kind {
     PoseId,
+    Target,
+    Plane,
+    Session,
     Joint(usize),
     Pos(usize),
     Point(usize),
@@ -391,8 +441,8 @@ const RPY_NAMES: [&str; 3] = ["roll", "pitch", "yaw"];
 const QUAT_NAMES: [&str; 4] = ["qw", "qx", "qy", "qz"];
 
 const KNOWN_COLUMNS: &str = "expected q1..qN, x/y/z, roll/pitch/yaw, qw/qx/qy/qz, \
-                             point_x/point_y/point_z, pose_id, s1..sN, temp_c, or a user \
-                             column prefixed with extra_";
+                             point_x/point_y/point_z, pose_id, target, plane, session, \
+                             s1..sN, temp_c, or a user column prefixed with extra_";
 
 /// Parses `k` in `q<k>` / `s<k>`: decimal, no sign, no leading zero.
 fn index_suffix(s: &str) -> Option<usize> {
@@ -406,6 +456,9 @@ fn index_suffix(s: &str) -> Option<usize> {
 fn classify(name: &str) -> Result<(Kind, Unit), String> {
     match name {
         "pose_id" => return Ok((Kind::PoseId, Unit::None)),
+        "target" => return Ok((Kind::Target, Unit::None)),
+        "plane" => return Ok((Kind::Plane, Unit::None)),
+        "session" => return Ok((Kind::Session, Unit::None)),
         "temp_c" => return Ok((Kind::Temp, Unit::None)),
         _ => {}
     }
@@ -478,6 +531,9 @@ struct Layout {
     approach_cols: Option<Vec<usize>>,
     temp_col: Option<usize>,
     pose_id_col: Option<usize>,
+    target_col: Option<usize>,
+    plane_col: Option<usize>,
+    session_col: Option<usize>,
     extra_cols: Vec<usize>,
 }
 
@@ -669,6 +725,9 @@ impl<'a> Parser<'a> {
             },
             has_position: layout.pos_cols.is_some(),
             has_point: layout.point_cols.is_some(),
+            has_target: layout.target_col.is_some(),
+            has_plane: layout.plane_col.is_some(),
+            has_session: layout.session_col.is_some(),
             has_approach: layout.approach_cols.is_some(),
             has_temperature: layout.temp_col.is_some(),
             sha256,
@@ -689,6 +748,7 @@ impl<'a> Parser<'a> {
         let mut approach: Vec<Option<usize>> = vec![None; n];
         let mut temp = None;
         let mut pose_id = None;
+        let (mut target, mut plane, mut session) = (None, None, None);
         let mut extra_cols = Vec::new();
 
         for (i, raw) in header.iter().enumerate() {
@@ -707,6 +767,9 @@ impl<'a> Parser<'a> {
             };
             let slot: &mut Option<usize> = match kind {
                 Kind::PoseId => &mut pose_id,
+                Kind::Target => &mut target,
+                Kind::Plane => &mut plane,
+                Kind::Session => &mut session,
                 Kind::Temp => &mut temp,
                 Kind::Pos(a) => &mut pos[a],
                 Kind::Point(a) => &mut point[a],
@@ -833,8 +896,9 @@ impl<'a> Parser<'a> {
                     .into(),
             ));
         }
+        let constraint_cols = target.is_some() || plane.is_some();
         if pos_cols.is_none() {
-            if let Some(c) = point_cols.map(|p| p[0]) {
+            if let (Some(c), false) = (point_cols.map(|p| p[0]), constraint_cols) {
                 return Err(at(
                     "x",
                     format!(
@@ -852,7 +916,7 @@ impl<'a> Parser<'a> {
                     ),
                 ));
             }
-            if self.opts.require_pose {
+            if self.opts.require_pose && !constraint_cols {
                 return Err(at(
                     "x",
                     "missing column: measured poses are required (x, y, z, optionally \
@@ -889,6 +953,9 @@ impl<'a> Parser<'a> {
             approach_cols,
             temp_col: temp,
             pose_id_col: pose_id,
+            target_col: target,
+            plane_col: plane,
+            session_col: session,
             extra_cols,
         })
     }
@@ -901,7 +968,10 @@ impl<'a> Parser<'a> {
         n_fields: usize,
     ) -> Result<MeasurementRow, InputError> {
         let cols = &layout.columns;
-        let first_is_text = matches!(cols[0].kind, Kind::PoseId | Kind::Extra(_));
+        let first_is_text = matches!(
+            cols[0].kind,
+            Kind::PoseId | Kind::Extra(_) | Kind::Target | Kind::Plane | Kind::Session
+        );
         if rec.first().is_some_and(|f| f.starts_with('#'))
             && (rec.len() != n_fields || !first_is_text)
         {
@@ -973,17 +1043,129 @@ impl<'a> Parser<'a> {
             q_rad.push(v);
         }
 
-        let position_m = match layout.pos_cols {
-            Some(p) => Some([num(p[0])?, num(p[1])?, num(p[2])?]),
+        // Text ids: empty means "not on this row" for target/plane, never for session.
+        let text = |c: Option<usize>| -> Option<(usize, String)> {
+            c.and_then(|c| {
+                let v = rec[c].trim();
+                (!v.is_empty()).then(|| (c, v.to_string()))
+            })
+        };
+        let target = text(layout.target_col);
+        let plane = text(layout.plane_col);
+        let session = match layout.session_col {
+            Some(c) => match text(Some(c)) {
+                Some((_, v)) => Some(v),
+                None => {
+                    return Err(self.err(
+                        Some(line),
+                        Some(&cols[c].name),
+                        "expected a session id, found an empty cell",
+                    ));
+                }
+            },
             None => None,
         };
+        if let (Some((_, t)), Some((c, p))) = (&target, &plane) {
+            return Err(self.err(
+                Some(line),
+                Some(&cols[*c].name),
+                format!(
+                    "the row names target {t:?} and plane {p:?}: expected one of them (a row \
+                     holds its tool point at a target or on a plane)"
+                ),
+            ));
+        }
+        let constraint = target.as_ref().or(plane.as_ref());
+        // Position components: each may be empty (not measured on this row).
+        let mut coords = [None; 3];
+        if let Some(p) = layout.pos_cols {
+            for (k, &c) in p.iter().enumerate() {
+                if !rec[c].trim().is_empty() {
+                    coords[k] = Some(num(c)?);
+                }
+            }
+        }
+        let orientation_cells: Vec<usize> = layout
+            .rpy_cols
+            .map(|r| r.to_vec())
+            .or(layout.quat_cols.map(|q| q.to_vec()))
+            .unwrap_or_default();
+        let orientation_given = orientation_cells
+            .iter()
+            .filter(|&&c| !rec[c].trim().is_empty())
+            .count();
+        if let Some((tc, id)) = constraint {
+            let pose_cell = layout
+                .pos_cols
+                .iter()
+                .flatten()
+                .chain(orientation_cells.iter())
+                .find(|&&c| !rec[c].trim().is_empty());
+            if let Some(&c) = pose_cell {
+                return Err(self.err(
+                    Some(line),
+                    Some(&cols[c].name),
+                    format!(
+                        "the row is a contact with {} {id:?} and also has a measured pose: \
+                         expected an empty cell (a target or plane row has no pose columns)",
+                        cols[*tc].name
+                    ),
+                ));
+            }
+        }
+        let n_coords = coords.iter().flatten().count();
+        let position_m = match coords {
+            [Some(x), Some(y), Some(z)] => Some([x, y, z]),
+            _ => None,
+        };
+        let partial_m = (n_coords > 0 && n_coords < 3).then_some(coords);
+        if orientation_given > 0 && (orientation_given < orientation_cells.len() || n_coords < 3) {
+            let c = orientation_cells
+                .iter()
+                .copied()
+                .find(|&c| rec[c].trim().is_empty())
+                .or(layout
+                    .pos_cols
+                    .and_then(|p| p.into_iter().find(|&c| rec[c].trim().is_empty())))
+                .unwrap_or(orientation_cells[0]);
+            return Err(self.err(
+                Some(line),
+                Some(&cols[c].name),
+                "expected a number, found an empty cell (an orientation needs all its \
+                 components and the full position x, y, z)",
+            ));
+        }
+        if self.opts.require_pose && n_coords == 0 && constraint.is_none() {
+            let c = layout
+                .pos_cols
+                .map(|p| p[0])
+                .or(layout.target_col)
+                .or(layout.plane_col)
+                .unwrap_or(0);
+            return Err(self.err(
+                Some(line),
+                Some(&cols[c].name),
+                "expected a number, found an empty cell (the row measures nothing: give a \
+                 coordinate, a target or a plane)",
+            ));
+        }
 
+        // The point columns may be left empty (all three): the default, the tool origin.
         let point_m = match layout.point_cols {
+            Some(p) if p.iter().all(|&c| rec[c].trim().is_empty()) => {
+                if constraint.is_some() {
+                    Some([0.0; 3])
+                } else {
+                    None
+                }
+            }
             Some(p) => Some([num(p[0])?, num(p[1])?, num(p[2])?]),
             None => None,
         };
 
-        let orientation = if let Some(r) = layout.rpy_cols {
+        let orientation = if orientation_given == 0 {
+            None
+        } else if let Some(r) = layout.rpy_cols {
             Some(Orientation::Rpy {
                 roll_rad: num(r[0])?,
                 pitch_rad: num(r[1])?,
@@ -1063,6 +1245,10 @@ impl<'a> Parser<'a> {
             approach,
             temp_c,
             extras,
+            partial_m,
+            target: target.map(|(_, v)| v),
+            plane: plane.map(|(_, v)| v),
+            session,
         })
     }
 }
@@ -1208,6 +1394,15 @@ pub fn write_measurements_csv(mut out: impl Write, set: &MeasurementSet) -> io::
     if set.has_point {
         header.extend(POINT_NAMES.iter().map(|s| s.to_string()));
     }
+    for (has, name) in [
+        (set.has_target, "target"),
+        (set.has_plane, "plane"),
+        (set.has_session, "session"),
+    ] {
+        if has {
+            header.push(name.into());
+        }
+    }
     if set.has_approach {
         header.extend((1..=n).map(|k| format!("s{k}")));
     }
@@ -1236,12 +1431,23 @@ pub fn write_measurements_csv(mut out: impl Write, set: &MeasurementSet) -> io::
         for (k, &q) in r.q_rad.iter().enumerate() {
             rec.push(finite(q, i, &format!("q{}", k + 1))?);
         }
-        match (r.position_m, set.has_position) {
+        let coords = match (r.position_m, r.partial_m) {
+            (Some(p), None) => Some(p.map(Some)),
+            (None, Some(c)) => Some(c),
+            (None, None) => None,
+            (Some(_), Some(_)) => return Err(bad("both position_m and partial_m")),
+        };
+        match (coords, set.has_position) {
             (Some(p), true) => {
-                for (a, &v) in p.iter().enumerate() {
-                    rec.push(finite(v, i, POS_NAMES[a])?);
+                for (a, v) in p.iter().enumerate() {
+                    match v {
+                        Some(v) => rec.push(finite(*v, i, POS_NAMES[a])?),
+                        None => rec.push(String::new()),
+                    }
                 }
             }
+            // Empty cells: a row that measures no coordinate (contact or joint-only row).
+            (None, true) => rec.extend(std::iter::repeat_n(String::new(), 3)),
             (None, false) => {}
             _ => return Err(bad("position does not match has_position")),
         }
@@ -1264,6 +1470,10 @@ pub fn write_measurements_csv(mut out: impl Write, set: &MeasurementSet) -> io::
                 }
             }
             (None, None) => {}
+            (None, Some(f)) => {
+                let k = if f == OrientationForm::Rpy { 3 } else { 4 };
+                rec.extend(std::iter::repeat_n(String::new(), k));
+            }
             _ => return Err(bad("orientation does not match orientation_form")),
         }
         match (r.point_m, set.has_point) {
@@ -1272,8 +1482,23 @@ pub fn write_measurements_csv(mut out: impl Write, set: &MeasurementSet) -> io::
                     rec.push(finite(v, i, POINT_NAMES[a])?);
                 }
             }
+            (None, true) => rec.extend(std::iter::repeat_n(String::new(), 3)),
             (None, false) => {}
             _ => return Err(bad("point does not match has_point")),
+        }
+        for (v, has, name) in [
+            (&r.target, set.has_target, "target"),
+            (&r.plane, set.has_plane, "plane"),
+            (&r.session, set.has_session, "session"),
+        ] {
+            match (v, has) {
+                (Some(id), true) if !id.trim().is_empty() && id.trim() == id => {
+                    rec.push(id.clone())
+                }
+                (None, true) if name != "session" => rec.push(String::new()),
+                (None, false) => {}
+                _ => return Err(bad(&format!("{name} does not match has_{name}"))),
+            }
         }
         match (&r.approach, set.has_approach) {
             (Some(s), true) if s.len() == n => {
@@ -1380,6 +1605,100 @@ mod tests {
             Some(1),
             Some("point_x_deg"),
             "is a length",
+        );
+    }
+
+    /// Target, plane and session columns, empty position components; round trip.
+    #[test]
+    fn contact_rows_partial_coordinates_and_sessions() {
+        let text = "q1,q2,x,y,z,roll,pitch,yaw,point_x_mm,point_y_mm,point_z_mm,target,plane,session\n\
+                    0.1,0.2,,,,,,,0,0,50,s0,,loc1\n\
+                    0.3,0.4,,,,,,,0,0,50,s0,,loc1\n\
+                    0.5,0.6,,,,,,,,,,,table,loc2\n\
+                    0.7,0.8,0.25,,,,,,0,0,0,,,loc2\n\
+                    0.9,1.0,1,2,3,0,0,0,,,,,,loc2\n";
+        let mut o = opts(2);
+        o.require_pose = true;
+        let set = parse_with(text, &o).expect("parse");
+        assert!(set.has_target && set.has_plane && set.has_session);
+        let r = &set.rows;
+        assert_eq!(r[0].target.as_deref(), Some("s0"));
+        assert_eq!(r[0].point_m, Some([0.0, 0.0, 0.05]));
+        assert!(r[0].position_m.is_none() && r[0].orientation.is_none());
+        assert_eq!(r[2].plane.as_deref(), Some("table"));
+        assert_eq!(r[2].point_m, Some([0.0; 3]));
+        assert_eq!(r[3].partial_m, Some([Some(0.25), None, None]));
+        assert_eq!(r[3].point_m, Some([0.0; 3]));
+        assert!(r[3].position_m.is_none());
+        assert_eq!(r[4].position_m, Some([1.0, 2.0, 3.0]));
+        assert_eq!(r[4].session.as_deref(), Some("loc2"));
+        let mut out = Vec::new();
+        write_measurements_csv(&mut out, &set).expect("write");
+        let back = parse_with(std::str::from_utf8(&out).unwrap(), &o).expect("reparse");
+        assert_eq!(back.rows.len(), set.rows.len());
+        for (a, b) in back.rows.iter().zip(&set.rows) {
+            assert_eq!(
+                (&a.target, &a.plane, &a.session),
+                (&b.target, &b.plane, &b.session)
+            );
+            assert_eq!(
+                (a.position_m, a.partial_m, a.point_m),
+                (b.position_m, b.partial_m, b.point_m)
+            );
+        }
+    }
+
+    #[test]
+    fn contact_row_refusals_name_line_and_column() {
+        let mut o = opts(2);
+        o.require_pose = true;
+        let h = "q1,q2,x,y,z,roll,pitch,yaw,target,plane,session\n";
+        // A pose and a target on one row.
+        rejects(
+            &format!("{h}0,0,,,,,,,t,,a\n0,0,1,,,,,,t,,a\n"),
+            &o,
+            Some(3),
+            Some("x"),
+            "also has a measured pose",
+        );
+        rejects(
+            &format!("{h}0,0,,,,,0.1,,t,,a\n"),
+            &o,
+            Some(2),
+            Some("pitch"),
+            "also has a measured pose",
+        );
+        // A target and a plane on one row.
+        rejects(
+            &format!("{h}0,0,,,,,,,t,p,a\n"),
+            &o,
+            Some(2),
+            Some("plane"),
+            "expected one of them",
+        );
+        // An empty session id.
+        rejects(
+            &format!("{h}0,0,,,,,,,t,,\n"),
+            &o,
+            Some(2),
+            Some("session"),
+            "session id",
+        );
+        // An orientation without the full position.
+        rejects(
+            &format!("{h}0,0,1,2,,0,0,0,,,a\n"),
+            &o,
+            Some(2),
+            Some("z"),
+            "full position",
+        );
+        // A row that measures nothing where poses are required.
+        rejects(
+            &format!("{h}0,0,,,,,,,,,a\n"),
+            &o,
+            Some(2),
+            Some("x"),
+            "measures nothing",
         );
     }
 
@@ -2184,6 +2503,10 @@ mod tests {
                 approach: Some(vec![-1, 0, 1]),
                 temp_c: Some(g.any()),
                 extras: vec![format!("a,\"b\" {i}"), String::new()],
+                partial_m: None,
+                target: None,
+                plane: None,
+                session: None,
             })
             .collect();
         let set = MeasurementSet {
@@ -2195,6 +2518,9 @@ mod tests {
             orientation_form: Some(OrientationForm::Rpy),
             has_position: true,
             has_point: false,
+            has_target: false,
+            has_plane: false,
+            has_session: false,
             has_approach: true,
             has_temperature: true,
             sha256: String::new(),

@@ -141,11 +141,34 @@ pub enum Error {
         /// The joint.
         joint: JointIndex,
     },
+    /// A group of constraint rows (target or plane) that cannot be used: rows not
+    /// contiguous, too few rows for its kind, or a non-finite / zero known normal.
+    BadGroup {
+        /// The group (index into the groups).
+        group: usize,
+    },
+    /// A plane whose predicted contact points are collinear (or coincide): its normal is
+    /// undetermined.
+    DegenerateGroup {
+        /// The group.
+        group: usize,
+    },
+    /// A known distance naming a group that does not exist or is not a target, the same
+    /// target twice, or a negative / non-finite length or weight.
+    BadDistance {
+        /// The distance (index into the distances).
+        distance: usize,
+    },
 }
 
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
+            Error::BadGroup { group } => write!(f, "constraint group {group} is unusable"),
+            Error::DegenerateGroup { group } => {
+                write!(f, "plane {group}: contact points are collinear")
+            }
+            Error::BadDistance { distance } => write!(f, "known distance {distance} is invalid"),
             Error::NonFinite { what, index } => {
                 write!(f, "non-finite number in {what:?} at index {index}")
             }

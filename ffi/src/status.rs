@@ -61,6 +61,14 @@ pub enum kincal_status {
     /// A `kincal_prepared` handle was not filled by `kincal_prepare` of this library build, or
     /// has been overwritten or corrupted since (`argument`): prepare it again.
     BadHandle = 117,
+    /// A group of constraint rows (target or plane) cannot be used: not contiguous, too
+    /// few rows, or a bad known normal (`index` = group).
+    BadGroup = 118,
+    /// A plane's contact points are collinear: its normal is undetermined (`index` = group).
+    DegenerateGroup = 119,
+    /// A known distance names a missing or non-target group, or has a bad length or
+    /// weight (`index` = distance).
+    BadDistance = 120,
     /// Inverse kinematics found no configuration within the limits that reaches the pose
     /// (`residual_pos_m`, `residual_rot_rad`: the best residual found).
     Unreachable = 200,
@@ -80,7 +88,7 @@ pub enum kincal_status {
 
 impl kincal_status {
     /// Every status, in numeric order (used by the tests and `kincal_status_str`).
-    pub(crate) const ALL: [kincal_status; 25] = [
+    pub(crate) const ALL: [kincal_status; 28] = [
         kincal_status::Ok,
         kincal_status::NullPointer,
         kincal_status::BadLength,
@@ -100,6 +108,9 @@ impl kincal_status {
         kincal_status::MisalignedPointer,
         kincal_status::DegenerateAxis,
         kincal_status::BadHandle,
+        kincal_status::BadGroup,
+        kincal_status::DegenerateGroup,
+        kincal_status::BadDistance,
         kincal_status::Unreachable,
         kincal_status::NotConverged,
         kincal_status::RankDeficient,
@@ -162,6 +173,15 @@ impl kincal_status {
             }
             kincal_status::BadHandle => {
                 c"KINCAL_STATUS_BAD_HANDLE: a kincal_prepared was not filled by kincal_prepare or is corrupted"
+            }
+            kincal_status::BadGroup => {
+                c"KINCAL_STATUS_BAD_GROUP: a target or plane group cannot be used"
+            }
+            kincal_status::DegenerateGroup => {
+                c"KINCAL_STATUS_DEGENERATE_GROUP: a plane's contact points are collinear"
+            }
+            kincal_status::BadDistance => {
+                c"KINCAL_STATUS_BAD_DISTANCE: a known distance is invalid"
             }
             kincal_status::Unreachable => {
                 c"KINCAL_STATUS_UNREACHABLE: no configuration within the limits reaches the pose"
@@ -400,6 +420,9 @@ impl From<Error> for kincal_error {
                 k.joint = joint.0;
                 k
             }
+            Error::BadGroup { group } => kincal_error::new(S::BadGroup).at(group),
+            Error::DegenerateGroup { group } => kincal_error::new(S::DegenerateGroup).at(group),
+            Error::BadDistance { distance } => kincal_error::new(S::BadDistance).at(distance),
             // A variant added to the core after this mapping: the test
             // `every_core_error_variant_has_a_status` names it.
             _ => kincal_error::new(S::Internal),

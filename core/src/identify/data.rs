@@ -182,7 +182,7 @@ pub(crate) fn residual<const N: usize>(
 }
 
 /// Row weight of component `k`.
-fn weight(opts: &IdentifyOptions<'_>, k: usize) -> f64 {
+pub(crate) fn weight(opts: &IdentifyOptions<'_>, k: usize) -> f64 {
     if k < 3 {
         opts.weight_pos
     } else {
@@ -210,64 +210,110 @@ pub(crate) fn cost<const N: usize>(
 
 /// Folds every measured row `(J[:, cols]·colscale, e)` of `data` into `ws.lsq` (reset to
 /// `n_cols` columns `ws.cols[..n_cols]`) and returns the weighted cost.
-pub(crate) fn accumulate<const N: usize, const P: usize>(
+pub(crate) fn accumulate<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
     robot: &Robot<N>,
-    data: &[Measurement<N>],
+    data: &D,
     opts: &IdentifyOptions<'_>,
     n_cols: usize,
     ws: &mut Workspace<P>,
 ) -> Result<f64> {
     ws.lsq.reset(n_cols)?;
     ws.to_gram = false;
-    let mut c = 0.0;
-    for m in data.iter().filter(|m| m.weight > 0.0) {
-        c += add_rows(robot, m, true, opts, n_cols, ws)?;
-    }
-    Ok(c)
+    data.fold(robot, true, opts, n_cols, ws)
 }
 
 /// As [`accumulate`] with a zero right-hand side: only the triangular factor of the
 /// Jacobian, which is all the identifiability analysis reads (it does not depend on the
 /// right-hand side), without a pose error per measurement.
-pub(crate) fn accumulate_jacobian<const N: usize, const P: usize>(
+pub(crate) fn accumulate_jacobian<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
     robot: &Robot<N>,
-    data: &[Measurement<N>],
+    data: &D,
     opts: &IdentifyOptions<'_>,
     n_cols: usize,
     ws: &mut Workspace<P>,
 ) -> Result<()> {
     ws.lsq.reset(n_cols)?;
     ws.to_gram = false;
-    for m in data.iter().filter(|m| m.weight > 0.0) {
-        add_rows(robot, m, false, opts, n_cols, ws)?;
-    }
-    Ok(())
+    data.fold(robot, false, opts, n_cols, ws).map(|_| ())
 }
 
 /// As [`accumulate`], into the normal equations `ws.gram` (the fast path of the iterations).
-pub(crate) fn accumulate_gram<const N: usize, const P: usize>(
+pub(crate) fn accumulate_gram<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
     robot: &Robot<N>,
-    data: &[Measurement<N>],
+    data: &D,
     opts: &IdentifyOptions<'_>,
     n_cols: usize,
     ws: &mut Workspace<P>,
 ) -> Result<f64> {
     ws.gram.reset(n_cols)?;
     ws.to_gram = true;
-    let mut c = 0.0;
-    let mut folded = Ok(());
-    for m in data.iter().filter(|m| m.weight > 0.0) {
-        match add_rows(robot, m, true, opts, n_cols, ws) {
-            Ok(v) => c += v,
-            Err(e) => {
-                folded = Err(e);
-                break;
-            }
-        }
-    }
+    let folded = data.fold(robot, true, opts, n_cols, ws);
     // Also on an error: a later fold must not land in `ws.gram` by accident.
     ws.to_gram = false;
-    folded.map(|()| c)
+    folded
+}
+
+/// The rows a fit folds: a slice of instrument [`Measurement`]s, or instrument-free
+/// constraint data ([`super::constraints::ConstraintData`]). The solvers, the covariance
+/// and the identifiability analysis see data only through this.
+pub(crate) trait RowSource<const N: usize> {
+    /// Finite numbers, valid masks and layout; errors carry the row index.
+    fn validate(&self) -> Result<()>;
+    /// Every row with a positive weight carries the inputs (approach directions,
+    /// temperature) the requested effects need.
+    fn check_inputs(&self, opts: &IdentifyOptions<'_>) -> Result<()>;
+    /// Number of scalar residual rows with a positive weight.
+    fn row_count(&self) -> usize;
+    /// Folds every row into `ws.lsq` or `ws.gram` (as `ws.to_gram` says, already reset to
+    /// `n_cols` columns `ws.cols[..n_cols]` scaled by `ws.colscale`); `with_rhs = false`
+    /// folds a zero right-hand side (analysis). Returns the weighted cost.
+    fn fold<const P: usize>(
+        &self,
+        robot: &Robot<N>,
+        with_rhs: bool,
+        opts: &IdentifyOptions<'_>,
+        n_cols: usize,
+        ws: &mut Workspace<P>,
+    ) -> Result<f64>;
+    /// The weighted cost `Σ w·e²`.
+    fn cost(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<f64>;
+    /// Residual statistics.
+    fn stats(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<ResidualStats>;
+}
+
+impl<const N: usize> RowSource<N> for [Measurement<N>] {
+    fn validate(&self) -> Result<()> {
+        validate(self)
+    }
+    fn check_inputs(&self, opts: &IdentifyOptions<'_>) -> Result<()> {
+        super::solvers::check_effect_inputs(self.iter().map(|m| &m.state), opts)
+    }
+    fn row_count(&self) -> usize {
+        self.iter()
+            .filter(|m| m.weight > 0.0)
+            .map(|m| (0..6).filter(|&k| m.mask.has(k)).count())
+            .sum()
+    }
+    fn fold<const P: usize>(
+        &self,
+        robot: &Robot<N>,
+        with_rhs: bool,
+        opts: &IdentifyOptions<'_>,
+        n_cols: usize,
+        ws: &mut Workspace<P>,
+    ) -> Result<f64> {
+        let mut c = 0.0;
+        for m in self.iter().filter(|m| m.weight > 0.0) {
+            c += add_rows(robot, m, with_rhs, opts, n_cols, ws)?;
+        }
+        Ok(c)
+    }
+    fn cost(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<f64> {
+        cost(robot, self, opts)
+    }
+    fn stats(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<ResidualStats> {
+        residual_stats(robot, self, opts)
+    }
 }
 
 /// Folds the rows of one pose (weighted by its weight) into `ws.lsq` or `ws.gram`; with
@@ -285,15 +331,7 @@ pub(crate) fn add_rows<const N: usize, const P: usize>(
         needed: n_cols,
         capacity: P,
     })?;
-    let full = cols.iter().any(|&c| c >= Robot::<N>::NUM_GEOMETRIC_PARAMS);
-    let links = cols.iter().all(|&c| c < 5 * N);
-    let n_jac = if full {
-        Robot::<N>::NUM_PARAMS
-    } else if links {
-        5 * N
-    } else {
-        Robot::<N>::NUM_GEOMETRIC_PARAMS
-    };
+    let n_jac = jacobian_len::<N>(cols);
     let jac = ws.jac.get_mut(..n_jac).ok_or(Error::CapacityExceeded {
         needed: n_jac,
         capacity: super::MAX_MODEL_PARAMS,
@@ -332,6 +370,20 @@ pub(crate) fn add_rows<const N: usize, const P: usize>(
         ws.lsq.add_rows6(&rows, &e, &wk)?;
     }
     Ok(c)
+}
+
+/// How many Jacobian columns (a prefix of the flat parameters) cover the columns `cols`:
+/// only the links, the geometry, or everything.
+pub(crate) fn jacobian_len<const N: usize>(cols: &[usize]) -> usize {
+    let full = cols.iter().any(|&c| c >= Robot::<N>::NUM_GEOMETRIC_PARAMS);
+    let links = cols.iter().all(|&c| c < 5 * N);
+    if full {
+        Robot::<N>::NUM_PARAMS
+    } else if links {
+        5 * N
+    } else {
+        Robot::<N>::NUM_GEOMETRIC_PARAMS
+    }
 }
 
 /// Residual statistics of a model on a data set.

@@ -15,7 +15,7 @@
 //! Because the test runs in priority order, a redundant group keeps its highest-priority
 //! member; the dropped ones name the kept parameter their column is most aligned with.
 
-use super::data::{ComponentMask, Measurement, add_rows};
+use super::data::{ComponentMask, Measurement, RowSource, add_rows};
 use super::{IdentifyOptions, MAX_MODEL_PARAMS, Workspace};
 use crate::error::{Error, ParamIndex, Result};
 use crate::linalg::bidiag::singular_values;
@@ -52,6 +52,13 @@ pub struct Identifiability {
     pub structural: ParamSet,
     /// Identifiable in general but not from these poses.
     pub data_deficient: ParamSet,
+    /// Not observable because the data have no external reference (instrument-free
+    /// constraint data, [`super::constraints`]): the base-frame parameters when no row
+    /// refers to the base frame (no instrument row, known target or known plane), and one
+    /// length (the longest nominal one) when nothing fixes the scale (no known distance,
+    /// instrument row, known target or known plane). Held at their initial values, never
+    /// fitted; not an error.
+    pub gauge: ParamSet,
     /// Number of identifiable parameters.
     pub rank: usize,
     /// σ_max/σ_min of the unit-column-scaled Jacobian of the identifiable parameters.
@@ -95,6 +102,7 @@ impl Identifiability {
             identifiable: ParamSet::new(),
             structural: ParamSet::new(),
             data_deficient: ParamSet::new(),
+            gauge: ParamSet::new(),
             rank: 0,
             condition_number: f64::INFINITY,
             partner: [None; MAX_MODEL_PARAMS],
@@ -104,11 +112,12 @@ impl Identifiability {
 
 impl Identifiability {
     /// [`Identifiability::empty`] in place (no temporary of this size on the stack).
-    fn reset(&mut self, requested: ParamSet) {
+    pub(crate) fn reset(&mut self, requested: ParamSet) {
         self.requested = requested;
         self.identifiable = ParamSet::new();
         self.structural = ParamSet::new();
         self.data_deficient = ParamSet::new();
+        self.gauge = ParamSet::new();
         self.rank = 0;
         self.condition_number = f64::INFINITY;
         for p in self.partner.iter_mut() {
@@ -181,6 +190,21 @@ pub(crate) fn analyze_into<const N: usize, const P: usize>(
     // 2. Data: the structurally identifiable columns on the given poses.
     for k in 0..n_struct {
         ws.cols[k] = ws.free[k];
+    }
+    data_step(robot, data, opts, ws, out, n_struct)
+}
+
+/// Steps 2 and 3 of [`analyze`] on the candidate columns `ws.cols[..n_struct]`: which the
+/// data determine (the rest are data-deficient) and the conditioning of those.
+pub(super) fn data_step<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
+    robot: &Robot<N>,
+    data: &D,
+    opts: &IdentifyOptions<'_>,
+    ws: &mut Workspace<P>,
+    out: &mut Identifiability,
+    n_struct: usize,
+) -> Result<()> {
+    for k in 0..n_struct {
         ws.colscale[k] = 1.0;
     }
     super::data::accumulate_jacobian(robot, data, opts, n_struct, ws)?;
@@ -240,15 +264,66 @@ pub(crate) fn structural_step<const N: usize, const P: usize>(
     structural: &mut ParamSet,
     partner: &mut [Option<Partner>; MAX_MODEL_PARAMS],
 ) -> Result<usize> {
+    let sel = StructuralSel {
+        mask,
+        points,
+        any_approach,
+        any_temp,
+        base_first: false,
+    };
+    structural_step_with(robot, &sel, opts, ws, structural, partner)
+}
+
+/// What the structural test runs on (see [`structural_step`]).
+pub(crate) struct StructuralSel<'p> {
+    pub(crate) mask: ComponentMask,
+    pub(crate) points: &'p [Option<[f64; 3]>],
+    pub(crate) any_approach: bool,
+    pub(crate) any_temp: bool,
+    /// Test the six base-frame parameters first, requested or not (constraint data
+    /// without an external reference: every rigid motion of the arm is then attributed to
+    /// the base, whose parameters are the gauge, and link parameters that only duplicate
+    /// a rigid motion are dropped with a base partner). Unrequested base parameters are
+    /// neither kept nor reported.
+    pub(crate) base_first: bool,
+}
+
+/// [`structural_step`] with the selection in one struct.
+pub(crate) fn structural_step_with<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    sel: &StructuralSel<'_>,
+    opts: &IdentifyOptions<'_>,
+    ws: &mut Workspace<P>,
+    structural: &mut ParamSet,
+    partner: &mut [Option<Partner>; MAX_MODEL_PARAMS],
+) -> Result<usize> {
+    let StructuralSel {
+        mask,
+        points,
+        any_approach,
+        any_temp,
+        base_first,
+    } = *sel;
     let requested = opts.requested;
-    let p = requested.len();
+    let base = 5 * N..5 * N + 6;
+    let extra = if base_first {
+        base.clone().filter(|&i| !requested.contains(i)).count()
+    } else {
+        0
+    };
+    let p = requested.len() + extra;
     if p > P {
         return Err(Error::CapacityExceeded {
             needed: p,
             capacity: P,
         });
     }
-    load_cols(ws, requested.iter());
+    if base_first {
+        let rest = requested.iter().filter(|i| !base.contains(i));
+        load_cols(ws, base.clone().chain(rest));
+    } else {
+        load_cols(ws, requested.iter());
+    }
     ws.lsq.reset(p)?;
     ws.to_gram = false;
     // Rows (6 per sample) outnumber the parameters about twice over: generic enough.
@@ -298,7 +373,7 @@ pub(crate) fn structural_step<const N: usize, const P: usize>(
         if kept.contains(k) {
             ws.free[n_struct] = col;
             n_struct += 1;
-        } else {
+        } else if requested.contains(col) {
             structural.insert(col)?;
         }
     }
@@ -321,7 +396,7 @@ fn column_norm<const P: usize>(ws: &Workspace<P>, k: usize) -> f64 {
 /// Copies `R·D` into `ws.mat` (upper triangle, zero below), `D` scaling each column of the
 /// Jacobian to unit length (`ws.colscale`): `J·D = Q·(R·D)`, so the column-scaled
 /// Jacobian's factor needs no second pass over the data.
-fn copy_r_unit_scaled<const P: usize>(ws: &mut Workspace<P>, n: usize) {
+pub(super) fn copy_r_unit_scaled<const P: usize>(ws: &mut Workspace<P>, n: usize) {
     for k in 0..n {
         let norm = column_norm(ws, k);
         ws.colscale[k] = if norm > 0.0 { 1.0 / norm } else { 1.0 };
@@ -340,7 +415,7 @@ fn copy_r_unit_scaled<const P: usize>(ws: &mut Workspace<P>, n: usize) {
 
 /// Greedy selection over the columns of `ws.lsq`'s R (same inner products as the Jacobian's
 /// columns) in order; returns the kept column positions. Dropped columns get a partner.
-fn greedy<const P: usize>(
+pub(super) fn greedy<const P: usize>(
     ws: &mut Workspace<P>,
     n: usize,
     tol: f64,

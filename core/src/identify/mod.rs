@@ -12,12 +12,17 @@
 //! exact log or eq. 16), over the identifiable subset of the requested parameters; the
 //! others keep their initial values and are reported.
 
+pub mod constraints;
 mod data;
 mod identifiability;
 pub mod robust;
 mod solvers;
 mod workspace;
 
+pub use constraints::{
+    ConstraintData, Contact, Distance, Group, GroupEstimate, GroupKind, analyze_constrained,
+    distance_estimate, group_estimate, identify_constrained,
+};
 pub use data::{ComponentMask, Measurement, ResidualStats, residual_stats};
 pub(crate) use data::{distinct_points, validate as validate_data};
 pub(crate) use identifiability::structural_step;

@@ -1,7 +1,7 @@
 //! The three identification algorithms on the identifiable parameter set, and the
 //! parameter covariance of the result.
 
-use super::data::{ResidualStats, accumulate, accumulate_gram, cost, residual_stats, validate};
+use super::data::{ResidualStats, RowSource, accumulate, accumulate_gram};
 use super::identifiability::analyze_into;
 use super::{
     Algorithm, CORRELATION_REPORT_THRESHOLD, Correlation, Identification, IdentifyOptions,
@@ -43,7 +43,7 @@ pub(crate) fn identify_in_place<const N: usize, const P: usize>(
     ws: &mut Workspace<P>,
     out: &mut Identification<N>,
 ) -> Result<()> {
-    validate(data)?;
+    data.validate()?;
     check_identify_options(opts)?;
     check_inputs(data, opts)?;
     out.robot = *robot;
@@ -124,13 +124,13 @@ impl<const N: usize> Identification<N> {
 /// `out.robot` and fills the rest of `out`. Works in the caller's memory, so that a loop of
 /// fits (robust reweighting, diagnosis) keeps one result, not one per call level, on the
 /// stack.
-pub(crate) fn identify_into<const N: usize, const P: usize>(
-    data: &[Measurement<N>],
+pub(crate) fn identify_into<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
+    data: &D,
     opts: &IdentifyOptions<'_>,
     ws: &mut Workspace<P>,
     out: &mut Identification<N>,
 ) -> Result<()> {
-    validate(data)?;
+    data.validate()?;
     check_inputs(data, opts)?;
     let analysis = &out.analysis;
     let n = analysis.rank;
@@ -140,11 +140,7 @@ pub(crate) fn identify_into<const N: usize, const P: usize>(
             capacity: P,
         });
     }
-    let rows: usize = data
-        .iter()
-        .filter(|m| m.weight > 0.0)
-        .map(|m| (0..6).filter(|&k| m.mask.has(k)).count())
-        .sum();
+    let rows = data.row_count();
     if n == 0 || (!analysis.data_deficient.is_empty() && !opts.allow_data_deficiency) {
         return Err(Error::RankDeficient {
             rank: n,
@@ -161,14 +157,14 @@ pub(crate) fn identify_into<const N: usize, const P: usize>(
         ws.cols[k] = i;
     }
     out.algorithm = opts.algorithm;
-    out.initial = residual_stats(&out.robot, data, opts)?;
+    out.initial = data.stats(&out.robot, opts)?;
     let finish = match opts.algorithm {
         Algorithm::Ols => gauss_newton(&mut out.robot, data, opts, n, ws)?,
         Algorithm::Opt2 => levenberg_marquardt(&mut out.robot, data, opts, n, ws)?,
         Algorithm::Opt1 => bounded(&mut out.robot, data, opts, n, ws)?,
     };
     out.iterations = finish.iterations;
-    out.fitted = residual_stats(&out.robot, data, opts)?;
+    out.fitted = data.stats(&out.robot, opts)?;
     out.sigma2 = 0.0;
     out.std_errors = [0.0; MAX_MODEL_PARAMS];
     out.at_bound = ParamSet::new();
@@ -190,9 +186,24 @@ pub(crate) fn identify_into<const N: usize, const P: usize>(
 
 use super::data::Measurement;
 
-/// Refuses effects whose inputs the data lack.
-pub(crate) fn check_inputs<const N: usize>(
-    data: &[Measurement<N>],
+/// Refuses effects whose inputs the data lack, and OPT1 without bounds.
+pub(crate) fn check_inputs<const N: usize, D: RowSource<N> + ?Sized>(
+    data: &D,
+    opts: &IdentifyOptions<'_>,
+) -> Result<()> {
+    data.check_inputs(opts)?;
+    if opts.algorithm == Algorithm::Opt1 && opts.bounds.is_none() {
+        return Err(Error::InvalidParameter {
+            index: 0,
+            value: f64::NAN,
+        });
+    }
+    Ok(())
+}
+
+/// Refuses effects whose inputs the joint states lack.
+pub(crate) fn check_effect_inputs<'s, const N: usize>(
+    states: impl Iterator<Item = &'s crate::model::JointState<N>> + Clone,
     opts: &IdentifyOptions<'_>,
 ) -> Result<()> {
     let has = |e: Effect| {
@@ -200,20 +211,14 @@ pub(crate) fn check_inputs<const N: usize>(
             .iter()
             .any(|i| ParamId::from_index(ParamIndex(i), N).is_ok_and(|id| id.effect() == Some(e)))
     };
-    if has(Effect::Backlash) && data.iter().any(|m| m.state.approach.is_none()) {
+    if has(Effect::Backlash) && states.clone().any(|s| s.approach.is_none()) {
         return Err(Error::MissingInput {
             what: Quantity::ApproachDirection,
         });
     }
-    if has(Effect::Thermal) && data.iter().any(|m| m.state.temp_c.is_none()) {
+    if has(Effect::Thermal) && states.clone().any(|s| s.temp_c.is_none()) {
         return Err(Error::MissingInput {
             what: Quantity::Temperature,
-        });
-    }
-    if opts.algorithm == Algorithm::Opt1 && opts.bounds.is_none() {
-        return Err(Error::InvalidParameter {
-            index: 0,
-            value: f64::NAN,
         });
     }
     Ok(())
@@ -345,9 +350,9 @@ impl Finish {
 /// in one pass): an accepted trial's cost and normal equations are those the next
 /// iteration needs, so each iteration costs one Jacobian pass instead of a Jacobian pass
 /// plus a cost pass.
-fn gauss_newton<const N: usize, const P: usize>(
+fn gauss_newton<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
     robot: &mut Robot<N>,
-    data: &[Measurement<N>],
+    data: &D,
     opts: &IdentifyOptions<'_>,
     n: usize,
     ws: &mut Workspace<P>,
@@ -396,7 +401,7 @@ fn gauss_newton<const N: usize, const P: usize>(
         for _ in 0..30 {
             apply(&mut trial, n, ws, None)?;
             let c2 = if last {
-                cost(&trial, data, opts)?
+                data.cost(&trial, opts)?
             } else {
                 accumulate_gram(&trial, data, opts, n, ws)?
             };
@@ -431,9 +436,9 @@ fn gauss_newton<const N: usize, const P: usize>(
 
 /// OPT2: MINPACK `lmder` — trust region on the scaled step, λ from `lmpar` — on the
 /// triangular factor of the normal equations (Givens factor if they are singular).
-fn levenberg_marquardt<const N: usize, const P: usize>(
+fn levenberg_marquardt<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
     robot: &mut Robot<N>,
-    data: &[Measurement<N>],
+    data: &D,
     opts: &IdentifyOptions<'_>,
     n: usize,
     ws: &mut Workspace<P>,
@@ -498,7 +503,7 @@ fn levenberg_marquardt<const N: usize, const P: usize>(
                 delta = delta.min(pnorm);
             }
             apply(&mut trial, n, ws, None)?;
-            let fnorm1 = sqrt(cost(&trial, data, opts)?);
+            let fnorm1 = sqrt(data.cost(&trial, opts)?);
             let actred = if 0.1 * fnorm1 < fnorm {
                 1.0 - (fnorm1 / fnorm) * (fnorm1 / fnorm)
             } else {
@@ -560,9 +565,9 @@ fn levenberg_marquardt<const N: usize, const P: usize>(
 /// OPT1: projected Levenberg–Marquardt with an active set. Parameters on a bound whose
 /// descent direction points outwards are held; the damped step of the others is clipped to
 /// the box; λ shrinks after a successful step and grows after a failed one.
-fn bounded<const N: usize, const P: usize>(
+fn bounded<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
     robot: &mut Robot<N>,
-    data: &[Measurement<N>],
+    data: &D,
     opts: &IdentifyOptions<'_>,
     n: usize,
     ws: &mut Workspace<P>,
@@ -640,7 +645,7 @@ fn bounded<const N: usize, const P: usize>(
                     step[k] = target - x[k];
                 }
                 apply(&mut trial, n, ws, Some(b))?;
-                let c2 = cost(&trial, data, opts)?;
+                let c2 = data.cost(&trial, opts)?;
                 if c2 < c {
                     let dx = scaled_norm(ws, n, &ws.step);
                     let xn = scaled_norm(ws, n, &ws.x);
@@ -674,8 +679,8 @@ fn bounded<const N: usize, const P: usize>(
 /// σ², standard errors and strong correlations at the fitted model. With `gram_current`
 /// (see [`Finish`]) the normal equations the solver left are used as they are; otherwise
 /// they are accumulated at the fitted model.
-fn covariance<const N: usize, const P: usize>(
-    data: &[Measurement<N>],
+fn covariance<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
+    data: &D,
     opts: &IdentifyOptions<'_>,
     n: usize,
     rows: usize,

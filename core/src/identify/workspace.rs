@@ -37,6 +37,8 @@ pub struct Workspace<const P: usize> {
     pub(crate) tmp: [f64; P],
     pub(crate) free: [usize; P],
     pub(crate) n_sv: usize,
+    /// Means of the last few constraint groups folded (for known distances).
+    pub(crate) means: [super::constraints::GroupMean<P>; super::constraints::MEAN_CACHE],
 }
 
 impl<const P: usize> Workspace<P> {
@@ -62,6 +64,7 @@ impl<const P: usize> Workspace<P> {
             tmp: [0.0; P],
             free: [0; P],
             n_sv: 0,
+            means: [super::constraints::GroupMean::EMPTY; super::constraints::MEAN_CACHE],
         }
     }
 

@@ -118,6 +118,29 @@ impl<const P: usize> GramAccumulator<P> {
         self.btb += (0..6).map(|r| w[r] * b[r] * b[r]).sum::<f64>();
         Ok(())
     }
+    /// Subtracts `w·a·aᵀ` (`w >= 0`) from the Gram matrix, leaving `Aᵀb` and `bᵀb` alone:
+    /// the downdate that turns `Σ w_i·J_iᵀJ_i` into the centred `Σ w_i·(J_i − J̄)ᵀ(J_i − J̄)`
+    /// (with `a = J̄` row by row, `w = Σ w_i`) when the rows were folded uncentred.
+    pub fn downdate(&mut self, a: &[f64], w: f64) -> Result<()> {
+        let n = self.n;
+        check_len(a.len(), n)?;
+        check_finite(a)?;
+        if !w.is_finite() || w < 0.0 {
+            return Err(Error::NonFinite {
+                what: crate::error::Quantity::Parameter,
+                index: n,
+            });
+        }
+        for (i, &ai) in a.iter().enumerate() {
+            let wai = w * ai;
+            if let Some(row) = self.g.get_mut(i) {
+                for (gij, &aj) in row[i..n].iter_mut().zip(a[i..].iter()) {
+                    *gij -= wai * aj;
+                }
+            }
+        }
+        Ok(())
+    }
     /// Number of unknowns.
     #[must_use]
     pub fn n(&self) -> usize {

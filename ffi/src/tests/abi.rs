@@ -139,6 +139,9 @@ fn status_numbers_are_fixed() {
         (S::MisalignedPointer, 115),
         (S::DegenerateAxis, 116),
         (S::BadHandle, 117),
+        (S::BadGroup, 118),
+        (S::DegenerateGroup, 119),
+        (S::BadDistance, 120),
         (S::Unreachable, 200),
         (S::NotConverged, 201),
         (S::RankDeficient, 202),
@@ -171,7 +174,7 @@ fn status_str_is_static_and_names_the_code() {
             s as u32
         );
     }
-    for unknown in [1, 99, 118, 204, 901, 1000, u32::MAX] {
+    for unknown in [1, 99, 121, 204, 901, 1000, u32::MAX] {
         let text = unsafe { CStr::from_ptr(kincal_status_str(unknown)) };
         assert_eq!(text.to_str().unwrap(), "unknown kincal status code");
     }
@@ -253,6 +256,9 @@ fn every_core_error_is_mapped() {
             S::TooFewData,
         ),
         (Error::BadPose { pose: PoseIndex(3) }, S::BadPose),
+        (Error::BadGroup { group: 4 }, S::BadGroup),
+        (Error::DegenerateGroup { group: 5 }, S::DegenerateGroup),
+        (Error::BadDistance { distance: 1 }, S::BadDistance),
         (
             Error::BoundViolated {
                 param: ParamIndex(10),

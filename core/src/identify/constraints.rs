@@ -1,0 +1,1083 @@
+//! Instrument-free calibration: rows that say where the tool point is *held*, not where an
+//! instrument saw it (issue #13; format in `docs/constraints.md`).
+//!
+//! A [`Contact`] is a joint state and a point in the tool frame (the ball centre, the probe
+//! tip: the tool frame moved to `point`, as [`Measurement::point`]). Contacts come in
+//! [`Group`]s, contiguous in the contact slice:
+//! - [`GroupKind::Target`]: every contact of the group has its tool point at one fixed,
+//!   unknown point `t` (ball in a socket);
+//! - [`GroupKind::KnownTarget`]: … at a known point (in the base frame);
+//! - [`GroupKind::Plane`]: every tool point lies on one unknown plane `n·p = c`;
+//! - [`GroupKind::KnownPlane`]: … on a known plane.
+//!
+//! A [`Distance`] states the distance between two targets (the only length reference when
+//! nothing else is known). Instrument rows ([`Measurement`]s, also partial coordinates via
+//! their [`super::ComponentMask`]) may be mixed in; they share the one base frame.
+//!
+//! **Elimination.** The nuisance parameters (3 per unknown target or plane) never enter the
+//! parameter vector. For a target, minimising over `t` gives the weighted mean `p̄` of the
+//! predicted tool points, and the reduced problem has residuals `e_i = p̄ − p_i` with the
+//! exact Jacobian `J_i − J̄` (`p̄` is linear in the `p_i`). For an unknown plane the normal
+//! `n` is the eigenvector of the smallest eigenvalue of the group's scatter about `p̄`, and
+//! `e_i = −n·(p_i − p̄)` with the Jacobian `nᵀ(J_i − J̄)` (Kaufman's variable projection:
+//! the cost is exact, its gradient too, only the Gauss–Newton matrix omits `∂n/∂θ`). A
+//! distance adds `e = D − ‖p̄_a − p̄_b‖` with `J = uᵀ(J̄_a − J̄_b)`, `u` the unit vector from
+//! `p̄_b` to `p̄_a`: the targets stay the means of their contacts (a distance does not pull
+//! them), which makes the objective a proper least-squares problem in the robot
+//! parameters alone, consistent, and exact on noise-free data.
+//!
+//! **Memory.** No heap: each group is streamed twice (forward kinematics for `p̄` and the
+//! scatter, then the Jacobian rows), so memory does not grow with the number of contacts
+//! or groups. On the normal-equation path the uncentred rows are folded and the Gram matrix
+//! downdated by `W·J̄ᵀJ̄` afterwards (`Σ w (J_i − J̄)ᵀ(J_i − J̄) = Σ w J_iᵀJ_i − W J̄ᵀJ̄`); the
+//! Givens path (analysis, singular fallback) needs `J̄` first and pays a second Jacobian
+//! pass. A distance needs `J̄` of two groups: the means of the last [`MEAN_CACHE`] groups
+//! are kept in the workspace and a distance is folded right after the later of its two
+//! groups, so distances between neighbouring groups cost nothing extra; others recompute
+//! the missing mean (one more pass over that group).
+//!
+//! **Gauge.** Without an external reference (no instrument row, known target or known
+//! plane) rigid motions of the base move every tool point together and leave every
+//! coincidence, coplanarity and distance unchanged: the base frame is not observable and
+//! its parameters go to [`super::Identifiability::gauge`]. Without a length reference (no
+//! known distance, instrument row, known target or known plane) scaling every length
+//! scales every tool point: one length, the longest nominal one, is held as the scale
+//! gauge. These are named, never silently fixed; the rest is the usual greedy rank test on
+//! the reduced Jacobian.
+
+use super::data::{
+    Measurement, RowSource, add_rows, residual_stats, validate as validate_instrument,
+};
+use super::identifiability::{StructuralSel, data_step, structural_step_with};
+use super::{
+    ComponentMask, Identifiability, Identification, IdentifyOptions, ResidualStats, Workspace,
+};
+use crate::error::{Error, ParamIndex, Quantity, Result, check_finite};
+use crate::math::sqrt;
+use crate::model::{JointState, Robot};
+use crate::params::ParamId;
+use crate::pose::Transform;
+
+/// One contact: the robot's joint state while its tool point (`point`, tool frame, \[m\])
+/// was held at a target or on a plane.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Contact<const N: usize> {
+    /// Joint readings and auxiliary data.
+    pub state: JointState<N>,
+    /// The tool point in the tool frame \[m\] (zero: the tool-frame origin, e.g. a ball
+    /// centre identified as the tool translation).
+    pub point: [f64; 3],
+    /// Weight (>= 0; 0 holds the contact out, as [`Measurement::weight`]).
+    pub weight: f64,
+}
+
+impl<const N: usize> Contact<N> {
+    /// A contact of the tool-frame origin at readings `q`.
+    #[must_use]
+    pub const fn new(q: [f64; N]) -> Self {
+        Contact {
+            state: JointState::new(q),
+            point: [0.0; 3],
+            weight: 1.0,
+        }
+    }
+
+    fn as_measurement(&self) -> Measurement<N> {
+        Measurement {
+            state: self.state,
+            pose: Transform::identity(),
+            mask: ComponentMask::POSITION,
+            weight: self.weight,
+            point: Some(self.point),
+        }
+    }
+
+    /// The predicted tool point in the base frame \[m\].
+    pub fn tool_point(&self, robot: &Robot<N>) -> Result<[f64; 3]> {
+        let t = self.as_measurement().model_pose(robot)?;
+        let v = t.translation.vector;
+        Ok([v.x, v.y, v.z])
+    }
+}
+
+/// What holds a group's tool points.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum GroupKind {
+    /// One unknown point (3 nuisance parameters, eliminated). At least 2 contacts.
+    Target,
+    /// A known point in the base frame \[m\]. At least 1 contact.
+    KnownTarget([f64; 3]),
+    /// An unknown plane (3 nuisance parameters, eliminated). At least 3 contacts, not
+    /// collinear; only the 4th and later add information.
+    Plane,
+    /// A known plane `normal·p = offset_m` (normal need not be unit length). At least 1.
+    KnownPlane {
+        /// Plane normal (base frame).
+        normal: [f64; 3],
+        /// `normal·p` on the plane, with the normal normalised \[m\].
+        offset_m: f64,
+    },
+}
+
+impl GroupKind {
+    /// Whether the group is a point (unknown or known): distances may name it.
+    #[must_use]
+    pub const fn is_target(self) -> bool {
+        matches!(self, GroupKind::Target | GroupKind::KnownTarget(_))
+    }
+    /// Whether it refers to the base frame (known coordinates).
+    #[must_use]
+    pub const fn is_known(self) -> bool {
+        matches!(
+            self,
+            GroupKind::KnownTarget(_) | GroupKind::KnownPlane { .. }
+        )
+    }
+    const fn min_contacts(self) -> usize {
+        match self {
+            GroupKind::Target => 2,
+            GroupKind::Plane => 3,
+            _ => 1,
+        }
+    }
+}
+
+/// A group: the contacts `start..start + len` of [`ConstraintData::contacts`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Group {
+    /// Kind.
+    pub kind: GroupKind,
+    /// First contact.
+    pub start: usize,
+    /// Number of contacts.
+    pub len: usize,
+}
+
+/// A known distance between two target groups.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Distance {
+    /// First group (a target).
+    pub a: usize,
+    /// Second group (a target).
+    pub b: usize,
+    /// The distance \[m\].
+    pub m: f64,
+    /// Weight relative to a position row (`IdentifyOptions::weight_pos` multiplies it):
+    /// 1 weighs the distance like one coordinate of the data; `(σ_data/σ_distance)²`
+    /// when the distance's uncertainty is known.
+    pub weight: f64,
+}
+
+/// Instrument-free (or mixed) calibration data. Groups must tile the contacts in order:
+/// the first starts at 0, each starts where the previous ends, the last ends at
+/// `contacts.len()` (sort rows by group first; [`Error::BadGroup`] otherwise).
+#[derive(Debug, Clone, Copy)]
+pub struct ConstraintData<'a, const N: usize> {
+    /// Instrument rows (poses, positions, partial coordinates) in the base frame.
+    pub instrument: &'a [Measurement<N>],
+    /// Contacts, grouped.
+    pub contacts: &'a [Contact<N>],
+    /// Groups over `contacts`.
+    pub groups: &'a [Group],
+    /// Known distances between target groups.
+    pub distances: &'a [Distance],
+}
+
+/// Number of group means kept for distances (see the module doc).
+pub const MEAN_CACHE: usize = 4;
+
+/// Weighted mean of a group's predicted tool points and (column-scaled) position Jacobian
+/// rows; `group == usize::MAX`: empty slot.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct GroupMean<const P: usize> {
+    pub(crate) group: usize,
+    /// Σ w of the active contacts.
+    pub(crate) w: f64,
+    pub(crate) p: [f64; 3],
+    pub(crate) jbar: [[f64; P]; 3],
+}
+
+impl<const P: usize> GroupMean<P> {
+    pub(crate) const EMPTY: Self = GroupMean {
+        group: usize::MAX,
+        w: 0.0,
+        p: [0.0; 3],
+        jbar: [[0.0; P]; 3],
+    };
+}
+
+impl<'a, const N: usize> ConstraintData<'a, N> {
+    fn group_contacts(&self, g: &Group) -> &'a [Contact<N>] {
+        self.contacts.get(g.start..g.start + g.len).unwrap_or(&[])
+    }
+
+    fn active_instrument(&self) -> bool {
+        self.instrument.iter().any(|m| m.weight > 0.0)
+    }
+
+    /// Whether some row refers to the base frame: instrument rows or known groups.
+    #[must_use]
+    pub fn has_external_reference(&self) -> bool {
+        self.active_instrument()
+            || self
+                .groups
+                .iter()
+                .any(|g| g.kind.is_known() && self.group_contacts(g).iter().any(|c| c.weight > 0.0))
+    }
+
+    /// Whether some row fixes the scale: a known distance or an external reference.
+    #[must_use]
+    pub fn has_length_reference(&self) -> bool {
+        !self.distances.is_empty() || self.has_external_reference()
+    }
+}
+
+/// Position of the predicted tool point and the scaled Jacobian rows of the selected
+/// columns (`ws.cols[..n_cols]`, `ws.colscale`) into `rows[..3]`.
+fn contact_rows<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    c: &Contact<N>,
+    n_cols: usize,
+    ws: &mut Workspace<P>,
+    rows: &mut [[f64; P]; 6],
+) -> Result<[f64; 3]> {
+    let Workspace {
+        jac,
+        cols,
+        colscale,
+        ..
+    } = ws;
+    let cols = cols.get(..n_cols).ok_or(Error::CapacityExceeded {
+        needed: n_cols,
+        capacity: P,
+    })?;
+    let n_jac = super::data::jacobian_len::<N>(cols);
+    let jac = jac.get_mut(..n_jac).ok_or(Error::CapacityExceeded {
+        needed: n_jac,
+        capacity: super::MAX_MODEL_PARAMS,
+    })?;
+    let t = c.as_measurement().model_jacobian(robot, jac)?;
+    for (j, (&col, &scale)) in cols.iter().zip(colscale.iter()).enumerate() {
+        let jc = jac.get(col).copied().unwrap_or([0.0; 6]);
+        for (k, row) in rows.iter_mut().take(3).enumerate() {
+            if let Some(x) = row.get_mut(j) {
+                *x = jc[k] * scale;
+            }
+        }
+    }
+    let v = t.translation.vector;
+    Ok([v.x, v.y, v.z])
+}
+
+/// Weighted mean `p̄`, total weight and scatter `Σ w (p − p̄)(p − p̄)ᵀ` of the predicted
+/// tool points of the active contacts (forward kinematics only).
+fn point_moments<const N: usize>(
+    robot: &Robot<N>,
+    contacts: &[Contact<N>],
+) -> Result<(f64, [f64; 3], [[f64; 3]; 3])> {
+    let mut w = 0.0;
+    let mut origin = None;
+    let mut s1 = [0.0; 3];
+    let mut s2 = [[0.0; 3]; 3];
+    for c in contacts.iter().filter(|c| c.weight > 0.0) {
+        let p = c.tool_point(robot)?;
+        let o = *origin.get_or_insert(p);
+        let d = [p[0] - o[0], p[1] - o[1], p[2] - o[2]];
+        w += c.weight;
+        for a in 0..3 {
+            s1[a] += c.weight * d[a];
+            for b in 0..3 {
+                s2[a][b] += c.weight * d[a] * d[b];
+            }
+        }
+    }
+    let o = origin.unwrap_or([0.0; 3]);
+    if w <= 0.0 {
+        return Ok((0.0, o, [[0.0; 3]; 3]));
+    }
+    let dbar = [s1[0] / w, s1[1] / w, s1[2] / w];
+    for a in 0..3 {
+        for b in 0..3 {
+            s2[a][b] -= w * dbar[a] * dbar[b];
+        }
+    }
+    Ok((w, [o[0] + dbar[0], o[1] + dbar[1], o[2] + dbar[2]], s2))
+}
+
+/// Eigenvalues (ascending) and the unit eigenvector of the smallest, of a symmetric 3×3
+/// matrix, by cyclic Jacobi rotations (no panics, no allocation).
+pub(crate) fn sym3_smallest(mut a: [[f64; 3]; 3]) -> ([f64; 3], [f64; 3]) {
+    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    for _ in 0..50 {
+        let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+        let diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
+        if off <= 1e-32 * diag || off == 0.0 {
+            break;
+        }
+        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
+            if a[p][q] == 0.0 {
+                continue;
+            }
+            let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+            let t = theta.signum() / (theta.abs() + sqrt(theta * theta + 1.0));
+            let t = if theta == 0.0 { 1.0 } else { t };
+            let c = 1.0 / sqrt(t * t + 1.0);
+            let s = t * c;
+            for k in 0..3 {
+                let (akp, akq) = (a[k][p], a[k][q]);
+                a[k][p] = c * akp - s * akq;
+                a[k][q] = s * akp + c * akq;
+            }
+            for k in 0..3 {
+                let (apk, aqk) = (a[p][k], a[q][k]);
+                a[p][k] = c * apk - s * aqk;
+                a[q][k] = s * apk + c * aqk;
+            }
+            for row in v.iter_mut() {
+                let (vp, vq) = (row[p], row[q]);
+                row[p] = c * vp - s * vq;
+                row[q] = s * vp + c * vq;
+            }
+        }
+    }
+    let mut idx = [0usize, 1, 2];
+    idx.sort_unstable_by(|&i, &j| a[i][i].total_cmp(&a[j][j]));
+    let k = idx[0];
+    let mut n = [v[0][k], v[1][k], v[2][k]];
+    // Sign convention: the largest component positive (reported planes are reproducible).
+    let big = (0..3).fold(0, |b, i| if n[i].abs() > n[b].abs() { i } else { b });
+    if n[big] < 0.0 {
+        n = [-n[0], -n[1], -n[2]];
+    }
+    ([a[idx[0]][idx[0]], a[idx[1]][idx[1]], a[idx[2]][idx[2]]], n)
+}
+
+/// Relative spread below which plane contacts count as collinear: the RMS distance of the
+/// predicted contacts from their best-fit line under this fraction of their RMS extent
+/// along it ([`Error::DegenerateGroup`]).
+pub const PLANE_MIN_ASPECT: f64 = 1e-3;
+
+/// Normal of an unknown plane from the scatter, or [`Error::DegenerateGroup`].
+fn plane_normal(scatter: [[f64; 3]; 3], group: usize) -> Result<[f64; 3]> {
+    let (ev, n) = sym3_smallest(scatter);
+    if ev[2].is_nan() || ev[2] <= 0.0 || ev[1] <= PLANE_MIN_ASPECT * PLANE_MIN_ASPECT * ev[2] {
+        return Err(Error::DegenerateGroup { group });
+    }
+    Ok(n)
+}
+
+fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn unit_normal(n: [f64; 3]) -> [f64; 3] {
+    let l = sqrt(dot3(&n, &n));
+    if l > 0.0 {
+        [n[0] / l, n[1] / l, n[2] / l]
+    } else {
+        n
+    }
+}
+
+fn fold6<const P: usize>(
+    ws: &mut Workspace<P>,
+    rows: &[[f64; P]; 6],
+    e: &[f64; 6],
+    w: &[f64; 6],
+) -> Result<()> {
+    if ws.to_gram {
+        ws.gram.add_rows6(rows, e, w)
+    } else {
+        ws.lsq.add_rows6(rows, e, w)
+    }
+}
+
+/// Folds one group; leaves its mean in the cache. Returns the cost.
+#[allow(clippy::too_many_lines)]
+fn fold_group<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &ConstraintData<'_, N>,
+    gi: usize,
+    with_rhs: bool,
+    opts: &IdentifyOptions<'_>,
+    n_cols: usize,
+    ws: &mut Workspace<P>,
+) -> Result<f64> {
+    let g = data
+        .groups
+        .get(gi)
+        .copied()
+        .ok_or(Error::BadGroup { group: gi })?;
+    let contacts = data.group_contacts(&g);
+    let (w_sum, pbar, scatter) = point_moments(robot, contacts)?;
+    let centred = matches!(g.kind, GroupKind::Target | GroupKind::Plane);
+    let normal = match g.kind {
+        GroupKind::Plane if w_sum > 0.0 => plane_normal(scatter, gi)?,
+        GroupKind::KnownPlane { normal, .. } => unit_normal(normal),
+        _ => [0.0; 3],
+    };
+    let mut rows = [[0.0; P]; 6];
+    let mut jbar = [[0.0; P]; 3];
+    // Givens path: the centred rows need J̄ first (one more Jacobian pass).
+    let pre_centre = centred && !ws.to_gram;
+    if pre_centre && w_sum > 0.0 {
+        for c in contacts.iter().filter(|c| c.weight > 0.0) {
+            contact_rows(robot, c, n_cols, ws, &mut rows)?;
+            for (jb, r) in jbar.iter_mut().zip(rows.iter()) {
+                for (x, y) in jb.iter_mut().zip(r.iter()).take(n_cols) {
+                    *x += c.weight / w_sum * y;
+                }
+            }
+        }
+    }
+    let mut jsum = [[0.0; P]; 3];
+    let mut cost = 0.0;
+    for c in contacts.iter().filter(|c| c.weight > 0.0) {
+        let p = contact_rows(robot, c, n_cols, ws, &mut rows)?;
+        if !pre_centre {
+            for (js, r) in jsum.iter_mut().zip(rows.iter()) {
+                for (x, y) in js.iter_mut().zip(r.iter()).take(n_cols) {
+                    *x += c.weight * y;
+                }
+            }
+        }
+        if pre_centre {
+            for (r, jb) in rows.iter_mut().zip(jbar.iter()) {
+                for (x, y) in r.iter_mut().zip(jb.iter()).take(n_cols) {
+                    *x -= y;
+                }
+            }
+        }
+        let wp = c.weight * opts.weight_pos;
+        let mut e = [0.0; 6];
+        let mut w = [0.0; 6];
+        match g.kind {
+            GroupKind::Target | GroupKind::KnownTarget(_) => {
+                let t = match g.kind {
+                    GroupKind::KnownTarget(x) => x,
+                    _ => pbar,
+                };
+                for k in 0..3 {
+                    e[k] = t[k] - p[k];
+                    w[k] = wp;
+                }
+            }
+            GroupKind::Plane | GroupKind::KnownPlane { .. } => {
+                e[0] = match g.kind {
+                    GroupKind::KnownPlane { offset_m, .. } => offset_m - dot3(&normal, &p),
+                    _ => -dot3(&normal, &[p[0] - pbar[0], p[1] - pbar[1], p[2] - pbar[2]]),
+                };
+                w[0] = wp;
+                let [r0, r1, r2, ..] = &mut rows;
+                for ((x, y), z) in r0.iter_mut().zip(r1.iter()).zip(r2.iter()).take(n_cols) {
+                    *x = normal[0] * *x + normal[1] * y + normal[2] * z;
+                }
+            }
+        }
+        cost += (0..6).map(|k| w[k] * e[k] * e[k]).sum::<f64>();
+        if !with_rhs {
+            e = [0.0; 6];
+        }
+        fold6(ws, &rows, &e, &w)?;
+    }
+    if !pre_centre && w_sum > 0.0 {
+        for (jb, js) in jbar.iter_mut().zip(jsum.iter()) {
+            for (x, y) in jb.iter_mut().zip(js.iter()).take(n_cols) {
+                *x = y / w_sum;
+            }
+        }
+        if centred {
+            let wd = w_sum * opts.weight_pos;
+            if g.kind == GroupKind::Target {
+                for jb in &jbar {
+                    ws.gram.downdate(jb.get(..n_cols).unwrap_or(&[]), wd)?;
+                }
+            } else {
+                let mut nj = [0.0; P];
+                for (j, x) in nj.iter_mut().enumerate().take(n_cols) {
+                    *x = normal[0] * jbar[0][j] + normal[1] * jbar[1][j] + normal[2] * jbar[2][j];
+                }
+                ws.gram.downdate(nj.get(..n_cols).unwrap_or(&[]), wd)?;
+            }
+        }
+    }
+    if g.kind.is_target() && data.distances.iter().any(|d| d.a == gi || d.b == gi) {
+        let slot = gi % MEAN_CACHE;
+        if let Some(m) = ws.means.get_mut(slot) {
+            m.group = gi;
+            m.w = w_sum;
+            m.p = pbar;
+            m.jbar = jbar;
+        }
+    }
+    Ok(cost)
+}
+
+/// The mean of group `gi` from the cache, or computed (one Jacobian pass).
+fn group_mean<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &ConstraintData<'_, N>,
+    gi: usize,
+    n_cols: usize,
+    ws: &mut Workspace<P>,
+) -> Result<GroupMean<P>> {
+    if let Some(m) = ws.means.iter().find(|m| m.group == gi) {
+        return Ok(*m);
+    }
+    let g = data
+        .groups
+        .get(gi)
+        .copied()
+        .ok_or(Error::BadGroup { group: gi })?;
+    let contacts = data.group_contacts(&g);
+    let mut out = GroupMean::<P>::EMPTY;
+    out.group = gi;
+    let mut rows = [[0.0; P]; 6];
+    let mut s1 = [0.0; 3];
+    for c in contacts.iter().filter(|c| c.weight > 0.0) {
+        let p = contact_rows(robot, c, n_cols, ws, &mut rows)?;
+        out.w += c.weight;
+        for k in 0..3 {
+            s1[k] += c.weight * p[k];
+        }
+        for (jb, r) in out.jbar.iter_mut().zip(rows.iter()) {
+            for (x, y) in jb.iter_mut().zip(r.iter()).take(n_cols) {
+                *x += c.weight * y;
+            }
+        }
+    }
+    if out.w > 0.0 {
+        let w = out.w;
+        out.p = [s1[0] / w, s1[1] / w, s1[2] / w];
+        for jb in out.jbar.iter_mut() {
+            for x in jb.iter_mut() {
+                *x /= w;
+            }
+        }
+    }
+    Ok(out)
+}
+
+fn fold_distance<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &ConstraintData<'_, N>,
+    di: usize,
+    with_rhs: bool,
+    opts: &IdentifyOptions<'_>,
+    n_cols: usize,
+    ws: &mut Workspace<P>,
+) -> Result<f64> {
+    let d = data
+        .distances
+        .get(di)
+        .copied()
+        .ok_or(Error::BadDistance { distance: di })?;
+    let ma = group_mean(robot, data, d.a, n_cols, ws)?;
+    let mb = group_mean(robot, data, d.b, n_cols, ws)?;
+    if ma.w <= 0.0 || mb.w <= 0.0 {
+        return Ok(0.0);
+    }
+    let diff = [ma.p[0] - mb.p[0], ma.p[1] - mb.p[1], ma.p[2] - mb.p[2]];
+    let len = sqrt(dot3(&diff, &diff));
+    if len <= 0.0 {
+        return Err(Error::DegenerateGroup { group: d.a });
+    }
+    let u = [diff[0] / len, diff[1] / len, diff[2] / len];
+    let mut row = [0.0; P];
+    for (j, x) in row.iter_mut().enumerate().take(n_cols) {
+        *x = (0..3).map(|k| u[k] * (ma.jbar[k][j] - mb.jbar[k][j])).sum();
+    }
+    let e = d.m - len;
+    let w = opts.weight_pos * d.weight;
+    let b = if with_rhs { e } else { 0.0 };
+    let a = row.get(..n_cols).unwrap_or(&[]);
+    if ws.to_gram {
+        ws.gram.add_row_weighted(a, b, w)?;
+    } else {
+        ws.lsq.add_row_weighted(a, b, w)?;
+    }
+    Ok(w * e * e)
+}
+
+/// Residuals of one active contact given its group's `p̄` and normal: `(|e|, e·w·e)`.
+fn contact_residual<const N: usize>(
+    robot: &Robot<N>,
+    c: &Contact<N>,
+    kind: GroupKind,
+    pbar: [f64; 3],
+    normal: [f64; 3],
+) -> Result<f64> {
+    let p = c.tool_point(robot)?;
+    Ok(match kind {
+        GroupKind::Target | GroupKind::KnownTarget(_) => {
+            let t = match kind {
+                GroupKind::KnownTarget(x) => x,
+                _ => pbar,
+            };
+            let e = [t[0] - p[0], t[1] - p[1], t[2] - p[2]];
+            sqrt(dot3(&e, &e))
+        }
+        GroupKind::KnownPlane { offset_m, .. } => (offset_m - dot3(&normal, &p)).abs(),
+        GroupKind::Plane => dot3(&normal, &[p[0] - pbar[0], p[1] - pbar[1], p[2] - pbar[2]]).abs(),
+    })
+}
+
+/// What a group's contacts say at a model: the estimated target or plane and the scatter
+/// of the predicted tool points about it (the consistency of the data with the model).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GroupEstimate {
+    /// Kind of the group.
+    pub kind: GroupKind,
+    /// Contacts with a positive weight.
+    pub contacts: usize,
+    /// Mean predicted tool point: the estimated target \[m\] (for planes, a point on it).
+    pub point: [f64; 3],
+    /// Plane normal (unit; zero for targets).
+    pub normal: [f64; 3],
+    /// Plane offset `normal·p` \[m\] (0 for targets).
+    pub offset_m: f64,
+    /// RMS of the residual distance of the contacts (3-D for targets, to the plane for
+    /// planes) \[m\].
+    pub rms_m: f64,
+    /// Largest residual distance \[m\].
+    pub max_m: f64,
+}
+
+/// The estimate of group `g` at `robot` from its contacts with a positive weight.
+/// Errors: an invalid group, a degenerate plane, kinematics errors.
+pub fn group_estimate<const N: usize>(
+    robot: &Robot<N>,
+    data: &ConstraintData<'_, N>,
+    g: usize,
+) -> Result<GroupEstimate> {
+    let grp = data
+        .groups
+        .get(g)
+        .copied()
+        .ok_or(Error::BadGroup { group: g })?;
+    let contacts = data.group_contacts(&grp);
+    let (w, pbar, scatter) = point_moments(robot, contacts)?;
+    let (normal, offset_m) = match grp.kind {
+        GroupKind::Plane if w > 0.0 => {
+            let n = plane_normal(scatter, g)?;
+            (n, dot3(&n, &pbar))
+        }
+        GroupKind::KnownPlane { normal, offset_m } => (unit_normal(normal), offset_m),
+        _ => ([0.0; 3], 0.0),
+    };
+    let mut out = GroupEstimate {
+        kind: grp.kind,
+        contacts: 0,
+        point: pbar,
+        normal,
+        offset_m,
+        rms_m: 0.0,
+        max_m: 0.0,
+    };
+    let mut s = 0.0;
+    for c in contacts.iter().filter(|c| c.weight > 0.0) {
+        let r = contact_residual(robot, c, grp.kind, pbar, normal)?;
+        out.contacts += 1;
+        s += r * r;
+        out.max_m = out.max_m.max(r);
+    }
+    if out.contacts > 0 {
+        out.rms_m = sqrt(s / out.contacts as f64);
+    }
+    Ok(out)
+}
+
+/// The distance `‖p̄_a − p̄_b‖` \[m\] the model predicts for known distance `k` (compare
+/// with `data.distances[k].m`); `None` when a group has no active contact.
+pub fn distance_estimate<const N: usize>(
+    robot: &Robot<N>,
+    data: &ConstraintData<'_, N>,
+    k: usize,
+) -> Result<Option<f64>> {
+    let d = data
+        .distances
+        .get(k)
+        .copied()
+        .ok_or(Error::BadDistance { distance: k })?;
+    let ga = data
+        .groups
+        .get(d.a)
+        .ok_or(Error::BadDistance { distance: k })?;
+    let gb = data
+        .groups
+        .get(d.b)
+        .ok_or(Error::BadDistance { distance: k })?;
+    let (wa, pa, _) = point_moments(robot, data.group_contacts(ga))?;
+    let (wb, pb, _) = point_moments(robot, data.group_contacts(gb))?;
+    if wa <= 0.0 || wb <= 0.0 {
+        return Ok(None);
+    }
+    let diff = [pa[0] - pb[0], pa[1] - pb[1], pa[2] - pb[2]];
+    Ok(Some(sqrt(dot3(&diff, &diff))))
+}
+
+impl<const N: usize> RowSource<N> for ConstraintData<'_, N> {
+    fn validate(&self) -> Result<()> {
+        validate_instrument(self.instrument)?;
+        let base = self.instrument.len();
+        for (i, c) in self.contacts.iter().enumerate() {
+            let index = base + i;
+            c.state.validate().map_err(|e| match e {
+                Error::NonFinite { what, .. } => Error::NonFinite { what, index },
+                other => other,
+            })?;
+            if check_finite(&c.point, Quantity::Position).is_err() {
+                return Err(Error::NonFinite {
+                    what: Quantity::Position,
+                    index,
+                });
+            }
+            if !(c.weight.is_finite() && c.weight >= 0.0) {
+                return Err(Error::NonFinite {
+                    what: Quantity::Setting,
+                    index,
+                });
+            }
+        }
+        let mut next = 0;
+        for (gi, g) in self.groups.iter().enumerate() {
+            let bad = Error::BadGroup { group: gi };
+            if g.start != next || g.len < g.kind.min_contacts() {
+                return Err(bad);
+            }
+            next = g.start.checked_add(g.len).ok_or(bad)?;
+            let finite = match g.kind {
+                GroupKind::KnownTarget(x) => check_finite(&x, Quantity::Position).is_ok(),
+                GroupKind::KnownPlane { normal, offset_m } => {
+                    check_finite(&normal, Quantity::Position).is_ok()
+                        && offset_m.is_finite()
+                        && dot3(&normal, &normal) > 0.0
+                }
+                _ => true,
+            };
+            if !finite {
+                return Err(bad);
+            }
+        }
+        if next != self.contacts.len() {
+            return Err(Error::BadGroup {
+                group: self.groups.len(),
+            });
+        }
+        for (k, d) in self.distances.iter().enumerate() {
+            let target = |g: usize| self.groups.get(g).is_some_and(|g| g.kind.is_target());
+            let ok = d.a != d.b
+                && target(d.a)
+                && target(d.b)
+                && d.m.is_finite()
+                && d.m > 0.0
+                && d.weight.is_finite()
+                && d.weight >= 0.0;
+            if !ok {
+                return Err(Error::BadDistance { distance: k });
+            }
+        }
+        Ok(())
+    }
+
+    fn check_inputs(&self, opts: &IdentifyOptions<'_>) -> Result<()> {
+        let states = self
+            .instrument
+            .iter()
+            .map(|m| &m.state)
+            .chain(self.contacts.iter().map(|c| &c.state));
+        super::solvers::check_effect_inputs(states, opts)
+    }
+
+    /// Residual rows minus the eliminated nuisance parameters (3 per unknown target or
+    /// plane with an active contact): the degrees of freedom σ² divides by.
+    fn row_count(&self) -> usize {
+        let mut rows = self.instrument.row_count();
+        let mut nuisance = 0;
+        for g in self.groups {
+            let n = self
+                .group_contacts(g)
+                .iter()
+                .filter(|c| c.weight > 0.0)
+                .count();
+            rows += n * if g.kind.is_target() { 3 } else { 1 };
+            if n > 0 && matches!(g.kind, GroupKind::Target | GroupKind::Plane) {
+                nuisance += 3;
+            }
+        }
+        rows += self.distances.len();
+        rows.saturating_sub(nuisance)
+    }
+
+    fn fold<const P: usize>(
+        &self,
+        robot: &Robot<N>,
+        with_rhs: bool,
+        opts: &IdentifyOptions<'_>,
+        n_cols: usize,
+        ws: &mut Workspace<P>,
+    ) -> Result<f64> {
+        let mut c = 0.0;
+        for m in self.instrument.iter().filter(|m| m.weight > 0.0) {
+            c += add_rows(robot, m, with_rhs, opts, n_cols, ws)?;
+        }
+        for m in ws.means.iter_mut() {
+            m.group = usize::MAX;
+        }
+        for gi in 0..self.groups.len() {
+            c += fold_group(robot, self, gi, with_rhs, opts, n_cols, ws)?;
+            for (di, d) in self.distances.iter().enumerate() {
+                if d.a.max(d.b) == gi {
+                    c += fold_distance(robot, self, di, with_rhs, opts, n_cols, ws)?;
+                }
+            }
+        }
+        Ok(c)
+    }
+
+    fn cost(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<f64> {
+        Ok(self.cost_and_sums(robot, opts)?.0)
+    }
+
+    fn stats(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<ResidualStats> {
+        let mut s = residual_stats(robot, self.instrument, opts)?;
+        let n_inst = self
+            .instrument
+            .iter()
+            .filter(|m| m.weight > 0.0 && m.mask.has_position())
+            .count();
+        let (cost, sum2, max, n) = self.cost_and_sums(robot, opts)?;
+        let sp = s.rms_pos_m * s.rms_pos_m * n_inst as f64 + sum2;
+        let np = n_inst + n;
+        s.poses += n;
+        s.rows = self.row_count();
+        s.cost = cost;
+        s.max_pos_m = s.max_pos_m.max(max);
+        s.rms_pos_m = if np > 0 { sqrt(sp / np as f64) } else { 0.0 };
+        Ok(s)
+    }
+}
+
+impl<const N: usize> ConstraintData<'_, N> {
+    /// Cost, Σ|e|² and max |e| over the active contacts (3-D for targets, 1-D for planes),
+    /// number of active contacts.
+    fn cost_and_sums(
+        &self,
+        robot: &Robot<N>,
+        opts: &IdentifyOptions<'_>,
+    ) -> Result<(f64, f64, f64, usize)> {
+        let mut cost = super::data::cost(robot, self.instrument, opts)?;
+        let (mut s2, mut max, mut n) = (0.0, 0.0f64, 0);
+        for (gi, g) in self.groups.iter().enumerate() {
+            let contacts = self.group_contacts(g);
+            let (w, pbar, scatter) = point_moments(robot, contacts)?;
+            if w <= 0.0 {
+                continue;
+            }
+            let normal = match g.kind {
+                GroupKind::Plane => plane_normal(scatter, gi)?,
+                GroupKind::KnownPlane { normal, .. } => unit_normal(normal),
+                _ => [0.0; 3],
+            };
+            for c in contacts.iter().filter(|c| c.weight > 0.0) {
+                let r = contact_residual(robot, c, g.kind, pbar, normal)?;
+                cost += c.weight * opts.weight_pos * r * r;
+                s2 += r * r;
+                max = max.max(r);
+                n += 1;
+            }
+        }
+        for (k, d) in self.distances.iter().enumerate() {
+            if let Some(len) = distance_estimate(robot, self, k)? {
+                let e = d.m - len;
+                cost += opts.weight_pos * d.weight * e * e;
+            }
+        }
+        Ok((cost, s2, max, n))
+    }
+}
+
+/// The distinct tool points of the active rows (instrument points, contact points), at
+/// most [`super::data::MAX_STRUCTURAL_POINTS`].
+fn distinct_points<const N: usize>(
+    data: &ConstraintData<'_, N>,
+) -> (
+    [Option<[f64; 3]>; super::data::MAX_STRUCTURAL_POINTS],
+    usize,
+) {
+    let (mut out, mut n) = super::data::distinct_points(data.instrument);
+    for c in data.contacts.iter().filter(|c| c.weight > 0.0) {
+        let p = if c.point == [0.0; 3] {
+            None
+        } else {
+            Some(c.point)
+        };
+        if n == out.len() {
+            break;
+        }
+        if !out[..n].contains(&p) {
+            out[n] = p;
+            n += 1;
+        }
+    }
+    (out, n)
+}
+
+/// The identifiability analysis of constraint data (see the module doc on the gauge):
+/// structural test as for instrument data (position rows of the tool points), then the
+/// gauge (base frame, scale) is set aside and named, then the greedy rank test on the
+/// reduced Jacobian at `robot`.
+pub fn analyze_constrained<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &ConstraintData<'_, N>,
+    opts: &IdentifyOptions<'_>,
+    ws: &mut Workspace<P>,
+) -> Result<Identifiability> {
+    let mut out = Identifiability::empty(opts.requested);
+    analyze_constrained_into(robot, data, opts, ws, &mut out)?;
+    Ok(out)
+}
+
+fn analyze_constrained_into<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &ConstraintData<'_, N>,
+    opts: &IdentifyOptions<'_>,
+    ws: &mut Workspace<P>,
+    out: &mut Identifiability,
+) -> Result<()> {
+    data.validate()?;
+    let requested = opts.requested;
+    let p = requested.len();
+    if p == 0 {
+        return Err(Error::TooFewData {
+            found: 0,
+            needed: 1,
+        });
+    }
+    if p > P {
+        return Err(Error::CapacityExceeded {
+            needed: p,
+            capacity: P,
+        });
+    }
+    if let Some(bad) = requested.iter().find(|&i| i >= Robot::<N>::NUM_PARAMS) {
+        return Err(Error::DimensionMismatch {
+            expected: Robot::<N>::NUM_PARAMS,
+            found: bad + 1,
+        });
+    }
+    let mut union = 0u8;
+    let (mut any_approach, mut any_temp) = (false, false);
+    for m in data.instrument.iter().filter(|m| m.weight > 0.0) {
+        union |= m.mask.0;
+        any_approach |= m.state.approach.is_some();
+        any_temp |= m.state.temp_c.is_some();
+    }
+    for c in data.contacts.iter().filter(|c| c.weight > 0.0) {
+        union |= ComponentMask::POSITION.0;
+        any_approach |= c.state.approach.is_some();
+        any_temp |= c.state.temp_c.is_some();
+    }
+    if union == 0 {
+        return Err(Error::TooFewData {
+            found: 0,
+            needed: p,
+        });
+    }
+    let (points, n_points) = distinct_points(data);
+    out.reset(requested);
+    let external = data.has_external_reference();
+    let sel = StructuralSel {
+        mask: ComponentMask(union),
+        points: points.get(..n_points).unwrap_or(&[]),
+        any_approach,
+        any_temp,
+        base_first: !external,
+    };
+    let n_struct =
+        structural_step_with(robot, &sel, opts, ws, &mut out.structural, &mut out.partner)?;
+    if !external {
+        // Link parameters that only duplicate a rigid motion of the base: gauge too.
+        let is_base =
+            |i: usize| matches!(ParamId::from_index(ParamIndex(i), N), Ok(ParamId::Base(_)));
+        for col in 0..super::MAX_MODEL_PARAMS {
+            let partner_base = out
+                .partner
+                .get(col)
+                .copied()
+                .flatten()
+                .is_some_and(|p| is_base(p.param.0));
+            if out.structural.contains(col) && partner_base {
+                out.structural.remove(col);
+                out.gauge.insert(col)?;
+            }
+        }
+    }
+    let scale_gauge = if data.has_length_reference() {
+        None
+    } else {
+        scale_gauge_param::<N, P>(robot, ws.free.get(..n_struct).unwrap_or(&[]))
+    };
+    let mut n = 0;
+    for k in 0..n_struct {
+        let col = ws.free[k];
+        let base = matches!(
+            ParamId::from_index(ParamIndex(col), N),
+            Ok(ParamId::Base(_))
+        );
+        if base && !external {
+            if requested.contains(col) {
+                out.gauge.insert(col)?;
+            }
+        } else if scale_gauge == Some(col) {
+            out.gauge.insert(col)?;
+        } else {
+            ws.cols[n] = col;
+            n += 1;
+        }
+    }
+    data_step(robot, data, opts, ws, out, n)
+}
+
+/// The scale gauge: the non-base length parameter among `cols` with the largest nominal
+/// magnitude (fixing it fixes the scale; one of value 0 would not).
+fn scale_gauge_param<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    cols: &[usize],
+) -> Option<usize> {
+    let mut best: Option<(usize, f64)> = None;
+    for &col in cols {
+        let Ok(id) = ParamId::from_index(ParamIndex(col), N) else {
+            continue;
+        };
+        if !id.is_length() || matches!(id, ParamId::Base(_)) {
+            continue;
+        }
+        let v = robot.param(ParamIndex(col)).unwrap_or(0.0).abs();
+        if v > 0.0 && best.is_none_or(|(_, b)| v > b) {
+            best = Some((col, v));
+        }
+    }
+    best.map(|(c, _)| c)
+}
+
+/// Identifies the identifiable subset of `opts.requested` from constraint data (see the
+/// module doc), starting at `robot`. Same solvers, options and result as
+/// [`super::identify`]; `analysis.gauge` names what the data cannot see at all.
+///
+/// Errors: as [`super::identify`], plus [`Error::BadGroup`], [`Error::DegenerateGroup`],
+/// [`Error::BadDistance`].
+pub fn identify_constrained<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &ConstraintData<'_, N>,
+    opts: &IdentifyOptions<'_>,
+    ws: &mut Workspace<P>,
+) -> Result<Identification<N>> {
+    let mut out = Identification::start(robot, opts.algorithm, None);
+    data.validate()?;
+    super::solvers::check_identify_options(opts)?;
+    super::solvers::check_inputs(data, opts)?;
+    analyze_constrained_into(robot, data, opts, ws, &mut out.analysis)?;
+    super::solvers::identify_into(data, opts, ws, &mut out)?;
+    Ok(out)
+}
