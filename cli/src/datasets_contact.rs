@@ -80,7 +80,7 @@ pub fn import(name: &str, dir: &Path, opts: &ContactOptions) -> Result<ContactIm
 
 /// Shortest decimal that reads back to the same double.
 fn num(v: f64) -> String {
-    format!("{v}")
+    crate::measurements::format_f64(v)
 }
 
 fn sha256(path: &Path) -> Result<String, CliError> {
@@ -459,4 +459,71 @@ fn q_rad(q_deg: &[f64]) -> String {
         .map(|d| num(d.to_radians()))
         .collect::<Vec<_>>()
         .join(",")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::measurements::{ReadOptions, parse_measurements};
+
+    fn shared() -> Option<PathBuf> {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/realdata");
+        if dir.is_dir() {
+            return Some(dir);
+        }
+        assert!(
+            std::env::var("CI").map_or(true, |v| v != "true"),
+            "CI=true: shared/realdata is required"
+        );
+        eprintln!("SKIPPED: {} not found", dir.display());
+        None
+    }
+
+    /// The written CSVs read back through the measurement reader: MUKCa's rows are targets
+    /// with sessions, MATE's contacts carry one coordinate each.
+    #[test]
+    fn imported_csvs_read_back_as_constraint_rows() {
+        let Some(root) = shared() else { return };
+        let opts = ContactOptions {
+            robot_id: Some("panda_1".into()),
+            chain: UrdfChainArgs::default(),
+        };
+        let imp = import("mukca", &root.join("mukca"), &opts).expect("mukca");
+        let set = parse_measurements(imp.csv.as_bytes(), "mukca.csv", &ReadOptions::new(7))
+            .expect("mukca reads back");
+        assert_eq!(set.rows.len(), imp.rows);
+        assert!(set.has_target && set.has_session);
+        let r = &set.rows[0];
+        assert_eq!(r.target.as_deref(), Some("back-high/s0"));
+        assert_eq!(r.session.as_deref(), Some("back-high"));
+        assert!(r.position_m.is_none() && r.orientation.is_none());
+
+        let imp = import(
+            "figaroh-mate-planes",
+            &root.join("figaroh-mate-planes"),
+            &ContactOptions::default(),
+        )
+        .expect("mate");
+        let set = parse_measurements(imp.csv.as_bytes(), "mate.csv", &ReadOptions::new(3))
+            .expect("mate reads back");
+        assert_eq!(set.rows.len(), 40);
+        let x = set
+            .rows
+            .iter()
+            .find(|r| r.pose_id.as_deref() == Some("x/2"))
+            .unwrap();
+        let y = set
+            .rows
+            .iter()
+            .find(|r| r.pose_id.as_deref() == Some("y/2"))
+            .unwrap();
+        let pose = set
+            .rows
+            .iter()
+            .find(|r| r.pose_id.as_deref() == Some("pose/2"))
+            .unwrap();
+        assert!(x.target.is_none() && pose.orientation.is_some());
+        assert_eq!(x.partial_m, Some([Some(0.3044), None, None]));
+        assert_eq!(y.partial_m, Some([None, Some(-0.43791), None]));
+    }
 }
