@@ -284,6 +284,74 @@ pub fn calibrate<const N: usize>(
     })
 }
 
+/// The parameters a calibration from contact rows requests: those of `settings` plus the
+/// tool translation (the contacted point, e.g. a ball centre, identified as the tool
+/// translation; the structural test drops it if the last link already covers it).
+pub fn contact_params<const N: usize>(start: &Robot<N>, settings: &Settings) -> ParamSet {
+    let mut requested = start.param_set(settings.effects);
+    for k in 0..3 {
+        // Tool-frame translation: flat indices 5N + 6 .. 5N + 9.
+        let _ = requested.insert(5 * N + 6 + k);
+    }
+    requested
+}
+
+/// [`calibrate`] for instrument-free (or mixed) data: the core's constraint analysis and
+/// `identify_constrained`, every algorithm in parallel; no robust fit (refused by the
+/// command).
+pub fn calibrate_constrained<const N: usize>(
+    start: &Robot<N>,
+    data: &kincal::identify::ConstraintData<'_, N>,
+    settings: &Settings,
+) -> Result<Calibration<N>, Failure> {
+    use kincal::identify::{analyze_constrained, identify_constrained};
+    let requested = contact_params(start, settings);
+    let core = |algorithm| move |error| Failure::Core { algorithm, error };
+    let mut ws = new_workspace();
+    let opts = settings.options(Algorithm::Ols, requested, None);
+    let analysis = analyze_constrained(start, data, &opts, &mut ws).map_err(core(None))?;
+    let singular_values = ws.singular_values().to_vec();
+    if analysis.rank == 0
+        || (!analysis.data_deficient.is_empty() && !settings.allow_data_deficiency)
+    {
+        return Err(Failure::Deficient {
+            analysis: Box::new(analysis),
+            singular_values,
+        });
+    }
+    let results: Vec<Result<Run<N>, Failure>> = settings
+        .algorithms
+        .par_iter()
+        .map(|&algorithm| {
+            let t0 = Instant::now();
+            let bounds = Box::new(Bounds::around(
+                start,
+                settings.bounds_length_m,
+                settings.bounds_angle_rad,
+            ));
+            let opts = settings.options(algorithm, requested, Some(&bounds));
+            let mut ws = new_workspace();
+            let ident =
+                identify_constrained(start, data, &opts, &mut ws).map_err(core(Some(algorithm)))?;
+            Ok(Run {
+                ident,
+                seconds: t0.elapsed().as_secs_f64(),
+                robust: None,
+            })
+        })
+        .collect();
+    let runs = results.into_iter().collect::<Result<Vec<_>, _>>()?;
+    let consensus = (runs.len() >= 2).then(|| Consensus::check(&runs, &analysis.identifiable));
+    Ok(Calibration {
+        start: *start,
+        settings: settings.clone(),
+        analysis,
+        singular_values,
+        runs,
+        consensus,
+    })
+}
+
 /// Two algorithms disagree on a parameter when the difference exceeds
 /// `CONSENSUS_K_SIGMA` combined standard errors plus `CONSENSUS_FLOOR_SI`. Each run's
 /// standard errors are first rescaled to the smallest residual variance σ² among the runs

@@ -143,6 +143,10 @@ pub struct Args {
     /// for a full pose, 2.80 for a position)
     #[arg(long, value_name = "C", value_parser = positive, requires = "robust")]
     pub robust_tuning: Option<f64>,
+    /// Known geometry of the fixtures (TOML: [[distance]], [[target]], [[plane]]) for
+    /// data with target/plane rows (docs/constraints.md)
+    #[arg(long, value_name = "FILE")]
+    pub constraints: Option<PathBuf>,
 }
 
 impl Args {
@@ -202,6 +206,9 @@ fn calibrate<const N: usize>(start: &Robot<N>, name: &str, args: &Args) -> Resul
             allow_out_of_limits: args.allow_out_of_limits,
         },
     )?;
+    if args.constraints.is_some() || crate::constraints::has_contacts(&set) {
+        return calibrate_contacts(start, name, args, &settings, &set);
+    }
     let meas = data::measurements::<N>(&set)?;
     let initial;
     let start = if args.init_frames {
@@ -226,46 +233,11 @@ fn calibrate<const N: usize>(start: &Robot<N>, name: &str, args: &Args) -> Resul
     ));
     let result = calibration::calibrate(start, &meas, &settings);
     pb.finish_and_clear();
-    let cal = match result {
-        Ok(c) => c,
-        Err(Failure::Deficient {
-            analysis,
-            singular_values,
-        }) => {
-            return Err(CliError::numeric(format!(
-                "{}: rank deficient: the data determine {} of the {} structurally identifiable parameters\n{}\
-                 hint: add poses that move the data-deficient parameters, or pass --allow-data-deficiency to fit the identifiable subset",
-                set.source,
-                analysis.rank,
-                analysis.requested.len() - analysis.structural.len(),
-                report::identifiability::<N>(&analysis, &singular_values, meas.len(), rows)
-            )));
-        }
-        Err(Failure::Core { algorithm, error }) => {
-            let e = core_error(error, &set.source, |i| data::line_of(&set, i));
-            let hint = match (algorithm, error) {
-                (Some(_), kincal::Error::NotConverged { .. }) if settings.robust.is_some() => {
-                    "\nhint: the robust reweighting or one of its fits did not settle: raise --max-iterations, \
-                     try --robust huber (convex), or --algorithm opt2 (Levenberg–Marquardt)"
-                }
-                (Some(Algorithm::Ols), kincal::Error::NotConverged { .. }) => {
-                    "\nhint: Gauss–Newton (OLS) can stall far from the solution or on nearly singular data; \
-                     OPT2 (Levenberg–Marquardt) is more robust: --algorithm opt2"
-                }
-                (Some(_), kincal::Error::NotConverged { .. }) => {
-                    "\nhint: raise --max-iterations, or add poses that determine the parameters better"
-                }
-                _ => "",
-            };
-            return Err(match algorithm {
-                Some(a) => CliError {
-                    exit: e.exit,
-                    message: format!("{} failed: {}{hint}", a.name().to_uppercase(), e.message),
-                },
-                None => e,
-            });
-        }
-    };
+    let cal = result.map_err(|f| {
+        failure_error::<N>(f, &settings, &set.source, meas.len(), rows, |i| {
+            data::line_of(&set, i)
+        })
+    })?;
 
     let data_json = DataJson {
         path: args.data.display().to_string(),
@@ -534,4 +506,137 @@ pub fn robust_report<const N: usize>(
         }
     }
     s
+}
+
+/// The CLI error of a failed calibration: a rank-deficiency report (exit 4) or the core
+/// error with its CSV line and a hint.
+fn failure_error<const N: usize>(
+    f: Failure,
+    settings: &Settings,
+    source: &str,
+    poses: usize,
+    rows: usize,
+    line_of: impl Fn(usize) -> Option<u64>,
+) -> CliError {
+    match f {
+        Failure::Deficient {
+            analysis,
+            singular_values,
+        } => CliError::numeric(format!(
+            "{source}: rank deficient: the data determine {} of the {} structurally identifiable parameters\n{}\
+             hint: add poses that move the data-deficient parameters, or pass --allow-data-deficiency to fit the identifiable subset",
+            analysis.rank,
+            analysis.requested.len() - analysis.structural.len(),
+            report::identifiability::<N>(&analysis, &singular_values, poses, rows)
+        )),
+        Failure::Core { algorithm, error } => {
+            let e = core_error(error, source, line_of);
+            let hint = match (algorithm, error) {
+                (Some(_), kincal::Error::NotConverged { .. }) if settings.robust.is_some() => {
+                    "\nhint: the robust reweighting or one of its fits did not settle: raise --max-iterations, \
+                     try --robust huber (convex), or --algorithm opt2 (Levenberg–Marquardt)"
+                }
+                (Some(Algorithm::Ols), kincal::Error::NotConverged { .. }) => {
+                    "\nhint: Gauss–Newton (OLS) can stall far from the solution or on nearly singular data; \
+                     OPT2 (Levenberg–Marquardt) is more robust: --algorithm opt2"
+                }
+                (Some(_), kincal::Error::NotConverged { .. }) => {
+                    "\nhint: raise --max-iterations, or add poses that determine the parameters better"
+                }
+                _ => "",
+            };
+            match algorithm {
+                Some(a) => CliError {
+                    exit: e.exit,
+                    message: format!("{} failed: {}{hint}", a.name().to_uppercase(), e.message),
+                },
+                None => e,
+            }
+        }
+    }
+}
+
+/// Calibration from target/plane (contact) rows, possibly mixed with instrument rows
+/// (docs/constraints.md).
+fn calibrate_contacts<const N: usize>(
+    start: &Robot<N>,
+    name: &str,
+    args: &Args,
+    settings: &Settings,
+    set: &crate::measurements::MeasurementSet,
+) -> Result<(), CliError> {
+    if args.robust.is_some() {
+        return Err(CliError::usage(
+            "--robust is not implemented for data with target/plane rows: fit by least squares",
+        ));
+    }
+    if args.init_frames {
+        return Err(CliError::usage(
+            "--init-frames needs instrument poses; data with target/plane rows start from the ROBOT's frames",
+        ));
+    }
+    let cons = args
+        .constraints
+        .as_deref()
+        .map(crate::constraints::read_constraints)
+        .transpose()?;
+    let cd =
+        crate::constraints::build::<N>(set, cons.as_ref(), start, settings.weighting.weights().0)?;
+    let view = cd.view();
+    let rows = kincal_rows(&cd);
+    let pb = crate::progress::spinner("identifying from contacts".to_string());
+    let result = calibration::calibrate_constrained(start, &view, settings);
+    pb.finish_and_clear();
+    let line_of = |i: usize| cd.row_of(i).and_then(|r| set.rows.get(r)).map(|r| r.line);
+    let cal = result
+        .map_err(|f| failure_error::<N>(f, settings, &set.source, cd.rows(), rows, line_of))?;
+    let robot = &cal.runs[0].ident.robot;
+    let cons_json = cd
+        .report_json(robot)
+        .map_err(|e| core_error(e, &set.source, line_of))?;
+    let data_json = DataJson {
+        path: args.data.display().to_string(),
+        sha256: set.sha256.clone(),
+        poses: cd.rows(),
+        rows,
+    };
+    let mut file = ModelFile::from_calibration(name, &cal, 0, data_json, args.allow_out_of_limits);
+    if let Some(c) = file.calibration.as_mut() {
+        c.constraints = Some(cons_json.clone());
+    }
+    let text = file.to_json();
+    let mut inputs: Vec<&Path> = vec![&args.data];
+    let robot_path = Path::new(&args.robot);
+    if robot_path.is_file() {
+        inputs.push(robot_path);
+    }
+    if let Some(c) = &args.constraints {
+        inputs.push(c);
+    }
+    crate::files::write_atomic(&args.out, &inputs, |w| w.write_all(text.as_bytes()))?;
+    let mut out = summary(&cal, name, &set.source, cd.rows(), rows);
+    out.push_str(&crate::constraints::reference_note(&view));
+    out.push_str(&crate::constraints::report_text(&cons_json));
+    out.push_str(&format!(
+        "Model written to {} ({} model).\n",
+        args.out.display(),
+        cal.runs[0].ident.algorithm.name().to_uppercase()
+    ));
+    report::emit(&out);
+    Ok(())
+}
+
+/// Residual rows of contact data (before eliminating the nuisance parameters).
+fn kincal_rows<const N: usize>(cd: &crate::constraints::ContactData<N>) -> usize {
+    let inst: usize = cd
+        .instrument
+        .iter()
+        .map(|m| (0..6).filter(|&k| m.mask.has(k)).count())
+        .sum();
+    let contacts: usize = cd
+        .groups
+        .iter()
+        .map(|g| g.len * if g.kind.is_target() { 3 } else { 1 })
+        .sum();
+    inst + contacts + cd.distances.len()
 }

@@ -78,6 +78,10 @@ pub struct Args {
     /// Print the summary only (no per-pose table)
     #[arg(long)]
     pub quiet: bool,
+    /// Known geometry of the fixtures (TOML) for data with target/plane rows: validate
+    /// then reports the consistency per target/plane and the error of every known distance
+    #[arg(long, value_name = "FILE")]
+    pub constraints: Option<PathBuf>,
 }
 
 /// Errors of one model on a data set.
@@ -306,6 +310,9 @@ fn validate<const N: usize>(
             allow_out_of_limits: args.allow_out_of_limits,
         },
     )?;
+    if args.constraints.is_some() || crate::constraints::has_contacts(&set) {
+        return validate_contacts(robot, name, file, args, &set);
+    }
     let meas = data::measurements::<N>(&set)?;
     let has_rot = meas.iter().any(|m| m.mask.has_orientation());
     let fail =
@@ -466,6 +473,102 @@ fn validate<const N: usize>(
     }
     if let Some(p) = &args.json {
         let _ = writeln!(out, "Report written to {}", p.display());
+    }
+    crate::report::emit(&out);
+    Ok(())
+}
+
+/// Validation of contact data: the consistency of the predicted tool points per target and
+/// plane (scatter about the target or plane re-estimated by each model: RMS and max, mm)
+/// and the error of every known distance, for the model and its variants.
+fn validate_contacts<const N: usize>(
+    robot: &Robot<N>,
+    name: &str,
+    file: &crate::model_file::ModelFile,
+    args: &Args,
+    set: &crate::measurements::MeasurementSet,
+) -> Result<(), CliError> {
+    let cons = args
+        .constraints
+        .as_deref()
+        .map(crate::constraints::read_constraints)
+        .transpose()?;
+    let cd = crate::constraints::build::<N>(set, cons.as_ref(), robot, 1.0)?;
+    let line_of = |i: usize| cd.row_of(i).and_then(|r| set.rows.get(r)).map(|r| r.line);
+    let variants: Vec<(String, Robot<N>)> = file
+        .variants::<N>()
+        .map_err(|m| CliError::input(format!("{}: {m}", args.model)))?;
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "Validation of {} on {}: {} contacts at {} targets/planes, {} known distances",
+        args.model,
+        set.source,
+        cd.contacts.len(),
+        cd.groups.len(),
+        cd.distances.len()
+    );
+    if !cd.instrument.is_empty() {
+        let _ = writeln!(
+            out,
+            "  ({} instrument rows are not scored here: validate them without the contact rows)",
+            cd.instrument.len()
+        );
+    }
+    let mut table = Table::new(&[
+        "model",
+        "mean RMS [mm]",
+        "max [mm]",
+        "mean |dist err| [mm]",
+        "max |dist err| [mm]",
+    ]);
+    let mut reports = Vec::new();
+    for (n, r) in std::iter::once((name.to_string(), *robot)).chain(variants) {
+        let j = cd
+            .report_json(&r)
+            .map_err(|e| core_error(e, &set.source, line_of))?;
+        let groups: Vec<_> = j.targets.iter().chain(j.planes.iter()).collect();
+        let mean_rms = groups.iter().map(|g| g.rms_mm).sum::<f64>() / groups.len().max(1) as f64;
+        let max = groups.iter().map(|g| g.max_mm).fold(0.0, f64::max);
+        let errs: Vec<f64> = j
+            .distances
+            .iter()
+            .filter_map(|d| d.error_mm)
+            .map(f64::abs)
+            .collect();
+        let (mean_d, max_d) = if errs.is_empty() {
+            ("–".to_string(), "–".to_string())
+        } else {
+            (
+                format!("{:.4}", errs.iter().sum::<f64>() / errs.len() as f64),
+                format!("{:.4}", errs.iter().fold(0.0, |a: f64, &b| a.max(b))),
+            )
+        };
+        table.row(vec![
+            n.clone(),
+            format!("{mean_rms:.4}"),
+            format!("{max:.4}"),
+            mean_d,
+            max_d,
+        ]);
+        reports.push((n, j));
+    }
+    out.push_str(&table.render("  "));
+    if let Some((_, j)) = reports.first()
+        && !args.quiet
+    {
+        out.push_str(&crate::constraints::report_text(j));
+    }
+    if let Some(path) = &args.json {
+        let map: std::collections::BTreeMap<&str, &crate::model_file::ConstraintsJson> =
+            reports.iter().map(|(n, j)| (n.as_str(), j)).collect();
+        let text = serde_json::to_string_pretty(&map)
+            .map_err(|e| CliError::io(format!("{}: {e}", path.display())))?;
+        let mut inputs: Vec<&Path> = vec![&args.data];
+        if let Some(c) = &args.constraints {
+            inputs.push(c);
+        }
+        crate::files::write_atomic(path, &inputs, |w| w.write_all(text.as_bytes()))?;
     }
     crate::report::emit(&out);
     Ok(())

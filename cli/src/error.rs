@@ -91,6 +91,9 @@ pub fn core_error(
     match e {
         E::NonFinite { index, .. } => CliError::input(format!("{}: {e}", at(index))),
         E::BadPose { pose } => CliError::input(format!("{}: {e}", at(pose.0))),
+        E::BadGroup { .. } | E::DegenerateGroup { .. } | E::BadDistance { .. } => {
+            CliError::input(format!("{file}: {e}"))
+        }
         E::OutOfLimits { .. } | E::MissingInput { .. } | E::DimensionMismatch { .. } => {
             CliError::input(format!("{file}: {e}"))
         }

@@ -20,6 +20,7 @@ pub mod cmd_observed_point;
 pub mod cmd_predict;
 pub mod cmd_select;
 pub mod cmd_validate;
+pub mod constraints;
 pub mod data;
 pub mod datasets;
 pub mod datasets_contact;

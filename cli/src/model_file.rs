@@ -142,6 +142,57 @@ pub struct CalibrationJson {
     /// The robust fit (with `calibrate --robust`): loss, thresholds, and the model's run.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub robust: Option<RobustJson>,
+    /// Instrument-free data: the targets, planes and known distances as the calibrated
+    /// model sees them (docs/constraints.md).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub constraints: Option<ConstraintsJson>,
+}
+
+/// Targets, planes and distances estimated by the calibrated model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ConstraintsJson {
+    /// The constraints file, if any (as given on the command line) and its SHA-256.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sha256: Option<String>,
+    pub targets: Vec<GroupJson>,
+    pub planes: Vec<GroupJson>,
+    pub distances: Vec<DistanceJson>,
+}
+
+/// One target or plane: the estimate and the scatter of the contacts about it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GroupJson {
+    pub id: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub session: Option<String>,
+    /// Given in the constraints file (not estimated).
+    pub known: bool,
+    pub contacts: usize,
+    /// Target position, or the contacts' mean point on a plane [m] (base frame).
+    pub xyz_m: [f64; 3],
+    /// Plane normal (planes only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normal: Option<[f64; 3]>,
+    /// Plane offset normal·p [m] (planes only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub offset_m: Option<f64>,
+    pub rms_mm: f64,
+    pub max_mm: f64,
+}
+
+/// A known distance and what the model predicts.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DistanceJson {
+    pub between: [String; 2],
+    pub m: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma_m: Option<f64>,
+    /// Predicted by the calibrated model (null when a target has no contact).
+    pub predicted_m: Option<f64>,
+    /// predicted − known [mm].
+    pub error_mm: Option<f64>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -172,6 +223,10 @@ pub struct IdentifiabilityJson {
     pub identifiable: Vec<String>,
     pub structurally_redundant: Vec<NotKeptJson>,
     pub data_deficient: Vec<NotKeptJson>,
+    /// Not observable without an external reference (constraint data: base frame, scale),
+    /// kept at their values.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub not_observable: Vec<NotKeptJson>,
     pub rank: usize,
     /// σ_max/σ_min of the unit-scaled Jacobian; `null` when infinite.
     pub condition_number: Option<f64>,
@@ -364,6 +419,9 @@ impl RobotJson {
                     Some(inf) if inf.analysis.data_deficient.contains(i) => {
                         ("data_deficient", false, None, false)
                     }
+                    Some(inf) if inf.analysis.gauge.contains(i) => {
+                        ("not_observable", false, None, false)
+                    }
                     _ => ("fixed", false, None, false),
                 };
                 Some(ParamJson {
@@ -464,6 +522,7 @@ pub fn identifiability_json<const N: usize>(
         identifiable: labels::<N>(&a.identifiable),
         structurally_redundant: not_kept::<N>(&a.structural, a),
         data_deficient: not_kept::<N>(&a.data_deficient, a),
+        not_observable: not_kept::<N>(&a.gauge, a),
         rank: a.rank,
         condition_number: finite_or_none(a.condition_number),
         singular_values: singular_values.to_vec(),
@@ -622,6 +681,7 @@ impl ModelFile {
                 results,
                 consensus: cal.consensus.as_ref().map(consensus_json::<N>),
                 robust: None,
+                constraints: None,
             }),
         }
     }

@@ -185,6 +185,34 @@ pub fn identifiability<const N: usize>(
         }
     );
     list::<N>(&a.data_deficient, a, &mut out);
+    if !a.gauge.is_empty() {
+        let _ = writeln!(
+            out,
+            "  not observable (gauge): {} (no external reference in the data; kept at their values)",
+            a.gauge.len()
+        );
+        for i in a.gauge.iter() {
+            let why = match kincal::params::ParamId::from_index(ParamIndex(i), N) {
+                Ok(kincal::params::ParamId::Base(_)) => {
+                    "base frame: no instrument row, known target or known plane refers to it"
+                }
+                Ok(id)
+                    if id.is_length()
+                        && a.partner[i].is_none_or(|p| {
+                            !matches!(
+                                kincal::params::ParamId::from_index(p.param, N),
+                                Ok(kincal::params::ParamId::Base(_))
+                            )
+                        }) =>
+                {
+                    "scale: no known distance, known target or known plane fixes the lengths \
+                     (this length is held, the others are relative to it)"
+                }
+                _ => "duplicates a rigid motion of the unobservable base frame",
+            };
+            let _ = writeln!(out, "    {:<28} {why}", label::<N>(i));
+        }
+    }
     out
 }
 
@@ -216,6 +244,8 @@ pub fn parameters<const N: usize>(cal: &Calibration<N>, k: usize) -> String {
             )
         } else if cal.analysis.structural.contains(i) {
             ("-".to_string(), "redundant (fixed)")
+        } else if cal.analysis.gauge.contains(i) {
+            ("-".to_string(), "not observable (fixed)")
         } else {
             ("-".to_string(), "data-deficient (fixed)")
         };

@@ -641,6 +641,10 @@ pub struct GroupEstimate {
     pub rms_m: f64,
     /// Largest residual distance \[m\].
     pub max_m: f64,
+    /// Planes: RMS spread of the contacts across their best-fit line over their RMS
+    /// extent along it (`sqrt(λ₂/λ₃)` of the scatter): near 0 for contacts along a line,
+    /// whose plane is undetermined. 0 for targets.
+    pub aspect: f64,
 }
 
 /// The estimate of group `g` at `robot` from its contacts with a positive weight.
@@ -657,9 +661,12 @@ pub fn group_estimate<const N: usize>(
         .ok_or(Error::BadGroup { group: g })?;
     let contacts = data.group_contacts(&grp);
     let (w, pbar, scatter) = point_moments(robot, contacts)?;
+    let mut aspect = 0.0;
     let (normal, offset_m) = match grp.kind {
         GroupKind::Plane if w > 0.0 => {
             let n = plane_normal(scatter, g)?;
+            let (ev, _) = sym3_smallest(scatter);
+            aspect = sqrt(ev[1].max(0.0) / ev[2]);
             (n, dot3(&n, &pbar))
         }
         GroupKind::KnownPlane { normal, offset_m } => (unit_normal(normal), offset_m),
@@ -673,6 +680,7 @@ pub fn group_estimate<const N: usize>(
         offset_m,
         rms_m: 0.0,
         max_m: 0.0,
+        aspect,
     };
     let mut s = 0.0;
     for c in contacts.iter().filter(|c| c.weight > 0.0) {

@@ -1,0 +1,736 @@
+//! Instrument-free data for the commands (docs/constraints.md): the constraints file
+//! (`--constraints FILE`, TOML: `[[distance]]`, `[[target]]`, `[[plane]]`) and the
+//! conversion of a measurement set with `target`, `plane` and `session` rows into the core's
+//! [`ConstraintData`]. Every refusal names the file, the line and the column.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use kincal::identify::{
+    ConstraintData, Contact, Distance, Group, GroupKind, Measurement, group_estimate,
+};
+use kincal::{Error, Robot};
+use serde::Deserialize;
+use toml::Spanned;
+
+use crate::error::CliError;
+use crate::measurements::{MeasurementRow, MeasurementSet};
+use crate::model_file::{ConstraintsJson, DistanceJson, GroupJson};
+
+/// A session needs at least this many rows: fewer fix nothing a set-up adds (a base frame
+/// of its own needs three points; a target needs two contacts).
+pub const MIN_SESSION_ROWS: usize = 3;
+/// Plane contacts whose spread across their best-fit line is below this fraction of their
+/// extent along it at the starting model count as collinear (the plane's tilt about that
+/// line is then undetermined; a model error of a few mm over a line of a few cm stays
+/// below it).
+pub const CLI_PLANE_MIN_ASPECT: f64 = 0.1;
+/// An unknown plane needs at least this many contacts (three define it; only the fourth
+/// and later say anything about the robot).
+pub const MIN_PLANE_CONTACTS: usize = 3;
+
+/// A known distance of the constraints file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DistanceSpec {
+    pub between: [String; 2],
+    pub m: f64,
+    pub sigma_m: Option<f64>,
+    /// 1-based line of the entry.
+    pub line: usize,
+}
+
+/// A known target of the constraints file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TargetSpec {
+    pub id: String,
+    pub xyz_m: [f64; 3],
+    pub line: usize,
+}
+
+/// A known plane of the constraints file (`normal·p = offset_m`, normal normalised).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlaneSpec {
+    pub id: String,
+    pub normal: [f64; 3],
+    pub offset_m: f64,
+    pub line: usize,
+}
+
+/// A parsed constraints file.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ConstraintsFile {
+    /// As given (for messages).
+    pub path: String,
+    pub sha256: String,
+    pub distances: Vec<DistanceSpec>,
+    pub targets: Vec<TargetSpec>,
+    pub planes: Vec<PlaneSpec>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawFile {
+    #[serde(default)]
+    distance: Vec<Spanned<RawDistance>>,
+    #[serde(default)]
+    target: Vec<Spanned<RawTarget>>,
+    #[serde(default)]
+    plane: Vec<Spanned<RawPlane>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDistance {
+    between: Spanned<Vec<String>>,
+    m: Spanned<f64>,
+    #[serde(default)]
+    sigma_m: Option<Spanned<f64>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTarget {
+    id: Spanned<String>,
+    xyz_m: Spanned<Vec<f64>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawPlane {
+    id: Spanned<String>,
+    normal: Spanned<Vec<f64>>,
+    offset_m: Spanned<f64>,
+}
+
+/// 1-based line of byte offset `at` in `text`.
+fn line_at(text: &str, at: usize) -> usize {
+    text.as_bytes()
+        .iter()
+        .take(at)
+        .filter(|&&b| b == b'\n')
+        .count()
+        + 1
+}
+
+/// Reads and checks a constraints file.
+pub fn read_constraints(path: &Path) -> Result<ConstraintsFile, CliError> {
+    let name = path.display().to_string();
+    let bytes = std::fs::read(path)
+        .map_err(|e| CliError::input(format!("{name}: cannot read the constraints file: {e}")))?;
+    let text = String::from_utf8(bytes)
+        .map_err(|e| CliError::input(format!("{name}: not UTF-8 text ({e})")))?;
+    let mut c = parse_constraints(&text, &name)?;
+    use sha2::Digest;
+    c.sha256 = sha2::Sha256::digest(text.as_bytes())
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    Ok(c)
+}
+
+/// Parses constraints TOML; `name` is the file name in messages.
+pub fn parse_constraints(text: &str, name: &str) -> Result<ConstraintsFile, CliError> {
+    let at = |span: std::ops::Range<usize>, key: &str, why: String| {
+        CliError::input(format!(
+            "{name}:{}: key '{key}': {why}",
+            line_at(text, span.start)
+        ))
+    };
+    let raw: RawFile = toml::from_str(text).map_err(|e| {
+        let line = e
+            .span()
+            .map_or(String::new(), |s| format!(":{}", line_at(text, s.start)));
+        CliError::input(format!(
+            "{name}{line}: {} (expected [[distance]] between/m/sigma_m, [[target]] id/xyz_m, \
+             [[plane]] id/normal/offset_m)",
+            e.message().trim_end()
+        ))
+    })?;
+    let mut out = ConstraintsFile {
+        path: name.to_string(),
+        ..ConstraintsFile::default()
+    };
+    let finite = |v: &Spanned<f64>, key: &str| {
+        if v.get_ref().is_finite() {
+            Ok(*v.get_ref())
+        } else {
+            Err(at(v.span(), key, "expected a finite number".into()))
+        }
+    };
+    let id_of = |v: &Spanned<String>| {
+        let id = v.get_ref().trim();
+        if id.is_empty() {
+            Err(at(v.span(), "id", "expected a non-empty id".into()))
+        } else {
+            Ok(id.to_string())
+        }
+    };
+    let vec3 = |v: &Spanned<Vec<f64>>, key: &str| -> Result<[f64; 3], CliError> {
+        match v.get_ref().as_slice() {
+            [x, y, z] if [x, y, z].iter().all(|c| c.is_finite()) => Ok([*x, *y, *z]),
+            _ => Err(at(
+                v.span(),
+                key,
+                "expected three finite numbers [x, y, z]".into(),
+            )),
+        }
+    };
+    for d in &raw.distance {
+        let line = line_at(text, d.span().start);
+        let r = d.get_ref();
+        let between = match r.between.get_ref().as_slice() {
+            [a, b] if !a.trim().is_empty() && !b.trim().is_empty() && a.trim() != b.trim() => {
+                [a.trim().to_string(), b.trim().to_string()]
+            }
+            _ => {
+                return Err(at(
+                    r.between.span(),
+                    "between",
+                    "expected two different target ids [\"a\", \"b\"]".into(),
+                ));
+            }
+        };
+        let m = finite(&r.m, "m")?;
+        if m <= 0.0 {
+            return Err(at(
+                r.m.span(),
+                "m",
+                format!("expected a positive distance in metres, found {m}"),
+            ));
+        }
+        let sigma_m = match &r.sigma_m {
+            Some(s) => {
+                let v = finite(s, "sigma_m")?;
+                if v <= 0.0 {
+                    return Err(at(
+                        s.span(),
+                        "sigma_m",
+                        format!("expected a positive 1-sigma in metres, found {v}"),
+                    ));
+                }
+                Some(v)
+            }
+            None => None,
+        };
+        out.distances.push(DistanceSpec {
+            between,
+            m,
+            sigma_m,
+            line,
+        });
+    }
+    for t in &raw.target {
+        let r = t.get_ref();
+        out.targets.push(TargetSpec {
+            id: id_of(&r.id)?,
+            xyz_m: vec3(&r.xyz_m, "xyz_m")?,
+            line: line_at(text, t.span().start),
+        });
+    }
+    for p in &raw.plane {
+        let r = p.get_ref();
+        let n = vec3(&r.normal, "normal")?;
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        if len <= 1e-12 {
+            return Err(at(
+                r.normal.span(),
+                "normal",
+                "expected a non-zero normal".into(),
+            ));
+        }
+        out.planes.push(PlaneSpec {
+            id: id_of(&r.id)?,
+            normal: [n[0] / len, n[1] / len, n[2] / len],
+            offset_m: finite(&r.offset_m, "offset_m")? / len,
+            line: line_at(text, p.span().start),
+        });
+    }
+    // One definition per id.
+    let mut seen: HashMap<&str, usize> = HashMap::new();
+    for (id, line) in out
+        .targets
+        .iter()
+        .map(|t| (t.id.as_str(), t.line))
+        .chain(out.planes.iter().map(|p| (p.id.as_str(), p.line)))
+    {
+        if let Some(prev) = seen.insert(id, line) {
+            return Err(CliError::input(format!(
+                "{name}:{line}: key 'id': {id:?} is already defined on line {prev}: expected one \
+                 [[target]] or [[plane]] per id"
+            )));
+        }
+    }
+    Ok(out)
+}
+
+/// What a group is, for reports.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GroupInfo {
+    pub id: String,
+    pub plane: bool,
+    pub known: bool,
+    pub session: Option<String>,
+    /// Line of its first row.
+    pub line: u64,
+}
+
+/// A measurement set as core constraint data (owned), with the way back to the file.
+#[derive(Debug, Clone)]
+pub struct ContactData<const N: usize> {
+    pub instrument: Vec<Measurement<N>>,
+    /// Row (index into the set) of each instrument measurement.
+    pub instrument_rows: Vec<usize>,
+    pub contacts: Vec<Contact<N>>,
+    /// Row of each contact.
+    pub contact_rows: Vec<usize>,
+    pub groups: Vec<Group>,
+    pub info: Vec<GroupInfo>,
+    pub distances: Vec<Distance>,
+    pub distance_specs: Vec<DistanceSpec>,
+    /// The constraints file (path, sha256), if any.
+    pub file: Option<(String, String)>,
+}
+
+impl<const N: usize> ContactData<N> {
+    /// The core's view.
+    pub fn view(&self) -> ConstraintData<'_, N> {
+        ConstraintData {
+            instrument: &self.instrument,
+            contacts: &self.contacts,
+            groups: &self.groups,
+            distances: &self.distances,
+        }
+    }
+
+    /// Row (index into the set) of the core's row index (instrument, then contacts).
+    pub fn row_of(&self, index: usize) -> Option<usize> {
+        match index.checked_sub(self.instrument.len()) {
+            None => self.instrument_rows.get(index).copied(),
+            Some(c) => self.contact_rows.get(c).copied(),
+        }
+    }
+
+    /// Number of rows of the set that take part.
+    pub fn rows(&self) -> usize {
+        self.instrument.len() + self.contacts.len()
+    }
+
+    /// Sets the weight of every row: `keep(row index)` → 1, else 0 (held out).
+    pub fn select(&mut self, keep: impl Fn(usize) -> bool) {
+        for (m, &r) in self.instrument.iter_mut().zip(&self.instrument_rows) {
+            m.weight = if keep(r) { 1.0 } else { 0.0 };
+        }
+        for (c, &r) in self.contacts.iter_mut().zip(&self.contact_rows) {
+            c.weight = if keep(r) { 1.0 } else { 0.0 };
+        }
+    }
+
+    /// The targets, planes and distances as `robot` sees them (rows with a positive weight).
+    pub fn report_json(&self, robot: &Robot<N>) -> Result<ConstraintsJson, Error> {
+        let d = self.view();
+        let mut out = ConstraintsJson {
+            file: self.file.as_ref().map(|f| f.0.clone()),
+            sha256: self.file.as_ref().map(|f| f.1.clone()),
+            targets: Vec::new(),
+            planes: Vec::new(),
+            distances: Vec::new(),
+        };
+        for (g, info) in self.info.iter().enumerate() {
+            let e = group_estimate(robot, &d, g)?;
+            let j = GroupJson {
+                id: info.id.clone(),
+                session: info.session.clone(),
+                known: info.known,
+                contacts: e.contacts,
+                xyz_m: e.point,
+                normal: info.plane.then_some(e.normal),
+                offset_m: info.plane.then_some(e.offset_m),
+                rms_mm: e.rms_m * 1e3,
+                max_mm: e.max_m * 1e3,
+            };
+            if info.plane {
+                out.planes.push(j);
+            } else {
+                out.targets.push(j);
+            }
+        }
+        for (k, s) in self.distance_specs.iter().enumerate() {
+            let p = kincal::identify::distance_estimate(robot, &d, k)?;
+            out.distances.push(DistanceJson {
+                between: s.between.clone(),
+                m: s.m,
+                sigma_m: s.sigma_m,
+                predicted_m: p,
+                error_mm: p.map(|p| (p - s.m) * 1e3),
+            });
+        }
+        Ok(out)
+    }
+}
+
+/// Whether the set has contact rows.
+pub fn has_contacts(set: &MeasurementSet) -> bool {
+    set.rows.iter().any(MeasurementRow::is_constraint)
+}
+
+fn input(set: &MeasurementSet, line: u64, column: &str, why: String) -> CliError {
+    CliError::input(format!("{}:{line}: column '{column}': {why}", set.source))
+}
+
+/// Builds the core's data from `set` and the constraints file: rows grouped by target or
+/// plane (in order of first appearance), instrument rows as measurements, known targets
+/// and planes from the file, distances weighted by `sigma_m` (`1/(σ²·weight_pos)` relative
+/// to a position row; 1 without). Refuses, naming file, line and column: a target with one
+/// row (unless known), a plane with fewer than [`MIN_PLANE_CONTACTS`] rows (unless known),
+/// a target or plane in two sessions, a session with fewer than [`MIN_SESSION_ROWS`] rows,
+/// instrument rows in several sessions (one base frame per session is not implemented), a
+/// row that measures nothing, a distance or known id that no row names, and plane contacts
+/// that are collinear at `start`.
+pub fn build<const N: usize>(
+    set: &MeasurementSet,
+    cons: Option<&ConstraintsFile>,
+    start: &Robot<N>,
+    weight_pos: f64,
+) -> Result<ContactData<N>, CliError> {
+    let empty = ConstraintsFile::default();
+    let cons = cons.unwrap_or(&empty);
+    let mut out = ContactData {
+        instrument: Vec::new(),
+        instrument_rows: Vec::new(),
+        contacts: Vec::new(),
+        contact_rows: Vec::new(),
+        groups: Vec::new(),
+        info: Vec::new(),
+        distances: Vec::new(),
+        distance_specs: cons.distances.clone(),
+        file: (!cons.path.is_empty()).then(|| (cons.path.clone(), cons.sha256.clone())),
+    };
+    // Sessions: row counts and which hold instrument rows.
+    let mut session_rows: Vec<(Option<&str>, usize, u64)> = Vec::new();
+    let mut instrument_session: Option<(Option<&str>, u64)> = None;
+    // Groups in order of first appearance: (id, plane) → rows.
+    let mut order: Vec<(String, bool)> = Vec::new();
+    let mut members: HashMap<(String, bool), Vec<usize>> = HashMap::new();
+    for (i, row) in set.rows.iter().enumerate() {
+        let session = row.session.as_deref();
+        match session_rows.iter_mut().find(|s| s.0 == session) {
+            Some(s) => s.1 += 1,
+            None => session_rows.push((session, 1, row.line)),
+        }
+        let key = match (&row.target, &row.plane) {
+            (Some(t), _) => Some((t.clone(), false)),
+            (None, Some(p)) => Some((p.clone(), true)),
+            _ => None,
+        };
+        if let Some(key) = key {
+            let list = members.entry(key.clone()).or_default();
+            if list.is_empty() {
+                order.push(key);
+            }
+            list.push(i);
+            continue;
+        }
+        let Some((pose, mask)) = crate::data::measured_pose(row, &set.source)? else {
+            return Err(input(
+                set,
+                row.line,
+                "x",
+                "the row measures nothing: expected a coordinate (x, y, z), a target or a plane"
+                    .into(),
+            ));
+        };
+        match instrument_session {
+            None => instrument_session = Some((session, row.line)),
+            Some((s, first)) if s != session => {
+                return Err(input(
+                    set,
+                    row.line,
+                    "session",
+                    format!(
+                        "instrument rows (x, y, z) in session {:?} and, from line {first}, in \
+                         session {:?}: one base frame per session is not implemented yet; \
+                         expected instrument rows in one session only (contact rows may span \
+                         sessions)",
+                        session.unwrap_or(""),
+                        s.unwrap_or("")
+                    ),
+                ));
+            }
+            _ => {}
+        }
+        out.instrument.push(Measurement {
+            state: crate::data::joint_state::<N>(row),
+            pose,
+            mask,
+            weight: 1.0,
+            point: row.point_m,
+        });
+        out.instrument_rows.push(i);
+    }
+    if set.has_session {
+        for &(s, n, line) in &session_rows {
+            if n < MIN_SESSION_ROWS {
+                return Err(input(
+                    set,
+                    line,
+                    "session",
+                    format!(
+                        "session {:?} has {n} row(s): expected at least {MIN_SESSION_ROWS} (a \
+                         set-up must hold enough contacts to say something)",
+                        s.unwrap_or("")
+                    ),
+                ));
+            }
+        }
+    }
+    let known_target = |id: &str| cons.targets.iter().find(|t| t.id == id);
+    let known_plane = |id: &str| cons.planes.iter().find(|p| p.id == id);
+    for key in &order {
+        let rows = &members[key];
+        let first = &set.rows[rows[0]];
+        let (id, plane) = (key.0.as_str(), key.1);
+        let col = if plane { "plane" } else { "target" };
+        if let Some(other) = rows
+            .iter()
+            .map(|&r| &set.rows[r])
+            .find(|r| r.session != first.session)
+        {
+            return Err(input(
+                set,
+                other.line,
+                col,
+                format!(
+                    "{col} {id:?} appears in session {:?} (from line {}) and in session {:?}: \
+                     expected each {col} in one session (a fixed point of one set-up)",
+                    first.session.as_deref().unwrap_or(""),
+                    first.line,
+                    other.session.as_deref().unwrap_or("")
+                ),
+            ));
+        }
+        if (plane && known_target(id).is_some()) || (!plane && known_plane(id).is_some()) {
+            return Err(input(
+                set,
+                first.line,
+                col,
+                format!(
+                    "{id:?} is a {col} here but a [[{}]] in the constraints file",
+                    if plane { "target" } else { "plane" }
+                ),
+            ));
+        }
+        let kind = if plane {
+            match known_plane(id) {
+                Some(p) => GroupKind::KnownPlane {
+                    normal: p.normal,
+                    offset_m: p.offset_m,
+                },
+                None => GroupKind::Plane,
+            }
+        } else {
+            match known_target(id) {
+                Some(t) => GroupKind::KnownTarget(t.xyz_m),
+                None => GroupKind::Target,
+            }
+        };
+        let needed = match kind {
+            GroupKind::Target => 2,
+            GroupKind::Plane => MIN_PLANE_CONTACTS,
+            _ => 1,
+        };
+        if rows.len() < needed {
+            return Err(input(
+                set,
+                first.line,
+                col,
+                format!(
+                    "{col} {id:?} has {} row(s): expected at least {needed} (an unknown {col} \
+                     is estimated from its contacts; give it in the constraints file if it is \
+                     known)",
+                    rows.len()
+                ),
+            ));
+        }
+        out.groups.push(Group {
+            kind,
+            start: out.contacts.len(),
+            len: rows.len(),
+        });
+        out.info.push(GroupInfo {
+            id: id.to_string(),
+            plane,
+            known: kind.is_known(),
+            session: first.session.clone(),
+            line: first.line,
+        });
+        for &r in rows {
+            let row = &set.rows[r];
+            out.contacts.push(Contact {
+                state: crate::data::joint_state::<N>(row),
+                point: row.point_m.unwrap_or([0.0; 3]),
+                weight: 1.0,
+            });
+            out.contact_rows.push(r);
+        }
+    }
+    // Known ids must be used; distances must name targets of the data.
+    let group_of =
+        |id: &str, plane: bool| out.info.iter().position(|g| g.id == id && g.plane == plane);
+    for t in &cons.targets {
+        if group_of(&t.id, false).is_none() {
+            return Err(CliError::input(format!(
+                "{}:{}: key 'id': no row of {} names target {:?}: expected a target of the data",
+                cons.path, t.line, set.source, t.id
+            )));
+        }
+    }
+    for p in &cons.planes {
+        if group_of(&p.id, true).is_none() {
+            return Err(CliError::input(format!(
+                "{}:{}: key 'id': no row of {} names plane {:?}: expected a plane of the data",
+                cons.path, p.line, set.source, p.id
+            )));
+        }
+    }
+    for d in &cons.distances {
+        let mut ends = [0; 2];
+        for (e, id) in ends.iter_mut().zip(&d.between) {
+            *e = group_of(id, false).ok_or_else(|| {
+                CliError::input(format!(
+                    "{}:{}: key 'between': no row of {} names target {id:?}: expected two \
+                     targets of the data",
+                    cons.path, d.line, set.source
+                ))
+            })?;
+        }
+        out.distances.push(Distance {
+            a: ends[0],
+            b: ends[1],
+            m: d.m,
+            weight: d.sigma_m.map_or(1.0, |s| 1.0 / (s * s * weight_pos)),
+        });
+    }
+    // Collinear plane contacts at the starting model.
+    let view = out.view();
+    for (g, info) in out.info.iter().enumerate() {
+        if info.plane && !info.known {
+            let aspect = match group_estimate(start, &view, g) {
+                Ok(e) => e.aspect,
+                Err(Error::DegenerateGroup { .. }) => 0.0,
+                Err(e) => {
+                    return Err(crate::error::core_error(e, &set.source, |i| {
+                        out.row_of(i).and_then(|r| set.rows.get(r)).map(|r| r.line)
+                    }));
+                }
+            };
+            if aspect < CLI_PLANE_MIN_ASPECT {
+                {
+                    return Err(input(
+                        set,
+                        info.line,
+                        "plane",
+                        format!(
+                            "the contacts of plane {:?} are collinear (at the starting model their \
+                             spread across their best-fit line is {aspect:.3} of their extent, \
+                             below {CLI_PLANE_MIN_ASPECT}): expected contacts spread over the plane",
+                            info.id,
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The consistency report: scatter of the predicted tool point per target and plane, and
+/// the error of every known distance (mm).
+pub fn report_text(c: &ConstraintsJson) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let groups = c.targets.iter().chain(c.planes.iter()).collect::<Vec<_>>();
+    if !groups.is_empty() {
+        let all: Vec<f64> = groups.iter().map(|g| g.rms_mm).collect();
+        let worst = groups.iter().map(|g| g.max_mm).fold(0.0, f64::max);
+        let _ = writeln!(
+            s,
+            "\nConsistency (scatter of the predicted tool point about its target/plane): {} targets, {} planes; \
+             mean RMS {:.4} mm, largest {:.4} mm",
+            c.targets.len(),
+            c.planes.len(),
+            all.iter().sum::<f64>() / all.len() as f64,
+            worst
+        );
+        let _ = writeln!(
+            s,
+            "  {:<24} {:>8} {:>8} {:>10} {:>10}",
+            "id", "kind", "contacts", "RMS [mm]", "max [mm]"
+        );
+        for (g, kind) in c
+            .targets
+            .iter()
+            .map(|g| (g, "target"))
+            .chain(c.planes.iter().map(|g| (g, "plane")))
+        {
+            let _ = writeln!(
+                s,
+                "  {:<24} {:>8} {:>8} {:>10.4} {:>10.4}{}",
+                g.id,
+                kind,
+                g.contacts,
+                g.rms_mm,
+                g.max_mm,
+                if g.known { "  (known)" } else { "" }
+            );
+        }
+    }
+    if !c.distances.is_empty() {
+        let _ = writeln!(s, "\nKnown distances:");
+        let _ = writeln!(
+            s,
+            "  {:<36} {:>12} {:>14} {:>11}",
+            "between", "known [mm]", "predicted [mm]", "error [mm]"
+        );
+        for d in &c.distances {
+            let _ = writeln!(
+                s,
+                "  {:<36} {:>12.4} {:>14} {:>11}",
+                format!("{} – {}", d.between[0], d.between[1]),
+                d.m * 1e3,
+                d.predicted_m
+                    .map_or("–".into(), |p| format!("{:.4}", p * 1e3)),
+                d.error_mm.map_or("–".into(), |e| format!("{e:+.4}"))
+            );
+        }
+    }
+    s
+}
+
+/// What fixes the frame and the scale of contact data (the identifiability report names
+/// the parameters held; this says why, also when the base frame was not requested).
+pub fn reference_note<const N: usize>(d: &ConstraintData<'_, N>) -> String {
+    let mut s = String::from("\nReference:\n");
+    if d.has_external_reference() {
+        s.push_str("  base frame: referred to by instrument rows or known targets/planes\n");
+    } else {
+        s.push_str(
+            "  base frame: NOT observable (no instrument row, known target or known plane): \
+             kept at the ROBOT's; targets and planes are reported in that frame\n",
+        );
+    }
+    if !d.distances.is_empty() {
+        let _ = std::fmt::Write::write_fmt(
+            &mut s,
+            format_args!("  scale: from {} known distance(s)\n", d.distances.len()),
+        );
+    } else if d.has_length_reference() {
+        s.push_str("  scale: from instrument rows or known targets/planes\n");
+    } else {
+        s.push_str(
+            "  scale: NOT observable (no known distance, instrument row, known target or \
+             known plane): one length is held (see 'not observable' above), the others are \
+             relative to it\n",
+        );
+    }
+    s
+}
