@@ -629,7 +629,8 @@ fn urdf_robot_arguments_take_base_and_tip_links() {
 }
 
 /// Consistency of predicted ball centres per target, from `predict`'s x, y, z: (mean
-/// absolute distance to the target's mean [mm], RMS of it [mm], mean |distance − 50 mm|
+/// absolute distance to the target's mean [mm], mean over targets of the RMS [mm], mean
+/// |distance − 50 mm|
 /// between each session's two targets [mm]). The test's own implementation, independent of
 /// `kincal validate`.
 fn consistency(targets: &[String], xyz: &[[f64; 3]]) -> (f64, f64, f64) {
@@ -650,9 +651,15 @@ fn consistency(targets: &[String], xyz: &[[f64; 3]]) -> (f64, f64, f64) {
         .iter()
         .flat_map(|(t, ps)| ps.iter().map(|p| dist(*p, means[t])))
         .collect();
-    let n = d.len() as f64;
-    let mean_abs = d.iter().sum::<f64>() / n;
-    let rms = (d.iter().map(|x| x * x).sum::<f64>() / n).sqrt();
+    let mean_abs = d.iter().sum::<f64>() / d.len() as f64;
+    // `kincal validate`'s "mean RMS": the mean over targets of each target's RMS scatter.
+    let rms = groups
+        .iter()
+        .map(|(t, ps)| {
+            (ps.iter().map(|p| dist(*p, means[t]).powi(2)).sum::<f64>() / ps.len() as f64).sqrt()
+        })
+        .sum::<f64>()
+        / groups.len() as f64;
     let dist_err: Vec<f64> = means
         .iter()
         .filter_map(|(t, m)| {
@@ -717,5 +724,101 @@ fn mukca_nominal_consistency_per_location() {
             "{loc}: {mean_abs} mm, want {want}"
         );
         assert!(rms >= mean_abs);
+    }
+}
+/// Leave-one-location-out on MUKCa robot `id`: per held-out location, nominal and
+/// calibrated consistency of the held-out rows (see [`consistency`]).
+type Fold = (String, (f64, f64, f64), (f64, f64, f64));
+
+fn mukca_leave_one_location_out(root: &Path, id: &str, dir: &Path, extra: &[&str]) -> Vec<Fold> {
+    import_mukca(root, id, dir);
+    let (header, rows) = csv_rows(&dir.join(format!("{id}.csv")));
+    let mut locations: Vec<String> = rows.iter().map(|r| r[1].clone()).collect();
+    locations.dedup();
+    let mut folds = Vec::new();
+    for loc in &locations {
+        let (test, train): (Vec<_>, Vec<_>) = rows.iter().cloned().partition(|r| &r[1] == loc);
+        let tag = format!("{id}-{loc}");
+        let mut csv = header.join(",") + "\n";
+        for r in &train {
+            csv.push_str(&r.join(","));
+            csv.push('\n');
+        }
+        std::fs::write(dir.join(format!("{tag}-train.csv")), csv).unwrap();
+        let mut cons = String::new();
+        for l in locations.iter().filter(|l| *l != loc) {
+            cons.push_str(&format!(
+                "[[distance]]\nbetween = [\"{l}/s0\", \"{l}/s1\"]\nm = 0.05\n\n"
+            ));
+        }
+        std::fs::write(dir.join(format!("{tag}-c.toml")), cons).unwrap();
+        let (train_f, cons_f, model_f, robot_f) = (
+            format!("{tag}-train.csv"),
+            format!("{tag}-c.toml"),
+            format!("{tag}-model.json"),
+            format!("{id}.toml"),
+        );
+        let mut args = vec![
+            "calibrate",
+            &train_f,
+            "--robot",
+            &robot_f,
+            "--constraints",
+            &cons_f,
+            "--out",
+            &model_f,
+            "--allow-out-of-limits",
+        ];
+        args.extend_from_slice(extra);
+        let o = kincal(&args, dir);
+        assert!(o.status.success(), "{tag}: {}", text(&o));
+        let targets: Vec<String> = test.iter().map(|r| r[2].clone()).collect();
+        let nominal = consistency(&targets, &predict_points(dir, &robot_f, &test, &tag));
+        let calibrated = consistency(
+            &targets,
+            &predict_points(dir, &model_f, &test, &format!("{tag}-cal")),
+        );
+        folds.push((loc.clone(), nominal, calibrated));
+    }
+    folds
+}
+
+/// Fold means of (nominal, calibrated) × (mean |.|, mean RMS, |distance error|) [mm].
+fn fold_means(folds: &[Fold]) -> [[f64; 3]; 2] {
+    let n = folds.len() as f64;
+    let m = |f: &dyn Fn(&Fold) -> f64| folds.iter().map(f).sum::<f64>() / n;
+    [
+        [m(&|f| f.1.0), m(&|f| f.1.1), m(&|f| f.1.2)],
+        [m(&|f| f.2.0), m(&|f| f.2.1), m(&|f| f.2.2)],
+    ]
+}
+
+/// docs/real-data.md, "MUKCa": held out by location (leave one location out), the figures
+/// of the table to 2 %. The calibrated Panda beats MUKCa's own 0.347 mm (test locations); the
+/// Kinova stops near 3 mm with a worse distance than nominal. (An independent MUKCa-style
+/// re-implementation — 6-D origin corrections of every joint, pure Python — gave the same
+/// panda_1 folds to 0.02 mm: 0.970, 0.659, 0.726 mm against 0.963, 0.673, 0.722 here.)
+#[test]
+fn mukca_held_out_by_location_beats_the_papers_panda_figure() {
+    let Some(root) = realdata() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    // (id, nominal [mean |.|, mean RMS, |dist err|], calibrated [...]) [mm]
+    let cases: [(&str, [f64; 3], [f64; 3]); 4] = [
+        ("panda_1", [8.595, 9.313, 2.557], [0.786, 0.842, 0.455]),
+        (
+            "panda_2_clean",
+            [7.849, 8.568, 1.454],
+            [0.282, 0.315, 0.187],
+        ),
+        ("kuka_14", [0.778, 0.832, 0.136], [0.239, 0.268, 0.104]),
+        ("dinova_1", [6.212, 6.561, 1.077], [3.233, 3.467, 4.954]),
+    ];
+    for (id, nominal, calibrated) in cases {
+        let folds = mukca_leave_one_location_out(&root, id, dir.path(), &[]);
+        let [nom, cal] = fold_means(&folds);
+        for k in 0..3 {
+            close(nom[k], nominal[k], &format!("{id} nominal [{k}]"));
+            close(cal[k], calibrated[k], &format!("{id} calibrated [{k}]"));
+        }
     }
 }
