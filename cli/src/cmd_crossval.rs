@@ -118,6 +118,13 @@ pub struct Args {
     /// Write the nominal geometry with the calibrated frames as a robot description
     #[arg(long, value_name = "ROBOT.toml")]
     pub robot_out: Option<PathBuf>,
+    /// Data with target/plane rows: what a fold holds out (default: session when the data
+    /// have sessions, else target); see docs/constraints.md
+    #[arg(long, value_enum, value_name = "BY")]
+    pub group_by: Option<crate::crossval_contacts::GroupBy>,
+    /// Known geometry of the fixtures (TOML) for data with target/plane rows
+    #[arg(long, value_name = "FILE")]
+    pub constraints: Option<PathBuf>,
 }
 
 /// A fold's held-out errors (pose, nominal, calibrated), data-deficient parameter count and
@@ -420,6 +427,14 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
             allow_out_of_limits: args.allow_out_of_limits,
         },
     )?;
+    if args.constraints.is_some() || crate::constraints::has_contacts(&set) {
+        return crossval_contacts(nominal, args, &set, effects);
+    }
+    if args.group_by.is_some() {
+        return Err(CliError::usage(
+            "--group-by applies to data with target/plane rows (instrument data: folds by pose_id)",
+        ));
+    }
     let meas = data::measurements::<N>(&set)?;
     let orientation = meas.iter().any(|m| m.mask.has_orientation());
     let (fold_of, n_groups) = assign_folds(&set, args.folds, args.seed)?;
@@ -873,5 +888,57 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
         );
     }
     crate::report::emit(&s);
+    Ok(())
+}
+
+/// Cross-validation of contact data by whole groups (see [`crate::crossval_contacts`]).
+fn crossval_contacts<const N: usize>(
+    nominal: &Robot<N>,
+    args: &Args,
+    set: &MeasurementSet,
+    effects: EffectSet,
+) -> Result<(), CliError> {
+    if args.robust || args.init_frames || args.plot.is_some() || args.robot_out.is_some() {
+        return Err(CliError::usage(
+            "--robust, --init-frames, --plot and --robot-out are not implemented for data with \
+             target/plane rows",
+        ));
+    }
+    let cons = args
+        .constraints
+        .as_deref()
+        .map(crate::constraints::read_constraints)
+        .transpose()?;
+    let group_by = args.group_by.unwrap_or(if set.has_session {
+        crate::crossval_contacts::GroupBy::Session
+    } else {
+        crate::crossval_contacts::GroupBy::Target
+    });
+    let mut requested = geometry_subset(nominal, &args.geometry).union(&effects.params(N));
+    for k in 0..3 {
+        // The contacted point (ball centre) as the tool translation.
+        let _ = requested.insert(5 * N + 6 + k);
+    }
+    let weight_pos = args.sigma_pos_mm.map_or(1.0, |s| 1.0 / (s * 1e-3).powi(2));
+    let plan = crate::crossval_contacts::Plan {
+        group_by,
+        folds: args.folds,
+        seed: args.seed,
+        requested,
+        weight_pos,
+        max_iterations: args.max_iterations,
+        constraints: cons.as_ref(),
+    };
+    let (text, json) = crate::crossval_contacts::run(nominal, set, &plan)?;
+    if let Some(path) = &args.json {
+        let body = serde_json::to_string_pretty(&json)
+            .map_err(|e| CliError::io(format!("{}: {e}", path.display())))?;
+        let mut inputs: Vec<&Path> = vec![&args.data];
+        if let Some(c) = &args.constraints {
+            inputs.push(c);
+        }
+        crate::files::write_atomic(path, &inputs, |w| w.write_all(body.as_bytes()))?;
+    }
+    crate::report::emit(&text);
     Ok(())
 }

@@ -21,6 +21,7 @@ pub mod cmd_predict;
 pub mod cmd_select;
 pub mod cmd_validate;
 pub mod constraints;
+pub mod crossval_contacts;
 pub mod data;
 pub mod datasets;
 pub mod datasets_contact;

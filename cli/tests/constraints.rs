@@ -140,7 +140,7 @@ fn calibrate_and_validate_from_contacts_recover_the_targets() {
     );
     let out = text(&o);
     assert_eq!(o.status.code(), Some(0), "{out}");
-    eprintln!("{out}");
+    assert!(out.contains("base frame: NOT observable"), "{out}");
     assert!(out.contains("not observable (gauge)"), "{out}");
     assert!(out.contains("Known distances"), "{out}");
     let model: Value =
@@ -192,6 +192,73 @@ fn calibrate_and_validate_from_contacts_recover_the_targets() {
         out.contains("Consistency") && out.contains("Known distances"),
         "{out}"
     );
+    // crossval holds out whole sessions: noise-free, the calibrated model is consistent on
+    // held-out placements, the nominal one is not.
+    let o = kincal(
+        &[
+            "crossval",
+            "contacts.csv",
+            "--robot",
+            "aria",
+            "--constraints",
+            "constraints.toml",
+            "--group-by",
+            "session",
+            "--folds",
+            "3",
+            "--json",
+            "cv.json",
+        ],
+        dir,
+    );
+    let out = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{out}");
+    let cv: Value =
+        serde_json::from_str(&fs::read_to_string(dir.join("cv.json")).unwrap()).unwrap();
+    let held = &cv["held_out"];
+    assert_eq!(held["scored_groups"].as_u64(), Some(12), "{cv}");
+    assert!(
+        held["calibrated"]["max_mm"].as_f64().unwrap() < 1e-5,
+        "{cv}"
+    );
+    assert!(held["nominal"]["mean_mm"].as_f64().unwrap() > 0.1, "{cv}");
+    // predict gives the tool point of contact rows: the contacts of a target coincide.
+    let o = kincal(
+        &["predict", "model.json", "contacts.csv", "--out", "pred.csv"],
+        dir,
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let pred = fs::read_to_string(dir.join("pred.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = pred
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with("q1") && !l.is_empty())
+        .map(|l| l.split(',').filter_map(|c| c.parse().ok()).collect())
+        .collect();
+    assert_eq!(rows.len(), 72);
+    for k in 0..3 {
+        assert!(
+            (rows[0][6 + k] - rows[5][6 + k]).abs() < 1e-9,
+            "{:?} {:?}",
+            rows[0],
+            rows[5]
+        );
+    }
+    // diagnose refuses contact rows by name.
+    let o = kincal(
+        &[
+            "diagnose",
+            "contacts.csv",
+            "--robot",
+            "aria",
+            "--json",
+            "d.json",
+            "--out",
+            "d.json2",
+        ],
+        dir,
+    );
+    assert_eq!(o.status.code(), Some(3), "{}", text(&o));
+    assert!(text(&o).contains("column 'target'"), "{}", text(&o));
 }
 
 /// Rewrites line `line` (1-based) of `name` with `edit`.

@@ -641,6 +641,8 @@ pub struct GroupEstimate {
     pub rms_m: f64,
     /// Largest residual distance \[m\].
     pub max_m: f64,
+    /// Mean residual distance \[m\] (MUKCa's "mean absolute consistency error").
+    pub mean_m: f64,
     /// Planes: RMS spread of the contacts across their best-fit line over their RMS
     /// extent along it (`sqrt(λ₂/λ₃)` of the scatter): near 0 for contacts along a line,
     /// whose plane is undetermined. 0 for targets.
@@ -680,6 +682,7 @@ pub fn group_estimate<const N: usize>(
         offset_m,
         rms_m: 0.0,
         max_m: 0.0,
+        mean_m: 0.0,
         aspect,
     };
     let mut s = 0.0;
@@ -687,10 +690,12 @@ pub fn group_estimate<const N: usize>(
         let r = contact_residual(robot, c, grp.kind, pbar, normal)?;
         out.contacts += 1;
         s += r * r;
+        out.mean_m += r;
         out.max_m = out.max_m.max(r);
     }
     if out.contacts > 0 {
         out.rms_m = sqrt(s / out.contacts as f64);
+        out.mean_m /= out.contacts as f64;
     }
     Ok(out)
 }
