@@ -117,6 +117,13 @@ for ID in panda_1 panda_1_with_sensor panda_2 panda_2_clean panda_3 panda_3_bis 
     done
 done
 
+# The same held-out placements scored by crossval's own contact scoring (panda_2_clean).
+D=$OUT/mukca/panda_2_clean
+"$K" crossval "$D/data.csv" --robot "$D/robot.toml" --constraints "$D/constraints.toml" \
+    --group-by session --folds 8 --allow-out-of-limits > "$D/crossval.txt" 2>&1
+echo "== mukca panda_2_clean, crossval --group-by session --folds 8:"
+grep -E "^  (nominal|calibrated) " "$D/crossval.txt" | sed 's/^/   /'
+
 # MATE: the 30 plane contacts (one coordinate each), 5-fold held-out rows.
 D=$OUT/figaroh-mate-planes
 mkdir -p "$D"
