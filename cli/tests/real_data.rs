@@ -8,7 +8,10 @@
 //! Checked: the FR3 and UR10e held-out residuals against the nominal model's (the numbers
 //! docs/real-data.md states, to 2 %), the FR3 description's FK against the robot's own
 //! TCP poses, TALOS calibrating from position-only rows with its identifiability report,
-//! the positioner's import, and the refusal of the sets that cannot be used as they are.
+//! the positioner's import, and the refusal of the sets that cannot be used as they are;
+//! MUKCa imported for every robot (rows against the raw files, refusals), its nominal and
+//! leave-one-location-out consistency (the test's own computation from `kincal predict`),
+//! MATE's single-coordinate rows, and `--base-link/--tip-link` on a URDF ROBOT.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
