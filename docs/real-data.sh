@@ -83,8 +83,56 @@ echo "== figaroh-ur10e leave-one-out and joint offsets only:"
 grep -h "held-out RMS" "$D/crossval-loo.txt" "$D/crossval-theta0.txt" | sed 's/^/   /'
 
 # Sets that are not usable as they are: the refusal and its reason.
-for NAME in figaroh-tiago-mocap figaroh-mate-planes mukca hilti-jaibot-stationing; do
+for NAME in figaroh-tiago-mocap hilti-jaibot-stationing; do
     "$K" import-dataset "$NAME" "$DATA/$NAME" --out "$OUT/unused.csv" 2>> "$OUT/refused.txt" \
         && echo "unexpected: $NAME imported" >&2 || true
 done
 echo "== refused sets: $OUT/refused.txt"
+
+# MUKCa (no instrument): every robot held out by location. For each location L: calibrate
+# on the other locations (their targets, sessions and 50 mm distances), validate on L
+# (consistency: scatter of the predicted ball centre per socket; the 50 mm distance).
+echo "== mukca, leave one location out (validate on the held-out location; NOM = URDF):"
+for ID in panda_1 panda_1_with_sensor panda_2 panda_2_clean panda_3 panda_3_bis panda_4 \
+    panda_4_clean panda_6 panda_7 kuka_14 dinova_1 dinova_2; do
+    D=$OUT/mukca/$ID
+    mkdir -p "$D"
+    "$K" import-dataset mukca "$DATA/mukca" --robot-id "$ID" --out "$D/data.csv" \
+        --robot-out "$D/robot.toml" --constraints-out "$D/constraints.toml" > "$D/import.txt"
+    for L in $(grep -v '^#' "$D/data.csv" | tail -n +2 | cut -d, -f2 | sort -u); do
+        for PART in train test; do
+            grep -v '^#' "$D/data.csv" | awk -F, -v L="$L" -v P="$PART" \
+                'NR == 1 || (P == "test" ? $2 == L : $2 != L)' > "$D/$L-$PART.csv"
+            cut -d, -f2 "$D/$L-$PART.csv" | tail -n +2 | sort -u | awk '{
+                printf "[[distance]]\nbetween = [\"%s/s0\", \"%s/s1\"]\nm = 0.05\n\n", $1, $1 }' \
+                > "$D/$L-$PART-constraints.toml"
+        done
+        "$K" calibrate "$D/$L-train.csv" --robot "$D/robot.toml" \
+            --constraints "$D/$L-train-constraints.toml" --allow-out-of-limits \
+            --out "$D/$L-model.json" > "$D/$L-calibrate.txt" 2>&1
+        "$K" validate "$D/$L-model.json" "$D/$L-test.csv" --allow-out-of-limits \
+            --constraints "$D/$L-test-constraints.toml" > "$D/$L-validate.txt" 2>&1
+        echo "   $ID held out $L: $(grep -E '^  (NOM|OLS) ' "$D/$L-validate.txt" | head -2 |
+            awk '{printf "%s mean RMS %s mm, |dist err| %s mm; ", $1, $2, $4}')"
+    done
+done
+
+# The same held-out placements scored by crossval's own contact scoring (panda_2_clean).
+D=$OUT/mukca/panda_2_clean
+"$K" crossval "$D/data.csv" --robot "$D/robot.toml" --constraints "$D/constraints.toml" \
+    --group-by session --folds 8 --allow-out-of-limits > "$D/crossval.txt" 2>&1
+echo "== mukca panda_2_clean, crossval --group-by session --folds 8:"
+grep -E "^  (nominal|calibrated) " "$D/crossval.txt" | sed 's/^/   /'
+
+# MATE: the 30 plane contacts (one coordinate each), 5-fold held-out rows.
+D=$OUT/figaroh-mate-planes
+mkdir -p "$D"
+"$K" import-dataset figaroh-mate-planes "$DATA/figaroh-mate-planes" --out "$D/data.csv" \
+    --robot-out "$D/robot.toml" > "$D/import.txt"
+grep -v 'pose/' "$D/data.csv" > "$D/planes.csv"
+"$K" crossval "$D/planes.csv" --robot "$D/robot.toml" --effects base_frame --folds 5 --seed 1 \
+    --allow-out-of-limits --json "$D/crossval.json" > "$D/crossval.txt" 2>&1 || true
+"$K" crossval "$D/planes.csv" --robot "$D/robot.toml" --geometry theta0 --effects base_frame \
+    --folds 5 --seed 1 --allow-out-of-limits > "$D/crossval-theta0.txt" 2>&1 || true
+echo "== figaroh-mate-planes (plane contacts, held-out rows; all geometry, then θ0 only):"
+grep -h "held-out RMS" "$D/crossval.txt" "$D/crossval-theta0.txt" | sed 's/^/   /'

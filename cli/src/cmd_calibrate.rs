@@ -107,6 +107,8 @@ pub struct Args {
     /// Built-in robot name (aria) or robot description file: the initial model
     #[arg(long, value_name = "ROBOT")]
     pub robot: String,
+    #[command(flatten)]
+    pub chain: crate::robot_arg::UrdfChainArgs,
     /// Effects to identify with the geometry (comma-separated names of spec/effects.md)
     #[arg(long, value_name = "E1,E2", value_delimiter = ',', value_parser = parse_effect)]
     pub effects: Vec<kincal::Effect>,
@@ -209,7 +211,7 @@ impl Args {
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
-    let spec = robot_arg::resolve_robot(&args.robot)?;
+    let spec = robot_arg::resolve_robot(&args.robot, &args.chain)?;
     kincal::with_any_robot!(&spec.robot, r => calibrate(r, &spec.name, args))
 }
 

@@ -80,6 +80,8 @@ pub struct Args {
     /// Built-in robot name (aria) or robot description file: the nominal model
     #[arg(long, value_name = "ROBOT")]
     pub robot: String,
+    #[command(flatten)]
+    pub chain: crate::robot_arg::UrdfChainArgs,
     /// Effects to identify with the geometry (comma-separated names of spec/effects.md)
     #[arg(long, value_name = "E1,E2", value_delimiter = ',', value_parser = parse_effect)]
     pub effects: Vec<Effect>,
@@ -159,7 +161,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             )));
         }
     }
-    let spec = robot_arg::resolve_robot(&args.robot)?;
+    let spec = robot_arg::resolve_robot(&args.robot, &args.chain)?;
     kincal::with_any_robot!(&spec.robot, r => crossval(r, &spec.name, args))
 }
 

@@ -214,6 +214,7 @@ pub fn sim_to_real_diagnosis(ctx: &DemoContext<'_>) -> Result<String, CliError> 
     let args = crate::cmd_diagnose::Args {
         data: session.clone(),
         robot: "aria".into(),
+        chain: Default::default(),
         sigma_pos_mm: None,
         sigma_rot_deg: None,
         json: ctx.out_dir.join("real_aria_REPORT.json"),

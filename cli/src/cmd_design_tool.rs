@@ -135,7 +135,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             "--rolls-deg and --yaws-deg: expected at least one angle",
         ));
     }
-    let spec = resolve_robot(&args.setup.robot)?;
+    let spec = resolve_robot(&args.setup.robot, &args.setup.chain)?;
     kincal::with_any_robot!(&spec.robot, r => design(*r, &spec.name, args))
 }
 

@@ -80,6 +80,8 @@ pub struct Args {
     /// Built-in robot name (aria) or robot description file (with its mass model)
     #[arg(long, value_name = "ROBOT")]
     pub robot: String,
+    #[command(flatten)]
+    pub chain: crate::robot_arg::UrdfChainArgs,
     /// Instrument position noise, 1σ per axis [mm] (default: from repeats)
     #[arg(long, value_name = "S", value_parser = crate::args::sigma_mm)]
     pub sigma_pos_mm: Option<f64>,
@@ -161,7 +163,7 @@ pub struct Outcome<const N: usize> {
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
-    let spec = crate::robot_arg::resolve_robot(&args.robot)?;
+    let spec = crate::robot_arg::resolve_robot(&args.robot, &args.chain)?;
     kincal::with_any_robot!(&spec.robot, r => {
         let out = execute(r, &spec.name, args)?;
         // The run time goes to the screen only: the report files are byte-for-byte

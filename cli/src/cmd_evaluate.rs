@@ -111,7 +111,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     for c in &args.commanded {
         named(c, "--commanded")?;
     }
-    let spec = resolve_robot(&args.setup.robot)?;
+    let spec = resolve_robot(&args.setup.robot, &args.setup.chain)?;
     kincal::with_any_robot!(&spec.robot, r => evaluate(*r, &spec.name, args))
 }
 

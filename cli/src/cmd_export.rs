@@ -132,7 +132,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         )));
     }
     let format = args.mdh_table.as_deref().map(table_format).transpose()?;
-    let model = robot_arg::resolve_model(&args.model)?;
+    let model = robot_arg::resolve_model(&args.model, &robot_arg::UrdfChainArgs::default())?;
     let model_path = Path::new(&args.model);
     let inputs: Vec<&Path> = if model.from_file {
         vec![model_path]

@@ -5,6 +5,7 @@
 use std::path::PathBuf;
 
 use crate::datasets::{self, UNUSABLE, USABLE};
+use crate::datasets_contact::{self, ContactOptions};
 use crate::error::CliError;
 use crate::measurements::write_measurements_csv;
 
@@ -23,8 +24,14 @@ Sets (--list prints them with what they measure):
   figaroh-talos-arm       TALOS torso + arm, one mocap marker, positions only; 9 joints
                           (torso 2 + arm 7), all modelled
   ical-2axis-positioner   two-axis positioner, static sensor, 6-D poses; DH of the README
-figaroh-tiago-mocap, figaroh-mate-planes, mukca and hilti-jaibot-stationing are refused with
-the reason (prismatic joints, unclear provenance, no external instrument, licence).
+  mukca                   MUKCa ball-in-socket plate, no instrument (--robot-id ID, e.g.
+                          panda_1, panda_1_with_sensor, kuka_14, dinova_1): each location a
+                          session with targets LOCATION/s0 and /s1, and --constraints-out
+                          with their 50 mm distances; robot = the set's URDF up to ball_link
+  figaroh-mate-planes     3-joint arm touching three known planes: one coordinate per row,
+                          plus the set's 10 full poses
+figaroh-tiago-mocap and hilti-jaibot-stationing are refused with the reason (prismatic
+joints, licence). --base-link/--tip-link override the chain of mukca's and MATE's URDF.
 
 In every set the frame of the measurements and the measured frame on the robot are unknown:
 calibrate with --effects base_frame,tool_frame --init-frames (see `kincal help calibrate`),
@@ -51,6 +58,14 @@ pub struct Args {
     /// Robot description (TOML) to write
     #[arg(long, value_name = "ROBOT.toml")]
     pub robot_out: Option<PathBuf>,
+    /// Constraints file (TOML) to write: the known geometry of a contact set (mukca)
+    #[arg(long, value_name = "CONSTRAINTS.toml")]
+    pub constraints_out: Option<PathBuf>,
+    /// mukca: the robot whose recordings to import (a folder of the set's data/)
+    #[arg(long, value_name = "ID")]
+    pub robot_id: Option<String>,
+    #[command(flatten)]
+    pub chain: crate::robot_arg::UrdfChainArgs,
     /// List the data sets and exit
     #[arg(long)]
     pub list: bool,
@@ -72,6 +87,21 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     let (Some(name), Some(dir), Some(out)) = (&args.name, &args.dir, &args.out) else {
         return Err(CliError::usage("NAME, DIR and --out are required"));
     };
+    if datasets_contact::CONTACT_SETS.contains(&name.as_str()) {
+        return run_contact(args, name, dir, out);
+    }
+    if args.robot_id.is_some() || args.constraints_out.is_some() {
+        return Err(CliError::usage(format!(
+            "--robot-id and --constraints-out apply to the contact sets ({}), not to '{name}'",
+            datasets_contact::CONTACT_SETS.join(", ")
+        )));
+    }
+    if args.chain != crate::robot_arg::UrdfChainArgs::default() {
+        return Err(CliError::usage(format!(
+            "--base-link/--tip-link apply to the contact sets ({}); '{name}' has a fixed robot",
+            datasets_contact::CONTACT_SETS.join(", ")
+        )));
+    }
     let imported = datasets::import(name, dir)?;
     let inputs: Vec<PathBuf> = std::fs::read_dir(dir)
         .map(|rd| rd.filter_map(|e| e.ok().map(|e| e.path())).collect())
@@ -113,4 +143,103 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     }
     crate::report::emit(&s);
     Ok(())
+}
+
+/// Files that must differ from each other (and from the inputs, checked by `write_atomic`).
+fn distinct(paths: &[&std::path::Path]) -> Result<(), CliError> {
+    for (i, a) in paths.iter().enumerate() {
+        for b in paths.iter().skip(i + 1) {
+            if crate::files::is_same_file(a, b) {
+                return Err(CliError::usage(format!(
+                    "--out, --robot-out and --constraints-out must name different files ({} twice)",
+                    a.display()
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A contact set (mukca, figaroh-mate-planes): CSV with targets/sessions or partial
+/// coordinates, its constraints file, its robot.
+fn run_contact(
+    args: &Args,
+    name: &str,
+    dir: &std::path::Path,
+    out: &std::path::Path,
+) -> Result<(), CliError> {
+    let opts = ContactOptions {
+        robot_id: args.robot_id.clone(),
+        chain: args.chain.clone(),
+    };
+    if name != "mukca" && args.robot_id.is_some() {
+        return Err(CliError::usage("--robot-id applies to mukca only"));
+    }
+    let imported = datasets_contact::import(name, dir, &opts)?;
+    if imported.constraints.is_some() && args.constraints_out.is_none() {
+        return Err(CliError::usage(format!(
+            "{name}: --constraints-out FILE is required (the set's known distances; calibrate reads it with --constraints)"
+        )));
+    }
+    if imported.constraints.is_none() && args.constraints_out.is_some() {
+        return Err(CliError::usage(format!(
+            "{name}: the set has no constraints file to write (drop --constraints-out)"
+        )));
+    }
+    let mut outs = vec![out];
+    outs.extend(args.robot_out.as_deref());
+    outs.extend(args.constraints_out.as_deref());
+    distinct(&outs)?;
+    let inputs: Vec<PathBuf> = walk_files(dir);
+    let input_refs: Vec<&std::path::Path> = inputs.iter().map(PathBuf::as_path).collect();
+    crate::files::write_atomic(out, &input_refs, |w| w.write_all(imported.csv.as_bytes()))?;
+    if let (Some(c), Some(text)) = (&args.constraints_out, &imported.constraints) {
+        crate::files::write_atomic(c, &input_refs, |w| w.write_all(text.as_bytes()))?;
+    }
+    let mut s = format!(
+        "{name}: {} rows ({}), {} joints -> {}",
+        imported.rows,
+        imported.what,
+        datasets::n_joints(&imported.robot),
+        out.display()
+    );
+    if let Some(r) = &args.robot_out {
+        let mut text = String::new();
+        for c in &imported.robot_comments {
+            text.push_str(&format!("#{c}\n"));
+        }
+        text.push_str(&crate::robot_file::write_robot_description(&imported.robot));
+        crate::files::write_atomic(r, &input_refs, |w| w.write_all(text.as_bytes()))?;
+        s.push_str(&format!(
+            ", robot '{}' -> {}",
+            imported.robot.name,
+            r.display()
+        ));
+    }
+    if let Some(c) = &args.constraints_out {
+        s.push_str(&format!(", constraints -> {}", c.display()));
+    }
+    s.push('\n');
+    for n in &imported.notes {
+        s.push_str(&format!("  note: {n}\n"));
+    }
+    crate::report::emit(&s);
+    Ok(())
+}
+
+/// Every file below `dir` (the inputs an output must not overwrite).
+fn walk_files(dir: &std::path::Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).into_iter().flatten().flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.push(p);
+            }
+        }
+    }
+    out
 }

@@ -84,6 +84,8 @@ pub struct Args {
     /// Built-in robot name or robot description file (joint count and limits)
     #[arg(long, value_name = "ROBOT")]
     pub robot: String,
+    #[command(flatten)]
+    pub chain: crate::robot_arg::UrdfChainArgs,
     /// Measurement CSV to write
     #[arg(long, value_name = "DATA.csv")]
     pub out: PathBuf,
@@ -421,7 +423,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             kincal::registration::MAX_OUTLIERS
         )));
     }
-    let spec = robot_arg::resolve_robot(&args.robot)?;
+    let spec = robot_arg::resolve_robot(&args.robot, &args.chain)?;
     kincal::with_any_robot!(&spec.robot, r => markers(r, args))
 }
 

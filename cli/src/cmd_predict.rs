@@ -33,6 +33,8 @@ pub struct Args {
     /// Model file, or ROBOT for the nominal model
     #[arg(value_name = "MODEL")]
     pub model: String,
+    #[command(flatten)]
+    pub chain: crate::robot_arg::UrdfChainArgs,
     /// CSV with joint readings q1..qN
     #[arg(value_name = "DATA")]
     pub data: PathBuf,
@@ -45,7 +47,7 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
-    let model = robot_arg::resolve_model(&args.model)?;
+    let model = robot_arg::resolve_model(&args.model, &args.chain)?;
     let effects = model
         .file
         .effects()

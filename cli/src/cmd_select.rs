@@ -71,7 +71,7 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
-    let spec = resolve_robot(&args.setup.robot)?;
+    let spec = resolve_robot(&args.setup.robot, &args.setup.chain)?;
     kincal::with_any_robot!(&spec.robot, r => select(*r, &spec.name, args))
 }
 

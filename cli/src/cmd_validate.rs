@@ -51,6 +51,8 @@ pub struct Args {
     /// Model file, or ROBOT for the nominal model
     #[arg(value_name = "MODEL")]
     pub model: String,
+    #[command(flatten)]
+    pub chain: crate::robot_arg::UrdfChainArgs,
     /// Measurement CSV with measured poses
     #[arg(value_name = "DATA")]
     pub data: PathBuf,
@@ -305,7 +307,7 @@ fn summary_json(e: &Evaluation, t: Targets, has_rot: bool) -> SummaryJson {
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
-    let model = robot_arg::resolve_model(&args.model)?;
+    let model = robot_arg::resolve_model(&args.model, &args.chain)?;
     let effects = model
         .file
         .effects()

@@ -54,6 +54,15 @@ pub const USABLE: &[(&str, &str)] = &[
         "ical-2axis-positioner",
         "two-axis positioner seen by a static sensor, full 6-D poses (205)",
     ),
+    (
+        "mukca",
+        "Panda x7, iiwa14, Gen3 lite: ball-in-socket targets 50 mm apart, no instrument \
+         (--robot-id ID; sessions, targets and a constraints file)",
+    ),
+    (
+        "figaroh-mate-planes",
+        "3-joint arm touching 3 known planes: one coordinate per row (30), plus 10 full poses",
+    ),
 ];
 
 /// The sets in the shared folder that are not used, and why.
@@ -64,18 +73,6 @@ pub const UNUSABLE: &[(&str, &str)] = &[
          kincal models revolute joints only; the file's 4 hand points are moreover computed from \
          one tracked rigid body (points 3 and 4 are identical, distances constant to 1e-7 m), \
          not independent marker measurements",
-    ),
-    (
-        "figaroh-mate-planes",
-        "its README cannot say whether the data are real (rounded joint readings, no \
-         provenance), and each row constrains one coordinate of a contact plane (per-row 1-D \
-         masks with an unknown plane offset), a measurement kincal's CSV does not express",
-    ),
-    (
-        "mukca",
-        "ball-in-socket constraints without an external instrument: the socket positions are \
-         unknown per tool placement (one base frame per placement), which the measurement CSV \
-         can only express one placement at a time; not attempted here",
     ),
     (
         "hilti-jaibot-stationing",

@@ -84,6 +84,8 @@ pub struct SetupArgs {
     /// ROBOT: a built-in robot (aria) or a robot description file
     #[arg(long, default_value = "aria", value_name = "ROBOT")]
     pub robot: String,
+    #[command(flatten)]
+    pub chain: crate::robot_arg::UrdfChainArgs,
     /// Working region [m], the box the validation grid and the local designs live in
     /// [ARIA default: the assumed biopsy region 0.066,0.116,0.235,0.566,0.592,0.335]
     #[arg(long, value_name = "X0,Y0,Z0,X1,Y1,Z1", value_parser = parse_box)]

@@ -271,6 +271,7 @@ pub fn import_dataset(a: &crate::cmd_import::Args) -> FilePlan {
     }
     p.output_opt("--out", a.out.as_deref())
         .output_opt("--robot-out", a.robot_out.as_deref())
+        .output_opt("--constraints-out", a.constraints_out.as_deref())
 }
 
 /// `observed-point`.

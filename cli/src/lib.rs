@@ -25,6 +25,7 @@ pub mod constraints;
 pub mod crossval_contacts;
 pub mod data;
 pub mod datasets;
+pub mod datasets_contact;
 pub mod design_args;
 pub mod designs;
 pub mod diagnosis_plot;

@@ -15,6 +15,33 @@ pub const BUILT_IN: &[(&str, &str)] = &[(
     "the ARIA arm of Arent et al. 2024: Table 1 geometry, eq. (2) limits, assumed mass model",
 )];
 
+/// `--base-link` / `--tip-link`: which chain of a URDF robot to use (any tree; the
+/// default is the unique chain from the single root to the single leaf).
+#[derive(clap::Args, Debug, Clone, Default, PartialEq, Eq)]
+pub struct UrdfChainArgs {
+    /// URDF robot only: the link that becomes the base frame [default: the single root link]
+    #[arg(long, value_name = "LINK")]
+    pub base_link: Option<String>,
+    /// URDF robot only: the link that becomes the tool frame [default: the single leaf
+    /// below the base link]
+    #[arg(long, value_name = "LINK")]
+    pub tip_link: Option<String>,
+}
+
+impl UrdfChainArgs {
+    /// The chain selection of these flags.
+    pub fn selection(&self) -> crate::urdf::ChainSelection<'_> {
+        crate::urdf::ChainSelection {
+            base_link: self.base_link.as_deref(),
+            tip_link: self.tip_link.as_deref(),
+        }
+    }
+
+    fn is_set(&self) -> bool {
+        self.base_link.is_some() || self.tip_link.is_some()
+    }
+}
+
 /// A resolved ROBOT.
 #[derive(Debug, Clone)]
 pub struct RobotSpec {
@@ -24,14 +51,23 @@ pub struct RobotSpec {
 }
 
 /// Resolves a ROBOT argument: a built-in name, else a robot description file. This is the
-/// one place robot sources are told apart.
-pub fn resolve_robot(arg: &str) -> Result<RobotSpec, CliError> {
+/// one place robot sources are told apart. `chain` picks the chain of a URDF; it is a usage
+/// error for any other robot.
+pub fn resolve_robot(arg: &str, chain: &UrdfChainArgs) -> Result<RobotSpec, CliError> {
+    let path = Path::new(arg);
+    let is_urdf = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("urdf"));
+    if chain.is_set() && !is_urdf {
+        return Err(CliError::usage(format!(
+            "--base-link/--tip-link choose a chain of a URDF robot; '{arg}' is not a .urdf file"
+        )));
+    }
     if let Some(spec) = built_in(arg) {
         return Ok(spec);
     }
-    let path = Path::new(arg);
     if path.is_file() {
-        return load_robot_file(path);
+        return load_robot_file(path, chain);
     }
     let names: Vec<&str> = BUILT_IN.iter().map(|(n, _)| *n).collect();
     Err(CliError::usage(format!(
@@ -50,14 +86,14 @@ fn built_in(name: &str) -> Option<RobotSpec> {
     }
 }
 
-/// Loads a robot description file: URDF (`.urdf`, the unique chain from the root link to
-/// the single leaf) or the TOML description of docs/robot-description.md (anything else).
-fn load_robot_file(path: &Path) -> Result<RobotSpec, CliError> {
+/// Loads a robot description file: URDF (`.urdf`, the chain `chain` selects) or the TOML
+/// description of docs/robot-description.md (anything else).
+fn load_robot_file(path: &Path, chain: &UrdfChainArgs) -> Result<RobotSpec, CliError> {
     let is_urdf = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("urdf"));
     if is_urdf {
-        let imported = crate::urdf::import_urdf_file(path, &crate::urdf::ChainSelection::default())
+        let imported = crate::urdf::import_urdf_file(path, &chain.selection())
             .map_err(|e| CliError::input(e.to_string()))?;
         for note in &imported.notes {
             eprintln!("kincal: note: {}: {note}", path.display());
@@ -111,8 +147,9 @@ fn refuse_what_is_neither(text: &str, arg: &str) -> Result<(), CliError> {
     Ok(())
 }
 
-/// Resolves a MODEL argument: a model file (JSON with `schema_version`), else a ROBOT.
-pub fn resolve_model(arg: &str) -> Result<ModelSpec, CliError> {
+/// Resolves a MODEL argument: a model file (JSON with `schema_version`), else a ROBOT
+/// (`chain` as in [`resolve_robot`]).
+pub fn resolve_model(arg: &str, chain: &UrdfChainArgs) -> Result<ModelSpec, CliError> {
     let path = Path::new(arg);
     if built_in(arg).is_none() && path.is_file() {
         let text = std::fs::read_to_string(path)
@@ -135,7 +172,7 @@ pub fn resolve_model(arg: &str) -> Result<ModelSpec, CliError> {
             });
         }
     }
-    let spec = resolve_robot(arg)?;
+    let spec = resolve_robot(arg, chain)?;
     let file = kincal::with_any_robot!(&spec.robot, r => ModelFile::nominal(&spec.name, r));
     Ok(ModelSpec {
         robot: spec.robot,

@@ -5,8 +5,13 @@
 //! branches otherwise), composes the joint origins at `q = 0` into joint axes in the base
 //! link's frame, and converts them with the core's [`AxisChain`] (see `kincal::axis_chain`
 //! for the mDH construction). Fixed joints are folded into the neighbouring transforms;
-//! revolute joints keep their limits; continuous joints get ±[`CONTINUOUS_LIMIT_RAD`];
-//! prismatic, floating, planar and mimic joints on the chain are errors naming the joint.
+//! revolute joints keep their limits; continuous joints get ±[`CONTINUOUS_LIMIT_RAD`].
+//! A revolute mimic joint collapses into its driver exactly when the driver's joints
+//! that lie on the chain are consecutive, turn about one line and add up to a multiplier
+//! of ±1 (e.g. a finger that mimics a driver on another branch): the model joint reads the
+//! driver, with the mimic offsets folded into the geometry; anything else is an error.
+//! Prismatic, floating and planar joints on the chain are errors naming the joint; every
+//! error names the URDF element and, for text input, its line.
 //! The robot's base frame is the base link's frame and its tool frame the tip link's, so
 //! `fk(q)` is the tip link in the base link for the URDF's own joint values `q`.
 //!
@@ -257,7 +262,34 @@ pub fn import_urdf_str(
     check_nesting(text, file)?;
     let urdf = urdf_rs::read_from_string(text)
         .map_err(|e| DescriptionError::new(file, None, format!("not a readable URDF: {e}")))?;
-    import_urdf(&urdf, file, sel)
+    import_urdf(&urdf, file, sel).map_err(|mut e| {
+        if e.line.is_none() {
+            e.line = e.key.as_deref().and_then(|k| element_line(text, k));
+        }
+        e
+    })
+}
+
+/// The 1-based line of the element an error key names (`joint NAME` or `link NAME`, the
+/// first of a comma-separated list), found in the URDF text: `<joint ... name="NAME"`.
+fn element_line(text: &str, key: &str) -> Option<usize> {
+    let first = key.split(',').next()?.trim();
+    let (tag, name) = first.split_once(' ')?;
+    let open = format!("<{tag}");
+    let quoted = [format!("name=\"{name}\""), format!("name='{name}'")];
+    let mut in_tag = false;
+    for (i, line) in text.lines().enumerate() {
+        if line.contains(&open) {
+            in_tag = true;
+        }
+        if in_tag && quoted.iter().any(|q| line.contains(q.as_str())) {
+            return Some(i + 1);
+        }
+        if line.contains('>') {
+            in_tag = false;
+        }
+    }
+    None
 }
 
 /// Deepest element nesting accepted in a URDF (real ones nest about 5 deep). The XML reader
@@ -342,6 +374,8 @@ pub fn import_urdf(
     let mut notes = Vec::new();
     // Segment of each path link: 0 before joint 1, k after joint k.
     let mut segment_of: Vec<(&str, usize)> = vec![(base.as_str(), 0)];
+    // Revolute joints driven by one joint (itself and its mimics), consecutive on the chain.
+    let mut groups: Vec<MimicGroup<'_>> = Vec::new();
     for j in &path {
         let o = &j.origin;
         if o.xyz.iter().chain(o.rpy.iter()).any(|v| !v.is_finite()) {
@@ -359,51 +393,89 @@ pub fn import_urdf(
         match j.joint_type {
             JointType::Fixed => fixed_joints.push(j.name.clone()),
             JointType::Revolute | JointType::Continuous => {
-                if j.mimic.is_some() {
-                    return Err(jerr(
-                        j,
-                        "mimics another joint; kincal models independent joints only".into(),
-                    ));
-                }
                 let a = Vector3::from(j.axis.xyz.0);
                 let n = a.norm();
                 if !(n.is_finite() && n > 1e-9) {
                     return Err(jerr(j, format!("axis {:?} has no direction", j.axis.xyz.0)));
                 }
-                axes.push(JointAxis {
-                    point: t.translation.vector,
-                    direction: t.rotation * (a / n),
-                });
-                limits.push(if j.joint_type == JointType::Continuous {
-                    notes.push(format!(
-                        "joint {}: continuous, limits set to ±{CONTINUOUS_LIMIT_RAD} rad",
-                        j.name
-                    ));
-                    JointLimits::new(-CONTINUOUS_LIMIT_RAD, CONTINUOUS_LIMIT_RAD)
+                let (driver, multiplier, offset) = mimic_of(urdf, j).map_err(|r| jerr(j, r))?;
+                let point = t.translation.vector;
+                let direction = t.rotation * (a / n);
+                let last_same = groups
+                    .last_mut()
+                    .filter(|g| g.driver.name == driver.name && g.axis_index + 1 == axes.len());
+                if let Some(g) = last_same {
+                    g.absorb(j, point, direction, multiplier)
+                        .map_err(|r| jerr(j, r))?;
                 } else {
-                    let (lo, hi) = (j.limit.lower, j.limit.upper);
-                    let bound = crate::units::MAX_MAGNITUDE_SI;
-                    if !(lo.abs() <= bound && hi.abs() <= bound) || lo >= hi {
+                    if let Some(g) = groups.iter().find(|g| g.driver.name == driver.name) {
                         return Err(jerr(
                             j,
-                            format!("revolute joint without usable limits (lower {lo}, upper {hi}); expected finite lower < upper within ±{bound} rad"),
+                            format!(
+                                "is driven by `{}` like `{}`, but other joints move between them: the mimic cannot be collapsed into its driver exactly",
+                                driver.name, g.members[0]
+                            ),
                         ));
                     }
-                    JointLimits::new(lo, hi)
-                });
-                joint_names.push(j.name.clone());
+                    axes.push(JointAxis { point, direction });
+                    limits.push(driver_limits(driver, &mut notes).map_err(|r| jerr(driver, r))?);
+                    joint_names.push(driver.name.clone());
+                    groups.push(MimicGroup {
+                        driver,
+                        axis_index: axes.len() - 1,
+                        point,
+                        direction,
+                        multiplier_sum: multiplier,
+                        members: vec![j.name.clone()],
+                    });
+                }
+                // The geometry at q = 0 of the model joint: the mimic at its offset.
+                t *= Transform::from_parts(
+                    nalgebra::Translation3::identity(),
+                    nalgebra::Rotation3::from_scaled_axis(a / n * offset),
+                );
             }
             ref other => {
+                let mimic = j
+                    .mimic
+                    .as_ref()
+                    .map(|m| format!(" (it mimics `{}`)", m.joint))
+                    .unwrap_or_default();
                 return Err(jerr(
                     j,
                     format!(
-                        "is {} on the chain `{base}` -> `{tip}`; kincal models revolute joints only (choose a base link after it)",
+                        "is {}{mimic} on the chain `{base}` -> `{tip}`; kincal models revolute joints only (choose a base link after it)",
                         format!("{other:?}").to_lowercase()
                     ),
                 ));
             }
         }
         segment_of.push((j.child.link.as_str(), axes.len()));
+    }
+    for g in &groups {
+        let m = g.multiplier_sum;
+        if (m.abs() - 1.0).abs() > 1e-12 {
+            return Err(DescriptionError::new(
+                file,
+                Some(format!("joint {}", g.members.join(", joint "))),
+                format!(
+                    "driven by `{}` with a total multiplier {m} about one axis; only a total of ±1 collapses into one joint exactly",
+                    g.driver.name
+                ),
+            ));
+        }
+        if let Some(ax) = axes.get_mut(g.axis_index)
+            && m < 0.0
+        {
+            ax.direction = -ax.direction;
+        }
+        if g.members.len() > 1 || g.members[0] != g.driver.name {
+            notes.push(format!(
+                "joint(s) {} collapsed into the joint they follow, `{}` (its reading is the model's joint)",
+                g.members.join(", "),
+                g.driver.name
+            ));
+        }
     }
     let n = axes.len();
     if n == 0 || n > MAX_JOINTS {
@@ -471,6 +543,99 @@ pub fn import_urdf(
         robot,
         notes,
     })
+}
+
+/// Revolute joints of the chain that turn with one driver joint about one line: the
+/// model's joint for them reads the driver.
+struct MimicGroup<'u> {
+    driver: &'u urdf_rs::Joint,
+    axis_index: usize,
+    point: Vector3<f64>,
+    direction: Vector3<f64>,
+    /// Σ ±multiplier (sign: the member's axis along or against the first one's).
+    multiplier_sum: f64,
+    members: Vec<String>,
+}
+
+impl MimicGroup<'_> {
+    /// Adds a consecutive member: it must turn about the same line (in the base frame).
+    fn absorb(
+        &mut self,
+        j: &urdf_rs::Joint,
+        point: Vector3<f64>,
+        direction: Vector3<f64>,
+        multiplier: f64,
+    ) -> Result<(), String> {
+        let parallel = self.direction.cross(&direction).norm() < 1e-9;
+        let on_line = (point - self.point).cross(&self.direction).norm() < 1e-9;
+        if !(parallel && on_line) {
+            return Err(format!(
+                "is driven by `{}` like `{}` but turns about another line: the mimic cannot be collapsed into its driver exactly",
+                self.driver.name, self.members[0]
+            ));
+        }
+        let sign = self.direction.dot(&direction).signum();
+        self.multiplier_sum += sign * multiplier;
+        self.members.push(j.name.clone());
+        Ok(())
+    }
+}
+
+/// The joint driving `j`, with `j = multiplier·driver + offset` (`j` itself, 1, 0 unless it
+/// has a `<mimic>`).
+fn mimic_of<'u>(
+    urdf: &'u urdf_rs::Robot,
+    j: &'u urdf_rs::Joint,
+) -> Result<(&'u urdf_rs::Joint, f64, f64), String> {
+    let Some(m) = &j.mimic else {
+        return Ok((j, 1.0, 0.0));
+    };
+    let Some(driver) = urdf.joints.iter().find(|d| d.name == m.joint) else {
+        return Err(format!(
+            "mimics `{}`, which the URDF does not define",
+            m.joint
+        ));
+    };
+    if let Some(dm) = &driver.mimic {
+        return Err(format!(
+            "mimics `{}`, which itself mimics `{}`: a chain or loop of mimic joints has no single driver",
+            driver.name, dm.joint
+        ));
+    }
+    if !matches!(
+        driver.joint_type,
+        JointType::Revolute | JointType::Continuous
+    ) {
+        return Err(format!("mimics `{}`, which is not revolute", driver.name));
+    }
+    let (mul, off) = (m.multiplier.unwrap_or(1.0), m.offset.unwrap_or(0.0));
+    if !(mul.is_finite() && off.is_finite()) {
+        return Err("mimic multiplier or offset is not a finite number".into());
+    }
+    Ok((driver, mul, off))
+}
+
+/// The limits of a model joint: its (driver) joint's, ±[`CONTINUOUS_LIMIT_RAD`] when
+/// continuous.
+fn driver_limits(j: &urdf_rs::Joint, notes: &mut Vec<String>) -> Result<JointLimits, String> {
+    if j.joint_type == JointType::Continuous {
+        notes.push(format!(
+            "joint {}: continuous, limits set to ±{CONTINUOUS_LIMIT_RAD} rad",
+            j.name
+        ));
+        return Ok(JointLimits::new(
+            -CONTINUOUS_LIMIT_RAD,
+            CONTINUOUS_LIMIT_RAD,
+        ));
+    }
+    let (lo, hi) = (j.limit.lower, j.limit.upper);
+    let bound = crate::units::MAX_MAGNITUDE_SI;
+    if !(lo.abs() <= bound && hi.abs() <= bound) || lo >= hi {
+        return Err(format!(
+            "revolute joint without usable limits (lower {lo}, upper {hi}); expected finite lower < upper within ±{bound} rad"
+        ));
+    }
+    Ok(JointLimits::new(lo, hi))
 }
 
 /// Gravity (−9.81 m/s² along the root's z) in the base link's frame.

@@ -367,8 +367,8 @@ fn synthetic_errors_name_the_joint() {
             format!(
                 "{rev}<joint name=\"m\" type=\"revolute\"><parent link=\"b\"/><child link=\"c\"/><axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" effort=\"0\" velocity=\"0\"/><mimic joint=\"j1\"/></joint>"
             ),
-            "joint m",
-            "mimics",
+            "joint j1, joint m",
+            "total multiplier 2",
         ),
         (
             format!(
@@ -464,4 +464,123 @@ fn urdf_rpy_matches_core_convention() {
         * Rotation3::from_axis_angle(&Vector3::x_axis(), 0.3);
     let m: Matrix3<f64> = *r.matrix();
     assert!((t.rotation.matrix() - m).amax() < 1e-15);
+}
+
+/// A revolute joint (its value `q`) as a transform about the unit `axis`.
+fn turn(axis: [f64; 3], q: f64) -> Transform {
+    Transform::from_parts(
+        Translation3::identity(),
+        Rotation3::from_scaled_axis(Vector3::from(axis).normalize() * q),
+    )
+}
+
+fn at(xyz: [f64; 3], rpy: [f64; 3]) -> Transform {
+    Transform::from_parts(
+        Translation3::new(xyz[0], xyz[1], xyz[2]),
+        Rotation3::from_euler_angles(rpy[0], rpy[1], rpy[2]),
+    )
+}
+
+#[test]
+fn mimic_joints_collapse_into_their_driver_exactly() {
+    // a -j1-> b; b -d-> side (the driver, on another branch); b -m-> c (mimic 0.5·d + 0.3
+    // about y); c -fixed (along and about y)-> c2; c2 -m2-> e (mimic 0.5·d − 0.2 about the
+    // same line); e -j3-> tip. Model joints: j1, d (read by m and m2), j3.
+    let lim = "<limit lower=\"-2\" upper=\"2\" effort=\"0\" velocity=\"0\"/>";
+    let text = format!(
+        "<robot name=\"mimic\">\n\
+         <link name=\"a\"/><link name=\"b\"/><link name=\"side\"/><link name=\"c\"/>\n\
+         <link name=\"c2\"/><link name=\"e\"/><link name=\"tip\"/>\n\
+         <joint name=\"j1\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/><origin xyz=\"0 0 0.3\" rpy=\"0 0 0\"/><axis xyz=\"0 0 1\"/>{lim}</joint>\n\
+         <joint name=\"d\" type=\"revolute\"><parent link=\"b\"/><child link=\"side\"/><origin xyz=\"0.5 0 0\" rpy=\"0 0 0\"/><axis xyz=\"1 0 0\"/><limit lower=\"-1.5\" upper=\"1.25\" effort=\"0\" velocity=\"0\"/></joint>\n\
+         <joint name=\"m\" type=\"revolute\"><parent link=\"b\"/><child link=\"c\"/><origin xyz=\"0.1 0.2 0.3\" rpy=\"0.2 0 0\"/><axis xyz=\"0 1 0\"/>{lim}<mimic joint=\"d\" multiplier=\"0.5\" offset=\"0.3\"/></joint>\n\
+         <joint name=\"f\" type=\"fixed\"><parent link=\"c\"/><child link=\"c2\"/><origin xyz=\"0 0.15 0\" rpy=\"0 0.7 0\"/></joint>\n\
+         <joint name=\"m2\" type=\"revolute\"><parent link=\"c2\"/><child link=\"e\"/><origin xyz=\"0 0 0\" rpy=\"0 0 0\"/><axis xyz=\"0 1 0\"/>{lim}<mimic joint=\"d\" multiplier=\"0.5\" offset=\"-0.2\"/></joint>\n\
+         <joint name=\"j3\" type=\"revolute\"><parent link=\"e\"/><child link=\"tip\"/><origin xyz=\"0.4 0 0.1\" rpy=\"0 0 0.3\"/><axis xyz=\"0 0 1\"/>{lim}</joint>\n\
+         </robot>"
+    );
+    let sel = ChainSelection {
+        base_link: None,
+        tip_link: Some("tip"),
+    };
+    let imp = import_urdf_str(&text, "mimic.urdf", &sel).expect("import");
+    assert_eq!(imp.joint_names, ["j1", "d", "j3"]);
+    with_any_robot!(&imp.robot, r => {
+        let l = r.limits().get(1).copied().expect("3 joints");
+        assert_eq!((l.lower, l.upper), (-1.5, 1.25), "driver's limits");
+    });
+    assert!(
+        imp.notes
+            .iter()
+            .any(|n| n.contains("m, m2") && n.contains("`d`")),
+        "{:?}",
+        imp.notes
+    );
+    let mut rng = Rng(0x3141);
+    let mut worst: f64 = 0.0;
+    for _ in 0..50 {
+        let q: Vec<f64> = (0..3).map(|_| rng.uniform(-1.2, 1.2)).collect();
+        let (q1, qd, q3) = (q[0], q[1], q[2]);
+        let reference = at([0.0, 0.0, 0.3], [0.0; 3])
+            * turn([0.0, 0.0, 1.0], q1)
+            * at([0.1, 0.2, 0.3], [0.2, 0.0, 0.0])
+            * turn([0.0, 1.0, 0.0], 0.5 * qd + 0.3)
+            * at([0.0, 0.15, 0.0], [0.0, 0.7, 0.0])
+            * turn([0.0, 1.0, 0.0], 0.5 * qd - 0.2)
+            * at([0.4, 0.0, 0.1], [0.0, 0.0, 0.3])
+            * turn([0.0, 0.0, 1.0], q3);
+        worst = worst.max(max_diff(&model_fk(&imp.robot, &q), &reference));
+    }
+    assert!(worst < FK_TOL, "mimic chain FK differs by {worst:e}");
+
+    // Refused, naming the joints: a total multiplier of 0.5, and mimics about another line.
+    let half = text.replace(
+        "multiplier=\"0.5\" offset=\"-0.2\"",
+        "multiplier=\"0\" offset=\"-0.2\"",
+    );
+    let e = import_urdf_str(&half, "mimic.urdf", &sel).unwrap_err();
+    assert!(e.to_string().contains("total multiplier 0.5"), "{e}");
+    assert_eq!(e.line, Some(6), "{e}");
+    let skew = text.replace("rpy=\"0 0.7 0\"", "rpy=\"0.7 0 0\"");
+    let e = import_urdf_str(&skew, "mimic.urdf", &sel).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("joint m2"), "{e}");
+    assert!(e.to_string().contains("another line"), "{e}");
+    assert!(e.to_string().starts_with("mimic.urdf:8: joint m2"), "{e}");
+    // A mimic of a mimic has no single driver.
+    let chained = text.replace(
+        "<mimic joint=\"d\" multiplier=\"0.5\" offset=\"-0.2\"/>",
+        "<mimic joint=\"m\"/>",
+    );
+    let e = import_urdf_str(&chained, "mimic.urdf", &sel).unwrap_err();
+    assert!(e.to_string().contains("itself mimics"), "{e}");
+}
+
+#[test]
+fn errors_carry_the_urdf_line() {
+    let Some(dir) = realdata() else {
+        return;
+    };
+    let path = dir.join("hilti-jaibot-stationing/data/trailblazer.urdf");
+    let sel = ChainSelection {
+        base_link: Some("base_link"),
+        tip_link: Some("prism"),
+    };
+    let e = import_urdf_file(&path, &sel).unwrap_err();
+    // line 87: <joint name="column_middle_joint" type="prismatic">, a mimic of the column.
+    assert_eq!(e.line, Some(87), "{e}");
+    assert!(
+        e.to_string().contains("mimics `column_prismatic_joint`"),
+        "{e}"
+    );
+    // A chain that does not exist names both links, at the tip link's line.
+    let sel = ChainSelection {
+        base_link: Some("dsr_base_0"),
+        tip_link: Some("column_tip"),
+    };
+    let e = import_urdf_file(&path, &sel).unwrap_err();
+    assert!(
+        e.to_string().contains("column_tip") && e.to_string().contains("dsr_base_0"),
+        "{e}"
+    );
+    assert!(e.line.is_some(), "{e}");
 }
