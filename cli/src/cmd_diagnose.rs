@@ -950,13 +950,18 @@ pub fn warning_text(w: &Warning) -> String {
     };
     match *w {
         Warning::NoiseVsRepeats { part, ratio, z } => format!(
-            "the repeats are {} than the stated {} noise (z = {z:.1}): check --sigma-{}",
+            "the repeats are {} than the stated {} noise (z = {z:.1}): check --sigma-{}{}",
             factor(ratio),
             noise(part),
             if part == Part::Rotation {
                 "rot-deg"
             } else {
                 "pos-mm"
+            },
+            if ratio > 1.0 {
+                "; the noise floor uses the repeats' sigma (repeatability bounds the noise from below)"
+            } else {
+                ""
             }
         ),
         Warning::NoiseVsResiduals { part, ratio, z } => format!(

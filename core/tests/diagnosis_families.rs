@@ -447,6 +447,19 @@ fn run_case(fam: &Family, k: usize, seed: u64, ws: &mut DiagWorkspace<80>) -> Ou
         && (d.verdict.effects == hidden_lib || d.verdict.confounded().contains(&hidden_lib));
     o.positive = status != Status::NoGap;
     o.overclaim = status == Status::Explained;
+    if std::env::var("FAM_DEBUG").is_ok() && o.outside && o.overclaim {
+        println!(
+            "    over-claim: rho_out {rho_out:.2}, {:?}, remaining gap z {:.2}, structure z {:.2}, gap closed {:.2}",
+            d.verdict
+                .effects
+                .iter()
+                .map(|e| e.name())
+                .collect::<Vec<_>>(),
+            d.remaining.z,
+            d.remaining_structure.z,
+            d.verdict.gap_closed_fraction
+        );
+    }
     o.silent = silent_choice(&d, &poses, &groups);
     o.smooth_share = d.explainable.share_of_gap;
     o.smooth_significant = d.explainable.significant;
