@@ -433,25 +433,36 @@ fn solve(ws: &mut SmoothWorkspace, li: usize, inner: bool) {
     let Some(ra) = r_all.get(li) else {
         return;
     };
+    // The six right-hand sides together (innermost), each still summed over c in order.
     for i in 0..M {
-        for k in 0..6 {
-            let mut v = ra[i][k] - r_out[i][k];
+        let mut v = [0.0; 6];
+        for (k, vk) in v.iter_mut().enumerate() {
+            *vk = ra[i][k] - r_out[i][k];
             if inner {
-                v -= r_in[i][k];
+                *vk -= r_in[i][k];
             }
-            for c in 0..i {
-                v -= chol[i][c] * beta[c][k];
+        }
+        for (&l, b) in chol[i].iter().zip(beta.iter()).take(i) {
+            for (vk, &bk) in v.iter_mut().zip(b) {
+                *vk -= l * bk;
             }
-            beta[i][k] = v / chol[i][i];
+        }
+        let d = chol[i][i];
+        for (bk, vk) in beta[i].iter_mut().zip(v) {
+            *bk = vk / d;
         }
     }
     for i in (0..M).rev() {
-        for k in 0..6 {
-            let mut v = beta[i][k];
-            for c in (i + 1)..M {
-                v -= chol[c][i] * beta[c][k];
+        let mut v = beta[i];
+        for (row, b) in chol.iter().zip(beta.iter()).skip(i + 1) {
+            let l = row[i];
+            for (vk, &bk) in v.iter_mut().zip(b) {
+                *vk -= l * bk;
             }
-            beta[i][k] = v / chol[i][i];
+        }
+        let d = chol[i][i];
+        for (bk, vk) in beta[i].iter_mut().zip(v) {
+            *bk = vk / d;
         }
     }
 }
