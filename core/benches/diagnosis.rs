@@ -1,6 +1,8 @@
-//! Time of a 120-measurement diagnosis over every single effect and every pair (28
-//! candidates): 90 poses of the biopsy region, 30 of them repeated, approach directions and
-//! temperatures recorded, a hidden joint compliance. Target: under 50 ms.
+//! Time of a diagnosis over every single effect and every pair (28 candidates) of simulated
+//! sessions: poses of the biopsy region, a quarter of the measurements repeats, approach
+//! directions and temperatures recorded, a hidden joint compliance. 120 measurements (90
+//! poses, 30 repeated; target under 10 ms), 1,000 and 5,000 (target under 0.5 s): the
+//! rank tests are O(G log G) in the pose groups.
 //! `cargo bench -p kincal --bench diagnosis -- --noplot`
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -8,20 +10,23 @@ use kincal::diagnosis::{Config, DiagWorkspace, PoseDiagnosis, diagnose};
 use kincal::identify::Measurement;
 use kincal::rng::SplitMix64;
 use kincal::sim::{SessionConfig, add_effect, perturb_geometry, simulate_session};
-use kincal::{Effect, Transform, aria};
+use kincal::{Effect, Robot, Transform, aria};
 
-fn bench(c: &mut Criterion) {
+/// Measurements per simulated session: 3/4 distinct poses, 1/4 repeats.
+const SIZES: [usize; 3] = [120, 1_000, 5_000];
+
+/// A simulated session of `n` measurements (`n` divisible by 4) and its pose groups.
+fn session(n: usize) -> (Robot<6>, Vec<Measurement<6>>, Vec<u32>) {
     let nominal = aria::nominal();
     let mut rng = SplitMix64::new(120);
     let mut truth = perturb_geometry(&nominal, 5e-3, 5f64.to_radians(), &mut rng).unwrap();
     add_effect(&mut truth, Effect::JointCompliance, 1.0, &mut rng).unwrap();
     let cfg = SessionConfig {
-        poses: 90,
-        repeated: 30,
+        poses: n / 4 * 3,
+        repeated: n / 4,
         ..SessionConfig::blind_training()
     };
-    let n = cfg.measurements();
-    assert_eq!(n, 120);
+    assert_eq!(cfg.measurements(), n);
     let mut data = vec![Measurement::new([0.0; 6], Transform::identity()); n];
     let mut groups = vec![0u32; n];
     simulate_session(
@@ -33,19 +38,34 @@ fn bench(c: &mut Criterion) {
         &mut groups,
     )
     .unwrap();
-    let mut poses = vec![PoseDiagnosis::default(); n];
+    (nominal, data, groups)
+}
+
+/// A zeroed diagnosis workspace on the heap (it is large).
+fn workspace() -> Box<DiagWorkspace<80>> {
     // SAFETY: all-zero is a valid DiagWorkspace (documented).
-    let mut ws: Box<DiagWorkspace<80>> = unsafe { Box::new_zeroed().assume_init() };
-    let dc = Config::default();
-    let d = diagnose(&nominal, &data, &groups, &dc, &mut poses, &mut ws).unwrap();
-    assert_eq!(d.n_candidates, 28);
-    c.bench_function("diagnose 120 measurements, 7 effects + 21 pairs", |b| {
-        b.iter(|| {
-            std::hint::black_box(
-                diagnose(&nominal, &data, &groups, &dc, &mut poses, &mut ws).unwrap(),
-            )
-        })
-    });
+    unsafe { Box::new_zeroed().assume_init() }
+}
+
+fn bench(c: &mut Criterion) {
+    let mut group = c.benchmark_group("diagnose, 7 effects + 21 pairs");
+    group.sample_size(10);
+    for n in SIZES {
+        let (nominal, data, groups) = session(n);
+        let mut poses = vec![PoseDiagnosis::default(); n];
+        let mut ws = workspace();
+        let dc = Config::default();
+        let d = diagnose(&nominal, &data, &groups, &dc, &mut poses, &mut ws).unwrap();
+        assert_eq!(d.n_candidates, 28);
+        group.bench_function(format!("{n} measurements"), |b| {
+            b.iter(|| {
+                std::hint::black_box(
+                    diagnose(&nominal, &data, &groups, &dc, &mut poses, &mut ws).unwrap(),
+                )
+            })
+        });
+    }
+    group.finish();
 }
 
 /// Process CPU time \[s\] from /proc/self/stat (user + system; Linux), or `None`.
@@ -58,46 +78,28 @@ fn cpu_seconds() -> Option<f64> {
     Some(ticks / 100.0)
 }
 
-/// CPU time per diagnosis over 200 runs: on a shared, loaded machine criterion's wall
-/// time overstates the cost; the process's CPU time much less so.
+/// CPU time per diagnosis (about 24,000 measurements' worth of runs, at least 3): on a
+/// shared, loaded machine criterion's wall time overstates the cost; the process's CPU
+/// time much less so.
 fn cpu_time(_c: &mut Criterion) {
-    let nominal = aria::nominal();
-    let mut rng = SplitMix64::new(120);
-    let mut truth = perturb_geometry(&nominal, 5e-3, 5f64.to_radians(), &mut rng).unwrap();
-    add_effect(&mut truth, Effect::JointCompliance, 1.0, &mut rng).unwrap();
-    let cfg = SessionConfig {
-        poses: 90,
-        repeated: 30,
-        ..SessionConfig::blind_training()
-    };
-    let n = cfg.measurements();
-    let mut data = vec![Measurement::new([0.0; 6], Transform::identity()); n];
-    let mut groups = vec![0u32; n];
-    simulate_session(
-        &truth,
-        &aria::TOOL_SEED_Q,
-        &cfg,
-        &mut rng,
-        &mut data,
-        &mut groups,
-    )
-    .unwrap();
-    let mut poses = vec![PoseDiagnosis::default(); n];
-    // SAFETY: all-zero is a valid DiagWorkspace (documented).
-    let mut ws: Box<DiagWorkspace<80>> = unsafe { Box::new_zeroed().assume_init() };
-    let dc = Config::default();
-    let runs = 200;
-    if let Some(t0) = cpu_seconds() {
-        for _ in 0..runs {
-            std::hint::black_box(
-                diagnose(&nominal, &data, &groups, &dc, &mut poses, &mut ws).unwrap(),
-            );
-        }
-        if let Some(t1) = cpu_seconds() {
-            println!(
-                "diagnose 120 measurements: {:.2} ms CPU time per run ({runs} runs)",
-                (t1 - t0) * 1e3 / runs as f64
-            );
+    for n in SIZES {
+        let (nominal, data, groups) = session(n);
+        let mut poses = vec![PoseDiagnosis::default(); n];
+        let mut ws = workspace();
+        let dc = Config::default();
+        let runs = (24_000 / n).max(3);
+        if let Some(t0) = cpu_seconds() {
+            for _ in 0..runs {
+                std::hint::black_box(
+                    diagnose(&nominal, &data, &groups, &dc, &mut poses, &mut ws).unwrap(),
+                );
+            }
+            if let Some(t1) = cpu_seconds() {
+                println!(
+                    "diagnose {n} measurements: {:.2} ms CPU time per run ({runs} runs)",
+                    (t1 - t0) * 1e3 / runs as f64
+                );
+            }
         }
     }
 }

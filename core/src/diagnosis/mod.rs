@@ -107,12 +107,13 @@
 //! per-pose outputs ([`PoseDiagnosis`]), and a caller-provided [`DiagWorkspace`] of
 //! capacity `P` columns (the union of all models' parameters: 71 for a 6-joint arm with
 //! every effect, so `P = 80` suffices there; `P = 144` for 9 joints), which includes the
-//! fixed ~110 KiB of the smooth check ([`SmoothWorkspace`]).
+//! fixed ~116 KiB of the smooth check ([`SmoothWorkspace`]).
 
 mod cv;
 mod folds;
 mod locate;
 mod noise;
+mod rank;
 mod screen;
 mod smooth;
 
@@ -979,8 +980,8 @@ fn group_sq(p: &PoseDiagnosis, m: usize, rows: Rows) -> f64 {
 
 /// Paired z of models `a` and `b` over groups (see the module documentation): the
 /// Wilcoxon signed-rank statistic of `D_g = S_g^a − S_g^b` in its normal approximation,
-/// zero differences dropped, mid-ranks and the tie correction for equal |D|. Ranks are
-/// counted in O(G²) (no memory); data sets have tens to hundreds of groups.
+/// zero differences dropped, mid-ranks and the tie correction for equal |D|
+/// ([`rank::signed_rank_z`], O(G log G)). Overwrites the first records' `scratch`.
 pub(crate) fn paired_z(poses: &mut [PoseDiagnosis], a: usize, b: usize, rows: Rows) -> f64 {
     // Compact the non-zero group differences into the first slots' scratch.
     let mut g = 0;
@@ -994,36 +995,7 @@ pub(crate) fn paired_z(poses: &mut [PoseDiagnosis], a: usize, b: usize, rows: Ro
             g += 1;
         }
     }
-    let (mut w_plus, mut ties) = (0.0, 0.0);
-    for i in 0..g {
-        let x = poses[i].scratch.abs();
-        let (mut below, mut equal) = (0usize, 0usize);
-        for q in &poses[..g] {
-            let y = q.scratch.abs();
-            if y < x {
-                below += 1;
-            } else if y == x {
-                equal += 1;
-            }
-        }
-        if poses[i].scratch > 0.0 {
-            w_plus += below as f64 + 0.5 * (equal as f64 + 1.0);
-        }
-        // A tie group of size t adds (t³ − t)/48 to the variance correction: (t² − 1)/48
-        // from each of its t members.
-        let t = equal as f64;
-        ties += (t * t - 1.0) / 48.0;
-    }
-    if g == 0 {
-        return 0.0;
-    }
-    let nf = g as f64;
-    let mean = nf * (nf + 1.0) / 4.0;
-    let var = nf * (nf + 1.0) * (2.0 * nf + 1.0) / 24.0 - ties;
-    if var <= 0.0 {
-        return 0.0;
-    }
-    (w_plus - mean) / sqrt(var)
+    poses.get_mut(..g).map_or(0.0, rank::signed_rank_z)
 }
 
 /// In-sample comparison of models `a` and `b` with `p_a`, `p_b` fitted parameters

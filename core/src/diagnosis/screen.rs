@@ -147,31 +147,92 @@ fn thr(q: &PoseDiagnosis) -> f64 {
 }
 
 /// Median over the clean rows measuring part `part` (0 position, 1 rotation) of the
-/// residual norm rescaled to three components, `|v|·√(3/k)`; 0 without such rows. Exact,
-/// by counting (O(n²), no memory).
-fn median_norm(poses: &[PoseDiagnosis], part: usize) -> f64 {
-    let value = |q: &PoseDiagnosis| {
+/// residual norm rescaled to three components, `|v|·√(3/k)`; 0 without such rows. Exact:
+/// the values are sorted in place in the first records' `scratch` (O(n log n), no memory).
+fn median_norm(poses: &mut [PoseDiagnosis], part: usize) -> f64 {
+    let mut n = 0;
+    for l in 0..poses.len() {
+        let q = &poses[l];
         let k = q.heldout_final[2 + part];
-        (!q.suspect && k > 0.0).then(|| sqrt(3.0 * q.heldout_final[part] / k))
-    };
-    let n = poses.iter().filter_map(value).count();
-    if n == 0 {
-        return 0.0;
+        if !q.suspect && k > 0.0 {
+            let v = sqrt(3.0 * q.heldout_final[part] / k);
+            // Slot n ≤ l: every record at or before it has been read.
+            poses[n].scratch = v;
+            n += 1;
+        }
     }
-    let select = |rank: usize| {
-        poses
-            .iter()
-            .filter_map(value)
-            .find(|&x| {
-                let below = poses.iter().filter_map(value).filter(|&y| y < x).count();
-                let equal = poses.iter().filter_map(value).filter(|&y| y == x).count();
-                below <= rank && rank < below + equal
-            })
-            .unwrap_or(0.0)
+    let Some(values) = poses.get_mut(..n) else {
+        return 0.0;
     };
-    if n % 2 == 1 {
-        select(n / 2)
-    } else {
-        0.5 * (select(n / 2 - 1) + select(n / 2))
+    // Non-negative values: ascending magnitude is ascending value.
+    super::rank::sort_by_magnitude(values);
+    let at = |i: usize| values.get(i).map_or(0.0, |p| p.scratch);
+    match n {
+        0 => 0.0,
+        _ if n % 2 == 1 => at(n / 2),
+        _ => 0.5 * (at(n / 2 - 1) + at(n / 2)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+    use std::vec::Vec;
+
+    /// The former O(n²) selection by counting, kept as the reference.
+    fn counted_median(poses: &[PoseDiagnosis], part: usize) -> f64 {
+        let value = |q: &PoseDiagnosis| {
+            let k = q.heldout_final[2 + part];
+            (!q.suspect && k > 0.0).then(|| sqrt(3.0 * q.heldout_final[part] / k))
+        };
+        let n = poses.iter().filter_map(value).count();
+        if n == 0 {
+            return 0.0;
+        }
+        let select = |rank: usize| {
+            poses
+                .iter()
+                .filter_map(value)
+                .find(|&x| {
+                    let below = poses.iter().filter_map(value).filter(|&y| y < x).count();
+                    let equal = poses.iter().filter_map(value).filter(|&y| y == x).count();
+                    below <= rank && rank < below + equal
+                })
+                .unwrap_or(0.0)
+        };
+        if n % 2 == 1 {
+            select(n / 2)
+        } else {
+            0.5 * (select(n / 2 - 1) + select(n / 2))
+        }
+    }
+
+    /// Sorted median equals the counted one bit for bit: odd and even counts, suspects and
+    /// rows without the part skipped, tied values.
+    #[test]
+    fn sorted_median_matches_the_counted_one() {
+        let mut rng = SplitMix64::new(4);
+        for case in 0..200 {
+            let n = rng.below(60);
+            let poses: Vec<PoseDiagnosis> = (0..n)
+                .map(|_| {
+                    let mut p = PoseDiagnosis::EMPTY;
+                    let level = if case % 2 == 0 {
+                        rng.below(4) as f64
+                    } else {
+                        rng.uniform()
+                    };
+                    p.heldout_final = [level, 2.0 * level, rng.below(4) as f64, 3.0, 0.0, 0.0];
+                    p.suspect = rng.uniform() < 0.1;
+                    p
+                })
+                .collect();
+            for part in 0..2 {
+                let want = counted_median(&poses, part);
+                let got = median_norm(&mut poses.clone(), part);
+                assert_eq!(got.to_bits(), want.to_bits(), "case {case} part {part}");
+            }
+        }
     }
 }

@@ -131,7 +131,7 @@ pub struct SmoothCheck {
     pub significant: bool,
 }
 
-/// Working memory of the check (part of [`super::DiagWorkspace`]; about 110 KiB).
+/// Working memory of the check (part of [`super::DiagWorkspace`]; about 116 KiB).
 #[derive(Debug, Clone)]
 pub struct SmoothWorkspace {
     omega: [[f64; X]; M],
@@ -144,6 +144,8 @@ pub struct SmoothWorkspace {
     r_in: [[f64; 6]; M],
     chol: [[f64; M]; M],
     beta: [[f64; 6]; M],
+    /// One solution per ridge while the ridges are compared.
+    beta_ridge: [[[f64; 6]; M]; R],
     u: [f64; M],
     n_linear: usize,
     task_mean: [f64; 3],
@@ -166,6 +168,7 @@ impl SmoothWorkspace {
             r_in: [[0.0; 6]; M],
             chol: [[0.0; M]; M],
             beta: [[0.0; 6]; M],
+            beta_ridge: [[[0.0; 6]; M]; R],
             u: [0.0; M],
             n_linear: 0,
             task_mean: [0.0; 3],
@@ -430,38 +433,59 @@ fn solve(ws: &mut SmoothWorkspace, li: usize, inner: bool) {
     let Some(ra) = r_all.get(li) else {
         return;
     };
+    // The six right-hand sides together (innermost), each still summed over c in order.
     for i in 0..M {
-        for k in 0..6 {
-            let mut v = ra[i][k] - r_out[i][k];
+        let mut v = [0.0; 6];
+        for (k, vk) in v.iter_mut().enumerate() {
+            *vk = ra[i][k] - r_out[i][k];
             if inner {
-                v -= r_in[i][k];
+                *vk -= r_in[i][k];
             }
-            for c in 0..i {
-                v -= chol[i][c] * beta[c][k];
+        }
+        for (&l, b) in chol[i].iter().zip(beta.iter()).take(i) {
+            for (vk, &bk) in v.iter_mut().zip(b) {
+                *vk -= l * bk;
             }
-            beta[i][k] = v / chol[i][i];
+        }
+        let d = chol[i][i];
+        for (bk, vk) in beta[i].iter_mut().zip(v) {
+            *bk = vk / d;
         }
     }
     for i in (0..M).rev() {
-        for k in 0..6 {
-            let mut v = beta[i][k];
-            for c in (i + 1)..M {
-                v -= chol[c][i] * beta[c][k];
+        let mut v = beta[i];
+        for (row, b) in chol.iter().zip(beta.iter()).skip(i + 1) {
+            let l = row[i];
+            for (vk, &bk) in v.iter_mut().zip(b) {
+                *vk -= l * bk;
             }
-            beta[i][k] = v / chol[i][i];
+        }
+        let d = chol[i][i];
+        for (bk, vk) in beta[i].iter_mut().zip(v) {
+            *bk = vk / d;
         }
     }
 }
 
-/// Prediction `φ·β` in the active component types (zero elsewhere).
+/// Prediction `φ·β` with the workspace's features and solution (see [`predict_with`]).
 fn predict(ws: &SmoothWorkspace, act: &[bool; 2], use_class: &[bool; 2]) -> [f64; 6] {
+    predict_with(&ws.phi, &ws.beta, act, use_class)
+}
+
+/// Prediction `φ·β` in the active component types (zero elsewhere).
+fn predict_with(
+    phi: &[f64; M],
+    beta: &[[f64; 6]; M],
+    act: &[bool; 2],
+    use_class: &[bool; 2],
+) -> [f64; 6] {
     let mut pred = [0.0; 6];
     for (c, range) in CLASSES.iter().enumerate() {
         if !(act[c] && use_class[c]) {
             continue;
         }
         for k in range.clone() {
-            pred[k] = ws.phi.iter().zip(&ws.beta).map(|(f, b)| f * b[k]).sum();
+            pred[k] = phi.iter().zip(beta).map(|(f, b)| f * b[k]).sum();
         }
     }
     pred
@@ -513,22 +537,36 @@ fn choose<const N: usize>(
         let mut ok = [true; R];
         for g in (0..folds).filter(|&g| g != f) {
             fold_gram(ws, robot, data, poses, sw, act, Some(g), inv_l, true);
+            // Every ridge's solution first, so each validation row's features are computed
+            // once for all ridges (the features cost more than the predictions).
+            let mut solved = [false; R];
             for (ri, &lambda) in RIDGES.iter().enumerate() {
                 if !factor(ws, li, true, lambda) {
                     ok[ri] = false;
                     continue;
                 }
                 solve(ws, li, true);
-                for (m, p) in data.iter().zip(poses) {
-                    if p.suspect || usize::from(p.fold) != g || !fits(m, act) {
-                        continue;
-                    }
-                    let y = target(m, p, sw);
-                    project(ws, robot, &m.state);
-                    features(ws, inv_l);
-                    let e = class_sq(&y, &predict(ws, act, &[true; 2]));
-                    err[ri][0] += e[0];
-                    err[ri][1] += e[1];
+                if let Some(b) = ws.beta_ridge.get_mut(ri) {
+                    *b = ws.beta;
+                    solved[ri] = true;
+                }
+            }
+            for (m, p) in data.iter().zip(poses) {
+                if p.suspect || usize::from(p.fold) != g || !fits(m, act) {
+                    continue;
+                }
+                let y = target(m, p, sw);
+                project(ws, robot, &m.state);
+                features(ws, inv_l);
+                for ((e_r, beta), _) in err
+                    .iter_mut()
+                    .zip(&ws.beta_ridge)
+                    .zip(solved)
+                    .filter(|&(_, s)| s)
+                {
+                    let e = class_sq(&y, &predict_with(&ws.phi, beta, act, &[true; 2]));
+                    e_r[0] += e[0];
+                    e_r[1] += e[1];
                 }
             }
         }
@@ -819,15 +857,15 @@ fn summarise<const N: usize>(
 }
 
 /// Paired Wilcoxon signed-rank z over groups of `D_g = S_g^baseline − S_g^smooth`
-/// (normal approximation, zero differences dropped, mid-ranks, tie correction), as
-/// `super::paired_z`. Overwrites `scratch` of group leaders with `D_g`. O(G²).
+/// (normal approximation, zero differences dropped, mid-ranks, tie correction) by the
+/// shared [`super::rank::signed_rank_z`], O(n + G log G). Overwrites `scratch`.
 fn group_wilcoxon<const N: usize>(
     data: &[Measurement<N>],
     poses: &mut [PoseDiagnosis],
     sw: &[f64; 6],
 ) -> f64 {
-    // Per pose D_l, then summed into the leader (leaders precede their members, so in
-    // reverse order a leader's members still hold their own D_l).
+    // Per pose D_l, then added into its leader in row order (a leader is the first row of
+    // its group, so it precedes its members and still holds its own sum when they arrive).
     for (m, p) in data.iter().zip(poses.iter_mut()) {
         // Suspect rows (gross outliers) take no part, as in every other test.
         p.scratch = if p.suspect {
@@ -836,54 +874,24 @@ fn group_wilcoxon<const N: usize>(
             sq(m, &target(m, p, sw), &[0.0; 6]) - p.scratch
         };
     }
-    for l in (0..poses.len()).rev() {
-        if poses[l].leader as usize != l {
-            continue;
+    for l in 0..poses.len() {
+        let (lead, d) = (poses[l].leader as usize, poses[l].scratch);
+        if lead < l
+            && let Some(p) = poses.get_mut(lead)
+        {
+            p.scratch += d;
         }
-        let mut d = poses[l].scratch;
-        for p in poses.iter().skip(l + 1) {
-            if p.leader as usize == l {
-                d += p.scratch;
-            }
-        }
-        poses[l].scratch = d;
     }
-    let is_lead = |l: usize, p: &PoseDiagnosis| p.leader as usize == l && p.scratch != 0.0;
-    let (mut w_plus, mut ties, mut g) = (0.0, 0.0, 0usize);
-    for (i, pi) in poses.iter().enumerate() {
-        if !is_lead(i, pi) {
-            continue;
+    // Compact the non-zero group totals into the first records (slot g ≤ l: read first).
+    let mut g = 0;
+    for l in 0..poses.len() {
+        let d = poses[l].scratch;
+        if poses[l].leader as usize == l && d != 0.0 {
+            poses[g].scratch = d;
+            g += 1;
         }
-        g += 1;
-        let x = pi.scratch.abs();
-        let (mut below, mut equal) = (0usize, 0usize);
-        for (j, pj) in poses.iter().enumerate() {
-            if !is_lead(j, pj) {
-                continue;
-            }
-            let y = pj.scratch.abs();
-            if y < x {
-                below += 1;
-            } else if y == x {
-                equal += 1;
-            }
-        }
-        if pi.scratch > 0.0 {
-            w_plus += below as f64 + 0.5 * (equal as f64 + 1.0);
-        }
-        let t = equal as f64;
-        ties += (t * t - 1.0) / 48.0;
     }
-    if g == 0 {
-        return 0.0;
-    }
-    let nf = g as f64;
-    let mean = nf * (nf + 1.0) / 4.0;
-    let var = nf * (nf + 1.0) * (2.0 * nf + 1.0) / 24.0 - ties;
-    if var <= 0.0 {
-        return 0.0;
-    }
-    (w_plus - mean) / sqrt(var)
+    poses.get_mut(..g).map_or(0.0, super::rank::signed_rank_z)
 }
 
 #[cfg(test)]
@@ -929,9 +937,9 @@ mod tests {
                 assert!((lhs - rhs).abs() < 1e-9 * (1.0 + rhs.abs()), "{i} {k}");
             }
         }
-        // The documented size (about 110 KiB).
+        // The documented size (about 116 KiB).
         let size = core::mem::size_of::<SmoothWorkspace>();
-        assert!((100 * 1024..120 * 1024).contains(&size), "{size}");
+        assert!((110 * 1024..125 * 1024).contains(&size), "{size}");
         // Not positive definite (λ = 0 with fewer rows than features): refused.
         ws.g_all[1] = [[0.0; M]; M];
         ws.g_out = [[0.0; M]; M];
