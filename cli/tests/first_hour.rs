@@ -231,3 +231,65 @@ fn opt1_on_its_bounds_is_said_once_and_output_stays_readable() {
             .is_empty()
     );
 }
+
+#[test]
+fn flags_agree_across_commands() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    fs::write(d.join("data.csv"), table2_csv(false)).unwrap();
+
+    // crossval takes calibrate's `--robust huber|cauchy`; `--robust` alone stays Cauchy.
+    let out = ok(&kincal(
+        &[
+            "crossval", "data.csv", "--robot", "aria", "--robust", "huber",
+        ],
+        d,
+        &[],
+    ));
+    assert!(out.contains("Fits: robust (huber IRLS)"), "{out}");
+    let out = ok(&kincal(
+        &["crossval", "data.csv", "--robot", "aria", "--robust"],
+        d,
+        &[],
+    ));
+    assert!(out.contains("Fits: robust (cauchy IRLS)"), "{out}");
+
+    // diagnose takes --seed (fold assignment); with only --sigma-pos-mm on data with
+    // orientations, the missing noise is named: --sigma-rot-deg, not both.
+    let o = kincal(
+        &[
+            "diagnose",
+            "data.csv",
+            "--robot",
+            "aria",
+            "--sigma-pos-mm",
+            "0.1",
+            "--seed",
+            "7",
+            "--json",
+            "r.json",
+            "--out",
+            "m.json",
+        ],
+        d,
+        &[],
+    );
+    let (out, err) = text(&o);
+    assert_eq!(o.status.code(), Some(2), "{out}{err}");
+    assert!(err.contains("no noise floor"), "{err}");
+    assert!(err.contains("--sigma-rot-deg is not given"), "{err}");
+    assert!(
+        !err.contains("--sigma-pos-mm/--sigma-rot-deg are not given"),
+        "{err}"
+    );
+
+    // markers: --sigma-pos-mm as everywhere else, --sigma-mm kept as its alias.
+    let help = ok(&kincal(&["markers", "--help"], d, &[]));
+    assert!(help.contains("--sigma-pos-mm"), "{help}");
+    for flag in ["--sigma-pos-mm", "--sigma-mm"] {
+        let o = kincal(&["markers", "export.csv", flag, "0.2"], d, &[]);
+        let (_, err) = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(!err.contains("unexpected argument"), "{flag}: {err}");
+    }
+}
