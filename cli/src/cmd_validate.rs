@@ -392,9 +392,11 @@ fn validate<const N: usize>(
     let variants: Vec<(String, Robot<N>)> = file
         .variants::<N>()
         .map_err(|m| CliError::input(format!("{}: {m}", args.model)))?;
+    // The variant that is this model carries its effects in its name too.
+    let bare = name.split(" + ").next().unwrap_or(name);
     let evals = variants
         .iter()
-        .map(|(n, r)| evaluate(n, r, &meas))
+        .map(|(n, r)| evaluate(if n == bare { name } else { n }, r, &meas))
         .collect::<Result<Vec<_>, _>>()
         .map_err(fail)?;
     for e in std::iter::once(&main).chain(&evals) {

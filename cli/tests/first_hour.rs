@@ -138,12 +138,40 @@ fn aria_targets_and_eq3_only_for_aria() {
         "{out}"
     );
     assert!(!out.contains("Eq. (3)"), "{out}");
+    assert!(out.contains("(OLS model of 'ur10e')"), "{out}");
     let out = ok(&kincal(
         &["validate", "other.json", "data.csv", "--biopsy-d-mm", "0.5"],
         dir.path(),
         &[],
     ));
     assert!(out.contains("Eq. (3)"), "{out}");
+
+    // A model with effects is named by them, not by its algorithm alone.
+    ok(&kincal(
+        &[
+            "calibrate",
+            "data.csv",
+            "--robot",
+            "aria",
+            "--effects",
+            "joint_compliance",
+            "--allow-data-deficiency",
+            "--out",
+            "jc.json",
+        ],
+        dir.path(),
+        &[],
+    ));
+    let out = ok(&kincal(
+        &["validate", "jc.json", "twins.csv"],
+        dir.path(),
+        &[],
+    ));
+    assert!(
+        out.contains("(OLS + joint_compliance model of 'aria')"),
+        "{out}"
+    );
+    assert!(out.contains("\n  OLS + joint_compliance "), "{out}");
 }
 
 #[test]
