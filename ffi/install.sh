@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds the kincal C ABI in release and installs it for C/C++ consumers:
 #   PREFIX/include/kincal.h
-#   PREFIX/lib/libkincal.a, PREFIX/lib/libkincal.so
+#   PREFIX/lib/libkincal.a, PREFIX/lib/libkincal.so.0 (SONAME) and the link libkincal.so
 #   PREFIX/lib/pkgconfig/kincal.pc (shared), kincal-static.pc (static)
 #   PREFIX/lib/cmake/kincal/kincalConfig.cmake, kincalConfigVersion.cmake
 #
@@ -25,6 +25,7 @@ export CARGO_TARGET_DIR=$target
 cd "$root"
 # One release build of both crate types; rustc also reports the system libraries the static
 # library needs (replayed from cargo's cache when the build is fresh).
+echo "install.sh: building the release library (about 3-4 minutes on a first build)..." >&2
 build_log=$(cargo rustc --release -p kincal-ffi -- --print native-static-libs 2>&1) || {
     printf '%s\n' "$build_log" >&2
     exit 1
@@ -41,7 +42,10 @@ version=$(cargo pkgid -p kincal-ffi | sed 's/.*[#@]//')
 install -d "$prefix/include" "$prefix/lib/pkgconfig" "$prefix/lib/cmake/kincal"
 install -m 644 "$root/include/kincal.h" "$prefix/include/kincal.h"
 install -m 644 "$target/release/libkincal.a" "$prefix/lib/libkincal.a"
-install -m 755 "$target/release/libkincal.so" "$prefix/lib/libkincal.so"
+# The library's SONAME is libkincal.so.0 (ffi/build.rs): the file under that name, and the
+# development link libkincal.so for -lkincal.
+install -m 755 "$target/release/libkincal.so" "$prefix/lib/libkincal.so.0"
+ln -sf libkincal.so.0 "$prefix/lib/libkincal.so"
 
 # Replacement text for sed: escape the characters special in a replacement (\, &, |).
 escape() { printf '%s' "$1" | sed -e 's/[\\&|]/\\&/g'; }

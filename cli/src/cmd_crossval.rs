@@ -50,7 +50,7 @@ Also printed (and in --json): the noise floor — the pooled scatter of repeated
 when the data have them (the estimator of `kincal diagnose`: repeats count together when
 they share approach directions and temperatures within 0.5 °C), else an upper bound: the
 calibrated model's dof-corrected residual per axis, which contains whatever the model does
-not explain; the robust fit (Cauchy IRLS on
+not explain; the robust fit (IRLS with --robust's loss, Cauchy by default, on
 all poses, core identify_robust) and the poses its residual test names as outliers (d² above
 the 99.99 % χ² quantile); the identifiability of the calibrated model on all poses.
 
@@ -107,10 +107,11 @@ pub struct Args {
     /// Weights 1 per m² and 1 per rad² (the paper's) instead of residual-based ones
     #[arg(long)]
     pub unit_weights: bool,
-    /// Fit every model robustly (Cauchy IRLS, core identify_robust) instead of by least
-    /// squares; held-out errors are still reported for every pose
-    #[arg(long)]
-    pub robust: bool,
+    /// Fit every model robustly (IRLS with this loss, core identify_robust; `--robust`
+    /// alone means cauchy, as before) instead of by least squares; held-out errors are
+    /// still reported for every pose
+    #[arg(long, value_enum, value_name = "LOSS", num_args = 0..=1, default_missing_value = "cauchy")]
+    pub robust: Option<crate::args::LossArg>,
     /// Accept joint readings outside the robot's joint limits
     #[arg(long)]
     pub allow_out_of_limits: bool,
@@ -213,12 +214,17 @@ fn geometry_subset<const N: usize>(robot: &Robot<N>, kinds: &[String]) -> ParamS
     out
 }
 
+/// The loss of the outlier fit on all poses: `--robust`'s, Cauchy by default.
+fn outlier_loss(args: &Args) -> Loss {
+    args.robust.map_or(Loss::Cauchy, Loss::from)
+}
+
 /// How every model is fitted.
 #[derive(Debug, Clone, Copy)]
 struct How {
     w: Weights,
     init_frames: bool,
-    robust: bool,
+    robust: Option<Loss>,
     max_iterations: u32,
 }
 
@@ -252,14 +258,14 @@ fn fit<const N: usize>(
         o.weight_rot = w.rot;
         o.allow_data_deficiency = true;
         o.max_iterations = max_iterations;
-        let result = if how.robust {
+        let result = if let Some(loss) = how.robust {
             let mut d = data.to_vec();
             let mut report = vec![PoseResidual::default(); d.len()];
             identify_robust(
                 &start,
                 &mut d,
                 &o,
-                &RobustOptions::new(Loss::Cauchy),
+                &RobustOptions::new(loss),
                 &mut report,
                 &mut ws,
             )
@@ -471,7 +477,7 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
     let how = |w: Weights| How {
         w,
         init_frames: args.init_frames,
-        robust: args.robust,
+        robust: args.robust.map(Loss::from),
         max_iterations: args.max_iterations,
     };
     let mut all =
@@ -562,7 +568,7 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
     // Noise floor.
     let repeats = repeat_noise(&all.robot, &set, &meas).map_err(|e| fail("noise floor", e))?;
 
-    // Robust fit and outliers (Cauchy IRLS from the calibrated start).
+    // Robust fit and outliers (IRLS with --robust's loss, Cauchy by default, from the calibrated start).
     let robust_start = if args.init_frames {
         kincal::frames::estimate_frames(nominal, &meas)
             .map_err(|e| fail("frame estimate", e.to_string()))?
@@ -582,7 +588,7 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
         &robust_start,
         &mut rdata,
         &o,
-        &RobustOptions::new(Loss::Cauchy),
+        &RobustOptions::new(outlier_loss(args)),
         &mut report,
         &mut ws,
     );
@@ -624,8 +630,12 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
             ""
         }
     );
-    if args.robust {
-        s.push_str("Fits: robust (Cauchy IRLS) in every fold and on all poses\n");
+    if args.robust.is_some() {
+        let _ = writeln!(
+            s,
+            "Fits: robust ({} IRLS) in every fold and on all poses",
+            outlier_loss(args).name()
+        );
     }
     let _ = writeln!(
         s,
@@ -771,7 +781,8 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
             let suspects: Vec<usize> = (0..meas.len()).filter(|&i| report[i].suspect).collect();
             let _ = writeln!(
                 s,
-                "Robust fit (Cauchy IRLS, {} reweighted fits): robust scales σ_pos {:.4} mm{}; {} outlier(s) by the 99.99 % residual test{}",
+                "Robust fit ({} IRLS, {} reweighted fits): robust scales σ_pos {:.4} mm{}; {} outlier(s) by the 99.99 % residual test{}",
+                outlier_loss(args).name(),
                 r.reweights,
                 r.test.scale_pos_m * 1e3,
                 if orientation {
@@ -836,7 +847,7 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
         let doc = json!({
             "format": "kincal-crossval", "schema_version": "1.0",
             "data": {"path": set.source, "sha256": set.sha256, "poses": meas.len(), "groups": n_groups, "orientation": orientation},
-            "robot": name, "effects": eff_names, "geometry": args.geometry, "init_frames": args.init_frames, "robust": args.robust,
+            "robot": name, "effects": eff_names, "geometry": args.geometry, "init_frames": args.init_frames, "robust": args.robust.is_some(), "robust_loss": args.robust.map(|l| Loss::from(l).name()),
             "folds": args.folds, "seed": args.seed,
             "weighting": {"mode": w.mode, "weight_pos": w.pos, "weight_rot": w.rot},
             "identifiability": analysis.map(|a| json!({
@@ -906,7 +917,8 @@ fn crossval_contacts<const N: usize>(
     set: &MeasurementSet,
     effects: EffectSet,
 ) -> Result<(), CliError> {
-    if args.robust || args.init_frames || args.plot.is_some() || args.robot_out.is_some() {
+    if args.robust.is_some() || args.init_frames || args.plot.is_some() || args.robot_out.is_some()
+    {
         return Err(CliError::usage(
             "--robust, --init-frames, --plot and --robot-out are not implemented for data with \
              target/plane rows",

@@ -223,6 +223,7 @@ pub fn sim_to_real_diagnosis(ctx: &DemoContext<'_>) -> Result<String, CliError> 
         candidates: Vec::new(),
         no_pairs: false,
         folds: 5,
+        seed: kincal::diagnosis::Config::default().fold_seed,
         allow_out_of_limits: false,
     };
     let nominal = aria::nominal();
@@ -637,7 +638,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             );
         }
         if let Some(c) = &cal.consensus {
-            text.push_str(&report::consensus::<N>(c));
+            text.push_str(&report::consensus_of::<N>(&cal, c));
         }
 
         // 5. Validation on the region grid.

@@ -215,6 +215,19 @@ fn score(r: &DesignResult, base: &DesignResult) -> f64 {
     .fold(0.0, f64::max)
 }
 
+/// The score as printed: an infinite one says why (failed runs are disqualifying).
+fn score_text(s: f64, r: &DesignResult) -> String {
+    if s.is_finite() {
+        format!("{s:.3}")
+    } else if r.failed > 0 {
+        format!("inf ({} failed)", r.failed)
+    } else if r.max_pos_mm.is_empty() {
+        "inf (no runs)".into()
+    } else {
+        "inf (baseline error 0)".into()
+    }
+}
+
 struct Candidate<const N: usize> {
     design: Design<N>,
     z: f64,
@@ -314,8 +327,16 @@ fn design<const N: usize>(
             opts.starts = settings.starts;
             opts.refine_trials = 0;
             opts.min_separation_m = args.min_separation_mm * 1e-3;
-            let sel =
-                designs::select_best(&ctx, &pool, settings.m, &obs, &c, &opts, Some(&reference));
+            let sel = designs::select_best(
+                &ctx,
+                &pool,
+                settings.m,
+                &obs,
+                &c,
+                &opts,
+                Some(&reference),
+                &indicatif::ProgressBar::hidden(),
+            );
             let Ok((sq, _)) = sel else {
                 let _ = writeln!(
                     log,
@@ -398,7 +419,7 @@ fn design<const N: usize>(
             format!("{:.3}", a.median),
             format!("{:.3}", a.p95),
             r.failed.to_string(),
-            format!("{s:.3}"),
+            score_text(s, r),
         ]);
     }
     let (p, a) = (base.pos(), base.rot());
@@ -415,6 +436,16 @@ fn design<const N: usize>(
         "1".into(),
     ]);
     log.push_str(&t.render("  "));
+    if candidates
+        .iter()
+        .zip(&sres[1..])
+        .any(|(_, r)| !score(r, base).is_finite())
+    {
+        let _ = writeln!(
+            log,
+            "  (score inf: the candidate failed in some runs (IK or identification), or had none; it is never chosen)"
+        );
+    }
     let Some((best_score, k)) = best else {
         return Err(CliError::numeric("no candidate tool"));
     };

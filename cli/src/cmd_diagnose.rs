@@ -106,6 +106,9 @@ pub struct Args {
     /// Cross-validation folds
     #[arg(long, value_name = "K", default_value_t = 5)]
     pub folds: usize,
+    /// Seed of the fold assignment (as in crossval; the default keeps earlier reports)
+    #[arg(long, value_name = "S", default_value_t = Config::default().fold_seed)]
+    pub seed: u64,
     /// Accept joint readings outside the robot's joint limits
     #[arg(long)]
     pub allow_out_of_limits: bool,
@@ -190,6 +193,7 @@ fn config(args: &Args) -> Result<Config, CliError> {
                 .fold(EffectSet::NONE, |a, &e| a.with(e))
         }),
         pairs: !args.no_pairs,
+        fold_seed: args.seed,
         ..Config::default()
     })
 }
@@ -227,6 +231,29 @@ fn why_no_repeat_scatter(groups: &[u32]) -> String {
     }
 }
 
+/// Which stated noise the data still need: the sentence and the flags to name.
+fn missing_sigma<const N: usize>(args: &Args, meas: &[Measurement<N>]) -> (String, String) {
+    let has_rot = meas.iter().any(|m| m.mask.has_orientation());
+    match (args.sigma_pos_mm, args.sigma_rot_deg, has_rot) {
+        (Some(_), None, true) => (
+            "--sigma-rot-deg is not given (the data measure orientation; --sigma-pos-mm covers positions only)".into(),
+            "--sigma-rot-deg".into(),
+        ),
+        (None, Some(_), _) => (
+            "--sigma-pos-mm is not given (--sigma-rot-deg covers orientations only)".into(),
+            "--sigma-pos-mm".into(),
+        ),
+        (None, None, true) => (
+            "neither --sigma-pos-mm nor --sigma-rot-deg is given".into(),
+            "--sigma-pos-mm and --sigma-rot-deg".into(),
+        ),
+        _ => (
+            "--sigma-pos-mm is not given".into(),
+            "--sigma-pos-mm".into(),
+        ),
+    }
+}
+
 /// Reads DATA, runs the diagnosis and writes every output; returns the readable report.
 pub fn execute<const N: usize>(
     robot: &Robot<N>,
@@ -255,10 +282,12 @@ pub fn execute<const N: usize>(
         kincal::Error::MissingInput {
             what: kincal::Quantity::NoiseFloor,
         } => CliError::usage(format!(
-            "{}: no noise floor: {}, and --sigma-pos-mm/--sigma-rot-deg are not given\n\
-             hint: state the instrument's noise (1σ per axis) with --sigma-pos-mm and --sigma-rot-deg, or repeat some poses",
+            "{}: no noise floor: {}, and {}\n\
+             hint: state the instrument's noise (1σ per axis) with {}, or repeat some poses",
             set.source,
-            why_no_repeat_scatter(&groups)
+            why_no_repeat_scatter(&groups),
+            missing_sigma(args, &meas).0,
+            missing_sigma(args, &meas).1
         )),
         kincal::Error::TooFewData { found, needed } => CliError::input(format!(
             "{}: {found} distinct pose_id groups, {needed} folds need at least {needed}",
@@ -1257,17 +1286,19 @@ pub fn readable<const N: usize>(
     // Which.
     let _ = writeln!(
         s,
-        "\nWHICH — every candidate fitted with the geometry, judged on held-out poses:"
+        "\nWHICH — every candidate fitted with the geometry, judged on held-out poses\n  \
+         (mm, deg: held-out RMS; z: improvement over geometric only; gap, rot. gap: share of\n  \
+         the gap to the noise floor closed, position and orientation):"
     );
     let mut t = Table::new(&[
         "candidate",
         "params",
-        "held-out mm",
-        "held-out °",
-        "z vs geometric",
-        "significant",
-        "gap closed",
-        "rot. closed",
+        "mm",
+        "deg",
+        "z",
+        "signif.",
+        "gap",
+        "rot. gap",
         "note",
     ]);
     t.row(vec![
@@ -1286,7 +1317,17 @@ pub fn readable<const N: usize>(
         (true, true) => a.heldout_chi2.total_cmp(&b.heldout_chi2),
         (a, b) => b.cmp(&a),
     });
+    // Long notes go under the table as numbered footnotes, keeping it within ~100 columns.
+    let mut footnotes: Vec<String> = Vec::new();
     for c in order {
+        let long_note = |text: String, footnotes: &mut Vec<String>| {
+            footnotes.push(format!(
+                "[{}] {}: {text}",
+                footnotes.len() + 1,
+                effects_text(c.effects)
+            ));
+            format!("see [{}]", footnotes.len())
+        };
         let note = if !c.evaluated {
             let partner = c
                 .dropped
@@ -1296,18 +1337,24 @@ pub fn readable<const N: usize>(
                 .and_then(|x| x.partner)
                 .map(|p| label::<N>(p.0))
                 .unwrap_or_default();
-            format!("confounded with the geometry ({partner})")
+            long_note(
+                format!("confounded with the geometry ({partner})"),
+                &mut footnotes,
+            )
         } else if c.effects == d.verdict.effects {
             "VERDICT".into()
         } else if d.verdict.confounded().contains(&c.effects) {
             "confounded with the verdict".into()
         } else if c.distinctness < 0.05 {
-            format!(
-                "weakly determined: {} has {:.3} of its column outside the others'",
-                c.least_distinct
-                    .map(|p| label::<N>(p.0))
-                    .unwrap_or_default(),
-                c.distinctness
+            long_note(
+                format!(
+                    "weakly determined: {} has {:.3} of its column outside the others'",
+                    c.least_distinct
+                        .map(|p| label::<N>(p.0))
+                        .unwrap_or_default(),
+                    c.distinctness
+                ),
+                &mut footnotes,
             )
         } else {
             String::new()
@@ -1345,6 +1392,9 @@ pub fn readable<const N: usize>(
         ]);
     }
     s.push_str(&t.render("  "));
+    for f in &footnotes {
+        let _ = writeln!(s, "  {f}");
+    }
 
     // Verdict and how far.
     let v = &d.verdict;

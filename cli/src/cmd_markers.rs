@@ -37,7 +37,7 @@ row; a marker name not in the design is an error.
 
 DESIGN (TOML):
     units = \"mm\"            # \"m\" (default) or \"mm\", for the positions below
-    sigma_mm = 0.2           # the system's noise, 1σ per axis (or --sigma-mm)
+    sigma_mm = 0.2           # the system's noise, 1σ per axis (or --sigma-pos-mm)
     [base]                   # optional: name = [x, y, z] in the robot base frame
     B1 = [300, 0, 0]
     [probe]                  # name = [x, y, z] in the tool frame (at least 3, not collinear)
@@ -89,8 +89,8 @@ pub struct Args {
     /// Measurement CSV to write
     #[arg(long, value_name = "DATA.csv")]
     pub out: PathBuf,
-    /// Marker noise, 1σ per axis [mm] (overrides the design's sigma_mm)
-    #[arg(long, value_name = "S", value_parser = crate::args::sigma_mm)]
+    /// Marker noise, 1σ per axis [mm] (overrides the design's sigma_mm; alias --sigma-mm)
+    #[arg(long = "sigma-pos-mm", alias = "sigma-mm", value_name = "S", value_parser = crate::args::sigma_mm)]
     pub sigma_mm: Option<f64>,
     /// Outlier threshold in units of σ on a marker's 3-D residual
     #[arg(long, value_name = "K", default_value = "4", value_parser = positive)]
@@ -435,7 +435,7 @@ fn markers<const N: usize>(robot: &Robot<N>, args: &Args) -> Result<(), CliError
         .or(design.sigma_m)
         .ok_or_else(|| {
             CliError::usage(format!(
-                "no marker noise stated: give --sigma-mm or sigma_mm in {}",
+                "no marker noise stated: give --sigma-pos-mm or sigma_mm in {}",
                 args.design.display()
             ))
         })?;

@@ -212,8 +212,9 @@ pub fn summary_table(evals: &[Evaluation], targets: Targets, has_rot: bool) -> S
     t.render("  ")
 }
 
-/// Per-pose table of one evaluation.
-pub fn pose_table(e: &Evaluation, ids: &[String], has_rot: bool) -> String {
+/// Per-pose table of one evaluation; `rot_measured[i]` false prints a dash for the
+/// orientation errors of row `i` (a position-only row has none, not a zero one).
+pub fn pose_table(e: &Evaluation, ids: &[String], has_rot: bool, rot_measured: &[bool]) -> String {
     let mut header = vec!["pose", "e_x [mm]", "e_y [mm]", "e_z [mm]", "|e_p| [mm]"];
     if has_rot {
         header.extend(["e_φx [deg]", "e_φy [deg]", "e_φz [deg]", "|e_φ| [deg]"]);
@@ -221,15 +222,53 @@ pub fn pose_table(e: &Evaluation, ids: &[String], has_rot: bool) -> String {
     let mut t = Table::new(&header);
     for (i, p) in e.errors.iter().enumerate() {
         let mut row = vec![ids.get(i).cloned().unwrap_or_else(|| (i + 1).to_string())];
-        row.extend(p.pos_m.iter().map(|v| format!("{:+.6}", v * 1e3)));
+        row.extend(p.pos_m.iter().map(|v| crate::report::fmt_signed6(v * 1e3)));
         row.push(format!("{:.6}", p.pos_norm_m * 1e3));
         if has_rot {
-            row.extend(p.rot_rad.iter().map(|v| format!("{:+.6}", v.to_degrees())));
-            row.push(format!("{:.6}", p.rot_norm_rad.to_degrees()));
+            if rot_measured.get(i).copied().unwrap_or(true) {
+                row.extend(
+                    p.rot_rad
+                        .iter()
+                        .map(|v| crate::report::fmt_signed6(v.to_degrees())),
+                );
+                row.push(format!("{:.6}", p.rot_norm_rad.to_degrees()));
+            } else {
+                row.extend(["-"; 4].map(String::from));
+            }
         }
         t.row(row);
     }
     t.render("  ")
+}
+
+/// "10 poses (46 rows)" when rows share pose ids, else "46 poses".
+pub fn poses_text(set: &crate::measurements::MeasurementSet) -> String {
+    let poses = set.pose_count();
+    let rows = set.rows.len();
+    if poses == rows {
+        format!("{rows} poses")
+    } else {
+        format!("{poses} poses ({rows} rows)")
+    }
+}
+
+/// The algorithm and the effects the model carries: "OLS + joint_compliance".
+fn model_label(algorithm: String, effects: kincal::EffectSet) -> String {
+    effects
+        .iter()
+        .fold(algorithm, |acc, e| format!("{acc} + {e}"))
+}
+
+/// True if the model was calibrated on exactly these bytes (same SHA-256).
+fn calibrated_on(file: &crate::model_file::ModelFile, sha256: &str) -> bool {
+    file.calibration
+        .as_ref()
+        .is_some_and(|c| c.data.sha256.eq_ignore_ascii_case(sha256))
+}
+
+/// The ARIA biopsy robot the paper's targets (1 mm, 0.66°) and eq. (3) were set for.
+fn is_aria(file: &crate::model_file::ModelFile) -> bool {
+    file.robot.name.eq_ignore_ascii_case("aria")
 }
 
 #[derive(Serialize)]
@@ -312,10 +351,13 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         .file
         .effects()
         .map_err(|m| CliError::input(format!("{}: {m}", args.model)))?;
-    let name = model
-        .file
-        .algorithm()
-        .map_or("NOM".to_string(), |a| a.name().to_uppercase());
+    let name = model_label(
+        model
+            .file
+            .algorithm()
+            .map_or("NOM".to_string(), |a| a.name().to_uppercase()),
+        effects,
+    );
     kincal::with_any_robot!(&model.robot, r => validate(r, &name, &model.file, effects, args))
 }
 
@@ -350,9 +392,11 @@ fn validate<const N: usize>(
     let variants: Vec<(String, Robot<N>)> = file
         .variants::<N>()
         .map_err(|m| CliError::input(format!("{}: {m}", args.model)))?;
+    // The variant that is this model carries its effects in its name too.
+    let bare = name.split(" + ").next().unwrap_or(name);
     let evals = variants
         .iter()
-        .map(|(n, r)| evaluate(n, r, &meas))
+        .map(|(n, r)| evaluate(if n == bare { name } else { n }, r, &meas))
         .collect::<Result<Vec<_>, _>>()
         .map_err(fail)?;
     for e in std::iter::once(&main).chain(&evals) {
@@ -442,20 +486,34 @@ fn validate<const N: usize>(
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "Validation of {} ({name} model of '{}') on {}: {} poses{}",
+        "Validation of {} ({name} model of '{}') on {}: {}{}",
         args.model,
         file.robot.name,
         set.source,
-        meas.len(),
+        poses_text(&set),
         if has_rot { "" } else { " (position only)" }
     );
-    if !args.quiet {
-        let _ = writeln!(out, "\nPer-pose errors ({name}, measured − model):");
-        out.push_str(&pose_table(&main, &ids, has_rot));
+    if calibrated_on(file, &set.sha256) {
+        let w = "in-sample: DATA is the file this model was calibrated on (same SHA-256); these errors flatter the model, validate on poses the calibration did not see";
+        eprintln!("kincal: warning: {w}");
+        let _ = writeln!(out, "Warning: {w}");
     }
+    if !args.quiet {
+        let rot_measured: Vec<bool> = meas.iter().map(|m| m.mask.has_orientation()).collect();
+        let _ = writeln!(out, "\nPer-pose errors ({name}, measured − model):");
+        out.push_str(&pose_table(&main, &ids, has_rot, &rot_measured));
+    }
+    let default_targets = args.target_pos_mm == 1.0 && args.target_rot_deg == 0.66;
+    let whose = if is_aria(file) {
+        "the paper's ARIA targets"
+    } else if default_targets {
+        "the paper's ARIA biopsy targets; set --target-pos-mm/--target-rot-deg for this robot"
+    } else {
+        "targets"
+    };
     let _ = writeln!(
         out,
-        "\nSummary (targets per pose: e_p < {} mm, e_φ < {}°):",
+        "\nSummary (per pose: e_p < {} mm, e_φ < {}°; {whose}):",
         args.target_pos_mm, args.target_rot_deg
     );
     out.push_str(&summary_table(
@@ -467,7 +525,9 @@ fn validate<const N: usize>(
         let _ = writeln!(out, "\nAll models in {}:", args.model);
         out.push_str(&summary_table(&evals, targets, has_rot));
     }
-    match eq3 {
+    // Eq. (3) is the ARIA biopsy's budget: printed for ARIA or when asked for (--biopsy-d-mm).
+    let show_eq3 = is_aria(file) || args.biopsy_d_mm.is_some();
+    match eq3.filter(|_| show_eq3) {
         Some(a) => {
             let _ = writeln!(
                 out,
@@ -491,7 +551,7 @@ fn validate<const N: usize>(
                 }
             );
         }
-        None => {
+        None if show_eq3 => {
             let _ = writeln!(
                 out,
                 "\nEq. (3): d = {:.4} mm is not below r_t = {} mm: no orientation error is allowed",
@@ -499,6 +559,7 @@ fn validate<const N: usize>(
                 args.tumour_radius_mm
             );
         }
+        None => {}
     }
     if let Some(p) = &args.plot {
         let _ = writeln!(out, "Error figure written to {}", p.display());

@@ -142,7 +142,8 @@ pub fn sample_joint_pool<const N: usize>(
             let mut out = vec![[0.0; N]; CHUNK];
             let w = sample_joint_space(&ctx.robot, c, &mut rng, &mut out, CHUNK * 5000)?;
             out.truncate(w);
-            pb.inc(w as u64);
+            // Only configurations the pool keeps count (the last chunk is cut to `k`).
+            pb.inc(w.min(k.saturating_sub(i * CHUNK)) as u64);
             Ok(out)
         })
         .collect();
@@ -181,7 +182,9 @@ pub fn sample_region_pool<const N: usize>(
                     }
                 }
                 kept.push(q);
-                pb.inc(1);
+                if i * CHUNK + kept.len() <= k {
+                    pb.inc(1);
+                }
             }
             Ok(kept)
         })
@@ -204,6 +207,7 @@ fn collect_pool<const N: usize>(
 /// Runs the starts of the selection in parallel and keeps the best (the lowest start on
 /// ties, as [`kincal::selection::select_poses`]). `reference` holds the blocks of the
 /// prediction-variance objective.
+#[allow(clippy::too_many_arguments)] // the bar is the one extra, optional-in-spirit argument
 pub fn select_best<const N: usize>(
     ctx: &Context<N>,
     pool: &OwnedPool<N>,
@@ -212,6 +216,7 @@ pub fn select_best<const N: usize>(
     c: &Constraints,
     opts: &SelectOptions,
     reference: Option<&[PoseBlock<P>]>,
+    pb: &ProgressBar,
 ) -> Result<(Vec<[f64; N]>, Selection), CliError> {
     let n = obs.params.len();
     type Start<const N: usize> = Result<(Vec<[f64; N]>, Selection), kincal::Error>;
@@ -236,6 +241,7 @@ pub fn select_best<const N: usize>(
                 &mut s,
                 &mut out,
             )?;
+            pb.inc(1);
             Ok((out, sel))
         })
         .collect();
@@ -294,7 +300,12 @@ pub fn standard_design<const N: usize>(
     let mut opts = SelectOptions::new(Objective::Index(s.index), ctx.seed);
     opts.starts = s.starts;
     opts.refine_trials = s.refine_trials;
-    let (q, sel) = select_best(ctx, &pool, s.m, &obs, &c, &opts, None)?;
+    crate::progress::phase(
+        pb,
+        opts.starts.max(1) as u64,
+        format!("exchange ({} starts)", opts.starts.max(1)),
+    );
+    let (q, sel) = select_best(ctx, &pool, s.m, &obs, &c, &opts, None, pb)?;
     let note = format!(
         "standard: {} poses maximising {} over {} joint-space candidates (whole workspace), instrument-measured",
         s.m,
@@ -497,7 +508,12 @@ pub fn region_design<const N: usize>(
     let mut opts = SelectOptions::new(Objective::Index(s.index), ctx.seed);
     opts.starts = s.starts;
     opts.refine_trials = 0;
-    let (q, sel) = select_best(ctx, &pool, s.m, &obs, &c, &opts, None)?;
+    crate::progress::phase(
+        pb,
+        opts.starts.max(1) as u64,
+        format!("exchange ({} starts)", opts.starts.max(1)),
+    );
+    let (q, sel) = select_best(ctx, &pool, s.m, &obs, &c, &opts, None, pb)?;
     let note = format!(
         "region: {} poses of the working region maximising {} over {} robust candidates; used as a tool",
         s.m,

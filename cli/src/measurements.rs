@@ -178,6 +178,19 @@ impl MeasurementSet {
     pub fn has_pose_id(&self) -> bool {
         self.rows.first().is_some_and(|r| r.pose_id.is_some())
     }
+
+    /// Robot poses (configurations) in the file: rows sharing a `pose_id` (within a
+    /// session) are one pose seen by several markers or points; a row without one is a pose.
+    pub fn pose_count(&self) -> usize {
+        let mut seen = std::collections::HashSet::new();
+        self.rows
+            .iter()
+            .filter(|r| match &r.pose_id {
+                Some(id) => seen.insert((r.session.as_deref(), id.as_str())),
+                None => true,
+            })
+            .count()
+    }
 }
 
 /// A rejected input: file, line, column and what was expected.

@@ -85,16 +85,33 @@ fn id<const N: usize>(i: usize) -> Option<ParamId> {
 
 /// Fixed-point with 6 decimals for ordinary magnitudes, exponent form otherwise.
 pub fn fmt_value(v: f64) -> String {
-    if v == 0.0 || (1e-3..1e6).contains(&v.abs()) {
+    if v.abs() < NOMINAL_ZERO {
+        // A nominal zero plus rounding noise (-0.0, -7e-15) is a zero, not a number to read.
+        "0".to_string()
+    } else if (1e-3..1e6).contains(&v.abs()) {
         format!("{v:.6}")
     } else {
         format!("{v:.4e}")
     }
 }
 
+/// Below this magnitude (in display units: mm, degrees, 1) a printed value is a zero:
+/// far under any instrument's resolution, it is round-off of a nominal zero.
+pub const NOMINAL_ZERO: f64 = 1e-9;
+
+/// A signed value with 6 decimals whose rounding to zero prints as "0.000000", never
+/// "-0.000000".
+pub fn fmt_signed6(v: f64) -> String {
+    if v.abs() < 5e-7 {
+        "0.000000".to_string()
+    } else {
+        format!("{v:+.6}")
+    }
+}
+
 /// A signed change: fixed-point for ordinary magnitudes, exponent form otherwise.
 pub fn fmt_change(v: f64) -> String {
-    if v == 0.0 {
+    if v.abs() < NOMINAL_ZERO {
         "0".to_string()
     } else if (1e-3..1e6).contains(&v.abs()) {
         format!("{v:+.6}")
@@ -342,6 +359,40 @@ pub fn residuals<const N: usize>(cal: &Calibration<N>) -> String {
     t.render("  ")
 }
 
+/// Strongly correlated estimates of every run, printed once: runs whose list names the
+/// same pairs as the first run's are named in its heading instead of repeating the list.
+pub fn correlations_all<const N: usize>(cal: &Calibration<N>) -> String {
+    let pairs = |k: usize| -> Vec<(usize, usize)> {
+        cal.runs.get(k).map_or(Vec::new(), |r| {
+            r.ident
+                .correlations()
+                .iter()
+                .map(|c| (c.a.0, c.b.0))
+                .collect()
+        })
+    };
+    let first = pairs(0);
+    let (same, differ): (Vec<usize>, Vec<usize>) = (1..cal.runs.len()).partition(|&k| {
+        pairs(k) == first && cal.runs[k].ident.n_correlated == cal.runs[0].ident.n_correlated
+    });
+    let mut out = correlations::<N>(cal, 0);
+    if !same.is_empty() && cal.runs[0].ident.n_correlated > 0 {
+        let names: Vec<String> = same
+            .iter()
+            .map(|&k| cal.runs[k].ident.algorithm.name().to_uppercase())
+            .collect();
+        let _ = writeln!(
+            out,
+            "    (the same pairs for {}; ρ as above within the runs' differences)",
+            names.join(", ")
+        );
+    }
+    for k in differ {
+        out.push_str(&correlations::<N>(cal, k));
+    }
+    out
+}
+
 /// Strongly correlated estimates of run `k`.
 pub fn correlations<const N: usize>(cal: &Calibration<N>, k: usize) -> String {
     let r = &cal.runs[k].ident;
@@ -376,12 +427,63 @@ pub fn correlations<const N: usize>(cal: &Calibration<N>, k: usize) -> String {
     out
 }
 
+/// A run with at least this fraction of its identified parameters on an OPT1 interval
+/// bound is judged by its bounds, not by the data: its pairwise disagreements are not listed.
+pub const BOUND_DOMINATED_FRACTION: f64 = 0.25;
+
+/// The consensus check of `cal`'s runs, saying once when a run ended on its bounds (its
+/// intervals exclude the data's optimum) and comparing only the other runs pairwise.
+pub fn consensus_of<const N: usize>(cal: &Calibration<N>, c: &Consensus) -> String {
+    let identified = cal.analysis.identifiable.len().max(1);
+    let bounded: Vec<_> = cal
+        .runs
+        .iter()
+        .filter(|r| r.ident.at_bound.len() as f64 >= BOUND_DOMINATED_FRACTION * identified as f64)
+        .map(|r| (r.ident.algorithm, r.ident.at_bound.len()))
+        .collect();
+    if bounded.is_empty() {
+        return consensus::<N>(c);
+    }
+    let mut out = String::new();
+    for (a, nb) in &bounded {
+        let _ = writeln!(
+            out,
+            "{} ended on its bounds ({nb} of {} identified parameters at ±{} mm / ±{}°):\n  \
+             its intervals exclude the data's optimum; widen --bounds-mm/--bounds-deg to compare\n  \
+             it (its {} pairwise disagreement(s) are not listed).",
+            a.name().to_uppercase(),
+            cal.analysis.identifiable.len(),
+            cal.settings.bounds_length_m * 1e3,
+            cal.settings.bounds_angle_rad.to_degrees(),
+            c.disagreeing
+                .iter()
+                .filter(|d| d.a == *a || d.b == *a)
+                .count()
+        );
+    }
+    let involved = |x: &kincal::identify::Algorithm| bounded.iter().any(|(a, _)| a == x);
+    let others = Consensus {
+        largest: c.largest.filter(|d| !involved(&d.a) && !involved(&d.b)),
+        disagreeing: c
+            .disagreeing
+            .iter()
+            .filter(|d| !involved(&d.a) && !involved(&d.b))
+            .copied()
+            .collect(),
+        ..c.clone()
+    };
+    if cal.runs.len() - bounded.len() >= 2 {
+        out.push_str(&consensus::<N>(&others));
+    }
+    out
+}
+
 /// The consensus check.
 pub fn consensus<const N: usize>(c: &Consensus) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "Consensus: two algorithms disagree on a parameter when |difference| > {} combined std errors + {:e} (SI units;\n  std errors rescaled to the smallest residual variance of the runs)",
+        "Consensus: two algorithms disagree on a parameter when |difference| > {} combined std errors\n  + {:e} (SI units; std errors rescaled to the smallest residual variance of the runs)",
         c.k_sigma, c.floor_si
     );
     if let Some(l) = &c.largest {

@@ -79,6 +79,11 @@ step "C++ consumer against the staticlib ${sanitize[*]:+(sanitizers on)}"
 "$work/consumer_static"
 
 step "C++ consumer against the cdylib ${sanitize[*]:+(sanitizers on)}"
+# The cdylib carries SONAME libkincal.so.0 (ffi/build.rs); the loader looks for that name.
+dynamic=$(readelf -d "$target/release/libkincal.so")
+grep -q 'SONAME.*\[libkincal\.so\.0\]' <<<"$dynamic" ||
+    fail "libkincal.so has no SONAME libkincal.so.0"
+ln -sf libkincal.so "$target/release/libkincal.so.0"
 "$CXX" "${cxxflags[@]}" "${sanitize[@]}" "$here/consumer.cpp" -L"$target/release" -lkincal \
     -Wl,-rpath,"$target/release" -o "$work/consumer_shared"
 # (ldd output captured first: `ldd | grep -q` can fail under pipefail when grep exits early)
