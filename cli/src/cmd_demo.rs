@@ -224,6 +224,7 @@ pub fn sim_to_real_diagnosis(ctx: &DemoContext<'_>) -> Result<String, CliError> 
         no_pairs: false,
         folds: 5,
         allow_out_of_limits: false,
+        constraints: None,
     };
     let nominal = aria::nominal();
     let outcome = crate::cmd_diagnose::execute::<N>(&nominal, "aria", &args)?;
