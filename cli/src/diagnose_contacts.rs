@@ -103,12 +103,15 @@ fn has_mass_model<const N: usize>(robot: &Robot<N>) -> bool {
     some_mass && m.gravity.iter().any(|&g| g != 0.0)
 }
 
+/// Effects that are not candidates, with the reason.
+type NotTestable = Vec<(Effect, &'static str)>;
+
 /// The candidates and, for every effect that is not one, why.
 fn candidates<const N: usize>(
     robot: &Robot<N>,
     set: &MeasurementSet,
     args: &Args,
-) -> Result<(Vec<EffectSet>, Vec<(Effect, &'static str)>), CliError> {
+) -> Result<(Vec<EffectSet>, NotTestable), CliError> {
     let mut not_testable = vec![
         (
             Effect::BaseFrame,

@@ -48,7 +48,7 @@ pub fn signed_rank_z(d: &[f64]) -> f64 {
 /// reach it). (0, 0) without dof or with σ ≤ 0.
 #[must_use]
 pub fn contact_gap_z(sum_sq_m2: f64, contacts: usize, dof: usize, sigma_m: f64) -> (f64, f64) {
-    if dof == 0 || contacts == 0 || !(sigma_m > 0.0) {
+    if dof == 0 || contacts == 0 || sigma_m.is_nan() || sigma_m <= 0.0 {
         return (0.0, 0.0);
     }
     let k = dof as f64;
