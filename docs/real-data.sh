@@ -124,6 +124,21 @@ D=$OUT/mukca/panda_2_clean
 echo "== mukca panda_2_clean, crossval --group-by session --folds 8:"
 grep -E "^  (nominal|calibrated) " "$D/crossval.txt" | sed 's/^/   /'
 
+# A real diagnosis (contact data): every candidate the data can express, held out by
+# location; without a floor, then with σ = 0.17 mm (the fixture's upper bound, from the
+# Panda's in-sample scatter).
+echo "== mukca diagnosis (leave one location out):"
+for ID in panda_2_clean panda_3 kuka_14 dinova_1 dinova_2; do
+    D=$OUT/mukca/$ID
+    "$K" diagnose "$D/data.csv" --robot "$D/robot.toml" --constraints "$D/constraints.toml" \
+        --allow-out-of-limits --json "$D/diagnose.json" --out "$D/diagnose-unused.json" \
+        > /dev/null 2>&1
+    "$K" diagnose "$D/data.csv" --robot "$D/robot.toml" --constraints "$D/constraints.toml" \
+        --allow-out-of-limits --sigma-pos-mm 0.17 --json "$D/diagnose-floor.json" \
+        --out "$D/diagnose-unused.json" > /dev/null 2>&1
+    echo "   $ID: $(grep -h '^VERDICT' "$D/diagnose.txt" "$D/diagnose-floor.txt" | tr '\n' ' ')"
+done
+
 # MATE: the 30 plane contacts (one coordinate each), 5-fold held-out rows.
 D=$OUT/figaroh-mate-planes
 mkdir -p "$D"

@@ -225,6 +225,7 @@ pub fn sim_to_real_diagnosis(ctx: &DemoContext<'_>) -> Result<String, CliError> 
         folds: 5,
         seed: kincal::diagnosis::Config::default().fold_seed,
         allow_out_of_limits: false,
+        constraints: None,
     };
     let nominal = aria::nominal();
     let outcome = crate::cmd_diagnose::execute::<N>(&nominal, "aria", &args)?;

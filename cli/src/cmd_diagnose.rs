@@ -112,6 +112,10 @@ pub struct Args {
     /// Accept joint readings outside the robot's joint limits
     #[arg(long)]
     pub allow_out_of_limits: bool,
+    /// Known distances, targets and planes (TOML, docs/constraints.md) of data with
+    /// target/plane rows
+    #[arg(long, value_name = "FILE")]
+    pub constraints: Option<PathBuf>,
 }
 
 /// Capacity of the diagnosis workspace: the union of every model's columns of the largest
@@ -168,12 +172,54 @@ pub struct Outcome<const N: usize> {
 pub fn run(args: &Args) -> Result<(), CliError> {
     let spec = crate::robot_arg::resolve_robot(&args.robot, &args.chain)?;
     kincal::with_any_robot!(&spec.robot, r => {
+        if let Some(text) = contact_diagnosis(r, args)? {
+            report::emit(&text);
+            return Ok(());
+        }
         let out = execute(r, &spec.name, args)?;
         // The run time goes to the screen only: the report files are byte-for-byte
         // reproducible.
         report::emit(&format!("{}Diagnosis took {:.2} s.\n", out.text, out.seconds));
         Ok(())
     })
+}
+
+/// The diagnosis of data with target/plane rows ([`crate::diagnose_contacts`]); `None`
+/// for instrument data. Writes REPORT.json and the readable report; no model (contact data
+/// are calibrated by `kincal calibrate`).
+fn contact_diagnosis<const N: usize>(
+    robot: &Robot<N>,
+    args: &Args,
+) -> Result<Option<String>, CliError> {
+    let set = data::read(
+        &args.data,
+        robot,
+        EffectSet::NONE,
+        DataOptions {
+            require_pose: true,
+            allow_out_of_limits: args.allow_out_of_limits,
+        },
+    )?;
+    if args.constraints.is_none() && !crate::constraints::has_contacts(&set) {
+        return Ok(None);
+    }
+    let (mut text, json) = crate::diagnose_contacts::run(robot, &set, args)?;
+    let _ = writeln!(
+        text,
+        "No model written to {}: calibrate contact data with `kincal calibrate DATA --robot R \
+         --constraints C [--effects E]`.",
+        args.out.display()
+    );
+    let outputs = Outputs::new(&args.json, args.report.as_deref(), &args.out);
+    let mut inputs: Vec<&Path> = vec![&args.data];
+    if let Some(c) = &args.constraints {
+        inputs.push(c);
+    }
+    let body = serde_json::to_string_pretty(&json)
+        .map_err(|e| CliError::io(format!("{}: {e}", outputs.json.display())))?;
+    crate::files::write_atomic(&outputs.json, &inputs, |w| w.write_all(body.as_bytes()))?;
+    crate::files::write_atomic(&outputs.report, &inputs, |w| w.write_all(text.as_bytes()))?;
+    Ok(Some(text))
 }
 
 fn config(args: &Args) -> Result<Config, CliError> {

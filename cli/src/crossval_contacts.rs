@@ -92,7 +92,10 @@ fn score<const N: usize>(robot: &Robot<N>, cd: &ContactData<N>) -> Result<Score,
 }
 
 /// Group label of every row, and the number of groups.
-fn groups_of(set: &MeasurementSet, by: GroupBy) -> Result<(Vec<usize>, Vec<String>), CliError> {
+pub(crate) fn groups_of(
+    set: &MeasurementSet,
+    by: GroupBy,
+) -> Result<(Vec<usize>, Vec<String>), CliError> {
     let mut labels: Vec<String> = Vec::new();
     let mut of = Vec::with_capacity(set.rows.len());
     for (i, r) in set.rows.iter().enumerate() {
@@ -127,7 +130,7 @@ fn groups_of(set: &MeasurementSet, by: GroupBy) -> Result<(Vec<usize>, Vec<Strin
 
 /// Fits the requested parameters on the rows of `cd` with a positive weight (OLS, then
 /// OPT2 if OLS does not converge; identifiable subset).
-fn fit<const N: usize>(
+pub(crate) fn fit<const N: usize>(
     start: &Robot<N>,
     cd: &ContactData<N>,
     requested: ParamSet,

@@ -28,6 +28,7 @@ pub mod datasets;
 pub mod datasets_contact;
 pub mod design_args;
 pub mod designs;
+pub mod diagnose_contacts;
 pub mod diagnosis_plot;
 pub mod error;
 pub mod file_plan;

@@ -825,3 +825,95 @@ fn mukca_held_out_by_location_beats_the_papers_panda_figure() {
         }
     }
 }
+
+/// `kincal diagnose` on MUKCa contact data (docs/real-data.md, "A real diagnosis"), held out
+/// by location, floor σ = 0.17 mm: the figures of the table to 2 %, and the verdicts.
+#[test]
+fn mukca_diagnosis_panda_and_kinova() {
+    let Some(root) = realdata() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let close = |got: f64, want: f64, what: &str| {
+        assert!(
+            (got - want).abs() <= 0.02 * want.abs().max(0.1),
+            "{what}: {got} vs {want}"
+        );
+    };
+    // (id, geometric mean |e|, RMS, |dist err| [mm], gap z, status,
+    //  (candidate, mean |e| [mm], paired z))
+    for (id, mean, rms, dist, gap, status, cand) in [
+        (
+            "panda_2_clean",
+            0.2810,
+            0.3292,
+            0.1866,
+            7.2,
+            "unexplained",
+            ("joint_cyclic", 0.2737, 1.71),
+        ),
+        (
+            "dinova_1",
+            3.1754,
+            3.6864,
+            4.9538,
+            187.9,
+            "unexplained",
+            ("joint_compliance", 3.2270, -0.98),
+        ),
+    ] {
+        import_mukca(&root, id, dir.path());
+        let json = format!("{id}-diag.json");
+        let o = kincal(
+            &[
+                "diagnose",
+                &format!("{id}.csv"),
+                "--robot",
+                &format!("{id}.toml"),
+                "--constraints",
+                &format!("{id}-constraints.toml"),
+                "--allow-out-of-limits",
+                "--sigma-pos-mm",
+                "0.17",
+                "--json",
+                &json,
+                "--out",
+                "unused.json",
+            ],
+            dir.path(),
+        );
+        assert!(o.status.success(), "{id}: {}", text(&o));
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.path().join(&json)).unwrap())
+                .unwrap();
+        let geo = &v["candidates"][0];
+        assert_eq!(geo["effects"].as_array().unwrap().len(), 0, "{id}");
+        close(geo["heldout_mean_mm"].as_f64().unwrap(), mean, id);
+        close(geo["heldout_rms_mm"].as_f64().unwrap(), rms, id);
+        close(geo["distance_error_mm"].as_f64().unwrap(), dist, id);
+        close(v["gap_z"].as_f64().unwrap(), gap, id);
+        assert_eq!(v["verdict"]["status"], status, "{id}");
+        let c = v["candidates"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["effects"] == serde_json::json!([cand.0]))
+            .unwrap_or_else(|| panic!("{id}: no {}", cand.0));
+        close(c["heldout_mean_mm"].as_f64().unwrap(), cand.1, id);
+        close(c["improvement_z"].as_f64().unwrap(), cand.2, id);
+        // What the data cannot express is said, not guessed.
+        let not: Vec<&str> = v["not_candidates"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|n| n["effect"].as_str().unwrap())
+            .collect();
+        assert!(
+            not.contains(&"backlash") && not.contains(&"base_frame"),
+            "{id}"
+        );
+        assert_eq!(
+            not.contains(&"joint_compliance"),
+            id.starts_with("panda"),
+            "{id}"
+        );
+    }
+}

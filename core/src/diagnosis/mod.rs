@@ -109,6 +109,7 @@
 //! every effect, so `P = 80` suffices there; `P = 144` for 9 joints), which includes the
 //! fixed ~116 KiB of the smooth check ([`SmoothWorkspace`]).
 
+pub mod contacts;
 mod cv;
 mod folds;
 mod locate;

@@ -1,0 +1,91 @@
+//! Statistics of the contact-data diagnosis (instrument-free data: targets, planes,
+//! sessions). The CLI cross-validates the geometric model and every candidate by whole
+//! sessions and scores each held-out target about its own held-out mean; these functions
+//! turn those per-target scores into the paired test and the gap test.
+
+use libm::sqrt;
+
+/// Wilcoxon signed-rank z of paired differences `d` (positive: the second model is
+/// better), in its normal approximation: zero differences dropped, mid-ranks and the tie
+/// correction for equal |d| — the same statistic as the instrument diagnosis' paired test.
+/// O(n²) without memory (tens to hundreds of targets). 0 when no difference is non-zero.
+#[must_use]
+pub fn signed_rank_z(d: &[f64]) -> f64 {
+    let nonzero = || d.iter().copied().filter(|x| *x != 0.0 && x.is_finite());
+    let (mut w_plus, mut ties, mut n) = (0.0, 0.0, 0usize);
+    for x in nonzero() {
+        n += 1;
+        let (mut below, mut equal) = (0usize, 0usize);
+        for y in nonzero() {
+            if y.abs() < x.abs() {
+                below += 1;
+            } else if y.abs() == x.abs() {
+                equal += 1;
+            }
+        }
+        if x > 0.0 {
+            w_plus += below as f64 + 0.5 * (equal as f64 + 1.0);
+        }
+        let t = equal as f64;
+        ties += (t * t - 1.0) / 48.0;
+    }
+    let nf = n as f64;
+    let var = nf * (nf + 1.0) * (2.0 * nf + 1.0) / 24.0 - ties;
+    if n == 0 || var <= 0.0 {
+        return 0.0;
+    }
+    (w_plus - nf * (nf + 1.0) / 4.0) / sqrt(var)
+}
+
+/// Gap test of held-out contacts against a stated noise floor σ (1σ per axis, metres).
+///
+/// A held-out target with `n` contacts scored about the mean of those same contacts has,
+/// at the floor, `E[Σ‖e‖²] = 3σ²(n − 1)` (3 components, one mean estimated): `dof` =
+/// `3·Σ(n_t − 1)` over targets. `sum_sq_m2` is `Σ‖e‖²` over all scored contacts.
+/// Returns (z of `Σ‖e‖²/σ²` against χ²(dof) by Wilson–Hilferty, the floor's RMS per
+/// contact `sqrt(3σ²·Σ(n_t − 1)/Σn_t)` \[m\]). The parameter-estimation error of the fit
+/// is not in the floor (it makes the test slightly liberal: a held-out fit cannot quite
+/// reach it). (0, 0) without dof or with σ ≤ 0.
+#[must_use]
+pub fn contact_gap_z(sum_sq_m2: f64, contacts: usize, dof: usize, sigma_m: f64) -> (f64, f64) {
+    if dof == 0 || contacts == 0 || sigma_m.is_nan() || sigma_m <= 0.0 {
+        return (0.0, 0.0);
+    }
+    let k = dof as f64;
+    let v = 2.0 / (9.0 * k);
+    let q = sum_sq_m2 / (sigma_m * sigma_m);
+    let z = (libm::cbrt(q.max(0.0) / k) - (1.0 - v)) / sqrt(v);
+    (z, sqrt(sigma_m * sigma_m * k / contacts as f64))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn signed_rank_z_matches_hand_computation() {
+        // n = 5, all positive: W+ = 15, mean 7.5, var 13.75.
+        let z = signed_rank_z(&[1.0, 2.0, 3.0, 4.0, 5.0]);
+        assert!((z - 7.5 / sqrt(13.75)).abs() < 1e-12);
+        // Zero dropped; |d| = 1, 1, 2 (mid-ranks 1.5, 1.5, 3); W+ = 4.5, mean 3,
+        // var 3.5 − (2³ − 2)/48 = 3.375.
+        let z = signed_rank_z(&[1.0, -1.0, 2.0, 0.0]);
+        assert!((z - 1.5 / sqrt(3.375)).abs() < 1e-12);
+        // Antisymmetric.
+        assert!((signed_rank_z(&[-1.0, 1.0, -2.0]) + z).abs() < 1e-12);
+        assert_eq!(signed_rank_z(&[0.0, 0.0]), 0.0);
+    }
+
+    #[test]
+    fn gap_z_is_near_zero_at_the_floor_and_large_above_it() {
+        // At the floor Σ‖e‖² = 3σ²·Σ(n−1): z ≈ Wilson–Hilferty's small offset.
+        let sigma = 1e-4;
+        let (z, floor) = contact_gap_z(3.0 * sigma * sigma * 90.0, 100, 270, sigma);
+        assert!(z.abs() < 0.1, "{z}");
+        assert!((floor - sqrt(sigma * sigma * 270.0 / 100.0)).abs() < 1e-15);
+        // Twice the floor in RMS (4× in sum of squares) on 270 dof: far beyond 3.
+        let (z, _) = contact_gap_z(4.0 * 3.0 * sigma * sigma * 90.0, 100, 270, sigma);
+        assert!(z > 10.0, "{z}");
+        assert_eq!(contact_gap_z(1.0, 10, 0, sigma), (0.0, 0.0));
+    }
+}
