@@ -296,13 +296,13 @@ pub fn run<const N: usize>(
 
 /// Paired z of model `b` against model `a` over groups (positive: `b` better).
 fn paired(a: &Model, b: &Model) -> f64 {
-    let d: Vec<f64> = a
+    let mut d: Vec<f64> = a
         .per_group
         .iter()
         .zip(&b.per_group)
         .map(|(x, y)| x - y)
         .collect();
-    signed_rank_z(&d)
+    signed_rank_z(&mut d)
 }
 
 /// Decides and formats.

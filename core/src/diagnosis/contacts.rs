@@ -6,35 +6,22 @@
 use libm::sqrt;
 
 /// Wilcoxon signed-rank z of paired differences `d` (positive: the second model is
-/// better), in its normal approximation: zero differences dropped, mid-ranks and the tie
-/// correction for equal |d| — the same statistic as the instrument diagnosis' paired test.
-/// O(n²) without memory (tens to hundreds of targets). 0 when no difference is non-zero.
+/// better), in its normal approximation: zero and non-finite differences dropped, mid-ranks
+/// and the tie correction for equal |d| — the instrument diagnosis' paired statistic (one
+/// routine, `rank.rs`). Reorders `d` in place (no memory); O(n log n). 0 when no difference
+/// is non-zero.
 #[must_use]
-pub fn signed_rank_z(d: &[f64]) -> f64 {
-    let nonzero = || d.iter().copied().filter(|x| *x != 0.0 && x.is_finite());
-    let (mut w_plus, mut ties, mut n) = (0.0, 0.0, 0usize);
-    for x in nonzero() {
-        n += 1;
-        let (mut below, mut equal) = (0usize, 0usize);
-        for y in nonzero() {
-            if y.abs() < x.abs() {
-                below += 1;
-            } else if y.abs() == x.abs() {
-                equal += 1;
-            }
+pub fn signed_rank_z(d: &mut [f64]) -> f64 {
+    // Move the usable differences to the front, in order.
+    let mut n = 0;
+    for i in 0..d.len() {
+        let x = d.get(i).copied().unwrap_or(0.0);
+        if x != 0.0 && x.is_finite() {
+            d.swap(n, i);
+            n += 1;
         }
-        if x > 0.0 {
-            w_plus += below as f64 + 0.5 * (equal as f64 + 1.0);
-        }
-        let t = equal as f64;
-        ties += (t * t - 1.0) / 48.0;
     }
-    let nf = n as f64;
-    let var = nf * (nf + 1.0) * (2.0 * nf + 1.0) / 24.0 - ties;
-    if n == 0 || var <= 0.0 {
-        return 0.0;
-    }
-    (w_plus - nf * (nf + 1.0) / 4.0) / sqrt(var)
+    d.get_mut(..n).map_or(0.0, super::rank::signed_rank_z)
 }
 
 /// Gap test of held-out contacts against a stated noise floor σ (1σ per axis, metres).
@@ -65,15 +52,15 @@ mod tests {
     #[test]
     fn signed_rank_z_matches_hand_computation() {
         // n = 5, all positive: W+ = 15, mean 7.5, var 13.75.
-        let z = signed_rank_z(&[1.0, 2.0, 3.0, 4.0, 5.0]);
+        let z = signed_rank_z(&mut [1.0, 2.0, 3.0, 4.0, 5.0]);
         assert!((z - 7.5 / sqrt(13.75)).abs() < 1e-12);
         // Zero dropped; |d| = 1, 1, 2 (mid-ranks 1.5, 1.5, 3); W+ = 4.5, mean 3,
         // var 3.5 − (2³ − 2)/48 = 3.375.
-        let z = signed_rank_z(&[1.0, -1.0, 2.0, 0.0]);
+        let z = signed_rank_z(&mut [1.0, -1.0, 2.0, 0.0]);
         assert!((z - 1.5 / sqrt(3.375)).abs() < 1e-12);
         // Antisymmetric.
-        assert!((signed_rank_z(&[-1.0, 1.0, -2.0]) + z).abs() < 1e-12);
-        assert_eq!(signed_rank_z(&[0.0, 0.0]), 0.0);
+        assert!((signed_rank_z(&mut [-1.0, 1.0, -2.0]) + z).abs() < 1e-12);
+        assert_eq!(signed_rank_z(&mut [0.0, 0.0]), 0.0);
     }
 
     #[test]

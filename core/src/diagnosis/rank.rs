@@ -8,32 +8,67 @@
 use super::PoseDiagnosis;
 use crate::math::sqrt;
 
-/// `|scratch|` of record `i` (NaN past the end, never reached).
-fn magnitude(d: &[PoseDiagnosis], i: usize) -> f64 {
-    d.get(i).map_or(f64::NAN, |p| p.scratch.abs())
+/// Values the rank routines sort in place: the `scratch` fields of pose records (the rest
+/// of each record stays where it is) or a plain slice of differences.
+pub(crate) trait RankValues {
+    /// Number of values.
+    fn count(&self) -> usize;
+    /// Value `i` (NaN past the end, never reached).
+    fn value(&self, i: usize) -> f64;
+    /// Swaps values `i` and `j`.
+    fn swap_values(&mut self, i: usize, j: usize);
 }
 
-/// Whether record `i`'s magnitude orders before record `j`'s (total order: a NaN
+impl RankValues for [PoseDiagnosis] {
+    fn count(&self) -> usize {
+        self.len()
+    }
+    fn value(&self, i: usize) -> f64 {
+        self.get(i).map_or(f64::NAN, |p| p.scratch)
+    }
+    fn swap_values(&mut self, i: usize, j: usize) {
+        let (Some(a), Some(b)) = (
+            self.get(i).map(|p| p.scratch),
+            self.get(j).map(|p| p.scratch),
+        ) else {
+            return;
+        };
+        if let Some(p) = self.get_mut(i) {
+            p.scratch = b;
+        }
+        if let Some(p) = self.get_mut(j) {
+            p.scratch = a;
+        }
+    }
+}
+
+impl RankValues for [f64] {
+    fn count(&self) -> usize {
+        self.len()
+    }
+    fn value(&self, i: usize) -> f64 {
+        self.get(i).copied().unwrap_or(f64::NAN)
+    }
+    fn swap_values(&mut self, i: usize, j: usize) {
+        if i < self.len() && j < self.len() {
+            self.swap(i, j);
+        }
+    }
+}
+
+/// `|value|` of entry `i`.
+fn magnitude<D: RankValues + ?Sized>(d: &D, i: usize) -> f64 {
+    d.value(i).abs()
+}
+
+/// Whether entry `i`'s magnitude orders before entry `j`'s (total order: a NaN
 /// magnitude, positive after `abs`, sorts last).
-fn before(d: &[PoseDiagnosis], i: usize, j: usize) -> bool {
+fn before<D: RankValues + ?Sized>(d: &D, i: usize, j: usize) -> bool {
     magnitude(d, i).total_cmp(&magnitude(d, j)).is_lt()
 }
 
-/// Swaps the `scratch` values of records `i` and `j` (the rest of the records stay).
-fn swap_scratch(d: &mut [PoseDiagnosis], i: usize, j: usize) {
-    let (Some(a), Some(b)) = (d.get(i).map(|p| p.scratch), d.get(j).map(|p| p.scratch)) else {
-        return;
-    };
-    if let Some(p) = d.get_mut(i) {
-        p.scratch = b;
-    }
-    if let Some(p) = d.get_mut(j) {
-        p.scratch = a;
-    }
-}
-
 /// Restores the max-heap property below `root` within the first `end` records.
-fn sift_down(d: &mut [PoseDiagnosis], mut root: usize, end: usize) {
+fn sift_down<D: RankValues + ?Sized>(d: &mut D, mut root: usize, end: usize) {
     loop {
         let mut child = 2 * root + 1;
         if child >= end {
@@ -45,20 +80,20 @@ fn sift_down(d: &mut [PoseDiagnosis], mut root: usize, end: usize) {
         if !before(d, root, child) {
             return;
         }
-        swap_scratch(d, root, child);
+        d.swap_values(root, child);
         root = child;
     }
 }
 
 /// Sorts the `scratch` values of `d` by magnitude, ascending: an in-place heapsort
 /// (O(G log G), no recursion, no memory).
-pub(crate) fn sort_by_magnitude(d: &mut [PoseDiagnosis]) {
-    let n = d.len();
+pub(crate) fn sort_by_magnitude<D: RankValues + ?Sized>(d: &mut D) {
+    let n = d.count();
     for root in (0..n / 2).rev() {
         sift_down(d, root, n);
     }
     for end in (1..n).rev() {
-        swap_scratch(d, 0, end);
+        d.swap_values(0, end);
         sift_down(d, 0, end);
     }
 }
@@ -69,17 +104,15 @@ pub(crate) fn sort_by_magnitude(d: &mut [PoseDiagnosis]) {
 /// size of each group of equal `|D|`. Positive: the differences lean positive. 0 when
 /// there is nothing to rank. (A NaN difference, which callers never produce, counts as
 /// in the former O(G²) count: ranked with nothing, `−1/48` in the tie correction.)
-pub(crate) fn signed_rank_z(d: &mut [PoseDiagnosis]) -> f64 {
+pub(crate) fn signed_rank_z<D: RankValues + ?Sized>(d: &mut D) -> f64 {
     sort_by_magnitude(d);
-    let g = d.len();
+    let g = d.count();
     let (mut w_plus, mut ties) = (0.0, 0.0);
     let mut start = 0;
     while start < g {
         let x = magnitude(d, start);
-        let run = d
-            .iter()
-            .skip(start)
-            .take_while(|p| p.scratch.abs() == x)
+        let run = (start..g)
+            .take_while(|&i| magnitude(d, i) == x)
             .count()
             .max(1);
         if x.is_nan() {
@@ -88,12 +121,7 @@ pub(crate) fn signed_rank_z(d: &mut [PoseDiagnosis]) -> f64 {
             // Records start.. start+run−1 share the mid-rank start + (run + 1)/2.
             let t = run as f64;
             let mid_rank = start as f64 + 0.5 * (t + 1.0);
-            let positive = d
-                .iter()
-                .skip(start)
-                .take(run)
-                .filter(|p| p.scratch > 0.0)
-                .count();
+            let positive = (start..start + run).filter(|&i| d.value(i) > 0.0).count();
             w_plus += positive as f64 * mid_rank;
             ties += (t * t * t - t) / 48.0;
         }
@@ -187,7 +215,7 @@ mod tests {
                 })
                 .collect();
             let want = quadratic_z(&d);
-            let got = signed_rank_z(&mut records(&d));
+            let got = signed_rank_z(records(&d).as_mut_slice());
             assert!(
                 (got - want).abs() <= 1e-12 * want.abs().max(1.0),
                 "case {case}: n {n}, {got} vs {want}"
@@ -202,11 +230,11 @@ mod tests {
     /// mean 5, variance 30/4 − 6/48, z = 2.5/√7.375.
     #[test]
     fn mid_ranks_and_tie_correction_by_hand() {
-        let z = signed_rank_z(&mut records(&[3.0, -2.0, 1.0, 2.0]));
+        let z = signed_rank_z(records(&[3.0, -2.0, 1.0, 2.0]).as_mut_slice());
         assert!((z - 2.5 / sqrt(7.375)).abs() < 1e-15, "{z}");
-        assert_eq!(signed_rank_z(&mut records(&[])), 0.0);
+        assert_eq!(signed_rank_z(records(&[]).as_mut_slice()), 0.0);
         // One positive difference: W+ = 1, mean 1/2, variance 1/4, z = 1.
-        let z1 = signed_rank_z(&mut records(&[1.0]));
+        let z1 = signed_rank_z(records(&[1.0]).as_mut_slice());
         assert!((z1 - 1.0).abs() < 1e-15, "{z1}");
     }
 
@@ -216,7 +244,7 @@ mod tests {
         let mut rng = SplitMix64::new(7);
         let d: Vec<f64> = (0..257).map(|_| rng.uniform() - 0.5).collect();
         let mut r = records(&d);
-        sort_by_magnitude(&mut r);
+        sort_by_magnitude(r.as_mut_slice());
         let got: Vec<f64> = r.iter().map(|p| p.scratch).collect();
         assert!(got.windows(2).all(|w| w[0].abs() <= w[1].abs()));
         let mut a = got.clone();
