@@ -223,14 +223,7 @@ pub fn calibrate<const N: usize>(
     let opts = settings.options(Algorithm::Ols, requested, None);
     let analysis = analyze(start, data, &opts, &mut ws).map_err(core(None))?;
     let singular_values = ws.singular_values().to_vec();
-    if analysis.rank == 0
-        || (!analysis.data_deficient.is_empty() && !settings.allow_data_deficiency)
-    {
-        return Err(Failure::Deficient {
-            analysis: Box::new(analysis),
-            singular_values,
-        });
-    }
+    refuse_deficient(&analysis, &singular_values, settings)?;
     let results: Vec<Result<Run<N>, Failure>> = settings
         .algorithms
         .par_iter()
@@ -297,6 +290,24 @@ pub fn contact_params<const N: usize>(start: &Robot<N>, settings: &Settings) -> 
 }
 
 /// [`calibrate`] for instrument-free (or mixed) data: the core's constraint analysis and
+/// The analysis's refusal, shared by the instrument and the contact path: no identifiable
+/// parameter, or data-deficient directions without `allow_data_deficiency`.
+fn refuse_deficient(
+    analysis: &kincal::identify::Identifiability,
+    singular_values: &[f64],
+    settings: &Settings,
+) -> Result<(), Failure> {
+    if analysis.rank == 0
+        || (!analysis.data_deficient.is_empty() && !settings.allow_data_deficiency)
+    {
+        return Err(Failure::Deficient {
+            analysis: Box::new(*analysis),
+            singular_values: singular_values.to_vec(),
+        });
+    }
+    Ok(())
+}
+
 /// `identify_constrained`, every algorithm in parallel; no robust fit (refused by the
 /// command).
 pub fn calibrate_constrained<const N: usize>(
@@ -311,14 +322,7 @@ pub fn calibrate_constrained<const N: usize>(
     let opts = settings.options(Algorithm::Ols, requested, None);
     let analysis = analyze_constrained(start, data, &opts, &mut ws).map_err(core(None))?;
     let singular_values = ws.singular_values().to_vec();
-    if analysis.rank == 0
-        || (!analysis.data_deficient.is_empty() && !settings.allow_data_deficiency)
-    {
-        return Err(Failure::Deficient {
-            analysis: Box::new(analysis),
-            singular_values,
-        });
-    }
+    refuse_deficient(&analysis, &singular_values, settings)?;
     let results: Vec<Result<Run<N>, Failure>> = settings
         .algorithms
         .par_iter()
