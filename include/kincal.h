@@ -1352,6 +1352,20 @@ typedef struct kincal_registration {
      Per-marker fits, in input order.
      */
     struct kincal_marker_fit markers[KINCAL_MAX_MARKERS];
+    /*
+     1 when another exclusion fits as well with a different pose (a ghost or knocked
+     marker on a body with too few markers to pin it, typical of symmetric designs): the
+     pose is not determined and must not be used. 0 otherwise.
+     */
+    uint32_t ambiguous;
+    /*
+     When `ambiguous`: the markers (bit j for marker j) the competing fit excludes.
+     */
+    uint32_t alternative_excluded;
+    /*
+     When `ambiguous`: the rotation between the two poses [rad]; else 0.
+     */
+    double ambiguity_rotation_rad;
 } kincal_registration;
 
 /*

@@ -7,7 +7,9 @@ function [T, info] = kincal_register(design, measured, varargin)
 %   with outlier identification; S is the stated measurement noise (1 sigma per axis, m).
 %   Options: 'weights' (M x 1 relative weights), 'k_sigma' (outlier threshold in sigmas,
 %   default 4), 'max_outliers' (default 2).
-%   INFO: n_used, rms_m, consistent (every used marker within its threshold), markers
+%   INFO: n_used, rms_m, consistent (every used marker within its threshold), ambiguous
+%   (another exclusion fits as well with a different pose: T is not determined; do not use
+%   it; typical of a ghost marker on a symmetric design), markers
 %   (M x 1 struct: predicted_m, residual_m, distance_m, threshold_m, status 'inlier' /
 %   'missing' / 'moved' / 'swapped' / 'suspect', swapped_with: the other marker, 1-based).
 %   Errors: kincal:tooFewData (fewer than 3 markers used), kincal:rankDeficient (collinear

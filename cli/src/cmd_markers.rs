@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use kincal::Robot;
 use kincal::pose::{Transform, matrix_to_quaternion};
 use kincal::registration::{
-    MarkerBody, MarkerStatus, Markers, Registration, RegistrationOptions, register,
+    MarkerBody, MarkerStatus, Markers, Registration, RegistrationOptions, design_symmetry, register,
 };
 use serde::Deserialize;
 
@@ -444,6 +444,10 @@ fn markers<const N: usize>(robot: &Robot<N>, args: &Args) -> Result<(), CliError
         k_sigma: args.k_sigma,
         max_outliers: args.max_outliers,
     };
+    let design_notes = symmetry_notes(&design, &opts);
+    for note in &design_notes {
+        eprintln!("warning: {note}");
+    }
     let frames = read_export(&args.export, &design)?;
     let (joints, frame_col) = read_joints::<N>(&args.joints, robot, args.allow_out_of_limits)?;
     let by_label: HashMap<&str, &Frame> = frames.iter().map(|(l, f)| (l.as_str(), f)).collect();
@@ -531,6 +535,10 @@ fn markers<const N: usize>(robot: &Robot<N>, args: &Args) -> Result<(), CliError
                 ..Markers::new(&d, &m)
             };
             match register(&mk, &opts) {
+                Ok(reg) if reg.consistent && reg.ambiguity.is_some() => {
+                    failed.push((label, r.line, ambiguous_reason("base", &design.base, &reg)));
+                    continue;
+                }
                 Ok(reg) if reg.consistent => {
                     record("base", &design.base, &label, &reg, &mut flagged, &mut stats);
                     base_poses.push((label.clone(), reg.t_mocap_body));
@@ -578,6 +586,10 @@ fn markers<const N: usize>(robot: &Robot<N>, args: &Args) -> Result<(), CliError
                         failed.push((label, r.line, "probe markers inconsistent".into()));
                         continue;
                     }
+                    if reg.ambiguity.is_some() {
+                        failed.push((label, r.line, ambiguous_reason("probe", &design.probe, reg)));
+                        continue;
+                    }
                     (0..d.len())
                         .filter(|&k| reg.markers()[k].status == MarkerStatus::Inlier)
                         .collect()
@@ -599,6 +611,13 @@ fn markers<const N: usize>(robot: &Robot<N>, args: &Args) -> Result<(), CliError
             continue;
         }
         match reg {
+            Ok(reg) if reg.consistent && reg.ambiguity.is_some() => {
+                failed.push((
+                    label,
+                    r.line,
+                    ambiguous_reason("probe", &design.probe, &reg),
+                ));
+            }
             Ok(reg) if reg.consistent => {
                 record(
                     "probe",
@@ -684,6 +703,9 @@ fn markers<const N: usize>(robot: &Robot<N>, args: &Args) -> Result<(), CliError
             format!("{:.4}", st.max * 1e3),
             st.flagged.to_string(),
         ]);
+    }
+    for note in &design_notes {
+        let _ = writeln!(s, "Design: {note}");
     }
     s.push_str("Per marker (residuals of the frames registered, flagged markers included):\n");
     s.push_str(&t.render("  "));
@@ -845,4 +867,69 @@ fn reg_failure(body: MarkerBody, e: &kincal::Error, visible: &[bool]) -> String 
         }
         other => format!("{name}: {other}"),
     }
+}
+
+/// Names of the markers in a bit mask (bit `j` for marker `j`).
+fn marker_names(mask: u32, names: &[(String, [f64; 3])]) -> String {
+    let picked: Vec<&str> = names
+        .iter()
+        .enumerate()
+        .filter(|(j, _)| *j < 32 && mask & (1 << j) != 0)
+        .map(|(_, (n, _))| n.as_str())
+        .collect();
+    picked.join("+")
+}
+
+/// Why an ambiguous frame is refused: the two exclusions and how far apart their poses are.
+fn ambiguous_reason(body: &str, names: &[(String, [f64; 3])], reg: &Registration) -> String {
+    let Some(a) = reg.ambiguity else {
+        return format!("{body} markers ambiguous");
+    };
+    format!(
+        "{body} markers ambiguous: excluding {} or {} fits equally well, with poses {:.1}° apart \
+         (markers {:.1} mm apart): a ghost or knocked marker; the pose is not determined",
+        marker_names(a.excluded, names),
+        marker_names(a.alternative_excluded, names),
+        a.rotation_rad.to_degrees(),
+        a.marker_shift_m * 1e3
+    )
+}
+
+/// Warnings for designs with congruent marker triangles (core `design_symmetry`): closer than
+/// the outlier threshold `k·σ`, a ghost or mislabelled marker can make a rotated copy of the
+/// body fit; such frames are then refused as ambiguous, and the design should be changed.
+fn symmetry_notes(design: &Design, opts: &RegistrationOptions) -> Vec<String> {
+    let threshold_m = opts.k_sigma * opts.sigma_m;
+    [("base", &design.base), ("probe", &design.probe)]
+        .into_iter()
+        .filter_map(|(body, markers)| {
+            let points: Vec<[f64; 3]> = markers.iter().map(|(_, p)| *p).collect();
+            let sym = design_symmetry(&points)?;
+            (sym.margin_m <= threshold_m).then(|| {
+                let tri = |t: [usize; 3]| {
+                    t.iter()
+                        .map(|&j| markers.get(j).map_or("?", |(n, _)| n.as_str()))
+                        .collect::<Vec<_>>()
+                        .join("-")
+                };
+                let what = if sym.triangles[0] == sym.triangles[1] {
+                    format!("triangle {} has two equal sides", tri(sym.triangles[0]))
+                } else {
+                    format!(
+                        "triangles {} and {} are congruent",
+                        tri(sym.triangles[0]),
+                        tri(sym.triangles[1])
+                    )
+                };
+                format!(
+                    "{body} design: {what} within {:.3} mm (outlier threshold {:.3} mm): a ghost, \
+                     knocked or mislabelled marker can fit a rotated copy of the body; such frames \
+                     are refused as ambiguous. Make every triangle's side lengths differ by more \
+                     than the threshold.",
+                    sym.margin_m * 1e3,
+                    threshold_m * 1e3
+                )
+            })
+        })
+        .collect()
 }

@@ -304,3 +304,80 @@ fn points_mode_writes_position_rows_per_marker() {
         .count();
     assert!(identified >= 1, "{t}");
 }
+
+/// A rhombus probe [mm]: P3 and P4 mirror images about the P1–P2 axis (issue: a symmetric
+/// probe kept the wrong 3-marker subset and wrote a pose turned 180° with exit 0).
+const RHOMBUS: [(&str, [f64; 3]); 4] = [
+    ("P1", [0.0, 0.0, 0.0]),
+    ("P2", [60.0, 0.0, 0.0]),
+    ("P3", [30.0, 40.0, 0.0]),
+    ("P4", [30.0, -40.0, 0.0]),
+];
+
+/// Six frames of the rhombus probe, no base markers; in frame f3 the export reports P4 where
+/// P3 is (a ghost / a marker labelled twice).
+fn symmetric_probe_session(dir: &Path) {
+    let robot = aria::nominal();
+    let mut rng = SplitMix64::new(11);
+    let mut export = String::from("frame,marker,x_mm,y_mm,z_mm\n");
+    let mut joints = String::from("# robot: aria\nframe,q1,q2,q3,q4,q5,q6\n");
+    for f in 1..=6 {
+        let q: [f64; 6] = std::array::from_fn(|_| -1.0 + 2.0 * rng.uniform());
+        let t = robot.fk_q(&q).unwrap();
+        joints.push_str(&format!("f{f},{}\n", q.map(|v| format!("{v:?}")).join(",")));
+        let p3 = apply(&t, RHOMBUS[2].1);
+        for (name, p) in RHOMBUS {
+            let m = if f == 3 && name == "P4" {
+                p3
+            } else {
+                apply(&t, p)
+            };
+            export.push_str(&format!(
+                "f{f},{name},{:?},{:?},{:?}\n",
+                (m[0] + SIGMA_M * rng.normal()) * 1e3,
+                (m[1] + SIGMA_M * rng.normal()) * 1e3,
+                (m[2] + SIGMA_M * rng.normal()) * 1e3
+            ));
+        }
+    }
+    let mut design = String::from("units = \"mm\"\nsigma_mm = 0.05\n[probe]\n");
+    for (n, p) in RHOMBUS {
+        design.push_str(&format!("{n} = [{:?}, {:?}, {:?}]\n", p[0], p[1], p[2]));
+    }
+    fs::write(dir.join("export.csv"), export).unwrap();
+    fs::write(dir.join("joints.csv"), joints).unwrap();
+    fs::write(dir.join("design.toml"), design).unwrap();
+}
+
+#[test]
+fn symmetric_probe_is_flagged_and_an_ambiguous_frame_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    symmetric_probe_session(dir.path());
+    let o = kincal(&args(&["--out", "poses.csv"]), dir.path());
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(3), "{t}");
+    // The design check names the congruent triangles, the margin and the threshold.
+    // (The rhombus's triangles are isosceles and congruent in pairs; the closest is named.)
+    assert!(t.contains("warning: probe design: triangle"), "{t}");
+    assert!(
+        t.contains("within 0.000 mm (outlier threshold 0.200 mm)"),
+        "{t}"
+    );
+    // The frame is refused with both subsets and the 180° between their poses.
+    assert!(t.contains("frame f3"), "{t}");
+    assert!(t.contains("probe markers ambiguous: excluding P"), "{t}");
+    assert!(
+        t.contains("fits equally well, with poses 180.0° apart"),
+        "{t}"
+    );
+    assert!(!dir.path().join("poses.csv").exists());
+    // With --skip-failed the other five frames are written, f3 is not.
+    let o = kincal(&args(&["--out", "poses.csv", "--skip-failed"]), dir.path());
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let csv = fs::read_to_string(dir.path().join("poses.csv")).unwrap();
+    let frames: Vec<&str> = csv
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with("pose_id") && !l.is_empty())
+        .collect();
+    assert_eq!(frames.len(), 5, "{csv}");
+}

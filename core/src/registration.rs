@@ -44,6 +44,18 @@
 //! [`Registration::consistent`] false and the inconsistent markers marked
 //! [`MarkerStatus::Suspect`].
 //!
+//! # Ambiguous frames
+//! Two exclusions of the same (smallest) size can both leave a consistent fit: markers a
+//! ghost or a knocked marker has put where a rotated copy of the body would have one. With
+//! a symmetric design this happens readily (a rhombus seen with one marker doubled fits
+//! rotated 180° about its axis either way), but it needs no symmetry: the fits share too
+//! few markers to pin the pose. The tie-break (smallest Σ(|r|/σ)²) would then be a guess;
+//! instead [`Registration::ambiguity`] names the competing exclusion whenever its pose puts
+//! some visible marker further from the chosen pose's prediction than that marker's
+//! threshold (the two poses cannot both be right), and callers must not use the pose.
+//! [`design_symmetry`] checks a design up front for congruent marker triangles, the usual
+//! cause.
+//!
 //! A marker design with a symmetry (e.g. a cross with equal arms) cannot reveal a swap that
 //! the symmetry maps onto itself: such a swap is explained by another rotation. Use
 //! asymmetric designs.
@@ -51,7 +63,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 use crate::error::{Error, Quantity, Result};
-use crate::math::sqrt;
+use crate::math::{atan2, sqrt};
 use crate::pose::{Transform, quaternion_to_matrix, transform};
 
 /// Most markers on one body.
@@ -154,6 +166,19 @@ const EMPTY_FIT: MarkerFit = MarkerFit {
     status: MarkerStatus::Missing,
 };
 
+/// A competing exclusion in an ambiguous registration (module docs, "Ambiguous frames").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ambiguity {
+    /// Markers (zero-based, bit `j` for marker `j`) the chosen fit excludes.
+    pub excluded: u32,
+    /// Markers the competing, equally consistent fit excludes instead.
+    pub alternative_excluded: u32,
+    /// Rotation between the two poses \[rad\].
+    pub rotation_rad: f64,
+    /// Largest distance between the two poses' predictions of a visible marker \[m\].
+    pub marker_shift_m: f64,
+}
+
 /// The result of [`register`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Registration {
@@ -165,6 +190,9 @@ pub struct Registration {
     pub rms_m: f64,
     /// Whether every used marker is within its threshold.
     pub consistent: bool,
+    /// A second exclusion that fits as well with a different pose (module docs): when set,
+    /// the pose is not determined by the data and must not be used.
+    pub ambiguity: Option<Ambiguity>,
     fits: [MarkerFit; MAX_MARKERS],
     n: usize,
 }
@@ -436,6 +464,83 @@ fn check_inputs(markers: &Markers<'_>, opts: &RegistrationOptions) -> Result<usi
     Ok(n)
 }
 
+/// Calls `f` with every combination of `size` markers among the first `n_vis` entries of
+/// `vis_idx` (marker indices), in lexicographic order.
+fn for_each_exclusion(
+    vis_idx: &[usize; MAX_MARKERS],
+    n_vis: usize,
+    size: usize,
+    mut f: impl FnMut(&[usize]),
+) {
+    if size == 0 || size > MAX_OUTLIERS || size > n_vis {
+        return;
+    }
+    let mut comb = [0usize; MAX_OUTLIERS];
+    for (i, c) in comb.iter_mut().enumerate().take(size) {
+        *c = i;
+    }
+    loop {
+        let mut excluded = [0usize; MAX_OUTLIERS];
+        for (e, &c) in excluded.iter_mut().zip(comb.iter()).take(size) {
+            *e = vis_idx.get(c).copied().unwrap_or(0);
+        }
+        f(excluded.get(..size).unwrap_or(&[]));
+        // Next combination (lexicographic).
+        let mut i = size;
+        let mut advanced = false;
+        while i > 0 {
+            i -= 1;
+            let limit = n_vis - size + i;
+            if let Some(ci) = comb.get(i).copied()
+                && ci < limit
+            {
+                comb[i] = ci + 1;
+                for k in (i + 1)..size {
+                    comb[k] = comb[k - 1] + 1;
+                }
+                advanced = true;
+                break;
+            }
+        }
+        if !advanced {
+            return;
+        }
+    }
+}
+
+/// `w` with the markers `excluded` set to weight 0.
+fn without(w: &[f64; MAX_MARKERS], excluded: &[usize]) -> [f64; MAX_MARKERS] {
+    let mut out = *w;
+    for &j in excluded {
+        if let Some(x) = out.get_mut(j) {
+            *x = 0.0;
+        }
+    }
+    out
+}
+
+/// Bit mask of the markers visible in `w_all` but at weight 0 in `w`.
+fn mask_of(w: &[f64; MAX_MARKERS], w_all: &[f64; MAX_MARKERS]) -> u32 {
+    w.iter()
+        .zip(w_all.iter())
+        .enumerate()
+        .filter(|(_, (a, b))| **a == 0.0 && **b > 0.0)
+        .fold(0, |m, (j, _)| m | (1u32 << j))
+}
+
+/// Angle of the rotation carrying `a`'s orientation onto `b`'s \[rad\].
+/// Computed as `atan2(sin θ, cos θ)` from the relative rotation matrix, accurate near 0 and
+/// near π (an `acos` of the trace is not, and can leave [-1, 1] by rounding).
+fn rotation_between(a: &Transform, b: &Transform) -> f64 {
+    let r = a.rotation.matrix().transpose() * b.rotation.matrix();
+    let sin_axis = Vector3::new(
+        r[(2, 1)] - r[(1, 2)],
+        r[(0, 2)] - r[(2, 0)],
+        r[(1, 0)] - r[(0, 1)],
+    );
+    atan2(sin_axis.norm() / 2.0, (r.trace() - 1.0) / 2.0)
+}
+
 /// Residual distance of marker `j` under `t`, and the residual vector.
 fn residual(t: &Transform, d: &[f64; 3], m: &[f64; 3]) -> (Vector3<f64>, Vector3<f64>) {
     let p = t.transform_point(&nalgebra::Point3::from(v3(d))).coords;
@@ -490,52 +595,73 @@ pub fn register(markers: &Markers<'_>, opts: &RegistrationOptions) -> Result<Reg
         (ok, chi)
     };
     let score = |t: &Transform, w: &[f64; MAX_MARKERS]| score_of(t, w, measured);
-    let t_all = weighted_rigid_fit(d, m, w_all.get(..n).unwrap_or(&[]), opts.sigma_m)?;
-    let (ok_all, _) = score(&t_all, &w_all);
+    // An all-visible fit that is itself ambiguous (a doubled marker on a symmetric body)
+    // still lets the exclusion search find, and report, the competing subsets.
+    let fit_all = weighted_rigid_fit(d, m, w_all.get(..n).unwrap_or(&[]), opts.sigma_m);
+    let ok_all = fit_all.as_ref().is_ok_and(|t| score(t, &w_all).0);
+    if fit_all.is_err() && (opts.max_outliers == 0 || n_vis < 4) {
+        fit_all?;
+    }
     let mut best: Option<(Transform, [f64; MAX_MARKERS], f64)> = None;
+    let mut best_size = 0;
     if !ok_all {
         let mut size = 1;
         while size <= opts.max_outliers && n_vis >= size + 3 && best.is_none() {
-            // Combinations of `size` positions among the visible markers.
-            let mut comb = [0usize; MAX_OUTLIERS];
-            for (i, c) in comb.iter_mut().enumerate().take(size) {
-                *c = i;
-            }
-            loop {
-                let mut w = w_all;
-                for &c in comb.iter().take(size) {
-                    w[vis_idx[c]] = 0.0;
-                }
+            for_each_exclusion(&vis_idx, n_vis, size, |excluded| {
+                let w = without(&w_all, excluded);
                 if let Ok(t) = weighted_rigid_fit(d, m, w.get(..n).unwrap_or(&[]), opts.sigma_m) {
                     let (ok, chi) = score(&t, &w);
                     if ok && best.as_ref().is_none_or(|b| chi < b.2) {
                         best = Some((t, w, chi));
                     }
                 }
-                // Next combination (lexicographic).
-                let mut i = size;
-                let mut advanced = false;
-                while i > 0 {
-                    i -= 1;
-                    if comb[i] < n_vis - size + i {
-                        comb[i] += 1;
-                        for k in (i + 1)..size {
-                            comb[k] = comb[k - 1] + 1;
-                        }
-                        advanced = true;
-                        break;
-                    }
-                }
-                if !advanced {
-                    break;
-                }
-            }
+            });
+            best_size = size;
             size += 1;
         }
     }
+    // Ambiguity: another exclusion of the same size, consistent, with a pose that moves some
+    // visible marker's prediction by more than its threshold.
+    let mut ambiguity = None;
+    if let Some((t_best, w_best, _)) = best.as_ref() {
+        for_each_exclusion(&vis_idx, n_vis, best_size, |excluded| {
+            let w = without(&w_all, excluded);
+            if w == *w_best {
+                return;
+            }
+            let Ok(t) = weighted_rigid_fit(d, m, w.get(..n).unwrap_or(&[]), opts.sigma_m) else {
+                return;
+            };
+            if !score(&t, &w).0 {
+                return;
+            }
+            let mut shift: f64 = 0.0;
+            let mut beyond = false;
+            for j in (0..n).filter(|&j| visible(j)) {
+                let a = residual(t_best, &design[j], &measured[j]).0;
+                let b = residual(&t, &design[j], &measured[j]).0;
+                let dist = (a - b).norm();
+                beyond |= dist > thr[j];
+                shift = shift.max(dist);
+            }
+            let found = Ambiguity {
+                excluded: mask_of(w_best, &w_all),
+                alternative_excluded: mask_of(&w, &w_all),
+                rotation_rad: rotation_between(t_best, &t),
+                marker_shift_m: shift,
+            };
+            if beyond
+                && ambiguity
+                    .as_ref()
+                    .is_none_or(|a: &Ambiguity| found.marker_shift_m > a.marker_shift_m)
+            {
+                ambiguity = Some(found);
+            }
+        });
+    }
     let (t, w_used, consistent) = match best {
         Some((t, w, _)) => (t, w, true),
-        None => (t_all, w_all, ok_all),
+        None => (fit_all?, w_all, ok_all),
     };
     let mut fits = [EMPTY_FIT; MAX_MARKERS];
     let mut wsum = 0.0;
@@ -596,9 +722,69 @@ pub fn register(markers: &Markers<'_>, opts: &RegistrationOptions) -> Result<Reg
         n_used,
         rms_m: if wsum > 0.0 { sqrt(ssq / wsum) } else { 0.0 },
         consistent,
+        ambiguity,
         fits,
         n,
     })
+}
+
+/// The closest pair of congruent marker triangles of a design (see [`design_symmetry`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DesignSymmetry {
+    /// Largest difference between the two triangles' sorted side lengths \[m\]: how far the
+    /// design is from having them congruent. Compare with the outlier threshold `k·σ`.
+    pub margin_m: f64,
+    /// The two triangles (marker indices, zero-based). Equal when one triangle is congruent
+    /// with itself under a relabelling (two equal sides: an isosceles triangle).
+    pub triangles: [[usize; 3]; 2],
+}
+
+/// Checks a marker design for the symmetry that makes registrations ambiguous: two marker
+/// triangles (or one, relabelled) that are congruent, so a rotated copy of the body fits a
+/// frame with a ghost, knocked or mislabelled marker as well as the true pose does. Returns
+/// the closest such pair, or `None` with fewer than 3 markers. Congruence of triangles is
+/// equality of their sorted side lengths (a triangle and its mirror image are related by a
+/// proper rotation in space), so the margin is exact, not a fit.
+#[must_use]
+pub fn design_symmetry(design: &[[f64; 3]]) -> Option<DesignSymmetry> {
+    let n = design.len().min(MAX_MARKERS);
+    let dist = |a: usize, b: usize| match (design.get(a), design.get(b)) {
+        (Some(p), Some(q)) => (v3(p) - v3(q)).norm(),
+        _ => 0.0,
+    };
+    let sides = |t: [usize; 3]| {
+        let mut s = [dist(t[0], t[1]), dist(t[1], t[2]), dist(t[0], t[2])];
+        s.sort_unstable_by(f64::total_cmp);
+        s
+    };
+    let mut best: Option<DesignSymmetry> = None;
+    let mut consider = |margin_m: f64, a: [usize; 3], b: [usize; 3]| {
+        if best.as_ref().is_none_or(|x| margin_m < x.margin_m) {
+            best = Some(DesignSymmetry {
+                margin_m,
+                triangles: [a, b],
+            });
+        }
+    };
+    let triangles = || {
+        (0..n)
+            .flat_map(move |i| ((i + 1)..n).flat_map(move |j| ((j + 1)..n).map(move |k| [i, j, k])))
+    };
+    for a in triangles() {
+        let sa = sides(a);
+        // Relabelling within one triangle: two equal sides.
+        consider((sa[1] - sa[0]).min(sa[2] - sa[1]), a, a);
+        for b in triangles().filter(|b| *b > a) {
+            let sb = sides(b);
+            let margin = sa
+                .iter()
+                .zip(sb.iter())
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max);
+            consider(margin, a, b);
+        }
+    }
+    best
 }
 
 /// The end-effector pose in the robot base frame from the two registrations' poses:

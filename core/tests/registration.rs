@@ -4,8 +4,8 @@
 use kincal::Error;
 use kincal::pose::Transform;
 use kincal::registration::{
-    MarkerBody, MarkerStatus, Markers, RegistrationOptions, register, register_end_effector,
-    weighted_rigid_fit,
+    MarkerBody, MarkerStatus, Markers, RegistrationOptions, design_symmetry, register,
+    register_end_effector, weighted_rigid_fit,
 };
 use nalgebra::{Matrix3, Rotation3, Translation3, Vector3};
 
@@ -316,6 +316,8 @@ fn moved_and_missing_markers_are_named() {
     use MarkerStatus::*;
     assert_eq!(st, vec![Inlier, Inlier, Moved, Inlier, Missing, Inlier]);
     assert!((reg.markers()[2].distance_m - 0.004).abs() < 1e-3);
+    // Five markers left after the exclusion pin the pose: nothing competes with it.
+    assert_eq!(reg.ambiguity, None);
     // Thresholds follow the weights: k·σ/√w.
     assert!((reg.markers()[1].threshold_m - 4.0 * sigma / 2f64.sqrt()).abs() < 1e-15);
     // The missing marker's predicted position is where it should have been.
@@ -418,4 +420,143 @@ fn swapped_pair_in_a_five_marker_probe_is_named() {
         );
         assert!(dp < 1e-3 && dr < 1e-2, "case {case}: {dp:e} m, {dr:e} rad");
     }
+}
+
+/// A rhombus probe [m]: symmetric about the P1–P2 axis (P3 and P4 mirror images).
+const RHOMBUS: [[f64; 3]; 4] = [
+    [0.0, 0.0, 0.0],
+    [0.060, 0.0, 0.0],
+    [0.030, 0.040, 0.0],
+    [0.030, -0.040, 0.0],
+];
+
+/// The angle between two rotations [rad], by the trace formula (independent of the code's
+/// quaternion path).
+fn angle_between(a: &Transform, b: &Transform) -> f64 {
+    let r = a.rotation.matrix().transpose() * b.rotation.matrix();
+    ((r.trace() - 1.0) / 2.0).clamp(-1.0, 1.0).acos()
+}
+
+#[test]
+fn a_doubled_marker_on_a_symmetric_probe_is_ambiguous_not_guessed() {
+    // P4 reported where P3 is (a ghost / a marker labelled twice): excluding P4 fits the
+    // true pose, excluding P3 fits the pose turned 180° about the P1–P2 axis, equally well.
+    let mut rng = Rng(29);
+    let sigma = 1e-4;
+    for _ in 0..20 {
+        let t = rng.transform();
+        let mut m = noisy(&mut rng, &t, &RHOMBUS, sigma);
+        m[3] = m[2];
+        let reg = register(
+            &Markers::new(&RHOMBUS, &m),
+            &RegistrationOptions::new(sigma),
+        )
+        .expect("register");
+        let a = reg
+            .ambiguity
+            .expect("two equally good subsets must be reported");
+        // One fit excludes P3, the other P4.
+        let mut pair = [a.excluded, a.alternative_excluded];
+        pair.sort_unstable();
+        assert_eq!(pair, [1 << 2, 1 << 3]);
+        // Check the reported angle against the independent trace formula on the two fits.
+        let flipped =
+            t * Transform::from_parts(
+                Translation3::new(0.060, 0.0, 0.0),
+                Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI),
+            ) * Transform::from_parts(Translation3::new(-0.060, 0.0, 0.0), Rotation3::identity());
+        let _ = flipped;
+        assert!(
+            (a.rotation_rad - std::f64::consts::PI).abs() < 0.02,
+            "{}",
+            a.rotation_rad
+        );
+        let either = angle_between(&reg.t_mocap_body, &t).min(angle_between(
+            &reg.t_mocap_body,
+            &(t * Transform::from_parts(
+                Translation3::new(0.0, 0.0, 0.0),
+                Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI),
+            )),
+        ));
+        assert!(either < 0.02, "the chosen pose is one of the two: {either}");
+        // P3/P4 move by 80 mm between the two poses.
+        assert!(
+            (a.marker_shift_m - 0.080).abs() < 1e-3,
+            "{}",
+            a.marker_shift_m
+        );
+    }
+}
+
+#[test]
+fn a_marker_knocked_round_the_axis_of_two_others_is_ambiguous_on_any_probe() {
+    // P4 of the rhombus knocked 120° round the P1–P2 axis: its distances to P1 and P2 are
+    // kept, so excluding P3 fits a pose turned 120° as well as excluding P4 fits the truth.
+    let mut rng = Rng(37);
+    let sigma = 1e-4;
+    let turn = Transform::from_parts(
+        Translation3::identity(),
+        Rotation3::from_axis_angle(&Vector3::x_axis(), 2.0 * std::f64::consts::FRAC_PI_3),
+    );
+    for _ in 0..20 {
+        let t = rng.transform();
+        let mut m = noisy(&mut rng, &t, &RHOMBUS, sigma);
+        m[3] = apply(&(t * turn), &RHOMBUS[3]);
+        let reg = register(
+            &Markers::new(&RHOMBUS, &m),
+            &RegistrationOptions::new(sigma),
+        )
+        .expect("register");
+        let a = reg.ambiguity.expect("ambiguous");
+        assert!(
+            (a.rotation_rad - 2.0 * std::f64::consts::FRAC_PI_3).abs() < 0.02,
+            "{}",
+            a.rotation_rad
+        );
+        let either =
+            angle_between(&reg.t_mocap_body, &t).min(angle_between(&reg.t_mocap_body, &(t * turn)));
+        assert!(either < 0.02);
+    }
+}
+
+#[test]
+fn a_moved_marker_on_an_asymmetric_probe_is_not_ambiguous() {
+    let mut rng = Rng(31);
+    let sigma = 1e-4;
+    for _ in 0..20 {
+        let t = rng.transform();
+        let mut m = noisy(&mut rng, &t, &PROBE, sigma);
+        m[1][2] += 0.006;
+        let reg = register(&Markers::new(&PROBE, &m), &RegistrationOptions::new(sigma))
+            .expect("register");
+        assert!(reg.consistent);
+        assert_eq!(reg.ambiguity, None);
+        assert_eq!(reg.markers()[1].status, MarkerStatus::Moved);
+    }
+}
+
+#[test]
+fn design_symmetry_finds_congruent_triangles_with_their_margin() {
+    // The rhombus: triangles P1P2P3 and P1P2P4 are mirror images (margin 0).
+    let s = design_symmetry(&RHOMBUS).expect("4 markers");
+    assert!(s.margin_m < 1e-15, "{}", s.margin_m);
+    // Move P4 by 2 mm along y: the margin is the change of its side lengths, by hand:
+    // |P1P4| and |P2P4| go from 50 mm to sqrt(30² + 42²) mm.
+    let mut d = RHOMBUS;
+    d[3][1] = -0.042;
+    let s = design_symmetry(&d).expect("4 markers");
+    let by_hand = (0.030f64.hypot(0.042) - 0.050).abs();
+    // Other triangle pairs may be closer; the margin is at most the hand figure.
+    assert!(s.margin_m <= by_hand + 1e-15, "{} vs {by_hand}", s.margin_m);
+    // An isosceles triangle is congruent with itself relabelled.
+    let iso = [[0.0, 0.0, 0.0], [0.050, 0.0, 0.0], [0.025, 0.070, 0.0]];
+    let s = design_symmetry(&iso).expect("3 markers");
+    assert!(s.margin_m < 1e-15);
+    assert_eq!(s.triangles[0], s.triangles[1]);
+    // The asymmetric probe keeps every triangle pair millimetres apart.
+    // (Its closest pair of triangles differs by 0.64 mm: above the 0.4 mm threshold of a
+    // 0.1 mm system, which is what matters.)
+    let s = design_symmetry(&PROBE).expect("6 markers");
+    assert!(s.margin_m > 5e-4, "{}", s.margin_m);
+    assert!(design_symmetry(&PROBE[..2]).is_none());
 }

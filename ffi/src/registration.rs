@@ -83,6 +83,14 @@ pub struct kincal_registration {
     pub n_markers: usize,
     /// Per-marker fits, in input order.
     pub markers: [kincal_marker_fit; KINCAL_MAX_MARKERS],
+    /// 1 when another exclusion fits as well with a different pose (a ghost or knocked
+    /// marker on a body with too few markers to pin it, typical of symmetric designs): the
+    /// pose is not determined and must not be used. 0 otherwise.
+    pub ambiguous: u32,
+    /// When `ambiguous`: the markers (bit j for marker j) the competing fit excludes.
+    pub alternative_excluded: u32,
+    /// When `ambiguous`: the rotation between the two poses [rad]; else 0.
+    pub ambiguity_rotation_rad: f64,
 }
 
 /// Default registration options for noise `sigma_m` [m]: k = 4, up to 2 outliers. Returns OK,
@@ -200,6 +208,9 @@ pub unsafe extern "C" fn kincal_register(
             consistent: u32::from(reg.consistent),
             n_markers: reg.markers().len(),
             markers: [kincal_marker_fit::default(); KINCAL_MAX_MARKERS],
+            ambiguous: u32::from(reg.ambiguity.is_some()),
+            alternative_excluded: reg.ambiguity.map_or(0, |a| a.alternative_excluded),
+            ambiguity_rotation_rad: reg.ambiguity.map_or(0.0, |a| a.rotation_rad),
         };
         for (d, f) in r.markers.iter_mut().zip(reg.markers()) {
             let (status, with) = match f.status {

@@ -2364,8 +2364,8 @@ static int get_rows3(kc_ctx *c, const mxArray *a, const char *name, size_t m, in
 
 static const char *const REGISTRATION_OPTION_FIELDS[] = {"sigma_m", "k_sigma", "max_outliers",
                                                          NULL};
-static const char *const REGISTRATION_FIELDS[] = {"n_used", "rms_m", "consistent", "markers",
-                                                  NULL};
+static const char *const REGISTRATION_FIELDS[] = {"n_used", "rms_m", "consistent", "ambiguous",
+                                                  "markers", NULL};
 static const char *const MARKER_FIELDS[] = {
     "predicted_m", "residual_m", "distance_m", "threshold_m", "status", "swapped_with", NULL,
 };
@@ -2450,7 +2450,7 @@ static int op_register(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prhs
     memcpy(KC_DOUBLES(plhs[0]), reg->t_mocap_body, sizeof reg->t_mocap_body);
     if (nlhs > 1) {
         size_t n = reg->n_markers < KINCAL_MAX_MARKERS ? reg->n_markers : KINCAL_MAX_MARKERS;
-        mxArray *s = mxCreateStructMatrix(1, 1, 4, (const char **)REGISTRATION_FIELDS);
+        mxArray *s = mxCreateStructMatrix(1, 1, 5, (const char **)REGISTRATION_FIELDS);
         mxArray *mk = mxCreateStructMatrix((mwSize)n, 1, 6, (const char **)MARKER_FIELDS);
         for (i = 0; i < n; ++i) {
             const kincal_marker_fit *mf = &reg->markers[i];
@@ -2471,6 +2471,7 @@ static int op_register(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prhs
         mxSetField(s, 0, "n_used", mxCreateDoubleScalar((double)reg->n_used));
         mxSetField(s, 0, "rms_m", mxCreateDoubleScalar(reg->rms_m));
         mxSetField(s, 0, "consistent", mxCreateLogicalScalar(reg->consistent != 0));
+        mxSetField(s, 0, "ambiguous", mxCreateLogicalScalar(reg->ambiguous != 0));
         mxSetField(s, 0, "markers", mk);
         plhs[1] = s;
     }

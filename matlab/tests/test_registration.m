@@ -4,6 +4,7 @@ tests = {
     'register_recovers_a_pose', @register_pose
     'register_names_missing_and_moved_markers', @register_outliers
     'register_bad_inputs', @register_bad
+    'register_flags_an_ambiguous_frame', @register_ambiguous
     't_base_ee', @t_base_ee
     'robot_from_axes_matches_aria', @from_axes
     };
@@ -30,7 +31,8 @@ require_registration();
 T = kincal_pose_from_xyzrpy([1.2; -0.4; 0.9; 0.3; -0.2; 2.1]);
 [Tr, info] = kincal_register(probe(), seen(T, probe()), 'sigma_m', 1e-4);
 expect_near(Tr, T, 1e-12, 'registered pose');
-expect_true(info.n_used == 5 && info.consistent && info.rms_m < 1e-12, 'fit report');
+expect_true(info.n_used == 5 && info.consistent && ~info.ambiguous && info.rms_m < 1e-12, ...
+    'fit report');
 expect_true(all(strcmp({info.markers.status}, 'inlier')), 'all inliers');
 end
 
@@ -63,6 +65,20 @@ m = d;
 m(1, 1) = Inf;
 expect_error('kincal:nonFinite', @() kincal_register(d, m, 'sigma_m', 1e-4), 'marker 1');
 expect_error('kincal:invalidParameter', @() kincal_register(d, d, 'sigma_m', -1));
+end
+
+function register_ambiguous()
+% A rhombus seen with P4 reported where P3 is: excluding P3 or P4 fits equally well, with
+% poses 180 degrees apart; the registration says so instead of choosing.
+require_registration();
+d = [0 0 0; 0.06 0 0; 0.03 0.04 0; 0.03 -0.04 0];
+T = kincal_pose_from_xyzrpy([0.2; 0.1; 1.5; 0; 0.4; -1]);
+m = seen(T, d);
+m(4, :) = m(3, :);
+[~, info] = kincal_register(d, m, 'sigma_m', 1e-4);
+expect_true(info.consistent && info.ambiguous, 'ambiguous frame flagged');
+[~, info] = kincal_register(d, seen(T, d), 'sigma_m', 1e-4);
+expect_true(~info.ambiguous, 'a clean frame is not ambiguous');
 end
 
 function t_base_ee()
