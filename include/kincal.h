@@ -694,6 +694,205 @@ typedef uint32_t kincal_axis;
 #endif // __cplusplus
 
 /*
+ The verdict's status (REPORT.json `verdict.status`).
+ */
+enum kincal_diagnosis_status
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     `no_gap`: the geometric model is already at the noise floor.
+     */
+    KINCAL_DIAGNOSIS_STATUS_NO_GAP = 0,
+    /*
+     `explained`: the verdict's effects close most of the gap and what remains is noise.
+     */
+    KINCAL_DIAGNOSIS_STATUS_EXPLAINED = 1,
+    /*
+     `partially_explained`: a significant but smaller share, or a remaining gap.
+     */
+    KINCAL_DIAGNOSIS_STATUS_PARTIALLY_EXPLAINED = 2,
+    /*
+     `unexplained`: a gap no candidate closes significantly.
+     */
+    KINCAL_DIAGNOSIS_STATUS_UNEXPLAINED = 3,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_diagnosis_status kincal_diagnosis_status;
+#else
+typedef uint32_t kincal_diagnosis_status;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ How the candidates were judged (REPORT.json `method`).
+ */
+enum kincal_diagnosis_method
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     `cross_validation`: k-fold on held-out pose groups.
+     */
+    KINCAL_DIAGNOSIS_METHOD_CROSS_VALIDATION = 0,
+    /*
+     `in_sample_nested`: too few pose groups; likelihood-ratio test with the noise floor.
+     */
+    KINCAL_DIAGNOSIS_METHOD_IN_SAMPLE_NESTED = 1,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_diagnosis_method kincal_diagnosis_method;
+#else
+typedef uint32_t kincal_diagnosis_method;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ Why the status (REPORT.json `verdict.reason`).
+ */
+enum kincal_diagnosis_reason
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     `at_noise_floor`.
+     */
+    KINCAL_DIAGNOSIS_REASON_AT_NOISE_FLOOR = 0,
+    /*
+     `closed`.
+     */
+    KINCAL_DIAGNOSIS_REASON_CLOSED = 1,
+    /*
+     `remaining_gap` (`reason_z`, `reason_part`).
+     */
+    KINCAL_DIAGNOSIS_REASON_REMAINING_GAP = 2,
+    /*
+     `remaining_structure` (`reason_z`: the smooth model's paired z).
+     */
+    KINCAL_DIAGNOSIS_REASON_REMAINING_STRUCTURE = 3,
+    /*
+     `worsens` (`reason_z` negative, `reason_part`).
+     */
+    KINCAL_DIAGNOSIS_REASON_WORSENS = 4,
+    /*
+     `small_share`.
+     */
+    KINCAL_DIAGNOSIS_REASON_SMALL_SHARE = 5,
+    /*
+     `no_significant_candidate`.
+     */
+    KINCAL_DIAGNOSIS_REASON_NO_SIGNIFICANT_CANDIDATE = 6,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_diagnosis_reason kincal_diagnosis_reason;
+#else
+typedef uint32_t kincal_diagnosis_reason;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ Position, rotation or both (`reason_part`, warning `part`); 0 = not applicable.
+ */
+enum kincal_diagnosis_part
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     Not applicable.
+     */
+    KINCAL_DIAGNOSIS_PART_NONE = 0,
+    /*
+     Position rows.
+     */
+    KINCAL_DIAGNOSIS_PART_POSITION = 1,
+    /*
+     Rotation rows.
+     */
+    KINCAL_DIAGNOSIS_PART_ROTATION = 2,
+    /*
+     Both.
+     */
+    KINCAL_DIAGNOSIS_PART_BOTH = 3,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_diagnosis_part kincal_diagnosis_part;
+#else
+typedef uint32_t kincal_diagnosis_part;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ What lies beyond the library (REPORT.json `verdict.beyond_library`).
+ */
+enum kincal_beyond_library
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     `not_applicable`: no open gap, or the check did not run.
+     */
+    KINCAL_BEYOND_LIBRARY_NOT_APPLICABLE = 0,
+    /*
+     `smooth_effect`: a smooth function of q closes more (`beyond_library_share`).
+     */
+    KINCAL_BEYOND_LIBRARY_SMOOTH_EFFECT = 1,
+    /*
+     `not_a_function_of_q`.
+     */
+    KINCAL_BEYOND_LIBRARY_NOT_A_FUNCTION_OF_Q = 2,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_beyond_library kincal_beyond_library;
+#else
+typedef uint32_t kincal_beyond_library;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ Warning codes (REPORT.json `warnings[].code`).
+ */
+enum kincal_diagnosis_warning_code
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     `noise_vs_repeats`: the repeats scatter `ratio` × the stated σ (`z`, `part`).
+     */
+    KINCAL_DIAGNOSIS_WARNING_CODE_NOISE_VS_REPEATS = 1,
+    /*
+     `noise_vs_residuals`: the residuals are below the stated σ, √(χ²/dof) = `ratio`.
+     */
+    KINCAL_DIAGNOSIS_WARNING_CODE_NOISE_VS_RESIDUALS = 2,
+    /*
+     `gap_despite_gap_test`: no gap by the gap test (`z_gap`) but a candidate improves
+     significantly (`z_candidate`).
+     */
+    KINCAL_DIAGNOSIS_WARNING_CODE_GAP_DESPITE_GAP_TEST = 3,
+    /*
+     `too_many_suspects`: `count` rows failed the outlier test; none excluded.
+     */
+    KINCAL_DIAGNOSIS_WARNING_CODE_TOO_MANY_SUSPECTS = 4,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_diagnosis_warning_code kincal_diagnosis_warning_code;
+#else
+typedef uint32_t kincal_diagnosis_warning_code;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
  Where and why a call failed: a caller-owned plain struct (pass NULL when the detail is not
  wanted; it need not be initialised). Every export that takes one overwrites all of it before
  returning: `status` = the returned code, the fields that code documents set, the others

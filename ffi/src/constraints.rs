@@ -283,7 +283,8 @@ fn workspace_size(
     n_requested: usize,
 ) -> Option<usize> {
     let cap = capacity_for(n_requested)?;
-    let (g, d, s) = (groups, distances, sessions);
+    // Without a session array all rows are one session: one counter either way.
+    let (g, d, s) = (groups, distances, sessions.max(1));
     match n_joints {
         1 => size_for::<1>(cap, rows, g, d, s),
         2 => size_for::<2>(cap, rows, g, d, s),
@@ -599,7 +600,7 @@ unsafe fn carve<'w, const N: usize, const P: usize>(
     ws_len: usize,
     v: &View<'_>,
 ) -> FfiResult<Arrays<'w, N, P>> {
-    let (l, g, d, s) = (v.rows, v.n_groups(), v.distances.len(), v.n_sessions);
+    let (l, g, d, s) = (v.rows, v.n_groups(), v.distances.len(), v.n_sessions.max(1));
     let lay = layout::<N, P>(l, g, d, s)
         .ok_or(kincal_error::new(kincal_status::CapacityExceeded).arg(c"workspace"))?;
     if ws.is_null() {
@@ -685,7 +686,12 @@ fn build<'w, const N: usize, const P: usize>(
     for l in 0..v.rows {
         let kind = v.kind(l)?;
         let s = v.session_of(l);
-        let Some(sc) = session_count.get_mut(s as usize) else {
+        let slot = if (s as usize) < v.n_sessions {
+            session_count.get_mut(s as usize)
+        } else {
+            None
+        };
+        let Some(sc) = slot else {
             return Err(at_row(
                 kincal_error::new(kincal_status::IndexOutOfRange)
                     .arg(c"data->session")

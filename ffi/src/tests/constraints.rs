@@ -638,6 +638,16 @@ fn bad_rows_name_their_row() {
         ("data->session", 2, l)
     );
 
+    // A session id beyond n_sessions.
+    let mut rows = base.clone();
+    rows.session[5] = 2;
+    let out = run(&start, &rows, &opts);
+    assert_eq!(out.status, kincal_status::IndexOutOfRange);
+    assert_eq!(
+        (arg(&out.err), out.err.pose, out.err.expected),
+        ("data->session", 5, 2)
+    );
+
     // A target id beyond n_targets.
     let mut rows = base.clone();
     rows.target[0] = 10;
