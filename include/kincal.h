@@ -150,6 +150,39 @@
 #define KINCAL_POSE_ERRORS_LEN 8
 
 /*
+ "No target / no plane" in `kincal_constraint_data.target` and `.plane`.
+ */
+#define KINCAL_NO_GROUP 4294967295
+
+/*
+ A session needs at least this many rows (as `kincal calibrate`): fewer fix nothing a
+ set-up adds.
+ */
+#define KINCAL_MIN_SESSION_ROWS 3
+
+/*
+ Plane contacts whose spread across their best-fit line, at the starting model, is below
+ this fraction of their extent along it are collinear (`KINCAL_STATUS_DEGENERATE_GROUP`):
+ the plane's tilt about that line is undetermined. The CLI's threshold.
+ */
+#define KINCAL_PLANE_MIN_ASPECT 0.1
+
+/*
+ Candidate models a report lists at most: every effect alone and every pair (7 + 21).
+ */
+#define KINCAL_DIAG_MAX_CANDIDATES 28
+
+/*
+ Suspect rows (gross outliers) a report lists at most.
+ */
+#define KINCAL_DIAG_MAX_SUSPECTS 16
+
+/*
+ Warnings a report lists at most.
+ */
+#define KINCAL_DIAG_MAX_WARNINGS 8
+
+/*
  Result of every fallible export. `KINCAL_STATUS_OK` (0) is success.
 
  The numbers are part of the ABI and never reused: argument errors are 100–199, numerical
@@ -657,6 +690,205 @@ enum kincal_axis
 typedef enum kincal_axis kincal_axis;
 #else
 typedef uint32_t kincal_axis;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ The verdict's status (REPORT.json `verdict.status`).
+ */
+enum kincal_diagnosis_status
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     `no_gap`: the geometric model is already at the noise floor.
+     */
+    KINCAL_DIAGNOSIS_STATUS_NO_GAP = 0,
+    /*
+     `explained`: the verdict's effects close most of the gap and what remains is noise.
+     */
+    KINCAL_DIAGNOSIS_STATUS_EXPLAINED = 1,
+    /*
+     `partially_explained`: a significant but smaller share, or a remaining gap.
+     */
+    KINCAL_DIAGNOSIS_STATUS_PARTIALLY_EXPLAINED = 2,
+    /*
+     `unexplained`: a gap no candidate closes significantly.
+     */
+    KINCAL_DIAGNOSIS_STATUS_UNEXPLAINED = 3,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_diagnosis_status kincal_diagnosis_status;
+#else
+typedef uint32_t kincal_diagnosis_status;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ How the candidates were judged (REPORT.json `method`).
+ */
+enum kincal_diagnosis_method
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     `cross_validation`: k-fold on held-out pose groups.
+     */
+    KINCAL_DIAGNOSIS_METHOD_CROSS_VALIDATION = 0,
+    /*
+     `in_sample_nested`: too few pose groups; likelihood-ratio test with the noise floor.
+     */
+    KINCAL_DIAGNOSIS_METHOD_IN_SAMPLE_NESTED = 1,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_diagnosis_method kincal_diagnosis_method;
+#else
+typedef uint32_t kincal_diagnosis_method;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ Why the status (REPORT.json `verdict.reason`).
+ */
+enum kincal_diagnosis_reason
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     `at_noise_floor`.
+     */
+    KINCAL_DIAGNOSIS_REASON_AT_NOISE_FLOOR = 0,
+    /*
+     `closed`.
+     */
+    KINCAL_DIAGNOSIS_REASON_CLOSED = 1,
+    /*
+     `remaining_gap` (`reason_z`, `reason_part`).
+     */
+    KINCAL_DIAGNOSIS_REASON_REMAINING_GAP = 2,
+    /*
+     `remaining_structure` (`reason_z`: the smooth model's paired z).
+     */
+    KINCAL_DIAGNOSIS_REASON_REMAINING_STRUCTURE = 3,
+    /*
+     `worsens` (`reason_z` negative, `reason_part`).
+     */
+    KINCAL_DIAGNOSIS_REASON_WORSENS = 4,
+    /*
+     `small_share`.
+     */
+    KINCAL_DIAGNOSIS_REASON_SMALL_SHARE = 5,
+    /*
+     `no_significant_candidate`.
+     */
+    KINCAL_DIAGNOSIS_REASON_NO_SIGNIFICANT_CANDIDATE = 6,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_diagnosis_reason kincal_diagnosis_reason;
+#else
+typedef uint32_t kincal_diagnosis_reason;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ Position, rotation or both (`reason_part`, warning `part`); 0 = not applicable.
+ */
+enum kincal_diagnosis_part
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     Not applicable.
+     */
+    KINCAL_DIAGNOSIS_PART_NONE = 0,
+    /*
+     Position rows.
+     */
+    KINCAL_DIAGNOSIS_PART_POSITION = 1,
+    /*
+     Rotation rows.
+     */
+    KINCAL_DIAGNOSIS_PART_ROTATION = 2,
+    /*
+     Both.
+     */
+    KINCAL_DIAGNOSIS_PART_BOTH = 3,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_diagnosis_part kincal_diagnosis_part;
+#else
+typedef uint32_t kincal_diagnosis_part;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ What lies beyond the library (REPORT.json `verdict.beyond_library`).
+ */
+enum kincal_beyond_library
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     `not_applicable`: no open gap, or the check did not run.
+     */
+    KINCAL_BEYOND_LIBRARY_NOT_APPLICABLE = 0,
+    /*
+     `smooth_effect`: a smooth function of q closes more (`beyond_library_share`).
+     */
+    KINCAL_BEYOND_LIBRARY_SMOOTH_EFFECT = 1,
+    /*
+     `not_a_function_of_q`.
+     */
+    KINCAL_BEYOND_LIBRARY_NOT_A_FUNCTION_OF_Q = 2,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_beyond_library kincal_beyond_library;
+#else
+typedef uint32_t kincal_beyond_library;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ Warning codes (REPORT.json `warnings[].code`).
+ */
+enum kincal_diagnosis_warning_code
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     `noise_vs_repeats`: the repeats scatter `ratio` × the stated σ (`z`, `part`).
+     */
+    KINCAL_DIAGNOSIS_WARNING_CODE_NOISE_VS_REPEATS = 1,
+    /*
+     `noise_vs_residuals`: the residuals are below the stated σ, √(χ²/dof) = `ratio`.
+     */
+    KINCAL_DIAGNOSIS_WARNING_CODE_NOISE_VS_RESIDUALS = 2,
+    /*
+     `gap_despite_gap_test`: no gap by the gap test (`z_gap`) but a candidate improves
+     significantly (`z_candidate`).
+     */
+    KINCAL_DIAGNOSIS_WARNING_CODE_GAP_DESPITE_GAP_TEST = 3,
+    /*
+     `too_many_suspects`: `count` rows failed the outlier test; none excluded.
+     */
+    KINCAL_DIAGNOSIS_WARNING_CODE_TOO_MANY_SUSPECTS = 4,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_diagnosis_warning_code kincal_diagnosis_warning_code;
+#else
+typedef uint32_t kincal_diagnosis_warning_code;
 #endif // __STDC_VERSION__ >= 202311L
 #endif // __cplusplus
 
@@ -1439,6 +1671,753 @@ typedef struct kincal_view_point_result {
      */
     size_t miss_max_pose;
 } kincal_view_point_result;
+
+/*
+ A target of `kincal_constraint_data`: unknown (3 nuisance coordinates, eliminated) or
+ known in the base frame.
+ */
+typedef struct kincal_target {
+    /*
+     Non-zero: the target's position is known (`xyz_m`, an external reference).
+     */
+    uint32_t known;
+    /*
+     Known position in the base frame [m] (ignored when not known).
+     */
+    double xyz_m[3];
+} kincal_target;
+
+/*
+ A plane of `kincal_constraint_data`: unknown or known as `normal·p = offset_m`.
+ */
+typedef struct kincal_plane {
+    /*
+     Non-zero: the plane is known (`normal`, `offset_m`).
+     */
+    uint32_t known;
+    /*
+     Normal in the base frame (any non-zero length).
+     */
+    double normal[3];
+    /*
+     `normal·p` on the plane with the normal normalised [m].
+     */
+    double offset_m;
+} kincal_plane;
+
+/*
+ A known distance between two targets.
+ */
+typedef struct kincal_distance {
+    /*
+     First target (index into the targets).
+     */
+    uint32_t a;
+    /*
+     Second target (≠ `a`).
+     */
+    uint32_t b;
+    /*
+     The distance [m] (> 0).
+     */
+    double m;
+    /*
+     Weight relative to one position coordinate (≥ 0): 1 normally,
+     `(σ_data/σ_distance)²` when the distance's uncertainty is known.
+     */
+    double weight;
+} kincal_distance;
+
+/*
+ Instrument-free (or mixed) data: caller-owned arrays viewed for one call. L = `n_rows`,
+ N = the robot's joint count. Every row is exactly one of: a contact of target `target[l]`,
+ a contact of plane `plane[l]`, or an instrument row with the coordinates `coord_mask[l]`
+ of `coords`. Rows need not be sorted.
+ */
+typedef struct kincal_constraint_data {
+    /*
+     Number of rows L (≥ 1).
+     */
+    size_t n_rows;
+    /*
+     Joint readings [rad], L × N row-major; `q_len` = L·N.
+     */
+    const double *q;
+    /*
+     Length of `q`.
+     */
+    size_t q_len;
+    /*
+     Target of each row (< `n_targets`) or `KINCAL_NO_GROUP`; NULL: no target rows.
+     */
+    const uint32_t *target;
+    /*
+     Length of `target` (L; ignored when NULL).
+     */
+    size_t target_len;
+    /*
+     Plane of each row (< `n_planes`) or `KINCAL_NO_GROUP`; NULL: no plane rows.
+     */
+    const uint32_t *plane;
+    /*
+     Length of `plane` (L; ignored when NULL).
+     */
+    size_t plane_len;
+    /*
+     Session of each row (< `n_sessions`); NULL: one session.
+     */
+    const uint32_t *session;
+    /*
+     Length of `session` (L; ignored when NULL).
+     */
+    size_t session_len;
+    /*
+     Number of sessions (ignored when `session` is NULL).
+     */
+    size_t n_sessions;
+    /*
+     Tool point of each row in the tool frame [m], L × 3 (the ball centre, the probe tip);
+     NULL: the tool-frame origin.
+     */
+    const double *point;
+    /*
+     Length of `point` (3·L; ignored when NULL).
+     */
+    size_t point_len;
+    /*
+     Measured coordinates of the tool point in the base frame [m], L × 3 (only the
+     components in `coord_mask` are read); NULL: no instrument rows.
+     */
+    const double *coords;
+    /*
+     Length of `coords` (3·L; ignored when NULL).
+     */
+    size_t coords_len;
+    /*
+     Measured components per row: bit k = coordinate k of `[x, y, z]` (0x7 a full point,
+     0x4 z only); 0 on contact rows. NULL: no instrument rows.
+     */
+    const uint8_t *coord_mask;
+    /*
+     Length of `coord_mask` (L; ignored when NULL).
+     */
+    size_t coord_mask_len;
+    /*
+     Approach directions / temperature per row, or NULL; `aux_len` = L.
+     */
+    const struct kincal_joint_aux *aux;
+    /*
+     Length of `aux` (ignored when NULL).
+     */
+    size_t aux_len;
+    /*
+     Number of targets T; each needs rows: 2 when unknown, 1 when known.
+     */
+    size_t n_targets;
+    /*
+     The targets (T entries), or NULL: all unknown.
+     */
+    const struct kincal_target *targets;
+    /*
+     Length of `targets` (T; ignored when NULL).
+     */
+    size_t targets_len;
+    /*
+     Number of planes; each needs rows: 3 not collinear when unknown, 1 when known.
+     */
+    size_t n_planes;
+    /*
+     The planes, or NULL: all unknown.
+     */
+    const struct kincal_plane *planes;
+    /*
+     Length of `planes` (`n_planes`; ignored when NULL).
+     */
+    size_t planes_len;
+    /*
+     Number of known distances.
+     */
+    size_t n_distances;
+    /*
+     The distances (NULL when `n_distances` is 0).
+     */
+    const struct kincal_distance *distances;
+    /*
+     Length of `distances` (`n_distances`).
+     */
+    size_t distances_len;
+} kincal_constraint_data;
+
+/*
+ Everything `kincal_identify_constraints` reports besides the model.
+ */
+typedef struct kincal_constraints_report {
+    /*
+     The identification report (identifiability, residuals before/after over all rows,
+     standard errors, correlations). Its residual statistics count contacts as poses:
+     `rms_pos_m` is over targets' 3-D and planes' 1-D residuals and instrument positions.
+     */
+    struct kincal_identify_report identify;
+    /*
+     The gauge (mask by flat index): requested parameters no row can see, named rather
+     than fixed silently: the base frame without an external reference (no instrument
+     row, known target or plane), one length without a length reference (no distance
+     either).
+     */
+    uint8_t gauge[KINCAL_MAX_PARAMS];
+    /*
+     Non-zero: some row refers to the base frame (instrument row, known target or plane).
+     */
+    uint32_t external_reference;
+    /*
+     Non-zero: some row fixes the scale (a distance or an external reference).
+     */
+    uint32_t length_reference;
+    /*
+     Instrument rows.
+     */
+    size_t n_instrument_rows;
+    /*
+     Contact rows (target and plane rows).
+     */
+    size_t n_contacts;
+} kincal_constraints_report;
+
+/*
+ What a target's or plane's contacts say at the identified model.
+ */
+typedef struct kincal_group_estimate {
+    /*
+     Contacts with a positive weight.
+     */
+    size_t contacts;
+    /*
+     Mean predicted tool point: the estimated target [m] (for planes a point on it).
+     */
+    double point[3];
+    /*
+     Unit plane normal (zero for targets).
+     */
+    double normal[3];
+    /*
+     Plane offset `normal·p` [m] (0 for targets).
+     */
+    double offset_m;
+    /*
+     RMS residual distance of the contacts (3-D for targets, to the plane for planes) [m].
+     */
+    double rms_m;
+    /*
+     Largest residual distance [m].
+     */
+    double max_m;
+    /*
+     Mean residual distance [m] (MUKCa's "mean absolute consistency error").
+     */
+    double mean_m;
+    /*
+     Planes: spread across the best-fit line over extent along it (0 for targets).
+     */
+    double aspect;
+} kincal_group_estimate;
+
+/*
+ Options of `kincal_diagnose`; fill with `kincal_diagnose_options_default`, then edit.
+ */
+typedef struct kincal_diagnose_options {
+    /*
+     Stated position noise, 1σ per axis [m]; NaN: estimate from repeats.
+     */
+    double sigma_pos_m;
+    /*
+     Stated rotation noise, 1σ per axis [rad]; NaN: estimate from repeats.
+     */
+    double sigma_rot_rad;
+    /*
+     Cross-validation folds (≥ 2; default 5).
+     */
+    uint32_t folds;
+    /*
+     Non-zero: also evaluate every pair of candidate effects (default 1).
+     */
+    uint32_t pairs;
+    /*
+     Seed of the fold assignment.
+     */
+    uint64_t fold_seed;
+    /*
+     Candidate effects (mask of `kincal_effect` bits); 0: every effect whose inputs all
+     rows carry (default).
+     */
+    uint32_t candidates;
+    /*
+     Cross-validation needs this many pose groups per fold (default 5), else the
+     in-sample nested test.
+     */
+    uint32_t min_groups_per_fold;
+    /*
+     Non-zero: screen gross outliers first (default 1).
+     */
+    uint32_t screen_outliers;
+    /*
+     Reserved, 0.
+     */
+    uint32_t reserved;
+    /*
+     Threshold of the gap test (one-sided z, default 3).
+     */
+    double z_gap;
+    /*
+     Threshold of a candidate's improvement (default 3).
+     */
+    double z_significance;
+    /*
+     "Not significantly worse" below this paired z (default 3).
+     */
+    double z_equivalence;
+    /*
+     Share of the gap closed for `explained` (default 0.8).
+     */
+    double explained_fraction;
+    /*
+     Share for `partially_explained` (default 0.25).
+     */
+    double partial_fraction;
+    /*
+     Repeats within this temperature difference [°C] are the same conditions (0.5).
+     */
+    double repeat_temp_tol_c;
+    /*
+     Rank tolerance of the identifiability tests (default 1e-6).
+     */
+    double rank_tol;
+} kincal_diagnose_options;
+
+/*
+ The gap test of a model's held-out errors against the noise floor.
+ */
+typedef struct kincal_gap_test {
+    /*
+     Observed over expected whitened held-out total, Q/E.
+     */
+    double ratio;
+    /*
+     z of ln(Q/E).
+     */
+    double z;
+    /*
+     Held-out RMS position error expected at the noise floor [m].
+     */
+    double expected_rms_pos_m;
+    /*
+     Held-out RMS rotation angle expected at the noise floor [rad].
+     */
+    double expected_rms_rot_rad;
+    /*
+     The test on the position rows alone (0 without).
+     */
+    double z_pos;
+    /*
+     The test on the rotation rows alone (0 without).
+     */
+    double z_rot;
+} kincal_gap_test;
+
+/*
+ The library-free smooth check (REPORT.json `explainable`, `remaining_structure`).
+ */
+typedef struct kincal_smooth_check {
+    /*
+     Non-zero: the check ran.
+     */
+    uint32_t evaluated;
+    /*
+     Non-zero: `z` exceeds the significance threshold.
+     */
+    uint32_t significant;
+    /*
+     Share of the held-out gap a smooth function of q removes (whitened), in [0, 1].
+     */
+    double share_of_gap;
+    /*
+     The same on the position RMS.
+     */
+    double share_pos;
+    /*
+     The same on the rotation RMS.
+     */
+    double share_rot;
+    /*
+     Held-out RMS position error after the smooth correction [m].
+     */
+    double heldout_rms_pos_m;
+    /*
+     Held-out RMS rotation angle after it [rad].
+     */
+    double heldout_rms_rot_rad;
+    /*
+     Paired z against the geometric model (positive: better).
+     */
+    double z;
+} kincal_smooth_check;
+
+/*
+ The noise floor used (REPORT.json `noise_floor`).
+ */
+typedef struct kincal_noise_floor {
+    /*
+     Position noise, 1σ per axis [m].
+     */
+    double sigma_pos_m;
+    /*
+     Rotation noise, 1σ per axis [rad].
+     */
+    double sigma_rot_rad;
+    /*
+     Degrees of freedom of the position estimate (infinity when stated).
+     */
+    double dof_pos;
+    /*
+     Degrees of freedom of the rotation estimate (infinity when stated).
+     */
+    double dof_rot;
+    /*
+     Repeat subgroups in the data.
+     */
+    size_t repeat_subgroups;
+    /*
+     Non-zero: σ_pos was stated (else from repeats).
+     */
+    uint32_t stated_pos;
+    /*
+     Non-zero: σ_rot was stated.
+     */
+    uint32_t stated_rot;
+    /*
+     σ per axis the repeats alone give [m] (NaN without repeats).
+     */
+    double repeats_pos_m;
+    /*
+     Its degrees of freedom (0 without).
+     */
+    double repeats_pos_dof;
+    /*
+     σ per axis of the rotation repeats [rad] (NaN without).
+     */
+    double repeats_rot_rad;
+    /*
+     Its degrees of freedom.
+     */
+    double repeats_rot_dof;
+    /*
+     Non-zero: the stated σ_pos was overruled by noisier repeats (the floor uses them).
+     */
+    uint32_t overruled_pos;
+    /*
+     Non-zero: the stated σ_rot was overruled.
+     */
+    uint32_t overruled_rot;
+    /*
+     The overruled stated σ_pos [m] (NaN when not overruled).
+     */
+    double overruled_pos_m;
+    /*
+     The overruled stated σ_rot [rad] (NaN when not overruled).
+     */
+    double overruled_rot_rad;
+} kincal_noise_floor;
+
+/*
+ One model's score (REPORT.json `candidates[]`, `baseline`).
+ */
+typedef struct kincal_model_score {
+    /*
+     Effects of the model (mask of `kincal_effect` bits; 0 for the baseline).
+     */
+    uint32_t effects;
+    /*
+     Non-zero: evaluated (0: no effect parameter separable from the geometry,
+     `confounded_with_geometry`).
+     */
+    uint32_t evaluated;
+    /*
+     Non-zero: significantly better than the geometric model.
+     */
+    uint32_t significant;
+    /*
+     Reserved, 0.
+     */
+    uint32_t reserved;
+    /*
+     Parameters fitted.
+     */
+    size_t fitted_params;
+    /*
+     Held-out RMS position error [m].
+     */
+    double heldout_rms_pos_m;
+    /*
+     Held-out RMS rotation angle [rad].
+     */
+    double heldout_rms_rot_rad;
+    /*
+     Whitened held-out total.
+     */
+    double heldout_chi2;
+    /*
+     Paired z of the improvement over the baseline.
+     */
+    double improvement_z;
+    /*
+     Paired z against the best candidate (positive: worse).
+     */
+    double z_vs_best;
+    /*
+     Paired z against the winner.
+     */
+    double z_vs_winner;
+    /*
+     Paired z of the improvement in position alone (negative: worse).
+     */
+    double z_pos;
+    /*
+     The same in rotation alone.
+     */
+    double z_rot;
+    /*
+     Share of the position gap closed.
+     */
+    double gap_closed_fraction;
+    /*
+     Share of the rotation gap closed.
+     */
+    double gap_closed_rot_fraction;
+    /*
+     Whitened share (position and rotation): what the status is decided on.
+     */
+    double gap_closed_total_fraction;
+    /*
+     How distinct the effect's columns are from the geometry (smallest sine).
+     */
+    double distinctness;
+} kincal_model_score;
+
+/*
+ A warning (REPORT.json `warnings[]`); the fields its code documents are set, the others 0.
+ */
+typedef struct kincal_diagnosis_warning {
+    /*
+     A `kincal_diagnosis_warning_code`.
+     */
+    uint32_t code;
+    /*
+     A `kincal_diagnosis_part`.
+     */
+    uint32_t part;
+    /*
+     Ratio (noise warnings).
+     */
+    double ratio;
+    /*
+     z (noise warnings).
+     */
+    double z;
+    /*
+     The baseline's gap-test z (`gap_despite_gap_test`).
+     */
+    double z_gap;
+    /*
+     The best candidate's improvement z (`gap_despite_gap_test`).
+     */
+    double z_candidate;
+    /*
+     Rows that failed the outlier test (`too_many_suspects`).
+     */
+    size_t count;
+} kincal_diagnosis_warning;
+
+/*
+ Everything `kincal_diagnose` found: the fields of REPORT.json (`where`, per-pose rows,
+ files and settings aside), in SI units.
+ */
+typedef struct kincal_diagnosis_report {
+    /*
+     A `kincal_diagnosis_status`.
+     */
+    uint32_t status;
+    /*
+     A `kincal_diagnosis_method` (`in_sample_nested` with too few pose groups).
+     */
+    uint32_t method;
+    /*
+     A `kincal_diagnosis_reason`.
+     */
+    uint32_t reason;
+    /*
+     Where the remaining gap lies or what gets worse (a `kincal_diagnosis_part`).
+     */
+    uint32_t reason_part;
+    /*
+     The z of the reason (remaining gap, remaining structure, worsening); NaN otherwise.
+     */
+    double reason_z;
+    /*
+     The verdict's effects (the winner; mask of `kincal_effect` bits; 0 for none).
+     */
+    uint32_t effects;
+    /*
+     Union of the effects of every confounded candidate (REPORT.json `confounded_with`).
+     */
+    uint32_t confounded_effects;
+    /*
+     The winner's index in `candidates`, or `KINCAL_NO_INDEX`.
+     */
+    size_t winner;
+    /*
+     Candidates that explain the data as well as the winner (first `n_confounded` of
+     `confounded_with`, each an effect mask).
+     */
+    size_t n_confounded;
+    /*
+     The confounded candidates.
+     */
+    uint32_t confounded_with[KINCAL_DIAG_MAX_CANDIDATES];
+    /*
+     Share of the position gap closed.
+     */
+    double gap_closed_fraction;
+    /*
+     Share of the rotation gap closed.
+     */
+    double gap_closed_rot_fraction;
+    /*
+     Whitened share (position and rotation): the status's share.
+     */
+    double gap_closed_total_fraction;
+    /*
+     Held-out RMS position error of the verdict's model [m].
+     */
+    double heldout_rms_pos_m;
+    /*
+     Held-out RMS rotation angle of the verdict's model [rad].
+     */
+    double heldout_rms_rot_rad;
+    /*
+     The gap test of what remains (z, z_pos, z_rot).
+     */
+    struct kincal_gap_test remaining;
+    /*
+     Non-zero: the remaining gap test exceeds `z_gap`.
+     */
+    uint32_t remaining_gap_significant;
+    /*
+     A `kincal_beyond_library`.
+     */
+    uint32_t beyond_library;
+    /*
+     Share a smooth function of q closes when `beyond_library` is `smooth_effect`, else
+     NaN.
+     */
+    double beyond_library_share;
+    /*
+     Held-out RMS of what remains per axis (x, y, z [m], rx, ry, rz [rad]).
+     */
+    double remaining_rms_axis[6];
+    /*
+     "Explainable at all?": the smooth check on the baseline's held-out residuals.
+     */
+    struct kincal_smooth_check explainable;
+    /*
+     The same check on the verdict's held-out residuals (run when it would be explained).
+     */
+    struct kincal_smooth_check remaining_structure;
+    /*
+     The noise floor used.
+     */
+    struct kincal_noise_floor noise;
+    /*
+     The geometric model's score.
+     */
+    struct kincal_model_score baseline;
+    /*
+     The geometric model's gap test.
+     */
+    struct kincal_gap_test gap;
+    /*
+     In-sample RMS position error of the geometric calibration [m].
+     */
+    double insample_rms_pos_m;
+    /*
+     In-sample RMS rotation angle of the geometric calibration [rad].
+     */
+    double insample_rms_rot_rad;
+    /*
+     Number of candidates (singles in `kincal_effect` order, then pairs).
+     */
+    size_t n_candidates;
+    /*
+     The candidates.
+     */
+    struct kincal_model_score candidates[KINCAL_DIAG_MAX_CANDIDATES];
+    /*
+     Number of suspect rows (gross outliers excluded from every fit and test).
+     */
+    size_t n_suspects;
+    /*
+     Suspect rows (zero-based indices into the data, ascending).
+     */
+    size_t suspects[KINCAL_DIAG_MAX_SUSPECTS];
+    /*
+     Number of warnings.
+     */
+    size_t n_warnings;
+    /*
+     The warnings.
+     */
+    struct kincal_diagnosis_warning warnings[KINCAL_DIAG_MAX_WARNINGS];
+    /*
+     Distinct pose groups.
+     */
+    size_t groups;
+    /*
+     Folds used.
+     */
+    size_t folds;
+} kincal_diagnosis_report;
+
+/*
+ Per-pose outputs of `kincal_diagnose` (REPORT.json `where.per_pose`).
+ */
+typedef struct kincal_pose_diagnosis {
+    /*
+     The pose's group id.
+     */
+    uint32_t group;
+    /*
+     Its cross-validation fold.
+     */
+    uint32_t fold;
+    /*
+     Non-zero: a suspect row (excluded).
+     */
+    uint32_t suspect;
+    /*
+     Reserved, 0.
+     */
+    uint32_t reserved;
+    /*
+     Residual of the geometric calibration on all rows `[Δp (m); Δφ (rad)]`.
+     */
+    double residual[6];
+    /*
+     Held-out residual of the geometric model.
+     */
+    double heldout_baseline[6];
+    /*
+     Held-out residual of the verdict's model.
+     */
+    double heldout_final[6];
+} kincal_pose_diagnosis;
 
 #ifdef __cplusplus
 extern "C" {
@@ -2662,6 +3641,135 @@ kincal_status kincal_moved_to_point(const double *t,
                                     double *t_out,
                                     size_t t_out_len,
                                     struct kincal_error *err);
+
+/*
+ Bytes of caller memory `kincal_identify_constraints` needs: `n_rows` rows of an
+ `n_joints` robot with `n_targets + n_planes` groups, `n_distances` distances,
+ `n_sessions` sessions (0 without a session array) and `n_requested` requested parameters
+ (the identification workspace of capacity 32 or `KINCAL_MAX_PARAMS`, about 66 KB or
+ 840 KB, plus about 0.5 KB per row). Returns 0 for an invalid joint count, more than
+ `KINCAL_MAX_PARAMS` parameters, or an overflowing size.
+ */
+size_t kincal_identify_constraints_workspace_size(size_t n_joints,
+                                                  size_t n_rows,
+                                                  size_t n_targets,
+                                                  size_t n_planes,
+                                                  size_t n_distances,
+                                                  size_t n_sessions,
+                                                  size_t n_requested);
+
+/*
+ Instrument-free calibration: identifies the identifiable subset of `opts->requested` from
+ contacts held at targets or on planes, known distances, known targets and planes, and
+ optional (partial) instrument coordinates, starting from `robot`; the 3 coordinates of
+ every unknown target or plane are eliminated, never fitted (`docs/constraints.md`).
+
+ - `robot`: initial model (read only). `robot_out` may point to the same struct.
+ - `data`: the rows (see `kincal_constraint_data`).
+ - `opts`: from `kincal_identify_options_default` (OLS, OPT1 or OPT2, the parameters to
+   fit; `weight_pos` weighs contact and distance rows too).
+ - `workspace`, `workspace_len`: caller memory of at least
+   `kincal_identify_constraints_workspace_size(...)` bytes, aligned to
+   `KINCAL_WORKSPACE_ALIGN`; scratch.
+ - `report_out` (NULL if not wanted): identification report, gauge, references.
+ - `targets_out` (`n_targets` entries), `planes_out` (`n_planes`), `distances_out`
+   (`n_distances` predicted distances [m]): each NULL if not wanted; the estimates at the
+   identified model (the consistency of the data with it). They are filled last, after
+   the model and the report are known; only a failure while computing them (none is
+   expected once the fit succeeded) can leave them partly written.
+
+ Every refusal of a row sets `kincal_error.pose` to the zero-based row (`KINCAL_NO_INDEX`
+ when no row names the group): INVALID_ARGUMENT (`data->coord_mask`: a row that measures
+ nothing, coordinates and a target or plane on one row, bits beyond 0x7; `data->plane`: a
+ target and a plane on one row; `data->session`: a target, plane or the instrument rows in
+ two sessions), INDEX_OUT_OF_RANGE (a target, plane or session id beyond its count), BAD_GROUP
+ (a target or plane with too few rows: `argument` `data->target` or `data->plane`, `index` =
+ its id, `expected`/`found` = rows needed/given; or a zero known normal), DEGENERATE_GROUP
+ (collinear plane contacts at the starting model, `value` = their aspect, below
+ `KINCAL_PLANE_MIN_ASPECT`), TOO_FEW_DATA (a session with fewer than
+ `KINCAL_MIN_SESSION_ROWS` rows, `index` = session), BAD_DISTANCE (`index` = the distance;
+ an unknown target: `found` = its id, `expected` = `n_targets`; equal ends, a length
+ ≤ 0, a bad weight), NON_FINITE (`pose` = row); plus the argument and numerical statuses of
+ `kincal_identify`. Outputs are written on success only.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths (`workspace` writable for
+ `workspace_len` bytes and not overlapping the other arguments); `err` NULL or writable.
+ */
+kincal_status kincal_identify_constraints(const struct kincal_robot *robot,
+                                          const struct kincal_constraint_data *data,
+                                          const struct kincal_identify_options *opts,
+                                          void *workspace,
+                                          size_t workspace_len,
+                                          struct kincal_robot *robot_out,
+                                          struct kincal_constraints_report *report_out,
+                                          struct kincal_group_estimate *targets_out,
+                                          size_t targets_out_len,
+                                          struct kincal_group_estimate *planes_out,
+                                          size_t planes_out_len,
+                                          double *distances_out,
+                                          size_t distances_out_len,
+                                          struct kincal_error *err);
+
+/*
+ Default diagnosis options (those of `kincal diagnose`): noise from repeats, 5 folds, all
+ candidates whose inputs the rows carry, pairs, z thresholds 3/3/3, explained at 80 %,
+ partial at 25 %, outlier screening on. Returns OK or NULL_POINTER / MISALIGNED_POINTER.
+
+ # Safety
+ `opts_out` NULL or writable; `err` NULL or writable.
+ */
+kincal_status kincal_diagnose_options_default(struct kincal_diagnose_options *opts_out,
+                                              struct kincal_error *err);
+
+/*
+ Bytes of caller memory `kincal_diagnose` needs for `n_poses` measurements of an
+ `n_joints` robot (the diagnosis workspace, about 1.4 MB, plus about 1.3 KB per pose and the
+ result). Returns 0 for an invalid joint count or an overflowing size.
+ */
+size_t kincal_diagnose_workspace_size(size_t n_joints,
+                                      size_t n_poses);
+
+/*
+ The sim-to-real gap diagnosis (`kincal diagnose`, spec/effects.md) of instrument
+ measurements against the robot description `robot` (nominal geometry, mass model,
+ limits; effect parameters zero): the geometric calibration, every candidate effect and
+ pair cross-validated over pose groups (or the in-sample nested test with too few
+ groups), the verdict, and the library-free smooth check.
+
+ - `data`: the measurements (`weights` NULL or all 1: the diagnosis holds out by itself).
+ - `groups`, `groups_len`: group id of every pose (`pose_id`: repeats of one pose share
+   it; `groups_len` = `n_poses`), or NULL: every pose its own group.
+ - `opts`: from `kincal_diagnose_options_default`; NaN σ: estimate from repeats.
+ - `workspace`: at least `kincal_diagnose_workspace_size(N, n_poses)` bytes aligned to
+   `KINCAL_WORKSPACE_ALIGN`; scratch.
+ - `model_out`: the verdict's model (geometry + effects) fitted on all rows;
+   `geometric_out` (NULL if not wanted): the geometric calibration; `report_out`: the
+   report; `poses_out` (NULL or `n_poses` entries): per-pose residuals.
+
+ Returns OK; the argument statuses of `kincal_identify`; MISSING_INPUT (no stated σ and
+ no repeats, or a candidate's input missing), TOO_FEW_DATA (fewer groups than folds),
+ INVALID_PARAMETER with `pose` set (a weight other than 1), INVALID_ARGUMENT (an option),
+ CAPACITY_EXCEEDED, and the numerical statuses of the fits. Outputs are written on
+ success only.
+
+ # Safety
+ Non-NULL pointers must be valid for their stated lengths (`workspace` writable for
+ `workspace_len` bytes and not overlapping the other arguments); `err` NULL or writable.
+ */
+kincal_status kincal_diagnose(const struct kincal_robot *robot,
+                              const struct kincal_measurements *data,
+                              const uint32_t *groups,
+                              size_t groups_len,
+                              const struct kincal_diagnose_options *opts,
+                              void *workspace,
+                              size_t workspace_len,
+                              struct kincal_robot *model_out,
+                              struct kincal_robot *geometric_out,
+                              struct kincal_diagnosis_report *report_out,
+                              struct kincal_pose_diagnosis *poses_out,
+                              size_t poses_out_len,
+                              struct kincal_error *err);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -31,6 +31,10 @@ function kincal()
 %     kincal_identifiability  rank, conditioning, redundant and undetermined parameters
 %     kincal_validate         per-pose errors and summary against the 1 mm / 0.66 deg targets
 %     kincal_biopsy_rotation  eq. (3): the orientation error a biopsy allows
+%     kincal_identify_constraints  calibration without an instrument: contacts held at
+%                             targets or on planes, known distances, sessions, partial
+%                             coordinates; the gauge named
+%     kincal_diagnose         the sim-to-real gap diagnosis (REPORT.json fields as a struct)
 %   Measurement set-up (Section 5.1)
 %     kincal_register         pose of a marker body from motion-capture data, outliers named
 %     kincal_t_base_ee        end-effector pose in the base frame from two registrations

@@ -270,7 +270,7 @@ pub extern "C" fn kincal_identify_workspace_size(
     ffi_boundary!(on_panic = 0; { workspace_size(n_joints, n_poses, n_requested).unwrap_or(0) })
 }
 
-fn mask_of(set: &ParamSet) -> [u8; KINCAL_MAX_PARAMS] {
+pub(crate) fn mask_of(set: &ParamSet) -> [u8; KINCAL_MAX_PARAMS] {
     let mut m = [0u8; KINCAL_MAX_PARAMS];
     for (i, v) in m.iter_mut().enumerate() {
         *v = u8::from(set.contains(i));
@@ -350,7 +350,7 @@ pub unsafe extern "C" fn kincal_identify_options_default(
 
 /// The core options of checked C options for an `n`-joint robot; `bounds` receives OPT1's
 /// intervals.
-fn options<'a>(
+pub(crate) fn options<'a>(
     o: &kincal_identify_options,
     n: usize,
     bounds: &'a mut Bounds,
@@ -644,7 +644,7 @@ fn stats(s: &kincal::identify::ResidualStats) -> kincal_residual_stats {
     }
 }
 
-fn report_of<const N: usize, const P: usize>(
+pub(crate) fn report_of<const N: usize, const P: usize>(
     r: &Identification<N>,
     ws: &Workspace<P>,
 ) -> kincal_identify_report {

@@ -13,7 +13,9 @@
 //! [`prepared`] (a model built once into caller-owned storage, for fast FK and IK),
 //! [`pose`] (pose error, conversions), [`identify`] (identifiability, OLS/OPT1/OPT2),
 //! [`validation`] (metrics, biopsy requirement), [`registration`] (markers), [`view_point`]
-//! (where camera poses look, a pose moved to a point), [`aria`] (built-in arm).
+//! (where camera poses look, a pose moved to a point), [`aria`] (built-in arm),
+//! [`constraints`] (instrument-free calibration: targets, planes, distances, sessions),
+//! [`diagnosis`] (the sim-to-real gap diagnosis and its report).
 #![cfg_attr(not(feature = "std"), no_std)]
 #![deny(missing_docs)]
 #![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
@@ -44,6 +46,9 @@ pub mod robot;
 pub mod status;
 pub mod validation;
 pub mod view_point;
+// Last, so that cbindgen keeps the header's earlier declarations in place.
+pub mod constraints;
+pub mod diagnosis;
 
 #[cfg(test)]
 mod tests;

@@ -4,6 +4,8 @@
 
 mod abi;
 mod calibration;
+mod constraints;
+mod diagnosis;
 mod fuzz_regressions;
 mod header;
 mod hostile;

@@ -57,7 +57,7 @@ typedef struct kc_fail {
 } kc_fail;
 
 /* Largest number of scratch buffers one operation allocates. */
-#define KC_MAX_BUFFERS 8
+#define KC_MAX_BUFFERS 24
 
 /* The state of one gateway call: the operation's name (for messages, "kincal_fk: ..."), the
  * failure record, and the scratch buffers the handler allocated (kc_alloc), which mexFunction
@@ -2638,6 +2638,9 @@ static int op_test_panic(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *pr
 /* Dispatch                                                                                   */
 /* ------------------------------------------------------------------------------------------ */
 
+/* Instrument-free calibration and the diagnosis (a file of their own, same helpers). */
+#include "kincal_mex_calibration.c"
+
 typedef struct kc_operation {
     const char *name;
     kc_handler handler;
@@ -2679,6 +2682,10 @@ static const kc_operation OPERATIONS[] = {
     {"identifiability", op_identifiability, 6, 1},
     {"validate", op_validate, 5, 2},
     {"biopsy_rotation", op_biopsy_rotation, 3, 1},
+#endif
+#if defined(KC_HAS_CALIBRATION)
+    {"identify_constraints", op_identify_constraints, 5, 2},
+    {"diagnose", op_diagnose, 7, 3},
 #endif
 #if defined(KC_HAS_REGISTRATION)
     {"register", op_register, 4, 2},

@@ -16,7 +16,11 @@
 //   tool poses, identified from Table 1 with OLS, OPT1 and OPT2, validated before and after;
 // - marker registration with a hidden and a moved marker;
 // - where camera poses look (kincal_view_point: cameras aimed at a known target) and a pose
-//   moved to a point (kincal_moved_to_point), with their bad-argument statuses.
+//   moved to a point (kincal_moved_to_point), with their bad-argument statuses;
+// - instrument-free calibration (kincal_identify_constraints): contacts made by IK on a
+//   perturbed ARIA recover its parameters, targets, plane and distance to 1e-9; bad rows
+//   are named;
+// - the diagnosis (kincal_diagnose): a planted joint compliance is `explained` by it.
 
 #include <kincal.h>
 
@@ -796,6 +800,375 @@ void test_panic_boundary() {
 #endif
 }
 
+// ------------------------------------------------------------------ instrument-free and diagnosis
+
+/// Deterministic pseudo-random numbers (SplitMix64), the same on every platform.
+struct Rng {
+    uint64_t s;
+    double uniform() {  // [0, 1)
+        uint64_t z = (s += 0x9e3779b97f4a7c15ULL);
+        z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+        z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+        return static_cast<double>((z ^ (z >> 31)) >> 11) * 0x1.0p-53;
+    }
+    double range(double a, double b) { return a + (b - a) * uniform(); }
+    double normal() {  // Box–Muller
+        const double u = 1.0 - uniform(), v = uniform();
+        return std::sqrt(-2.0 * std::log(u)) * std::cos(6.283185307179586 * v);
+    }
+};
+
+const double BALL[3] = {0.01, -0.02, 0.1};  // tool point in the tool frame [m]
+
+std::array<double, 3> ball_at(const Mat4 &t) {
+    std::array<double, 3> p{};
+    for (int r = 0; r < 3; ++r)
+        p[r] = t[12 + r] + t[r] * BALL[0] + t[4 + r] * BALL[1] + t[8 + r] * BALL[2];
+    return p;
+}
+
+Mat4 fk(const kincal_robot &r, const double *q) {
+    Mat4 t{};
+    kincal_error err;
+    CHECK_STATUS(kincal_fk(&r, q, 6, nullptr, t.data(), 16, &err), KINCAL_STATUS_OK, err, nullptr);
+    return t;
+}
+
+/// Joint readings holding the ball of `robot` at `p`, the tool tilted up to `tilt` rad from
+/// the orientation of `t0` (IK seeded at `q0`).
+std::array<double, 6> hold(const kincal_robot &robot, const std::array<double, 3> &p,
+                           const Mat4 &t0, const double *q0, double tilt, Rng &rng) {
+    kincal_ik_options opts;
+    kincal_error err;
+    CHECK_STATUS(kincal_ik_options_default(&opts, &err), KINCAL_STATUS_OK, err, nullptr);
+    opts.first_solution = 1;
+    opts.extra_seeds = 4;
+    std::array<double, 6> q{};
+    for (int attempt = 0; attempt < 50; ++attempt) {
+        double axis[3] = {rng.range(-1, 1), rng.range(-1, 1), rng.range(-1, 1)};
+        const double n = std::sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+        const double a = rng.range(0.0, tilt);
+        const double v[6] = {0, 0, 0, axis[0] / n * a, axis[1] / n * a, axis[2] / n * a};
+        Mat4 r = mul(frame(v), t0);  // tilted in the base frame
+        for (int k = 0; k < 3; ++k)
+            r[12 + k] = p[k] - (r[k] * BALL[0] + r[4 + k] * BALL[1] + r[8 + k] * BALL[2]);
+        if (kincal_ik(&robot, r.data(), 16, q0, 6, nullptr, &opts, q.data(), 6, nullptr,
+                      &err) == KINCAL_STATUS_OK)
+            return q;
+    }
+    CHECK(!"IK of a contact failed");
+    return q;
+}
+
+/// Instrument-free data made on `truth`: 6 unknown targets (5 contacts), 2 known targets
+/// (3), one unknown plane (6), a distance between targets 0 and 1, and two instrument rows
+/// (z only; x, y, z). Rows interleaved, not sorted by group.
+struct ContactSet {
+    std::vector<double> q, point, coords;
+    std::vector<uint32_t> target, plane;
+    std::vector<uint8_t> mask;
+    std::vector<kincal_target> targets;
+    std::vector<kincal_plane> planes;
+    std::vector<kincal_distance> distances;
+    std::vector<std::array<double, 3>> true_targets;
+    std::array<double, 3> true_normal{};
+    double true_offset = 0.0;
+
+    size_t rows() const { return target.size(); }
+    void push(const std::array<double, 6> &qr, uint32_t t, uint32_t p) {
+        q.insert(q.end(), qr.begin(), qr.end());
+        point.insert(point.end(), BALL, BALL + 3);
+        coords.insert(coords.end(), {0.0, 0.0, 0.0});
+        target.push_back(t);
+        plane.push_back(p);
+        mask.push_back(0);
+    }
+    kincal_constraint_data view() const {
+        kincal_constraint_data d{};
+        d.n_rows = rows();
+        d.q = q.data();
+        d.q_len = q.size();
+        d.target = target.data();
+        d.target_len = rows();
+        d.plane = plane.data();
+        d.plane_len = rows();
+        d.point = point.data();
+        d.point_len = point.size();
+        d.coords = coords.data();
+        d.coords_len = coords.size();
+        d.coord_mask = mask.data();
+        d.coord_mask_len = rows();
+        d.n_targets = targets.size();
+        d.targets = targets.data();
+        d.targets_len = targets.size();
+        d.n_planes = planes.size();
+        d.planes = planes.data();
+        d.planes_len = planes.size();
+        d.n_distances = distances.size();
+        d.distances = distances.data();
+        d.distances_len = distances.size();
+        return d;
+    }
+};
+
+ContactSet contact_set(const kincal_robot &truth, uint64_t seed) {
+    Rng rng{seed};
+    double seed_q[6];
+    kincal_error err;
+    CHECK_STATUS(kincal_aria_tool_seed(seed_q, 6, &err), KINCAL_STATUS_OK, err, nullptr);
+    auto near_seed = [&]() {
+        std::array<double, 6> q{};
+        for (int j = 0; j < 6; ++j) q[j] = seed_q[j] + rng.range(-0.5, 0.5);
+        return q;
+    };
+    ContactSet s;
+    std::vector<std::vector<std::array<double, 6>>> groups;
+    for (uint32_t t = 0; t < 8; ++t) {
+        const auto q0 = near_seed();
+        const Mat4 t0 = fk(truth, q0.data());
+        const auto p = ball_at(t0);
+        const bool known = t >= 6;
+        std::vector<std::array<double, 6>> g;
+        for (int k = 0; k < (known ? 3 : 5); ++k) g.push_back(hold(truth, p, t0, q0.data(), 0.5, rng));
+        groups.push_back(g);
+        kincal_target kt{};
+        kt.known = known ? 1 : 0;
+        for (int k = 0; k < 3; ++k) kt.xyz_m[k] = known ? p[k] : 0.0;
+        s.targets.push_back(kt);
+        s.true_targets.push_back(p);
+    }
+    {
+        const auto q0 = near_seed();
+        const Mat4 t0 = fk(truth, q0.data());
+        const auto c = ball_at(t0);
+        const double n[3] = {0.48, -0.6, 0.64};  // unit
+        const double u[3] = {0.8, 0.64, 0.0};    // ⟂ n
+        const double v[3] = {n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2],
+                             n[0] * u[1] - n[1] * u[0]};
+        std::vector<std::array<double, 6>> g;
+        for (int k = 0; k < 6; ++k) {
+            const double a = rng.range(-0.08, 0.08), b = rng.range(-0.08, 0.08);
+            std::array<double, 3> p{};
+            for (int i = 0; i < 3; ++i) p[i] = c[i] + a * u[i] + b * v[i];
+            g.push_back(hold(truth, p, t0, q0.data(), 0.3, rng));
+        }
+        groups.push_back(g);
+        s.planes.push_back(kincal_plane{});
+        s.true_normal = {n[0], n[1], n[2]};
+        s.true_offset = n[0] * c[0] + n[1] * c[1] + n[2] * c[2];
+    }
+    for (size_t k = 0; k < 6; ++k)
+        for (size_t g = 0; g < groups.size(); ++g)
+            if (k < groups[g].size())
+                s.push(groups[g][k], g < 8 ? static_cast<uint32_t>(g) : KINCAL_NO_GROUP,
+                       g < 8 ? KINCAL_NO_GROUP : 0u);
+    const auto &a = s.true_targets[0], &b = s.true_targets[1];
+    kincal_distance d{};
+    d.a = 0;
+    d.b = 1;
+    d.m = std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+                    (a[2] - b[2]) * (a[2] - b[2]));
+    d.weight = 1.0;
+    s.distances.push_back(d);
+    for (uint8_t m : {uint8_t{0x4}, uint8_t{0x7}}) {
+        const auto q = near_seed();
+        const auto p = ball_at(fk(truth, q.data()));
+        s.push(q, KINCAL_NO_GROUP, KINCAL_NO_GROUP);
+        s.mask.back() = m;
+        for (int k = 0; k < 3; ++k) s.coords[3 * (s.rows() - 1) + k] = p[k];
+    }
+    return s;
+}
+
+struct ConstraintRun {
+    kincal_status status;
+    kincal_error err;
+    kincal_robot fitted;
+    std::unique_ptr<kincal_constraints_report> report;
+    std::vector<kincal_group_estimate> targets, planes;
+    std::vector<double> distances;
+};
+
+ConstraintRun identify_contacts(const kincal_robot &start, const ContactSet &s) {
+    ConstraintRun r{};
+    kincal_identify_options opts;
+    CHECK_STATUS(kincal_identify_options_default(&start, KINCAL_ALGORITHM_OLS, 0, &opts, &r.err),
+                 KINCAL_STATUS_OK, r.err, nullptr);
+    size_t n_req = 0;
+    for (unsigned char m : opts.requested) n_req += m != 0;
+    const size_t size = kincal_identify_constraints_workspace_size(
+        6, s.rows(), s.targets.size(), s.planes.size(), s.distances.size(), 0, n_req);
+    CHECK(size > 0);
+    std::vector<std::max_align_t> ws(size / sizeof(std::max_align_t) + 1);
+    r.report = std::make_unique<kincal_constraints_report>();
+    r.targets.resize(s.targets.size());
+    r.planes.resize(s.planes.size());
+    r.distances.resize(s.distances.size());
+    const kincal_constraint_data data = s.view();
+    r.status = kincal_identify_constraints(
+        &start, &data, &opts, ws.data(), size, &r.fitted, r.report.get(), r.targets.data(),
+        r.targets.size(), r.planes.data(), r.planes.size(), r.distances.data(),
+        r.distances.size(), &r.err);
+    return r;
+}
+
+void test_constraints() {
+    const kincal_robot nominal = aria(KINCAL_ARIA_MODEL_NOMINAL);
+    // Which parameters contacts determine: from data made on the nominal arm.
+    const ContactSet probe = contact_set(nominal, 5);
+    const ConstraintRun p = identify_contacts(nominal, probe);
+    CHECK_STATUS(p.status, KINCAL_STATUS_OK, p.err, nullptr);
+    // The truth: every identifiable parameter off by up to 2 mm / 0.3°.
+    kincal_robot truth = nominal;
+    Rng rng{77};
+    for (size_t i = 0; i < kincal_num_params(6); ++i)
+        if (p.report->identify.analysis.identifiable[i] != 0) {
+            char label[32];
+            kincal_error err;
+            CHECK_STATUS(kincal_robot_param_label(&nominal, i, label, sizeof label, &err),
+                         KINCAL_STATUS_OK, err, nullptr);
+            const bool length = label[0] == 'a' || label[0] == 'd' ||
+                                std::strstr(label, "_p") != nullptr;
+            truth.params[i] += length ? rng.range(-2e-3, 2e-3) : rng.range(-5e-3, 5e-3);
+        }
+    const ContactSet s = contact_set(truth, 11);
+    const ConstraintRun r = identify_contacts(nominal, s);
+    CHECK_STATUS(r.status, KINCAL_STATUS_OK, r.err, nullptr);
+    CHECK(r.report->external_reference == 1 && r.report->length_reference == 1);
+    CHECK(r.report->n_instrument_rows == 2 && r.report->n_contacts == s.rows() - 2);
+    double worst = 0.0;
+    size_t fitted = 0;
+    for (size_t i = 0; i < kincal_num_params(6); ++i)
+        if (r.report->identify.analysis.identifiable[i] != 0) {
+            worst = std::fmax(worst, std::fabs(r.fitted.params[i] - truth.params[i]));
+            ++fitted;
+        }
+    CHECK(fitted > 15 && worst < 1e-9);
+    double worst_point = 0.0;
+    for (size_t t = 0; t < s.targets.size(); ++t) {
+        worst_point = std::fmax(worst_point, max_abs_diff(r.targets[t].point,
+                                                          s.true_targets[t].data(), 3));
+        CHECK(r.targets[t].rms_m < 1e-9);
+    }
+    CHECK(worst_point < 1e-9);
+    const double sign = r.planes[0].normal[0] * s.true_normal[0] +
+                                    r.planes[0].normal[1] * s.true_normal[1] +
+                                    r.planes[0].normal[2] * s.true_normal[2] <
+                                0
+                            ? -1.0
+                            : 1.0;
+    for (int k = 0; k < 3; ++k) CHECK(std::fabs(sign * r.planes[0].normal[k] - s.true_normal[k]) < 1e-9);
+    CHECK(std::fabs(sign * r.planes[0].offset_m - s.true_offset) < 1e-9);
+    CHECK(std::fabs(r.distances[0] - s.distances[0].m) < 1e-9);
+    std::printf("constraints: %zu rows, %zu parameters recovered to %.1e, targets to %.1e m\n",
+                s.rows(), fitted, worst, worst_point);
+
+    // Bad rows name the row: a target with one contact, a distance to an unknown target,
+    // a target and coordinates on one row.
+    ContactSet bad = s;
+    std::vector<size_t> of3;
+    for (size_t l = 0; l < bad.rows(); ++l)
+        if (bad.target[l] == 3) of3.push_back(l);
+    for (size_t k = 1; k < of3.size(); ++k) bad.target[of3[k]] = 2;
+    ConstraintRun e = identify_contacts(nominal, bad);
+    CHECK_STATUS(e.status, KINCAL_STATUS_BAD_GROUP, e.err, "data->target");
+    CHECK(e.err.index == 3 && e.err.pose == of3[0] && e.err.found == 1 && e.err.expected == 2);
+    bad = s;
+    bad.distances[0].b = 9;
+    e = identify_contacts(nominal, bad);
+    CHECK_STATUS(e.status, KINCAL_STATUS_BAD_DISTANCE, e.err, "data->distances");
+    CHECK(e.err.index == 0 && e.err.found == 9);
+    bad = s;
+    bad.mask[4] = 0x7;
+    e = identify_contacts(nominal, bad);
+    CHECK_STATUS(e.status, KINCAL_STATUS_INVALID_ARGUMENT, e.err, "data->coord_mask");
+    CHECK(e.err.pose == 4);
+    char text[512];
+    kincal_error_describe(&e.err, text, sizeof text);
+    CHECK(std::strstr(text, "pose 4") != nullptr);
+}
+
+void test_diagnosis() {
+    const kincal_robot nominal = aria(KINCAL_ARIA_MODEL_NOMINAL);
+    kincal_robot truth = nominal;
+    kincal_error err;
+    // Geometry off by a millimetre here and there, and a planted joint compliance.
+    const std::pair<const char *, double> planted[] = {
+        {"a_2", 1.5e-3},        {"alpha_3", 2e-3},      {"theta0_4", -3e-3},
+        {"d_5", -1e-3},         {"compliance_2", 8e-4}, {"compliance_3", 6e-4},
+        {"compliance_5", 4e-4}};
+    for (const auto &pv : planted) {
+        double v = 0.0;
+        CHECK_STATUS(kincal_robot_get_param_by_label(&truth, pv.first, &v, &err),
+                     KINCAL_STATUS_OK, err, nullptr);
+        CHECK_STATUS(kincal_robot_set_param_by_label(&truth, pv.first, v + pv.second, &err),
+                     KINCAL_STATUS_OK, err, nullptr);
+    }
+    // 60 poses around the tool seed, the first 20 measured twice; mocap-like noise.
+    const double sigma_pos = 1e-4, sigma_rot = 0.02 * 3.141592653589793 / 180.0;
+    Rng rng{2024};
+    double seed_q[6];
+    CHECK_STATUS(kincal_aria_tool_seed(seed_q, 6, &err), KINCAL_STATUS_OK, err, nullptr);
+    std::vector<double> q, poses;
+    std::vector<uint32_t> groups;
+    std::vector<std::array<double, 6>> configs;
+    for (int l = 0; l < 60; ++l) {
+        std::array<double, 6> c{};
+        for (int j = 0; j < 6; ++j) c[j] = seed_q[j] + rng.range(-0.8, 0.8);
+        configs.push_back(c);
+    }
+    for (int pass = 0; pass < 2; ++pass)
+        for (int l = 0; l < (pass == 0 ? 60 : 20); ++l) {
+            const Mat4 t = fk(truth, configs[l].data());
+            const double w[6] = {0, 0, 0, sigma_rot * rng.normal(), sigma_rot * rng.normal(),
+                                 sigma_rot * rng.normal()};
+            Mat4 m = mul(frame(w), t);
+            for (int k = 0; k < 3; ++k) m[12 + k] = t[12 + k] + sigma_pos * rng.normal();
+            q.insert(q.end(), configs[l].begin(), configs[l].end());
+            poses.insert(poses.end(), m.begin(), m.end());
+            groups.push_back(static_cast<uint32_t>(l));
+        }
+    kincal_measurements data{};
+    data.n_poses = groups.size();
+    data.q = q.data();
+    data.q_len = q.size();
+    data.poses = poses.data();
+    data.poses_len = poses.size();
+    kincal_diagnose_options opts;
+    CHECK_STATUS(kincal_diagnose_options_default(&opts, &err), KINCAL_STATUS_OK, err, nullptr);
+    opts.sigma_pos_m = sigma_pos;
+    opts.sigma_rot_rad = sigma_rot;
+    const size_t size = kincal_diagnose_workspace_size(6, groups.size());
+    CHECK(size > 0);
+    std::vector<std::max_align_t> ws(size / sizeof(std::max_align_t) + 1);
+    kincal_robot model, geometric;
+    auto report = std::make_unique<kincal_diagnosis_report>();
+    std::vector<kincal_pose_diagnosis> per_pose(groups.size());
+    CHECK_STATUS(kincal_diagnose(&nominal, &data, groups.data(), groups.size(), &opts, ws.data(),
+                                 size, &model, &geometric, report.get(), per_pose.data(),
+                                 per_pose.size(), &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    const uint32_t compliance = 1u << KINCAL_EFFECT_JOINT_COMPLIANCE;
+    CHECK(report->status == KINCAL_DIAGNOSIS_STATUS_EXPLAINED);
+    CHECK(report->effects == compliance);
+    CHECK(report->reason == KINCAL_DIAGNOSIS_REASON_CLOSED);
+    CHECK(report->method == KINCAL_DIAGNOSIS_METHOD_CROSS_VALIDATION);
+    CHECK(report->remaining_gap_significant == 0 && report->gap.z > 3.0);
+    CHECK(report->noise.stated_pos == 1 && report->noise.overruled_pos == 0);
+    CHECK(report->winner < report->n_candidates &&
+          report->candidates[report->winner].effects == compliance);
+    CHECK(report->n_suspects == 0 && report->groups == 60 && report->folds == 5);
+    // The identified compliance is the planted one within 15 %.
+    double c2 = 0.0;
+    CHECK_STATUS(kincal_robot_get_param_by_label(&model, "compliance_2", &c2, &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    CHECK(std::fabs(c2 / 8e-4 - 1.0) < 0.15);
+    std::printf("diagnosis: status %u, effects %#x, gap z %.1f, closed %.2f, remaining z %.2f, "
+                "compliance_2 %.3g (planted 8e-4)\n",
+                report->status, report->effects, report->gap.z, report->gap_closed_fraction,
+                report->remaining.z, c2);
+}
+
 }  // namespace
 
 // O (eq. 17) of the ten Table 2 tool poses (IK on the nominal model), default geometric
@@ -850,6 +1223,8 @@ int main() {
     test_registration();
     test_view_point();
     test_panic_boundary();
+    test_constraints();
+    test_diagnosis();
     std::printf("kincal %s C++ consumer: %d checks, %d failed\n", kincal_version(), g_checks,
                 g_failures);
     return g_failures == 0 ? 0 : 1;

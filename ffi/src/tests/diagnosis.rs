@@ -1,0 +1,397 @@
+//! The diagnosis through the ABI (`kincal_diagnose`): a planted joint compliance (the
+//! core's honest-diagnosis case: ARIA's geometry off by mm and a degree, compliance of
+//! realistic size, the blind-suite session, stated σ) is `explained` by joint_compliance,
+//! and the C report equals the core's `Diagnosis` field by field on the same data; small
+//! data switch to the in-sample nested test; bad arguments name what is wrong.
+
+use core::ffi::{CStr, c_void};
+use core::ptr::{null, null_mut};
+
+use kincal::diagnosis::{Config, DiagWorkspace, Diagnosis, PoseDiagnosis, Status, diagnose};
+use kincal::identify::Measurement;
+use kincal::rng::SplitMix64;
+use kincal::sim::{SessionConfig, add_effect, measure, perturb_geometry, simulate_session};
+use kincal::{Effect, Transform, aria};
+
+use crate::diagnosis::*;
+use crate::identify::*;
+use crate::kinematics::kincal_joint_aux;
+use crate::robot::*;
+use crate::status::*;
+
+struct Set {
+    meas: Vec<Measurement<6>>,
+    groups: Vec<u32>,
+    q: Vec<f64>,
+    poses: Vec<f64>,
+    aux: Vec<kincal_joint_aux>,
+    weights: Vec<f64>,
+}
+
+impl Set {
+    fn view(&self) -> kincal_measurements {
+        kincal_measurements {
+            n_poses: self.meas.len(),
+            q: self.q.as_ptr(),
+            q_len: self.q.len(),
+            poses: self.poses.as_ptr(),
+            poses_len: self.poses.len(),
+            masks: null(),
+            masks_len: 0,
+            aux: self.aux.as_ptr(),
+            aux_len: self.aux.len(),
+            weights: if self.weights.is_empty() {
+                null()
+            } else {
+                self.weights.as_ptr()
+            },
+            weights_len: self.weights.len(),
+        }
+    }
+}
+
+/// The planted-compliance session; `meas` are the core's measurements after the round trip
+/// through the C arrays (so both sides see the same bits).
+fn compliance_session(seed: u64) -> Set {
+    let mut truth = perturb_geometry(
+        &aria::nominal(),
+        2e-3,
+        1f64.to_radians(),
+        &mut SplitMix64::new(seed),
+    )
+    .unwrap();
+    add_effect(
+        &mut truth,
+        Effect::JointCompliance,
+        1.0,
+        &mut SplitMix64::new(seed + 1),
+    )
+    .unwrap();
+    let cfg = SessionConfig::blind_training();
+    let n = cfg.measurements();
+    let mut meas = vec![Measurement::new([0.0; 6], Transform::identity()); n];
+    let mut groups = vec![0u32; n];
+    let exact = SessionConfig {
+        sigma_pos_m: 0.0,
+        sigma_rot_rad: 0.0,
+        ..cfg
+    };
+    simulate_session(
+        &truth,
+        &aria::TOOL_SEED_Q,
+        &exact,
+        &mut SplitMix64::new(seed + 2),
+        &mut meas,
+        &mut groups,
+    )
+    .unwrap();
+    measure(
+        &truth,
+        &mut meas,
+        cfg.sigma_pos_m,
+        cfg.sigma_rot_rad,
+        &mut SplitMix64::new(seed ^ 0x55),
+    )
+    .unwrap();
+    let mut s = Set {
+        meas: Vec::new(),
+        groups,
+        q: Vec::new(),
+        poses: Vec::new(),
+        aux: Vec::new(),
+        weights: Vec::new(),
+    };
+    for m in &meas {
+        s.q.extend_from_slice(&m.state.q);
+        let t = crate::pose::to_matrix(&m.pose);
+        s.poses.extend_from_slice(&t);
+        let mut a = kincal_joint_aux {
+            has_approach: 0,
+            has_temp: 0,
+            approach: [0.0; KINCAL_MAX_JOINTS],
+            temp_c: 0.0,
+        };
+        if let Some(ap) = m.state.approach {
+            a.has_approach = 1;
+            a.approach[..6].copy_from_slice(&ap);
+        }
+        if let Some(t) = m.state.temp_c {
+            a.has_temp = 1;
+            a.temp_c = t;
+        }
+        s.aux.push(a);
+        let mut back = *m;
+        back.pose = crate::pose::from_matrix(&t, c"poses").unwrap();
+        s.meas.push(back);
+    }
+    s
+}
+
+fn options() -> kincal_diagnose_options {
+    let mut o = unsafe { core::mem::zeroed::<kincal_diagnose_options>() };
+    assert_eq!(
+        unsafe { kincal_diagnose_options_default(&mut o, null_mut()) },
+        kincal_status::Ok
+    );
+    o
+}
+
+struct Out {
+    status: kincal_status,
+    err: kincal_error,
+    model: kincal_robot,
+    geometric: kincal_robot,
+    report: Box<kincal_diagnosis_report>,
+    poses: Vec<kincal_pose_diagnosis>,
+}
+
+fn run(set: &Set, groups: Option<&[u32]>, o: &kincal_diagnose_options) -> Out {
+    let robot = crate::robot::from_robot(&aria::nominal()).unwrap();
+    let size = kincal_diagnose_workspace_size(6, set.meas.len());
+    assert!(size > 0);
+    let mut ws = vec![0u128; size.div_ceil(16)];
+    let mut out = Out {
+        status: kincal_status::Ok,
+        err: kincal_error::CLEAR,
+        model: kincal_robot::ZERO,
+        geometric: kincal_robot::ZERO,
+        report: Box::new(unsafe { core::mem::zeroed() }),
+        poses: vec![kincal_pose_diagnosis::default(); set.meas.len()],
+    };
+    let data = set.view();
+    out.status = unsafe {
+        kincal_diagnose(
+            &robot,
+            &data,
+            groups.map_or(null(), <[u32]>::as_ptr),
+            groups.map_or(0, <[u32]>::len),
+            o,
+            ws.as_mut_ptr().cast::<c_void>(),
+            size,
+            &mut out.model,
+            &mut out.geometric,
+            &mut *out.report,
+            out.poses.as_mut_ptr(),
+            out.poses.len(),
+            &mut out.err,
+        )
+    };
+    out
+}
+
+fn core_diagnosis(set: &Set, cfg: &Config) -> (Box<Diagnosis<6>>, Vec<PoseDiagnosis>) {
+    let mut ws: Box<DiagWorkspace<KINCAL_MAX_PARAMS>> = unsafe { Box::new_zeroed().assume_init() };
+    let mut poses = vec![PoseDiagnosis::default(); set.meas.len()];
+    let d = diagnose(
+        &aria::nominal(),
+        &set.meas,
+        &set.groups,
+        cfg,
+        &mut poses,
+        &mut ws,
+    )
+    .unwrap();
+    (Box::new(d), poses)
+}
+
+fn params(r: &kincal_robot) -> Vec<u64> {
+    r.params.iter().map(|v| v.to_bits()).collect()
+}
+
+fn compliance_mask() -> u32 {
+    1 << crate::effects::kincal_effect::JointCompliance as u32
+}
+
+#[test]
+fn planted_compliance_is_explained_and_the_report_equals_the_core() {
+    let set = compliance_session(51);
+    let mut o = options();
+    o.sigma_pos_m = 1e-4;
+    o.sigma_rot_rad = 0.02f64.to_radians();
+    let out = run(&set, Some(&set.groups), &o);
+    assert_eq!(out.status, kincal_status::Ok, "{:?}", out.err);
+    let r = &*out.report;
+    println!(
+        "status {} effects {:#x} gap z {:.1} closed {:.2}/{:.2} remaining z {:.2} method {} \
+         candidates {} suspects {} warnings {}",
+        r.status,
+        r.effects,
+        r.gap.z,
+        r.gap_closed_fraction,
+        r.gap_closed_total_fraction,
+        r.remaining.z,
+        r.method,
+        r.n_candidates,
+        r.n_suspects,
+        r.n_warnings
+    );
+    assert_eq!(r.status, kincal_diagnosis_status::Explained as u32);
+    assert_eq!(r.effects, compliance_mask());
+    assert_eq!(r.reason, kincal_diagnosis_reason::Closed as u32);
+    assert_eq!(r.method, kincal_diagnosis_method::CrossValidation as u32);
+    assert_eq!(r.remaining_gap_significant, 0);
+    assert_eq!(r.noise.stated_pos, 1);
+
+    // The core on the same bits.
+    let cfg = Config {
+        sigma_pos_m: Some(1e-4),
+        sigma_rot_rad: Some(0.02f64.to_radians()),
+        ..Config::default()
+    };
+    let (d, poses) = core_diagnosis(&set, &cfg);
+    assert_eq!(d.verdict.status, Status::Explained);
+    assert_eq!(params(&out.model), params(&from_robot(&d.model).unwrap()));
+    assert_eq!(
+        params(&out.geometric),
+        params(&from_robot(&d.geometric).unwrap())
+    );
+    assert_eq!(r.n_candidates, d.n_candidates);
+    for (c, k) in r.candidates.iter().zip(d.candidates()) {
+        assert_eq!(c.effects, u32::from(k.effects.bits()));
+        assert_eq!(c.improvement_z.to_bits(), k.improvement_z.to_bits());
+        assert_eq!(c.heldout_rms_pos_m.to_bits(), k.heldout_rms_pos_m.to_bits());
+        assert_eq!(
+            c.gap_closed_total_fraction.to_bits(),
+            k.gap_closed_total_fraction.to_bits()
+        );
+        assert_eq!(c.significant, u32::from(k.significant));
+    }
+    assert_eq!(r.gap.z.to_bits(), d.gap.z.to_bits());
+    assert_eq!(r.remaining.z.to_bits(), d.remaining.z.to_bits());
+    assert_eq!(
+        r.gap_closed_fraction.to_bits(),
+        d.verdict.gap_closed_fraction.to_bits()
+    );
+    assert_eq!(r.explainable.z.to_bits(), d.explainable.z.to_bits());
+    assert_eq!(
+        r.explainable.share_of_gap.to_bits(),
+        d.explainable.share_of_gap.to_bits()
+    );
+    assert_eq!(r.n_confounded, d.verdict.n_confounded);
+    assert_eq!(r.n_suspects, d.n_suspects);
+    assert_eq!(r.n_warnings, d.n_warnings);
+    assert_eq!(r.folds, d.folds);
+    assert_eq!(r.groups, d.groups);
+    assert_eq!(r.remaining_rms_axis, d.final_rms_axis);
+    assert_eq!(r.winner, d.verdict.candidate.unwrap());
+    for (p, k) in out.poses.iter().zip(&poses) {
+        assert_eq!(p.residual, k.residual);
+        assert_eq!(p.heldout_final, k.heldout_final);
+        assert_eq!(p.fold, u32::from(k.fold));
+    }
+}
+
+#[test]
+fn few_groups_use_the_in_sample_nested_test_and_errors_name_the_problem() {
+    let full = compliance_session(61);
+    // The first 12 poses only, each its own group (NULL groups).
+    let n = 12;
+    let set = Set {
+        meas: full.meas[..n].to_vec(),
+        groups: (0..n as u32).collect(),
+        q: full.q[..6 * n].to_vec(),
+        poses: full.poses[..16 * n].to_vec(),
+        aux: full.aux[..n].to_vec(),
+        weights: Vec::new(),
+    };
+    let mut o = options();
+    o.sigma_pos_m = 1e-4;
+    o.sigma_rot_rad = 0.02f64.to_radians();
+    let out = run(&set, None, &o);
+    assert_eq!(out.status, kincal_status::Ok, "{:?}", out.err);
+    assert_eq!(
+        out.report.method,
+        kincal_diagnosis_method::InSampleNested as u32
+    );
+    let (d, _) = core_diagnosis(
+        &set,
+        &Config {
+            sigma_pos_m: Some(1e-4),
+            sigma_rot_rad: Some(0.02f64.to_radians()),
+            ..Config::default()
+        },
+    );
+    assert_eq!(out.report.status, d.verdict.status as u32);
+
+    // No stated σ and no repeats (every row its own group): MISSING_INPUT.
+    let out = run(&set, None, &options());
+    assert_eq!(out.status, kincal_status::MissingInput);
+
+    // A weight other than 1: INVALID_PARAMETER naming the row.
+    let mut w = set;
+    w.weights = vec![1.0; n];
+    w.weights[4] = 0.5;
+    let out = run(&w, None, &o);
+    assert_eq!(out.status, kincal_status::InvalidParameter);
+    assert_eq!(out.err.pose, 4);
+
+    // Bad options.
+    let mut bad = o;
+    bad.folds = 1;
+    let out = run(&w, None, &bad);
+    assert_eq!(out.status, kincal_status::InvalidArgument);
+    let name = unsafe { CStr::from_ptr(out.err.argument) }
+        .to_str()
+        .unwrap();
+    assert_eq!(name, "opts->folds");
+    let mut bad = o;
+    bad.sigma_pos_m = -1.0;
+    assert_eq!(run(&w, None, &bad).status, kincal_status::InvalidArgument);
+    let mut bad = o;
+    bad.candidates = 1 << 9;
+    assert_eq!(run(&w, None, &bad).status, kincal_status::InvalidArgument);
+}
+
+#[test]
+fn the_workspace_is_checked() {
+    let set = compliance_session(71);
+    let robot = crate::robot::from_robot(&aria::nominal()).unwrap();
+    let size = kincal_diagnose_workspace_size(6, set.meas.len());
+    assert_eq!(kincal_diagnose_workspace_size(10, 5), 0);
+    assert_eq!(kincal_diagnose_workspace_size(6, usize::MAX / 4), 0);
+    println!("diagnosis workspace for 80 poses: {size} bytes");
+    let mut ws = vec![0u128; size.div_ceil(16)];
+    let data = set.view();
+    let o = options();
+    let mut model = kincal_robot::ZERO;
+    let mut report: Box<kincal_diagnosis_report> = Box::new(unsafe { core::mem::zeroed() });
+    let mut err = kincal_error::CLEAR;
+    let s = unsafe {
+        kincal_diagnose(
+            &robot,
+            &data,
+            set.groups.as_ptr(),
+            set.groups.len(),
+            &o,
+            ws.as_mut_ptr().cast(),
+            size - 16,
+            &mut model,
+            null_mut(),
+            &mut *report,
+            null_mut(),
+            0,
+            &mut err,
+        )
+    };
+    assert_eq!(s, kincal_status::BadLength);
+    assert_eq!((err.expected, err.found), (size, size - 16));
+    // Group ids of the wrong length.
+    let s = unsafe {
+        kincal_diagnose(
+            &robot,
+            &data,
+            set.groups.as_ptr(),
+            3,
+            &o,
+            ws.as_mut_ptr().cast(),
+            size,
+            &mut model,
+            null_mut(),
+            &mut *report,
+            null_mut(),
+            0,
+            &mut err,
+        )
+    };
+    assert_eq!(s, kincal_status::BadLength);
+}
