@@ -502,6 +502,12 @@ struct Report {
     /// The same check on the verdict's held-out residuals (evaluated only when the
     /// verdict would otherwise be `explained`).
     remaining_structure: ExplainableJson,
+    /// Leave-one-range-out check of the verdict's model (evaluated only when the verdict
+    /// would otherwise be `explained` under cross-validation).
+    extrapolation: ExtrapolationJson,
+    /// Form check of a verdict with `joint_cyclic` (evaluated only when the verdict would
+    /// otherwise be `explained` under cross-validation).
+    form: FormJson,
     #[serde(rename = "where")]
     where_: WhereJson,
     data: DataInfoJson,
@@ -642,6 +648,39 @@ struct ExplainableJson {
     heldout_rms_rot_deg: f64,
     /// Paired Wilcoxon z against the geometric model (positive: better).
     z: Option<f64>,
+    significant: bool,
+    method: &'static str,
+}
+
+#[derive(Serialize)]
+struct FormJson {
+    evaluated: bool,
+    /// Paired z of the alternative (3rd and 4th harmonics in place of joint_cyclic's 1st
+    /// and 2nd) against the verdict's model (positive: the alternative is worse).
+    z: Option<f64>,
+    heldout_rms_pos_mm: f64,
+    heldout_rms_rot_deg: f64,
+    /// The alternative explains the data as well: the form is not determined.
+    equivalent: bool,
+    method: &'static str,
+}
+
+#[derive(Serialize)]
+struct ExtrapolationJson {
+    evaluated: bool,
+    /// Half-range splits evaluated (two per joint at most).
+    splits: usize,
+    /// Largest z over the splits (held-out total against its expectation under the model).
+    z: Option<f64>,
+    /// Held-out whitened total over its expectation, of that split.
+    ratio: f64,
+    /// Joint (1-based) whose range that split halves; null when not evaluated.
+    joint: Option<usize>,
+    /// `upper` or `lower`: the half held out.
+    held_out_half: &'static str,
+    /// Bonferroni-corrected threshold of the largest z.
+    threshold: f64,
+    /// The model does not predict the held-out half.
     significant: bool,
     method: &'static str,
 }
@@ -890,6 +929,19 @@ fn report_json<const N: usize>(
         },
         explainable: explainable_json(&d.explainable),
         remaining_structure: explainable_json(&d.remaining_structure),
+        extrapolation: extrapolation_json(&d.extrapolation),
+        form: FormJson {
+            evaluated: d.form.evaluated,
+            z: if d.form.evaluated {
+                finite(d.form.z)
+            } else {
+                None
+            },
+            heldout_rms_pos_mm: d.form.heldout_rms_pos_m * 1e3,
+            heldout_rms_rot_deg: d.form.heldout_rms_rot_rad.to_degrees(),
+            equivalent: d.form.equivalent,
+            method: "the verdict's model cross-validated with each joint's 3rd and 4th harmonics in place of joint_cyclic's 1st and 2nd; paired Wilcoxon z over pose groups against the verdict",
+        },
         where_: WhereJson {
             rms_axis: axis(&loc.rms_axis),
             mean_axis: axis(&loc.mean_axis),
@@ -1068,12 +1120,29 @@ fn explainable_json(x: &diagnosis::SmoothCheck) -> ExplainableJson {
     }
 }
 
+/// The JSON form of the extrapolation check.
+fn extrapolation_json(x: &diagnosis::ExtrapolationCheck) -> ExtrapolationJson {
+    ExtrapolationJson {
+        evaluated: x.evaluated,
+        splits: x.splits,
+        z: if x.evaluated { finite(x.z) } else { None },
+        ratio: x.ratio,
+        joint: x.evaluated.then_some(x.joint + 1),
+        held_out_half: if x.upper { "upper" } else { "lower" },
+        threshold: x.threshold,
+        significant: x.significant,
+        method: "leave-one-range-out: the verdict's model fitted on one half of each joint's range (split at the median) and judged on the other; exact moments of the held-out total, Satterthwaite/Wilson-Hilferty z, Bonferroni over the splits",
+    }
+}
+
 fn reason_code(r: &Reason) -> &'static str {
     match r {
         Reason::AtNoiseFloor => "at_noise_floor",
         Reason::Closed => "closed",
         Reason::RemainingGap { .. } => "remaining_gap",
         Reason::RemainingStructure { .. } => "remaining_structure",
+        Reason::DoesNotExtrapolate { .. } => "does_not_extrapolate",
+        Reason::FormNotDetermined { .. } => "form_not_determined",
         Reason::Worsens { .. } => "worsens",
         Reason::SmallShare => "small_share",
         Reason::NoSignificantCandidate => "no_significant_candidate",
@@ -1135,6 +1204,15 @@ fn status_reason_text<const N: usize>(d: &Diagnosis<N>) -> String {
         ),
         Reason::RemainingStructure { z } => format!(
             "what the chosen effects leave is near the noise floor but not noise-like: a library-free smooth function of the joint angles still explains part of it held out (z = {z:.1}); part of the gap is not explained by the chosen effects"
+        ),
+        Reason::DoesNotExtrapolate { z, joint, upper } => format!(
+            "what the chosen effects leave is near the noise floor where they were fitted, but fitted on the {} half of joint {}'s range they do not predict the {} half (z = {z:.1}): they absorb an effect of another form (outside the library) rather than explain it",
+            if upper { "lower" } else { "upper" },
+            joint + 1,
+            if upper { "upper" } else { "lower" }
+        ),
+        Reason::FormNotDetermined { z } => format!(
+            "the chosen effects fit, but a function of the same joints outside the library (3rd and 4th harmonics in place of joint_cyclic's 1st and 2nd) explains the data as well held out (paired z = {z:.1}): the data do not determine the effect's form, so part of the gap may come from an effect outside the library"
         ),
         Reason::Worsens { z, part } => format!(
             "the chosen effects make the {} significantly worse (z = {z:.1})",

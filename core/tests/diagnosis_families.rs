@@ -25,6 +25,13 @@
 //! withheld noise-free poses, (B − A)/B of the RMS position error of the geometric and
 //! the final model; and the library-free smooth share (`Diagnosis::explainable`).
 //!
+//! Over-claims are counted on the first generator (`common/outside.rs`, the target); a
+//! second, independent generator (`common/outside2.rs`: other effects and magnitudes,
+//! written after the decision rules were fixed) is reported beside it as a check against
+//! tuning to one family, not tuned to. `FAM_DEBUG=1` prints every case's detectability
+//! and, per over-claim, the truth, the winner's parameters, amplitudes and gains;
+//! `FAM_ONLY=text` runs only the families whose name contains `text` (same seeds).
+//!
 //! `families_short` (default run: 10 cases per family, about 10–30 s in a debug build)
 //! prints the table and asserts the targets that hold today; `families_long` (`#[ignore]`,
 //! run in release: `cargo test -p kincal --release --test diagnosis_families --
@@ -32,17 +39,56 @@
 
 #[path = "common/outside.rs"]
 mod outside;
+#[path = "common/outside2.rs"]
+mod outside2;
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 use kincal::diagnosis::{Config, DiagWorkspace, Diagnosis, PoseDiagnosis, Status, diagnose};
 use kincal::rng::SplitMix64;
 use kincal::sim::{add_effect, only_effects, perturb_geometry};
-use kincal::{Effect, EffectSet, Robot, aria};
+use kincal::{Effect, EffectSet, ParamId, Robot, aria};
 use outside::{
-    Design, Instrument, LASER, MOCAP, Outside, OutsideEffect, add_outliers, detectability, measure,
-    states,
+    Design, Instrument, LASER, MOCAP, Outside, OutsideEffect, PoseEffect, add_outliers,
+    detectability, measure, states,
 };
+use outside2::{Outside2, Outside2Effect};
+
+/// An out-of-library effect of either generator.
+#[derive(Debug, Clone, Copy)]
+enum AnyOutside {
+    First(OutsideEffect),
+    Second(Outside2Effect),
+}
+
+impl AnyOutside {
+    fn name(&self) -> &'static str {
+        match self {
+            AnyOutside::First(e) => e.kind.name(),
+            AnyOutside::Second(e) => e.kind.name(),
+        }
+    }
+    fn size(&self) -> f64 {
+        match self {
+            AnyOutside::First(e) => e.size,
+            AnyOutside::Second(e) => e.size,
+        }
+    }
+}
+
+impl PoseEffect for AnyOutside {
+    fn pose(
+        &self,
+        truth: &Robot<6>,
+        st: &kincal::JointState<6>,
+        t: Option<f64>,
+    ) -> kincal::Transform {
+        match self {
+            AnyOutside::First(e) => e.pose(truth, st, t),
+            AnyOutside::Second(e) => e.pose(truth, st, t),
+        }
+    }
+}
 
 const DETECTABLE: f64 = 3.0;
 const UNDETECTABLE: f64 = 0.3;
@@ -63,6 +109,9 @@ enum Hidden {
     None,
     Library(Vec<EffectSet>),
     Outside(Vec<Outside>),
+    /// Effects of the second, independent generator (`common/outside2.rs`): measured, not
+    /// tuned to.
+    Outside2(Vec<Outside2>),
     /// A library effect plus an out-of-library one.
     Mixed(Vec<(Effect, Outside)>),
 }
@@ -247,6 +296,25 @@ fn families() -> Vec<Family> {
             3,
             2,
         ),
+        // Last, so the other families keep their seeds.
+        f(
+            "outside2/mocap",
+            Hidden::Outside2(Outside2::ALL.to_vec()),
+            MOCAP,
+            RANDOM,
+            st,
+            0,
+            0,
+        ),
+        f(
+            "outside2/laser",
+            Hidden::Outside2(Outside2::ALL.to_vec()),
+            LASER,
+            RANDOM,
+            st,
+            0,
+            0,
+        ),
     ]
 }
 
@@ -257,6 +325,10 @@ struct Outcome {
     error: Option<String>,
     in_library: bool,
     outside: bool,
+    /// The out-of-library effect comes from the second generator.
+    second: bool,
+    /// An `explained` verdict the extrapolation check demoted.
+    demoted_extrapolation: bool,
     /// Detectability of everything hidden together.
     rho: f64,
     /// The least detectability of the hidden library effects each alone (pairs).
@@ -344,7 +416,7 @@ fn silent_choice(d: &Diagnosis<6>, poses: &[PoseDiagnosis], groups: &[u32]) -> b
 fn rms_against(
     model: &Robot<6>,
     truth: &Robot<6>,
-    out: &[OutsideEffect],
+    out: &[AnyOutside],
     st: &[(kincal::JointState<6>, u32)],
 ) -> f64 {
     let s: f64 = st
@@ -377,7 +449,15 @@ fn run_case(fam: &Family, k: usize, seed: u64, ws: &mut DiagWorkspace<80>) -> Ou
         Hidden::Outside(list) => {
             let kind = list[k % list.len()];
             let size = log_uniform(&mut rng, 0.1, 5.0);
-            out_effects.push(OutsideEffect::draw(kind, size, &mut rng));
+            out_effects.push(AnyOutside::First(OutsideEffect::draw(kind, size, &mut rng)));
+        }
+        Hidden::Outside2(list) => {
+            let kind = list[k % list.len()];
+            let size = log_uniform(&mut rng, 0.1, 5.0);
+            out_effects.push(AnyOutside::Second(Outside2Effect::draw(
+                kind, size, &mut rng,
+            )));
+            o.second = true;
         }
         Hidden::Mixed(list) => {
             let (e, kind) = list[k % list.len()];
@@ -385,7 +465,7 @@ fn run_case(fam: &Family, k: usize, seed: u64, ws: &mut DiagWorkspace<80>) -> Ou
             add_effect(&mut truth, e, size, &mut rng).unwrap();
             hidden_lib = EffectSet::of(e);
             let size = log_uniform(&mut rng, 0.1, 5.0);
-            out_effects.push(OutsideEffect::draw(kind, size, &mut rng));
+            out_effects.push(AnyOutside::First(OutsideEffect::draw(kind, size, &mut rng)));
         }
     }
     let st = states(&truth, fam.design, &mut rng);
@@ -394,7 +474,7 @@ fn run_case(fam: &Family, k: usize, seed: u64, ws: &mut DiagWorkspace<80>) -> Ou
         let n_out = 1 + rng.below(fam.outliers);
         add_outliers(&mut data, n_out, &mut rng);
     }
-    let rho_of = |t: &Robot<6>, oe: &[OutsideEffect]| {
+    let rho_of = |t: &Robot<6>, oe: &[AnyOutside]| {
         let (p, r) = detectability(t, oe, &st, &fam.inst);
         if fam.inst.mask.has(3) { p.max(r) } else { p }
     };
@@ -404,7 +484,12 @@ fn run_case(fam: &Family, k: usize, seed: u64, ws: &mut DiagWorkspace<80>) -> Ou
         // A set is detectable when each of its effects is (as the blind suite).
         o.rho_each = hidden_lib
             .iter()
-            .map(|e| rho_of(&only_effects(&truth, EffectSet::of(e)), &[]))
+            .map(|e| {
+                rho_of(
+                    &only_effects(&truth, EffectSet::of(e)),
+                    &[] as &[AnyOutside],
+                )
+            })
             .fold(f64::INFINITY, f64::min);
     }
     if std::env::var("FAM_DEBUG").is_ok() {
@@ -447,6 +532,19 @@ fn run_case(fam: &Family, k: usize, seed: u64, ws: &mut DiagWorkspace<80>) -> Ou
         && (d.verdict.effects == hidden_lib || d.verdict.confounded().contains(&hidden_lib));
     o.positive = status != Status::NoGap;
     o.overclaim = status == Status::Explained;
+    o.demoted_extrapolation = matches!(
+        d.verdict.reason,
+        kincal::diagnosis::Reason::DoesNotExtrapolate { .. }
+            | kincal::diagnosis::Reason::FormNotDetermined { .. }
+    );
+    if std::env::var("FAM_DEBUG").is_ok() && d.form.evaluated {
+        println!(
+            "    FORM {} rho {:.1} rho_out {rho_out:.1}: {:?}",
+            if o.in_library { "LIB" } else { "OUT" },
+            o.rho,
+            d.form
+        );
+    }
     if std::env::var("FAM_DEBUG").is_ok() && o.outside && o.overclaim {
         println!(
             "    over-claim: rho_out {rho_out:.2}, {:?}, remaining gap z {:.2}, structure z {:.2}, gap closed {:.2}",
@@ -458,6 +556,28 @@ fn run_case(fam: &Family, k: usize, seed: u64, ws: &mut DiagWorkspace<80>) -> Ou
             d.remaining.z,
             d.remaining_structure.z,
             d.verdict.gap_closed_fraction
+        );
+        println!("      extrapolation check: {:?}", d.extrapolation);
+        debug_overclaim(&d, &data, &groups, &out_effects, &nominal);
+    }
+    if std::env::var("FAM_DEBUG").is_ok()
+        && status == Status::Explained
+        && d.verdict.effects.contains(Effect::JointCyclic)
+    {
+        let mut line = String::new();
+        for j in 0..6 {
+            let (mut a2, mut s2) = (0.0, 0.0);
+            for t in kincal::params::CyclicTerm::ALL {
+                let i = ParamId::Cyclic(j, t).index(6);
+                a2 += d.model.param(i).unwrap().powi(2);
+                s2 += d.fit.std_errors[i.0].powi(2);
+            }
+            line += &format!(" {:.1}({:.1})", a2.sqrt() * 1e3, s2.sqrt() * 1e3);
+        }
+        println!(
+            "    CYC {} rho_out {rho_out:.1} rho {:.1}: amplitude mrad (se):{line}",
+            if o.in_library { "LIB" } else { "OUT" },
+            o.rho
         );
     }
     o.silent = silent_choice(&d, &poses, &groups);
@@ -478,6 +598,121 @@ fn run_case(fam: &Family, k: usize, seed: u64, ws: &mut DiagWorkspace<80>) -> Ou
     o
 }
 
+/// Per over-claim (`FAM_DEBUG`): the truth, the winner's parameters and amplitudes, its
+/// in-sample and held-out gains, and how it extrapolates: fitted (nonlinear, kincal's own
+/// identification) on the poses with q_j below the median and judged on those above, and
+/// the other way round, for every joint, against the geometric model fitted the same way.
+fn debug_overclaim(
+    d: &Diagnosis<6>,
+    data: &[kincal::identify::Measurement<6>],
+    _groups: &[u32],
+    out_effects: &[AnyOutside],
+    nominal: &Robot<6>,
+) {
+    use kincal::identify::{Algorithm, IdentifyOptions, Workspace, identify};
+    use kincal::params::CyclicTerm;
+    let Some(w) = d.verdict.candidate else { return };
+    let c = &d.candidates[w];
+    for oe in out_effects {
+        println!("      truth: {} size {:.2}", oe.name(), oe.size());
+    }
+    println!(
+        "      winner params {} (geometric {}), heldout chi2 base {:.0} -> {:.0}, in-sample cost {:.0} -> {:.0}, rows {}",
+        c.fitted_params,
+        d.baseline.fitted_params,
+        d.baseline.heldout_chi2,
+        c.heldout_chi2,
+        d.geometric_residuals.cost,
+        d.fit.fitted.cost,
+        d.geometric_residuals.rows
+    );
+    let mut amp = String::new();
+    for j in 0..6 {
+        let a: f64 = CyclicTerm::ALL
+            .iter()
+            .map(|&t| {
+                let i = ParamId::Cyclic(j, t).index(6);
+                d.model.param(i).unwrap().powi(2)
+            })
+            .sum::<f64>()
+            .sqrt();
+        let (lo, hi) = data.iter().fold((f64::MAX, f64::MIN), |(lo, hi), m| {
+            (lo.min(m.state.q[j]), hi.max(m.state.q[j]))
+        });
+        amp += &format!(
+            " j{}:{:.2}mrad[{:.0}..{:.0}deg]",
+            j + 1,
+            a * 1e3,
+            lo.to_degrees(),
+            hi.to_degrees()
+        );
+    }
+    println!("      cyclic amplitudes{amp}");
+    let sp = d.noise.sigma_pos_m;
+    let sr = d.noise.sigma_rot_rad;
+    let fit_rms = |set: kincal::ParamSet,
+                   train: &[kincal::identify::Measurement<6>],
+                   test: &[kincal::identify::Measurement<6>]| {
+        let mut o = IdentifyOptions::new(Algorithm::Ols, set);
+        o.weight_pos = sp.powi(-2);
+        o.weight_rot = sr.powi(-2);
+        o.allow_data_deficiency = true;
+        let mut ws = Box::<Workspace<80>>::default();
+        let Ok(fit) = identify(nominal, train, &o, &mut ws) else {
+            return f64::NAN;
+        };
+        let s: f64 = test
+            .iter()
+            .map(|m| {
+                let e = kincal::pose::pose_error(
+                    &m.pose,
+                    &fit.robot.fk(&m.state).unwrap(),
+                    kincal::OrientationError::Exact,
+                );
+                (0..6)
+                    .filter(|&k| m.mask.has(k))
+                    .map(|k| (e[k] / if k < 3 { sp } else { sr }).powi(2))
+                    .sum::<f64>()
+            })
+            .sum();
+        let rows: usize = test
+            .iter()
+            .map(|m| (0..6).filter(|&k| m.mask.has(k)).count())
+            .sum();
+        (s / rows as f64).sqrt()
+    };
+    let mut line = String::new();
+    for j in 0..6 {
+        let mut qs: Vec<f64> = data.iter().map(|m| m.state.q[j]).collect();
+        qs.sort_by(f64::total_cmp);
+        let med = qs[qs.len() / 2];
+        let lo: Vec<_> = data
+            .iter()
+            .filter(|m| m.state.q[j] < med)
+            .copied()
+            .collect();
+        let hi: Vec<_> = data
+            .iter()
+            .filter(|m| m.state.q[j] >= med)
+            .copied()
+            .collect();
+        let g = nominal.geometric_param_set();
+        let wb = fit_rms(g, &lo, &hi);
+        let ww = fit_rms(c.identifiable, &lo, &hi);
+        let wb2 = fit_rms(g, &hi, &lo);
+        let ww2 = fit_rms(c.identifiable, &hi, &lo);
+        line += &format!(
+            " j{}: {:.1}->{:.1} / {:.1}->{:.1};",
+            j + 1,
+            wb,
+            ww,
+            wb2,
+            ww2
+        );
+    }
+    println!("      extrapolation whitened rms/row (geometric -> winner, lo->hi / hi->lo):{line}");
+}
+
 /// Counts of one family (or a group of families).
 #[derive(Debug, Clone, Default)]
 struct Tally {
@@ -490,6 +725,11 @@ struct Tally {
     false_pos: usize,
     det_out: usize,
     overclaim: usize,
+    /// The same on the second generator's cases (not part of the target).
+    det_out2: usize,
+    overclaim2: usize,
+    /// Detectable in-library cases the extrapolation check demoted from `explained`.
+    lib_demoted: usize,
     named: usize,
     silent: usize,
     closed_sum: f64,
@@ -519,7 +759,15 @@ impl Tally {
             self.undet += 1;
             self.false_pos += usize::from(o.positive);
         }
-        if o.outside {
+        if o.in_library && o.rho_each >= DETECTABLE {
+            self.lib_demoted += usize::from(o.demoted_extrapolation);
+        }
+        if o.outside && o.second {
+            self.det_out2 += 1;
+            self.overclaim2 += usize::from(o.overclaim);
+            self.smooth_sum += o.smooth_share;
+            self.smooth_sig += usize::from(o.smooth_significant);
+        } else if o.outside {
             self.det_out += 1;
             self.overclaim += usize::from(o.overclaim);
             self.smooth_sum += o.smooth_share;
@@ -544,6 +792,9 @@ impl Tally {
         self.false_pos += t.false_pos;
         self.det_out += t.det_out;
         self.overclaim += t.overclaim;
+        self.det_out2 += t.det_out2;
+        self.overclaim2 += t.overclaim2;
+        self.lib_demoted += t.lib_demoted;
         self.named += t.named;
         self.silent += t.silent;
         self.closed_sum += t.closed_sum;
@@ -570,6 +821,8 @@ fn frac(a: usize, b: usize) -> f64 {
 }
 
 fn row(name: &str, t: &Tally) -> String {
+    // Out-of-library columns over both generators (the target counts the first only).
+    let (det_out, overclaim) = (t.det_out + t.det_out2, t.overclaim + t.overclaim2);
     format!(
         "{:<20} {:>5} {:>5} {:>4} | {:>4} {} | {:>4} {} | {:>4} {} {:>6} {} | {:>4} {} | {:>6}",
         name,
@@ -580,14 +833,14 @@ fn row(name: &str, t: &Tally) -> String {
         pct(t.correct, t.det_lib),
         t.undet,
         pct(t.false_pos, t.undet),
-        t.det_out,
-        pct(t.overclaim, t.det_out),
-        if t.det_out > 0 {
-            format!("{:.2}", t.smooth_sum / t.det_out as f64)
+        det_out,
+        pct(overclaim, det_out),
+        if det_out > 0 {
+            format!("{:.2}", t.smooth_sum / det_out as f64)
         } else {
             "-".into()
         },
-        pct(t.smooth_sig, t.det_out),
+        pct(t.smooth_sig, det_out),
         t.named,
         pct(t.silent, t.named),
         if t.closed_n > 0 {
@@ -623,7 +876,12 @@ fn suite(per_family: usize, seed: u64) -> ([Tally; 3], Tally) {
         "silent",
         "closed"
     );
+    // FAM_ONLY=substring runs only the matching families (same seeds: for investigation).
+    let only = std::env::var("FAM_ONLY").ok();
     for (fi, fam) in families().iter().enumerate() {
+        if only.as_deref().is_some_and(|o| !fam.name.contains(o)) {
+            continue;
+        }
         let mut t = Tally::default();
         for k in 0..per_family {
             let s = seed
@@ -636,6 +894,17 @@ fn suite(per_family: usize, seed: u64) -> ([Tally; 3], Tally) {
         total.merge(&t);
     }
     println!("{}", row("TOTAL", &total));
+    println!(
+        "over-claims: first generator (outside.rs, the target) {}/{} = {}; second generator (outside2.rs, measured only) {}/{} = {}; detectable in-library cases the extrapolation or form check demoted from explained: {}/{}",
+        total.overclaim,
+        total.det_out,
+        pct(total.overclaim, total.det_out),
+        total.overclaim2,
+        total.det_out2,
+        pct(total.overclaim2, total.det_out2),
+        total.lib_demoted,
+        total.det_lib
+    );
     println!(
         "columns: det = detectable in-library cases, right = correct verdicts among them; und = undetectable (rho < {UNDETECTABLE}), FP = status not no_gap; out = detectable out-of-library, over = status explained, smooth = mean library-free share, sm.sig = share of those where it is significant; named = cases with a verdict effect, silent = silent choices among them; closed = gap closed against the truth on withheld poses (detectable cases)"
     );
@@ -709,14 +978,50 @@ fn families_short() {
             assert!(ok, "{name}");
         }
     }
+    // Over-claims: about a dozen detectable out-of-library cases here, too few for the
+    // plain 5 % (one case is 9 %): asserted as "not significantly above 5 %" (exact
+    // one-sided binomial test at the 5 % level; today's rate, 23 % before the form check,
+    // fails it). `families_long` asserts the plain figure.
+    let p = binomial_tail(total.overclaim, total.det_out, 0.05);
+    assert!(
+        p >= 0.05,
+        "over-claims {}/{} significantly above 5 % (p = {p:.3})",
+        total.overclaim,
+        total.det_out
+    );
     // The suite itself must measure something: every target group has scored cases.
     assert!(groups[0].det_lib > 0 && total.det_out > 0 && total.undet > 0);
+}
+
+/// P(X ≥ k) for X binomial with `n` trials of probability `p`.
+fn binomial_tail(k: usize, n: usize, p: f64) -> f64 {
+    (k..=n)
+        .map(|i| {
+            let ln_choose: f64 = (1..=i).map(|j| ((n - i + j) as f64 / j as f64).ln()).sum();
+            (ln_choose + i as f64 * p.ln() + (n - i) as f64 * (1.0 - p).ln()).exp()
+        })
+        .sum()
+}
+
+#[test]
+fn binomial_tail_matches_closed_forms() {
+    // P(X ≥ 0) = 1; P(X ≥ 1) = 1 − (1 − p)^n; P(X ≥ n) = p^n.
+    assert!((binomial_tail(0, 11, 0.05) - 1.0).abs() < 1e-12);
+    assert!((binomial_tail(1, 11, 0.05) - (1.0 - 0.95f64.powi(11))).abs() < 1e-12);
+    assert!((binomial_tail(11, 11, 0.05) - 0.05f64.powi(11)).abs() < 1e-20);
 }
 
 #[test]
 #[ignore]
 fn families_long() {
     let (groups, total) = suite(60, 2);
-    targets(&groups, &total);
+    let t = targets(&groups, &total);
     assert_eq!(total.crashes, 0);
+    // Asserted since the form check (`kincal::diagnosis::FormCheck`); the other targets
+    // are asserted in `families_short` or printed.
+    for (name, _, _, ok) in &t {
+        if *name == "over-claims <= 5 %" {
+            assert!(ok, "{name}");
+        }
+    }
 }

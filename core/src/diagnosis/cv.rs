@@ -17,10 +17,12 @@
 //! and one small factorisation per model and fold.
 
 use super::{DiagWorkspace, MAX_MODELS, ModelAcc, PoseDiagnosis};
+use crate::error::ParamIndex;
 use crate::error::{Error, Result};
 use crate::identify::Measurement;
-use crate::math::sqrt;
+use crate::math::{cos, sin, sqrt};
 use crate::model::Robot;
+use crate::params::{CyclicTerm, LinkParam, ParamId};
 use crate::pose::{OrientationError, pose_error};
 
 /// Whitened rows of pose `m` at `lin` into `ws.a`/`ws.b` (`a[k][c] = √w_k·J_k[U_c]`,
@@ -45,7 +47,45 @@ pub(crate) fn pose_rows<const N: usize, const P: usize>(
             ws.a[k][c] = w * ws.jac[ws.u[c]][k];
         }
     }
+    if ws.alt_harmonics {
+        alternative_harmonics(m, sw, ws);
+    }
     Ok(e)
+}
+
+/// The form check's alternative (`form.rs`): every `joint_cyclic` column of `U` replaced by
+/// the 3rd and 4th harmonics of its joint (`sin 3q, cos 3q, sin 4q, cos 4q` for the terms
+/// `sin q, cos q, sin 2q, cos 2q`) times the column of the joint's offset θ0_j.
+fn alternative_harmonics<const N: usize, const P: usize>(
+    m: &Measurement<N>,
+    sw: &[f64; 6],
+    ws: &mut DiagWorkspace<P>,
+) {
+    for c in 0..ws.n_u {
+        let Ok(ParamId::Cyclic(j, t)) = ParamId::from_index(ParamIndex(ws.u[c]), N) else {
+            continue;
+        };
+        let theta = ParamId::Link {
+            link: j,
+            kind: LinkParam::Theta0,
+        }
+        .index(N)
+        .0;
+        let q = m.state.q.get(j).copied().unwrap_or(0.0);
+        let f = match t {
+            CyclicTerm::Sin1 => sin(3.0 * q),
+            CyclicTerm::Cos1 => cos(3.0 * q),
+            CyclicTerm::Sin2 => sin(4.0 * q),
+            CyclicTerm::Cos2 => cos(4.0 * q),
+        };
+        let Some(col) = ws.jac.get(theta).copied() else {
+            continue;
+        };
+        for k in 0..6 {
+            let w = if m.mask.has(k) { sw[k] } else { 0.0 };
+            ws.a[k][c] = w * col[k] * f;
+        }
+    }
 }
 
 /// Folds the rows in `ws.a`/`ws.b` into `ws.g_all` (`fold = false`) or `ws.g_fold`.

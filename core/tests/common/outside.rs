@@ -152,6 +152,19 @@ impl OutsideEffect {
     }
 }
 
+/// An effect the test applies to the true pose (the library never sees it).
+pub trait PoseEffect {
+    /// The pose the instrument reports (before noise) at `state` on `truth` with this
+    /// effect; `t` is the row's place in the session in [0, 1] (`None`: mid-session).
+    fn pose(&self, truth: &Robot<6>, state: &JointState<6>, t: Option<f64>) -> Transform;
+}
+
+impl PoseEffect for OutsideEffect {
+    fn pose(&self, truth: &Robot<6>, state: &JointState<6>, _t: Option<f64>) -> Transform {
+        self.true_pose(truth, state)
+    }
+}
+
 /// The instrument.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Instrument {
@@ -241,9 +254,9 @@ pub fn states(truth: &Robot<6>, design: Design, rng: &mut SplitMix64) -> Vec<(Jo
 
 /// Measured poses at `states` on `truth` with the out-of-library effects `outside`,
 /// instrument noise and mask.
-pub fn measure(
+pub fn measure<E: PoseEffect>(
     truth: &Robot<6>,
-    outside: &[OutsideEffect],
+    outside: &[E],
     states: &[(JointState<6>, u32)],
     inst: &Instrument,
     noisy: bool,
@@ -251,8 +264,9 @@ pub fn measure(
 ) -> (Vec<Measurement<6>>, Vec<u32>) {
     let mut data = Vec::with_capacity(states.len());
     let mut groups = Vec::with_capacity(states.len());
-    for (st, g) in states {
-        let pose = true_pose(truth, outside, st);
+    let last = states.len().saturating_sub(1).max(1) as f64;
+    for (l, (st, g)) in states.iter().enumerate() {
+        let pose = true_pose_at(truth, outside, st, Some(l as f64 / last));
         let pose = if noisy {
             add_noise(&pose, inst.sigma_pos_m, inst.sigma_rot_rad, rng)
         } else {
@@ -273,21 +287,31 @@ pub fn measure(
 /// The true (noise-free) pose with every effect in `outside` (composed: each changes
 /// what the previous one produced only through the pose, so apply at most one robot-level
 /// and any number of pose-level effects).
-pub fn true_pose(truth: &Robot<6>, outside: &[OutsideEffect], st: &JointState<6>) -> Transform {
+pub fn true_pose<E: PoseEffect>(truth: &Robot<6>, outside: &[E], st: &JointState<6>) -> Transform {
+    true_pose_at(truth, outside, st, None)
+}
+
+/// [`true_pose`] at place `t` of the session.
+pub fn true_pose_at<E: PoseEffect>(
+    truth: &Robot<6>,
+    outside: &[E],
+    st: &JointState<6>,
+    t: Option<f64>,
+) -> Transform {
     match outside {
         [] => truth.fk(st).unwrap(),
-        [one] => one.true_pose(truth, st),
+        [one] => one.pose(truth, st, t),
         [first, rest @ ..] => {
             // Add the other effects' pose changes to the first one's pose.
             let base = truth.fk(st).unwrap();
-            let mut t = first.true_pose(truth, st);
+            let mut pose = first.pose(truth, st, t);
             for e in rest {
-                let te = e.true_pose(truth, st);
+                let te = e.pose(truth, st, t);
                 let dp = te.translation.vector - base.translation.vector;
                 let dr = te.rotation.matrix() * base.rotation.matrix().transpose();
-                t = transform(dr * t.rotation.matrix(), t.translation.vector + dp);
+                pose = transform(dr * pose.rotation.matrix(), pose.translation.vector + dp);
             }
-            t
+            pose
         }
     }
 }
@@ -298,9 +322,9 @@ pub fn true_pose(truth: &Robot<6>, outside: &[OutsideEffect], st: &JointState<6>
 /// geometry (its global optimum without effects), so ρ measures the effect, not a local
 /// minimum of a fit from the nominal arm (position-only data with ±5° errors can stall in
 /// one: the diagnosis starts from the nominal arm and may see such a stall as a gap).
-pub fn detectability(
+pub fn detectability<E: PoseEffect>(
     truth: &Robot<6>,
-    outside: &[OutsideEffect],
+    outside: &[E],
     states: &[(JointState<6>, u32)],
     inst: &Instrument,
 ) -> (f64, f64) {
