@@ -80,6 +80,15 @@ calibration than before (position or orientation), and identified changes beyond
 --bounds-mm/--bounds-deg tolerance are warnings, on stderr and in the model file
 (calibration.warnings).
 
+Priors (docs/real-data.md, \"Priors\"): --prior [MM,DEG] adds a Gaussian prior around the
+initial model on every link parameter (one σ for lengths [mm] and for angles [deg]; alone:
+5 mm, 1°), in every algorithm: one row per parameter, whitened like the data rows, so it
+needs --sigma-pos-mm/--sigma-rot-deg. Weakly excited directions then stay near nominal;
+data-deficient link parameters are fitted (held by the prior) instead of refused; the
+standard errors are posterior ones and σ² = data cost/(rows − n_eff), n_eff the number of
+parameters the data determine. The model file records the prior (calibration.options.prior).
+`kincal crossval --prior auto` chooses the size by held-out error.
+
 Instrument-free data (docs/constraints.md): rows with a `target` id hold the tool point (a
 ball centre, identified as the tool translation) at an unknown fixed point, rows with a
 `plane` id on a plane; --constraints FILE (TOML) gives known distances between targets,

@@ -46,6 +46,16 @@ Weighting: Σ w_pos·|Δp|² + w_rot·|Δφ|². --sigma-pos-mm/--sigma-rot-deg s
 with σ the per-axis RMS residual of the calibrated model on all poses, iterated to a fixed
 point and corrected for the fitted parameters (so neither kind of row dominates by its unit).
 
+Priors: --prior [MM,DEG] fits the calibrated model with a Gaussian prior around the initial
+model on the link parameters (one σ for lengths [mm] and angles [deg]; alone: 5 mm, 1°),
+whitened by the weights (not with --unit-weights; one kind of rows is then weighted by its
+residual σ too); the weights themselves come from fits without the prior. --prior auto
+cross-validates without a prior and with each size of the grid 1.25 mm/0.25°, 2.5/0.5,
+5/1, 10/2, 20/4, 40/8, and takes the tightest size whose held-out score (w_pos·RMS_p² +
+w_rot·RMS_φ², square-rooted) is within 2 % of the best; the table is printed and in --json
+(prior.grid). Printed either way: the largest change of a link length and angle from the
+nominal model in the fit on all poses (--json largest_change), with and without the prior.
+
 Also printed (and in --json): the noise floor — the pooled scatter of repeated pose_ids
 when the data have them (the estimator of `kincal diagnose`: repeats count together when
 they share approach directions and temperatures within 0.5 °C), else an upper bound: the
