@@ -221,9 +221,22 @@ impl<const N: usize, D: RowSource<N> + ?Sized> RowSource<N> for WithPrior<'_, D>
         ws: &mut Workspace<P>,
     ) -> Result<f64> {
         let mut c = self.data.fold(robot, with_rhs, opts, n_cols, ws)?;
-        let mut row = [0.0; P];
-        for j in 0..n_cols.min(P) {
-            let i = ws.cols[j];
+        // The prior row is built in `ws.row` (scratch that no caller holds across a fold),
+        // not in a P-sized temporary on the stack.
+        let Workspace {
+            row,
+            cols,
+            colscale,
+            gram,
+            lsq,
+            to_gram,
+            ..
+        } = ws;
+        let a = row.get_mut(..n_cols).ok_or(Error::CapacityExceeded {
+            needed: n_cols,
+            capacity: P,
+        })?;
+        for (j, (&i, &scale)) in cols.iter().zip(colscale.iter()).enumerate().take(n_cols) {
             let w = self.prior.weight(i);
             if w == 0.0 {
                 continue;
@@ -235,18 +248,14 @@ impl<const N: usize, D: RowSource<N> + ?Sized> RowSource<N> for WithPrior<'_, D>
             } else {
                 0.0
             };
-            let a = row.get_mut(..n_cols).ok_or(Error::CapacityExceeded {
-                needed: n_cols,
-                capacity: P,
-            })?;
             a.fill(0.0);
             if let Some(x) = a.get_mut(j) {
-                *x = ws.colscale[j];
+                *x = scale;
             }
-            if ws.to_gram {
-                ws.gram.add_row_weighted(a, e, w)?;
+            if *to_gram {
+                gram.add_row_weighted(a, e, w)?;
             } else {
-                ws.lsq.add_row_weighted(a, e, w)?;
+                lsq.add_row_weighted(a, e, w)?;
             }
             c += w * e * e;
         }
