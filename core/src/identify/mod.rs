@@ -10,7 +10,9 @@
 //! Problem: `min Σ_l Σ_rows w_row·e_row²`, `e = [p_meas − p_model; φ(R_meas·R_modelᵀ)]`
 //! (positions in metres, rotations in radians, [`IdentifyOptions::orientation`] decides
 //! exact log or eq. 16), over the identifiable subset of the requested parameters; the
-//! others keep their initial values and are reported.
+//! others keep their initial values and are reported. Optionally with Gaussian priors
+//! around the initial model ([`Prior`], [`IdentifyOptions::prior`]): one whitened row per
+//! parameter, in every algorithm and in the covariance, for directions the data leave weak.
 
 pub mod constraints;
 mod data;

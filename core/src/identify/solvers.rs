@@ -777,8 +777,7 @@ fn covariance<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
     } else {
         accumulate_gram(robot, data, opts, n, ws)?
     };
-    let plain_sigma2 = if rows > n { c / (rows - n) as f64 } else { 0.0 };
-    out.sigma2 = plain_sigma2;
+    out.sigma2 = if rows > n { c / (rows - n) as f64 } else { 0.0 };
     // Covariance (RᵀR)⁻¹ from the normal equations (2–3 digits suffice for standard
     // errors); the backward-stable Givens factor when they are numerically singular. The
     // inverse goes to `ws.v`, read straight from the factor.
