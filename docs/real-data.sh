@@ -82,6 +82,32 @@ D=$OUT/figaroh-ur10e
 echo "== figaroh-ur10e leave-one-out and joint offsets only:"
 grep -h "held-out RMS" "$D/crossval-loo.txt" "$D/crossval-theta0.txt" | sed 's/^/   /'
 
+# Priors around the nominal model (docs/real-data.md, "Priors"): crossval chooses the size
+# by held-out error (--prior auto) and reports the largest change of a link parameter from
+# nominal with and without it; also the default size (5 mm, 1°), and calibrate with the
+# prior (model-prior.json records it).
+echo "== priors (crossval --prior auto, then the default 5 mm, 1°):"
+for NAME in figaroh-talos-arm figaroh-ur10e robotkinecal-fr3; do
+    D=$OUT/$NAME
+    CSV=$D/data.csv
+    if [ -f "$D/observed.csv" ]; then CSV=$D/observed.csv; fi
+    for P in auto 5,1; do
+        TAG=${P/5,1/default}
+        "$K" crossval "$CSV" --robot "$D/robot.toml" --effects base_frame,tool_frame \
+            --init-frames --folds 5 --seed 1 --prior "$P" --json "$D/crossval-prior-$TAG.json" \
+            > "$D/crossval-prior-$TAG.txt"
+        echo "   $NAME --prior $P:"
+        grep -E "^Prior|^  prior|^Largest change|held-out RMS" "$D/crossval-prior-$TAG.txt" |
+            sed 's/^/     /'
+    done
+    SP=$(json_number sigma_pos_mm "$D/crossval.json")
+    SR=$(json_number sigma_rot_deg "$D/crossval.json")
+    if [ "$SR" = "null" ]; then SR=1; fi
+    "$K" calibrate "$CSV" --robot "$D/robot.toml" --effects base_frame,tool_frame \
+        --init-frames --allow-data-deficiency --sigma-pos-mm "$SP" --sigma-rot-deg "$SR" \
+        --prior --out "$D/model-prior.json" > "$D/calibrate-prior.txt" 2>&1
+done
+
 # Sets that are not usable as they are: the refusal and its reason.
 for NAME in figaroh-tiago-mocap hilti-jaibot-stationing; do
     "$K" import-dataset "$NAME" "$DATA/$NAME" --out "$OUT/unused.csv" 2>> "$OUT/refused.txt" \

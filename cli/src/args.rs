@@ -168,3 +168,67 @@ mod tests {
         assert!(amount_deg("1e300").is_err());
     }
 }
+
+/// `--prior [MM,DEG|auto]`: Gaussian priors around the initial model on the link
+/// parameters (one σ for lengths in mm, one for angles in degrees; the core's
+/// `kincal::identify::Prior`), or `auto` (crossval: chosen from [`PRIOR_AUTO_GRID`] by
+/// held-out error).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PriorArg {
+    /// One σ for link lengths [mm] and link angles [deg].
+    Sizes { length_mm: f64, angle_deg: f64 },
+    /// Chosen by held-out error (crossval only).
+    Auto,
+}
+
+/// The default prior: 5 mm, 1° (`kincal::identify::DEFAULT_PRIOR_LENGTH_M`, `_ANGLE_RAD`).
+pub const PRIOR_DEFAULT: PriorArg = PriorArg::Sizes {
+    length_mm: kincal::identify::DEFAULT_PRIOR_LENGTH_M * 1e3,
+    angle_deg: 1.0,
+};
+
+/// The sizes `crossval --prior auto` tries (mm, deg), from tight to loose: the default
+/// scaled by 1/4 … 8 (the last is practically no prior on well-excited data).
+pub const PRIOR_AUTO_GRID: [(f64, f64); 6] = [
+    (1.25, 0.25),
+    (2.5, 0.5),
+    (5.0, 1.0),
+    (10.0, 2.0),
+    (20.0, 4.0),
+    (40.0, 8.0),
+];
+
+impl PriorArg {
+    /// The core's sizes (links only; frames and effects without a prior).
+    pub fn sizes(self) -> Option<kincal::identify::PriorSizes> {
+        match self {
+            PriorArg::Sizes {
+                length_mm,
+                angle_deg,
+            } => Some(kincal::identify::PriorSizes::links(
+                length_mm * 1e-3,
+                angle_deg.to_radians(),
+            )),
+            PriorArg::Auto => None,
+        }
+    }
+}
+
+/// Parses `MM,DEG` (both > 0 and finite) or `auto`.
+pub fn prior(s: &str) -> Result<PriorArg, String> {
+    let s = s.trim();
+    if s.eq_ignore_ascii_case("auto") {
+        return Ok(PriorArg::Auto);
+    }
+    let Some((mm, deg)) = s.split_once(',') else {
+        return Err(format!(
+            "expected MM,DEG (one σ for link lengths and angles, e.g. 5,1) or auto, found '{s}'"
+        ));
+    };
+    let length_mm = within(mm, 1e-6, 1e6, "mm")?;
+    let angle_deg = within(deg, 1e-6, 1e4, "deg")?;
+    Ok(PriorArg::Sizes {
+        length_mm,
+        angle_deg,
+    })
+}

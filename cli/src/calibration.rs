@@ -6,8 +6,8 @@ use std::time::Instant;
 
 use kincal::identify::{
     Algorithm, Bounds, Identifiability, Identification, IdentifyOptions, MAX_MODEL_PARAMS,
-    Measurement, PoseResidual, RobustOptions, Workspace, analyze, identify, identify_robust,
-    robust::ResidualTest,
+    Measurement, PoseResidual, Prior, PriorSizes, RobustOptions, Workspace, analyze, identify,
+    identify_robust, robust::ResidualTest,
 };
 use kincal::pose::OrientationError;
 use kincal::{EffectSet, ParamIndex, ParamSet, Robot};
@@ -73,6 +73,10 @@ pub struct Settings {
     /// Robust fit (core `identify_robust`: Huber/Cauchy IRLS around each algorithm) instead
     /// of plain least squares; `None`: least squares.
     pub robust: Option<RobustOptions>,
+    /// Gaussian priors around the starting model (core `Prior`), one σ per kind; `None`:
+    /// none. The prior's rows are whitened against data rows of weight 1/σ², so the
+    /// weighting should be [`Weighting::Sigma`] (the commands require it).
+    pub prior: Option<PriorSizes>,
 }
 
 impl Settings {
@@ -89,6 +93,7 @@ impl Settings {
             allow_data_deficiency: false,
             max_iterations: 200,
             robust: None,
+            prior: None,
         }
     }
 
@@ -97,6 +102,7 @@ impl Settings {
         algorithm: Algorithm,
         requested: ParamSet,
         bounds: Option<&'a Bounds>,
+        prior: Option<&'a Prior>,
     ) -> IdentifyOptions<'a> {
         let mut o = IdentifyOptions::new(algorithm, requested);
         let (wp, wr) = self.weighting.weights();
@@ -106,7 +112,14 @@ impl Settings {
         o.allow_data_deficiency = self.allow_data_deficiency;
         o.max_iterations = self.max_iterations;
         o.bounds = bounds;
+        o.prior = prior;
         o
+    }
+
+    /// The prior of these settings around `start` (rows whitened: data variance 1).
+    pub fn prior_around<const N: usize>(&self, start: &Robot<N>) -> Option<Box<Prior>> {
+        self.prior
+            .map(|sizes| Box::new(Prior::around(start, &sizes)))
     }
 }
 
@@ -220,10 +233,11 @@ pub fn calibrate<const N: usize>(
     let requested = start.param_set(settings.effects);
     let core = |algorithm| move |error| Failure::Core { algorithm, error };
     let mut ws = new_workspace();
-    let opts = settings.options(Algorithm::Ols, requested, None);
+    let prior = settings.prior_around(start);
+    let opts = settings.options(Algorithm::Ols, requested, None, None);
     let analysis = analyze(start, data, &opts, &mut ws).map_err(core(None))?;
     let singular_values = ws.singular_values().to_vec();
-    refuse_deficient(&analysis, &singular_values, settings)?;
+    refuse_deficient(&analysis, &singular_values, settings, prior.as_deref())?;
     let results: Vec<Result<Run<N>, Failure>> = settings
         .algorithms
         .par_iter()
@@ -234,7 +248,7 @@ pub fn calibrate<const N: usize>(
                 settings.bounds_length_m,
                 settings.bounds_angle_rad,
             ));
-            let opts = settings.options(algorithm, requested, Some(&bounds));
+            let opts = settings.options(algorithm, requested, Some(&bounds), prior.as_deref());
             let mut ws = new_workspace();
             let (ident, robust) = match &settings.robust {
                 None => (
@@ -296,10 +310,14 @@ fn refuse_deficient(
     analysis: &kincal::identify::Identifiability,
     singular_values: &[f64],
     settings: &Settings,
+    prior: Option<&Prior>,
 ) -> Result<(), Failure> {
-    if analysis.rank == 0
-        || (!analysis.data_deficient.is_empty() && !settings.allow_data_deficiency)
-    {
+    // A data-deficient parameter with a prior is fitted: the prior holds it.
+    let undetermined = analysis
+        .data_deficient
+        .iter()
+        .any(|i| !prior.is_some_and(|p| p.has(i)));
+    if analysis.rank == 0 || (undetermined && !settings.allow_data_deficiency) {
         return Err(Failure::Deficient {
             analysis: Box::new(*analysis),
             singular_values: singular_values.to_vec(),
@@ -319,10 +337,11 @@ pub fn calibrate_constrained<const N: usize>(
     let requested = contact_params(start, settings);
     let core = |algorithm| move |error| Failure::Core { algorithm, error };
     let mut ws = new_workspace();
-    let opts = settings.options(Algorithm::Ols, requested, None);
+    let prior = settings.prior_around(start);
+    let opts = settings.options(Algorithm::Ols, requested, None, None);
     let analysis = analyze_constrained(start, data, &opts, &mut ws).map_err(core(None))?;
     let singular_values = ws.singular_values().to_vec();
-    refuse_deficient(&analysis, &singular_values, settings)?;
+    refuse_deficient(&analysis, &singular_values, settings, prior.as_deref())?;
     let results: Vec<Result<Run<N>, Failure>> = settings
         .algorithms
         .par_iter()
@@ -333,7 +352,7 @@ pub fn calibrate_constrained<const N: usize>(
                 settings.bounds_length_m,
                 settings.bounds_angle_rad,
             ));
-            let opts = settings.options(algorithm, requested, Some(&bounds));
+            let opts = settings.options(algorithm, requested, Some(&bounds), prior.as_deref());
             let mut ws = new_workspace();
             let ident =
                 identify_constrained(start, data, &opts, &mut ws).map_err(core(Some(algorithm)))?;

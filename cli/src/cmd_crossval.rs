@@ -10,8 +10,8 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use kincal::identify::{
-    Algorithm, Identifiability, IdentifyOptions, Loss, Measurement, PoseResidual, RobustOptions,
-    identify, identify_robust,
+    Algorithm, Identifiability, IdentifyOptions, Loss, Measurement, PoseResidual, Prior,
+    PriorSizes, RobustOptions, identify, identify_robust,
 };
 use kincal::noise::{pooled_repeat_scatter, repeat_leader, residual_sigma};
 use kincal::validation::{ErrorSummary, PoseErrors};
@@ -45,6 +45,16 @@ Weighting: Σ w_pos·|Δp|² + w_rot·|Δφ|². --sigma-pos-mm/--sigma-rot-deg s
 (w = 1/σ²); --unit-weights uses 1 and 1 (the paper's); by default the weights are 1/σ²
 with σ the per-axis RMS residual of the calibrated model on all poses, iterated to a fixed
 point and corrected for the fitted parameters (so neither kind of row dominates by its unit).
+
+Priors: --prior [MM,DEG] fits the calibrated model with a Gaussian prior around the initial
+model on the link parameters (one σ for lengths [mm] and angles [deg]; alone: 5 mm, 1°),
+whitened by the weights (not with --unit-weights; one kind of rows is then weighted by its
+residual σ too); the weights themselves come from fits without the prior. --prior auto
+cross-validates without a prior and with each size of the grid 1.25 mm/0.25°, 2.5/0.5,
+5/1, 10/2, 20/4, 40/8, and takes the tightest size whose held-out score (w_pos·RMS_p² +
+w_rot·RMS_φ², square-rooted) is within 2 % of the best; the table is printed and in --json
+(prior.grid). Printed either way: the largest change of a link length and angle from the
+nominal model in the fit on all poses (--json largest_change), with and without the prior.
 
 Also printed (and in --json): the noise floor — the pooled scatter of repeated pose_ids
 when the data have them (the estimator of `kincal diagnose`: repeats count together when
@@ -134,6 +144,11 @@ pub struct Args {
     /// Known geometry of the fixtures (TOML) for data with target/plane rows
     #[arg(long, value_name = "FILE")]
     pub constraints: Option<PathBuf>,
+    /// Gaussian priors around the initial model on the calibrated link parameters: one σ
+    /// for lengths [mm] and angles [deg] (`--prior` alone: 5,1), or `auto`: the tightest
+    /// size of a fixed grid whose held-out error is within 2 % of the best
+    #[arg(long, value_name = "MM,DEG|auto", value_parser = crate::args::prior, num_args = 0..=1, default_missing_value = "5,1", conflicts_with = "unit_weights")]
+    pub prior: Option<crate::args::PriorArg>,
 }
 
 /// A fold's held-out errors (pose, nominal, calibrated), data-deficient parameter count and
@@ -226,6 +241,8 @@ struct How {
     init_frames: bool,
     robust: Option<Loss>,
     max_iterations: u32,
+    /// Priors around each fit's starting model (rows whitened: the weights are 1/σ²).
+    prior: Option<PriorSizes>,
 }
 
 /// Fits `requested` on the poses of `data` with a positive weight.
@@ -252,8 +269,12 @@ fn fit<const N: usize>(
     }
     let mut ws = new_workspace();
     let mut last = String::new();
+    let prior = how
+        .prior
+        .map(|sizes| Box::new(Prior::around(&start, &sizes)));
     for algorithm in [Algorithm::Ols, Algorithm::Opt2] {
         let mut o = IdentifyOptions::new(algorithm, requested);
+        o.prior = prior.as_deref();
         o.weight_pos = w.pos;
         o.weight_rot = w.rot;
         o.allow_data_deficiency = true;
@@ -430,6 +451,210 @@ fn repeat_noise<const N: usize>(
     )))
 }
 
+/// Every fold's held-out errors: (nominal, calibrated) per pose, and per fold (fold, poses,
+/// data-deficient count, algorithm).
+type Folds = (
+    Vec<PoseErrors>,
+    Vec<PoseErrors>,
+    Vec<(usize, usize, usize, &'static str)>,
+);
+
+/// K-fold cross-validation: each fold's poses predicted by the nominal and the calibrated
+/// fit of the other folds.
+fn run_folds<const N: usize>(
+    nominal: &Robot<N>,
+    meas: &[Measurement<N>],
+    fold_of: &[usize],
+    k_folds: usize,
+    req_nom: ParamSet,
+    req_cal: ParamSet,
+    how: How,
+) -> Result<Folds, String> {
+    let folds: Vec<FoldResult> = (0..k_folds)
+        .into_par_iter()
+        .map(|k| {
+            let train: Vec<Measurement<N>> = meas
+                .iter()
+                .zip(fold_of)
+                .map(|(m, &f)| Measurement {
+                    weight: if f == k { 0.0 } else { m.weight },
+                    ..*m
+                })
+                .collect();
+            let a = fit(nominal, &train, req_nom, how)
+                .map_err(|e| format!("fold {}: nominal: {e}", k + 1))?;
+            let b = fit(nominal, &train, req_cal, how)
+                .map_err(|e| format!("fold {}: calibrated: {e}", k + 1))?;
+            let deficient = b.analysis.as_ref().map_or(0, |x| x.data_deficient.len());
+            let mut out = Vec::new();
+            for (i, m) in meas.iter().enumerate() {
+                if fold_of[i] == k {
+                    out.push((i, errors(&a.robot, m)?, errors(&b.robot, m)?));
+                }
+            }
+            Ok((out, deficient, b.algorithm))
+        })
+        .collect();
+    let mut held_nom = vec![PoseErrors::default(); meas.len()];
+    let mut held_cal = vec![PoseErrors::default(); meas.len()];
+    let mut fold_info = Vec::new();
+    for (k, f) in folds.into_iter().enumerate() {
+        let (rows, deficient, algorithm) = f?;
+        for &(i, a, b) in &rows {
+            held_nom[i] = a;
+            held_cal[i] = b;
+        }
+        fold_info.push((k, rows.len(), deficient, algorithm));
+    }
+    Ok((held_nom, held_cal, fold_info))
+}
+
+/// One row of `--prior auto`'s search: the sizes (none: no prior), the held-out RMS of the
+/// calibrated model [m, rad] and its weighted score (`w_pos·RMS_p² + w_rot·RMS_φ²`, the
+/// fit's own cost per pose).
+#[derive(Debug, Clone, Copy)]
+struct AutoRow {
+    sizes: Option<(f64, f64)>,
+    rms_pos_m: f64,
+    rms_rot_rad: f64,
+    score: f64,
+}
+
+/// `--prior auto`: cross-validates without a prior and with every size of
+/// [`crate::args::PRIOR_AUTO_GRID`]; picks the tightest size whose held-out score's square
+/// root (an RMS in noise units) is within [`AUTO_TOLERANCE`] of the best of all rows — the
+/// most physical model the data cannot tell apart from the best-predicting one.
+fn choose_prior<const N: usize>(
+    nominal: &Robot<N>,
+    meas: &[Measurement<N>],
+    fold_of: &[usize],
+    k_folds: usize,
+    req_nom: ParamSet,
+    req_cal: ParamSet,
+    how: How,
+) -> Result<(Option<PriorSizes>, Vec<AutoRow>), String> {
+    let grid = std::iter::once(None).chain(crate::args::PRIOR_AUTO_GRID.iter().map(|&g| Some(g)));
+    let mut rows = Vec::new();
+    for sizes in grid {
+        let prior = sizes.map(|(mm, deg)| PriorSizes::links(mm * 1e-3, f64::to_radians(deg)));
+        let (_, held, _) = run_folds(
+            nominal,
+            meas,
+            fold_of,
+            k_folds,
+            req_nom,
+            req_cal,
+            How { prior, ..how },
+        )?;
+        let s = summarize(meas, &held, |_| true);
+        let (p, r) = (s.rms_pos_m(), s.rms_rot_rad());
+        rows.push(AutoRow {
+            sizes,
+            rms_pos_m: p,
+            rms_rot_rad: r,
+            score: how.w.pos * p * p + how.w.rot * r * r,
+        });
+    }
+    let best = rows.iter().map(|r| r.score).fold(f64::INFINITY, f64::min);
+    let limit = best * (1.0 + AUTO_TOLERANCE).powi(2);
+    let chosen = rows
+        .iter()
+        .filter(|r| r.sizes.is_some() && r.score <= limit)
+        .map(|r| r.sizes)
+        .next()
+        .flatten();
+    Ok((
+        chosen.map(|(mm, deg)| PriorSizes::links(mm * 1e-3, f64::to_radians(deg))),
+        rows,
+    ))
+}
+
+/// Prints the prior (and `--prior auto`'s search) into `s`; its JSON (null without one).
+fn prior_report(
+    s: &mut String,
+    prior: Option<PriorSizes>,
+    auto: bool,
+    table: &[AutoRow],
+    orientation: bool,
+) -> Value {
+    let Some(p) = prior else {
+        if auto {
+            let _ = writeln!(
+                s,
+                "Prior (auto): none is within 2 % of the best held-out error"
+            );
+        }
+        return if auto {
+            json!({"auto": true, "length_mm": null, "angle_deg": null})
+        } else {
+            Value::Null
+        };
+    };
+    let (mm, deg) = (p.length_m * 1e3, p.angle_rad.to_degrees());
+    let _ = writeln!(
+        s,
+        "Prior{}: Gaussian around the initial model on the link parameters, σ {mm} mm (lengths), {deg}° (angles); rows whitened by the weights above",
+        if auto {
+            " (auto: the tightest size of the grid within 2 % of the best held-out error)"
+        } else {
+            ""
+        }
+    );
+    let mut rows = Vec::new();
+    for r in table {
+        let _ = writeln!(
+            s,
+            "  prior {:>14}: held-out RMS {:.4} mm{}, score {:.4}",
+            r.sizes
+                .map_or("none".to_string(), |(a, b)| format!("{a} mm, {b}°")),
+            r.rms_pos_m * 1e3,
+            if orientation {
+                format!(", {:.4}°", r.rms_rot_rad.to_degrees())
+            } else {
+                String::new()
+            },
+            r.score
+        );
+        rows.push(json!({
+            "length_mm": r.sizes.map(|x| x.0), "angle_deg": r.sizes.map(|x| x.1),
+            "heldout_rms_pos_mm": r.rms_pos_m * 1e3,
+            "heldout_rms_rot_deg": if orientation { json!(r.rms_rot_rad.to_degrees()) } else { Value::Null },
+            "score": r.score,
+        }));
+    }
+    json!({"auto": auto, "length_mm": mm, "angle_deg": deg, "grid": rows})
+}
+
+/// `--prior auto` accepts a held-out RMS (in noise units) this much above the best.
+const AUTO_TOLERANCE: f64 = 0.02;
+
+/// The largest change of a link length [m] and a link angle [rad] of `fitted` from
+/// `nominal` among `set`, with the parameters' labels.
+fn largest_changes<const N: usize>(
+    fitted: &Robot<N>,
+    nominal: &Robot<N>,
+    set: &ParamSet,
+) -> ((f64, String), (f64, String)) {
+    let mut len = (0.0, String::from("-"));
+    let mut ang = (0.0, String::from("-"));
+    for i in set.iter() {
+        let Ok(id) = kincal::ParamId::from_index(kincal::ParamIndex(i), N) else {
+            continue;
+        };
+        if !matches!(id, kincal::ParamId::Link { .. }) {
+            continue;
+        }
+        let d = (fitted.param(kincal::ParamIndex(i)).unwrap_or(f64::NAN)
+            - nominal.param(kincal::ParamIndex(i)).unwrap_or(f64::NAN))
+        .abs();
+        let slot = if id.is_length() { &mut len } else { &mut ang };
+        if d > slot.0 || d.is_nan() {
+            *slot = (d, crate::report::label::<N>(i));
+        }
+    }
+    (len, ang)
+}
+
 fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Result<(), CliError> {
     let effects = args.effects.iter().fold(EffectSet::NONE, |a, &e| a.with(e));
     let set = data::read(
@@ -479,13 +704,15 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
         init_frames: args.init_frames,
         robust: args.robust.map(Loss::from),
         max_iterations: args.max_iterations,
+        prior: None,
     };
     let mut all =
         fit(nominal, &meas, req_cal, how(w)).map_err(|e| fail("calibration on all poses", e))?;
     let p_fit = |f: &Fit<N>| f.analysis.as_ref().map_or(0, |a| a.identifiable.len());
     // Residual-based weights matter only when both kinds of rows are measured.
     let both = orientation && meas.iter().any(|m| m.mask.has_position());
-    if w.mode == "residual" && !both {
+    // A prior is weighed against the data's noise: then the weights whiten even one kind.
+    if w.mode == "residual" && !both && args.prior.is_none() {
         w.mode = "residual (one kind of rows: weights immaterial)";
     }
     if w.mode == "residual" {
@@ -510,45 +737,44 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
     let nom_all =
         fit(nominal, &meas, req_nom, how(w)).map_err(|e| fail("nominal fit on all poses", e))?;
 
+    // The prior: as given, or chosen by held-out error (`auto`). The weights above come
+    // from fits without it, so that a prior changes the model, not the weighting.
+    let no_prior = all.robot;
+    let (prior, auto_table) = match args.prior {
+        None => (None, Vec::new()),
+        Some(crate::args::PriorArg::Sizes { .. }) => {
+            (args.prior.and_then(|p| p.sizes()), Vec::new())
+        }
+        Some(crate::args::PriorArg::Auto) => choose_prior(
+            nominal,
+            &meas,
+            &fold_of,
+            args.folds,
+            req_nom,
+            req_cal,
+            how(w),
+        )
+        .map_err(|e| fail("--prior auto", e))?,
+    };
+    let how = |w: Weights| How { prior, ..how(w) };
+    if prior.is_some() {
+        all = fit(nominal, &meas, req_cal, how(w))
+            .map_err(|e| fail("calibration on all poses with the prior", e))?;
+    }
+
     // Folds.
     let pb = crate::progress::spinner(format!("cross-validating ({} folds)", args.folds));
-    let folds: Vec<FoldResult> = (0..args.folds)
-        .into_par_iter()
-        .map(|k| {
-            let train: Vec<Measurement<N>> = meas
-                .iter()
-                .zip(&fold_of)
-                .map(|(m, &f)| Measurement {
-                    weight: if f == k { 0.0 } else { m.weight },
-                    ..*m
-                })
-                .collect();
-            let a = fit(nominal, &train, req_nom, how(w))
-                .map_err(|e| format!("fold {}: nominal: {e}", k + 1))?;
-            let b = fit(nominal, &train, req_cal, how(w))
-                .map_err(|e| format!("fold {}: calibrated: {e}", k + 1))?;
-            let deficient = b.analysis.as_ref().map_or(0, |x| x.data_deficient.len());
-            let mut out = Vec::new();
-            for (i, m) in meas.iter().enumerate() {
-                if fold_of[i] == k {
-                    out.push((i, errors(&a.robot, m)?, errors(&b.robot, m)?));
-                }
-            }
-            Ok((out, deficient, b.algorithm))
-        })
-        .collect();
+    let folds = run_folds(
+        nominal,
+        &meas,
+        &fold_of,
+        args.folds,
+        req_nom,
+        req_cal,
+        how(w),
+    );
     pb.finish_and_clear();
-    let mut held_nom = vec![PoseErrors::default(); meas.len()];
-    let mut held_cal = vec![PoseErrors::default(); meas.len()];
-    let mut fold_info = Vec::new();
-    for (k, f) in folds.into_iter().enumerate() {
-        let (rows, deficient, algorithm) = f.map_err(|e| fail("cross-validation", e))?;
-        for &(i, a, b) in &rows {
-            held_nom[i] = a;
-            held_cal[i] = b;
-        }
-        fold_info.push((k, rows.len(), deficient, algorithm));
-    }
+    let (held_nom, held_cal, fold_info) = folds.map_err(|e| fail("cross-validation", e))?;
     let all_poses = |_: usize| true;
     let s_nom = summarize(&meas, &held_nom, all_poses);
     let s_cal = summarize(&meas, &held_cal, all_poses);
@@ -644,14 +870,47 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
         w.pos,
         w.rot,
         match w.mode {
-            "residual" => format!(
+            "residual" if orientation => format!(
                 " (σ = {:.4} mm, {:.4}° per axis)",
                 1e3 / w.pos.sqrt(),
                 (1.0 / w.rot.sqrt()).to_degrees()
             ),
+            "residual" => format!(" (σ = {:.4} mm per axis)", 1e3 / w.pos.sqrt()),
             _ => String::new(),
         }
     );
+    let prior_json = prior_report(
+        &mut s,
+        prior,
+        args.prior == Some(crate::args::PriorArg::Auto),
+        &auto_table,
+        orientation,
+    );
+    let changes = |r: &Robot<N>| {
+        let ((dl, pl), (da, pa)) = largest_changes(r, nominal, &req_cal);
+        json!({"length_mm": dl * 1e3, "length_param": pl, "angle_deg": da.to_degrees(), "angle_param": pa})
+    };
+    let change_json =
+        json!({"calibrated": changes(&all.robot), "without_prior": changes(&no_prior)});
+    {
+        let ((dl, pl), (da, pa)) = largest_changes(&all.robot, nominal, &req_cal);
+        let _ = writeln!(
+            s,
+            "Largest change from nominal (calibrated on all poses): |Δ length| {:.3} mm ({pl}), |Δ angle| {:.3}° ({pa}){}",
+            dl * 1e3,
+            da.to_degrees(),
+            if prior.is_some() {
+                let ((dl, pl), (da, pa)) = largest_changes(&no_prior, nominal, &req_cal);
+                format!(
+                    "; without the prior {:.3} mm ({pl}), {:.3}° ({pa})",
+                    dl * 1e3,
+                    da.to_degrees()
+                )
+            } else {
+                String::new()
+            }
+        );
+    }
     if let Some(a) = analysis {
         let _ = writeln!(
             s,
@@ -850,6 +1109,7 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
             "robot": name, "effects": eff_names, "geometry": args.geometry, "init_frames": args.init_frames, "robust": args.robust.is_some(), "robust_loss": args.robust.map(|l| Loss::from(l).name()),
             "folds": args.folds, "seed": args.seed,
             "weighting": {"mode": w.mode, "weight_pos": w.pos, "weight_rot": w.rot},
+            "prior": prior_json, "largest_change": change_json,
             "identifiability": analysis.map(|a| json!({
                 "requested": a.requested.len(), "identifiable": a.identifiable.len(),
                 "structurally_redundant": a.structural.iter().map(crate::report::label::<N>).collect::<Vec<_>>(),

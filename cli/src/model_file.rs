@@ -219,6 +219,27 @@ pub struct OptionsJson {
     pub allow_data_deficiency: bool,
     pub allow_out_of_limits: bool,
     pub max_iterations: u32,
+    /// Gaussian priors around the initial model (`calibrate --prior`), if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prior: Option<PriorJson>,
+}
+
+/// The prior of a calibration: one σ per kind (none: no prior on that kind), centred on the
+/// initial model, rows whitened against the data's 1/σ² weights; its χ² at the model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PriorJson {
+    pub length_mm: f64,
+    pub angle_deg: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame_length_mm: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame_angle_deg: Option<f64>,
+    /// `Σ ((x − x_initial)/σ)²` of the model's run, and its number of rows.
+    pub chi2: f64,
+    pub rows: usize,
+    /// Data-deficient parameters fitted because their prior holds them.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub held: Vec<String>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -676,6 +697,21 @@ impl ModelFile {
                     allow_data_deficiency: s.allow_data_deficiency,
                     allow_out_of_limits,
                     max_iterations: s.max_iterations,
+                    prior: s.prior.map(|p| PriorJson {
+                        length_mm: p.length_m * 1e3,
+                        angle_deg: p.angle_rad.to_degrees(),
+                        frame_length_mm: p
+                            .frame_length_m
+                            .is_finite()
+                            .then_some(p.frame_length_m * 1e3),
+                        frame_angle_deg: p
+                            .frame_angle_rad
+                            .is_finite()
+                            .then_some(p.frame_angle_rad.to_degrees()),
+                        chi2: main.prior_chi2,
+                        rows: main.prior_rows,
+                        held: main.prior_held.iter().map(label::<N>).collect(),
+                    }),
                 },
                 identifiability: identifiability_json::<N>(&cal.analysis, &cal.singular_values),
                 residuals: ResidualsJson {

@@ -1,5 +1,5 @@
 //! Worst-case stack of identification on a controller: ARIA with every effect, the three
-//! algorithms, the identifiability analysis and the robust fit, run on a thread with a
+//! algorithms (also with priors), the identifiability analysis and the robust fit, run on a thread with a
 //! fixed stack. The workspace is on the heap (the caller's memory, as on firmware where it
 //! is a `static`); everything else the core needs must fit in [`STACK_BOUND`].
 //!
@@ -14,8 +14,8 @@
 mod stack_probe;
 
 use kincal::identify::{
-    Algorithm, Bounds, IdentifyOptions, Loss, Measurement, PoseResidual, RobustOptions, Workspace,
-    analyze, identify, identify_robust,
+    Algorithm, Bounds, IdentifyOptions, Loss, Measurement, PoseResidual, Prior, PriorSizes,
+    RobustOptions, Workspace, analyze, identify, identify_robust,
 };
 use kincal::pose::{rotation_exp, transform};
 use kincal::rng::SplitMix64;
@@ -116,7 +116,7 @@ fn rank(
 }
 
 /// Everything identification does on a controller, with every effect of ARIA.
-fn workload(data: &mut [Measurement<6>], report: &mut [PoseResidual], ws: &mut Ws) {
+fn workload(data: &mut [Measurement<6>], report: &mut [PoseResidual], ws: &mut Ws, prior: &Prior) {
     let robot = aria::nominal();
     let requested = robot.param_set(all_effects());
     let bounds = Bounds::around(&robot, 0.05, 1.0);
@@ -134,6 +134,13 @@ fn workload(data: &mut [Measurement<6>], report: &mut [PoseResidual], ws: &mut W
         let rms = fit_robust(&robot, data, &opts, loss, report, ws);
         assert!(rms < 1e-3, "{loss:?}: {rms}");
     }
+    // With Gaussian priors on every parameter (the caller's memory, like the workspace).
+    opts.prior = Some(prior);
+    for alg in Algorithm::ALL {
+        opts.algorithm = alg;
+        let rms = fit(&robot, data, &opts, ws);
+        assert!(rms < 1e-3, "{alg:?} with a prior: {rms}");
+    }
 }
 
 /// Runs the workload on a thread with the probed stack (only in a child process).
@@ -145,7 +152,11 @@ fn stack_probe_child() {
         // The workspace is the caller's memory (a `static` on firmware): on the heap, made
         // outside the probed thread.
         let mut ws = Box::<Ws>::default();
-        move || workload(&mut data, &mut report, &mut ws)
+        let mut prior = Box::new(Prior::around(&aria::nominal(), &PriorSizes::DEFAULT));
+        prior.sigma = [1.0; kincal::identify::MAX_MODEL_PARAMS];
+        // Unit weights on data of ~1e-5 m noise: a prior row as weak as the data's noise.
+        prior.data_variance = 1e-10;
+        move || workload(&mut data, &mut report, &mut ws, &prior)
     });
 }
 

@@ -293,6 +293,10 @@ pub(crate) trait RowSource<const N: usize> {
     fn cost(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<f64>;
     /// Residual statistics.
     fn stats(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<ResidualStats>;
+    /// The prior whose rows [`RowSource::fold`] adds after the data's, if any.
+    fn prior(&self) -> Option<&super::Prior> {
+        None
+    }
 }
 
 impl<const N: usize> RowSource<N> for [Measurement<N>] {

@@ -10,11 +10,14 @@
 //! Problem: `min Σ_l Σ_rows w_row·e_row²`, `e = [p_meas − p_model; φ(R_meas·R_modelᵀ)]`
 //! (positions in metres, rotations in radians, [`IdentifyOptions::orientation`] decides
 //! exact log or eq. 16), over the identifiable subset of the requested parameters; the
-//! others keep their initial values and are reported.
+//! others keep their initial values and are reported. Optionally with Gaussian priors
+//! around the initial model ([`Prior`], [`IdentifyOptions::prior`]): one whitened row per
+//! parameter, in every algorithm and in the covariance, for directions the data leave weak.
 
 pub mod constraints;
 mod data;
 mod identifiability;
+mod prior;
 pub mod robust;
 mod solvers;
 mod workspace;
@@ -27,6 +30,7 @@ pub use data::{ComponentMask, Measurement, ResidualStats, residual_stats};
 pub(crate) use data::{distinct_points, validate as validate_data};
 pub(crate) use identifiability::structural_step;
 pub use identifiability::{Identifiability, Partner, analyze};
+pub use prior::{DEFAULT_PRIOR_ANGLE_RAD, DEFAULT_PRIOR_LENGTH_M, Prior, PriorSizes};
 pub use robust::{
     Loss, PoseResidual, RobustIdentification, RobustOptions, identify_robust, residual_test,
 };
@@ -169,6 +173,10 @@ pub struct IdentifyOptions<'a> {
     /// Indices of rows left out of the fit as if their weight were 0 (sorted ascending):
     /// e.g. the suspect rows of a diagnosis, whose data the caller shares read-only.
     pub excluded: &'a [u32],
+    /// Gaussian priors around the initial model ([`Prior`]): one whitened row per fitted
+    /// parameter with a finite σ, in every algorithm; parameters the data leave undetermined
+    /// are fitted when they carry a prior. `None`: no prior (the paper's fits).
+    pub prior: Option<&'a Prior>,
 }
 
 impl IdentifyOptions<'_> {
@@ -190,6 +198,7 @@ impl IdentifyOptions<'_> {
             allow_data_deficiency: false,
             covariance: true,
             excluded: &[],
+            prior: None,
         }
     }
 }
@@ -225,7 +234,14 @@ pub struct Identification<const N: usize> {
     pub initial: ResidualStats,
     /// Residuals at the identified model.
     pub fitted: ResidualStats,
-    /// Residual variance σ² = cost/(rows − fitted parameters) (0 without redundancy).
+    /// Residual variance σ² = cost/(rows − fitted parameters) (0 without redundancy); with
+    /// whitened rows, the reduced χ². With a prior: σ² = data cost/(rows − n_eff), where
+    /// `n_eff = n − tr(A⁻¹·P)` counts the parameters the data (not the prior) determine
+    /// (`A` the normal matrix with the prior rows, `P` their part): today's σ² as the prior
+    /// vanishes, cost/rows when it pins everything, and unbiased when the truth is drawn
+    /// from the prior. The standard errors are then those of the posterior,
+    /// `σ²·(JᵀWJ + s²·Σ_p⁻¹)⁻¹` ([`Prior`]); the prior's own χ² is
+    /// [`Identification::prior_chi2`].
     pub sigma2: f64,
     /// Standard error of each fitted parameter (flat index; 0 for parameters not fitted).
     pub std_errors: [f64; MAX_MODEL_PARAMS],
@@ -235,6 +251,12 @@ pub struct Identification<const N: usize> {
     pub correlated: [Correlation; MAX_CORRELATED_PAIRS],
     /// Number of pairs above [`CORRELATION_REPORT_THRESHOLD`].
     pub n_correlated: usize,
+    /// With a prior: `Σ ((x_i − c_i)/σ_i)²` of the fitted parameters at the result (0 without).
+    pub prior_chi2: f64,
+    /// With a prior: its rows (fitted parameters with a finite σ; 0 without).
+    pub prior_rows: usize,
+    /// With a prior: the data-deficient parameters fitted because their prior holds them.
+    pub prior_held: ParamSet,
 }
 
 impl<const N: usize> Identification<N> {

@@ -112,6 +112,9 @@ impl<const N: usize> Identification<N> {
                 rho: 0.0,
             }; MAX_CORRELATED_PAIRS],
             n_correlated: 0,
+            prior_chi2: 0.0,
+            prior_rows: 0,
+            prior_held: ParamSet::new(),
         };
         if let Some(a) = analysis {
             out.analysis = *a;
@@ -132,18 +135,53 @@ pub(crate) fn identify_into<const N: usize, const P: usize, D: RowSource<N> + ?S
 ) -> Result<()> {
     data.validate()?;
     check_inputs(data, opts)?;
+    out.prior_chi2 = 0.0;
+    out.prior_rows = 0;
+    out.prior_held = ParamSet::new();
+    let Some(prior) = opts.prior else {
+        let fitted = out.analysis.identifiable;
+        return fit_set(data, opts, fitted, ws, out);
+    };
+    prior.validate()?;
+    // Data-deficient parameters with a prior are fitted: the prior holds them.
+    let mut fitted = out.analysis.identifiable;
+    for i in out.analysis.data_deficient.iter().filter(|&i| prior.has(i)) {
+        fitted.insert(i)?;
+        out.prior_held.insert(i)?;
+    }
+    let with = super::prior::WithPrior {
+        data,
+        prior,
+        fitted,
+    };
+    fit_set(&with, opts, fitted, ws, out)?;
+    out.prior_rows = fitted.iter().filter(|&i| prior.has(i)).count();
+    out.prior_chi2 = prior.chi2(&out.robot, &fitted)?;
+    Ok(())
+}
+
+/// Fits the parameters `fitted` (the identifiable ones, and with a prior the data-deficient
+/// ones it holds) on the rows of `data`.
+fn fit_set<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
+    data: &D,
+    opts: &IdentifyOptions<'_>,
+    fitted: ParamSet,
+    ws: &mut Workspace<P>,
+    out: &mut Identification<N>,
+) -> Result<()> {
     let analysis = &out.analysis;
-    let n = analysis.rank;
-    if n > P || analysis.identifiable.len() != n {
+    let n = fitted.len();
+    if n > P || analysis.identifiable.len() != analysis.rank {
         return Err(Error::CapacityExceeded {
-            needed: analysis.identifiable.len(),
+            needed: n,
             capacity: P,
         });
     }
     let rows = data.row_count(opts);
-    if n == 0 || (!analysis.data_deficient.is_empty() && !opts.allow_data_deficiency) {
+    let undetermined = analysis.data_deficient.iter().any(|i| !fitted.contains(i));
+    if n == 0 || (undetermined && !opts.allow_data_deficiency) {
         return Err(Error::RankDeficient {
-            rank: n,
+            rank: analysis.rank,
             required: analysis.requested.len() - analysis.structural.len(),
         });
     }
@@ -153,7 +191,7 @@ pub(crate) fn identify_into<const N: usize, const P: usize, D: RowSource<N> + ?S
             needed: n,
         });
     }
-    for (k, i) in analysis.identifiable.iter().enumerate() {
+    for (k, i) in fitted.iter().enumerate() {
         ws.cols[k] = i;
     }
     out.algorithm = opts.algorithm;
@@ -676,6 +714,49 @@ fn bounded<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
     })
 }
 
+/// σ² of a fit with a prior, from the inverse `ws.v` of its normal equations (unit-scaled):
+/// the data's cost over `rows − n_eff`, where `rows` are the data rows and
+/// `n_eff = n − tr(A⁻¹·P)` (`A` the normal matrix with the prior, `P` its prior part) is the
+/// number of parameters the data determine: `n` for a vanishing prior (today's σ²), 0 for
+/// an infinitely strong one. Unbiased when the truth is drawn from the prior
+/// (`E[data cost] = s²·(rows − n_eff)`, as for ridge regression). `c` is the total cost,
+/// `rows_all` the data and prior rows.
+fn posterior_sigma2<const N: usize, const P: usize>(
+    prior: &super::Prior,
+    robot: &Robot<N>,
+    c: f64,
+    rows_all: usize,
+    n: usize,
+    ws: &Workspace<P>,
+) -> Result<f64> {
+    let (mut prior_cost, mut trace, mut prior_rows) = (0.0, 0.0, 0usize);
+    for k in 0..n.min(P) {
+        let i = ws.cols[k];
+        let w = prior.weight(i);
+        if w == 0.0 {
+            continue;
+        }
+        let e = prior.center.get(i).copied().unwrap_or(0.0) - robot.param(ParamIndex(i))?;
+        prior_cost += w * e * e;
+        trace += w * ws.v[k][k];
+        prior_rows += 1;
+    }
+    let data_rows = rows_all.saturating_sub(prior_rows);
+    if prior_rows == 0 {
+        return Ok(if data_rows > n {
+            c / (data_rows - n) as f64
+        } else {
+            0.0
+        });
+    }
+    let dof = data_rows as f64 - (n as f64 - trace);
+    Ok(if dof > 0.0 {
+        (c - prior_cost).max(0.0) / dof
+    } else {
+        0.0
+    })
+}
+
 /// σ², standard errors and strong correlations at the fitted model. With `gram_current`
 /// (see [`Finish`]) the normal equations the solver left are used as they are; otherwise
 /// they are accumulated at the fitted model.
@@ -711,6 +792,9 @@ fn covariance<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
     if inverted.is_err() {
         // Identifiable at the start but singular at the optimum: report no errors.
         return Ok(());
+    }
+    if let Some(prior) = data.prior() {
+        out.sigma2 = posterior_sigma2(prior, robot, c, rows, n, ws)?;
     }
     let cov = &ws.v;
     for k in 0..n {

@@ -30,6 +30,8 @@ pub struct Workspace<const P: usize> {
     pub(crate) cols: [usize; P],
     /// Factor applied to each column when accumulating.
     pub(crate) colscale: [f64; P],
+    /// Scratch row: OPT1's damping scales, a prior row while folding (never held across a
+    /// fold).
     pub(crate) row: [f64; P],
     pub(crate) diag: [f64; P],
     pub(crate) x: [f64; P],
