@@ -80,6 +80,11 @@ pub enum kincal_diagnosis_reason {
     SmallShare = 5,
     /// `no_significant_candidate`.
     NoSignificantCandidate = 6,
+    /// `does_not_extrapolate` (`reason_z`: the worst half-range split's z; `reason_joint`).
+    DoesNotExtrapolate = 7,
+    /// `form_not_determined` (`reason_z`: the out-of-library alternative's paired z, below
+    /// the equivalence threshold: the library's form is not singled out by the data).
+    FormNotDetermined = 8,
 }
 
 /// Position, rotation or both (`reason_part`, warning `part`); 0 = not applicable.
@@ -323,8 +328,12 @@ pub struct kincal_diagnosis_report {
     pub reason: u32,
     /// Where the remaining gap lies or what gets worse (a `kincal_diagnosis_part`).
     pub reason_part: u32,
-    /// The z of the reason (remaining gap, remaining structure, worsening); NaN otherwise.
+    /// The z of the reason (remaining gap, remaining structure, worsening, extrapolation,
+    /// form check); NaN otherwise.
     pub reason_z: f64,
+    /// For `does_not_extrapolate`: the joint (zero-based) whose half range was held out;
+    /// `KINCAL_NO_INDEX` otherwise.
+    pub reason_joint: usize,
     /// The verdict's effects (the winner; mask of `kincal_effect` bits; 0 for none).
     pub effects: u32,
     /// Union of the effects of every confounded candidate (REPORT.json `confounded_with`).
@@ -655,6 +664,10 @@ fn warning(w: &Warning) -> kincal_diagnosis_warning {
 fn report_of<const N: usize>(d: &Diagnosis<N>, cfg: &Config) -> kincal_diagnosis_report {
     let v = &d.verdict;
     let winner = v.candidate.and_then(|c| d.candidates().get(c));
+    let reason_joint = match v.reason {
+        Reason::DoesNotExtrapolate { joint, .. } => joint,
+        _ => KINCAL_NO_INDEX,
+    };
     let (reason, reason_part, reason_z) = match v.reason {
         Reason::AtNoiseFloor => (kincal_diagnosis_reason::AtNoiseFloor, 0, f64::NAN),
         Reason::Closed => (kincal_diagnosis_reason::Closed, 0, f64::NAN),
@@ -665,6 +678,8 @@ fn report_of<const N: usize>(d: &Diagnosis<N>, cfg: &Config) -> kincal_diagnosis
         Reason::NoSignificantCandidate => {
             (kincal_diagnosis_reason::NoSignificantCandidate, 0, f64::NAN)
         }
+        Reason::DoesNotExtrapolate { z, .. } => (kincal_diagnosis_reason::DoesNotExtrapolate, 0, z),
+        Reason::FormNotDetermined { z } => (kincal_diagnosis_reason::FormNotDetermined, 0, z),
     };
     let (beyond, beyond_share) = match d.beyond_library() {
         BeyondLibrary::NotApplicable => (kincal_beyond_library::NotApplicable, f64::NAN),
@@ -686,6 +701,7 @@ fn report_of<const N: usize>(d: &Diagnosis<N>, cfg: &Config) -> kincal_diagnosis
         reason: reason as u32,
         reason_part,
         reason_z,
+        reason_joint,
         effects: mask(v.effects),
         confounded_effects: mask(v.confounded_effects()),
         winner: v.candidate.unwrap_or(KINCAL_NO_INDEX),
