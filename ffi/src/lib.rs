@@ -13,7 +13,8 @@
 //! [`prepared`] (a model built once into caller-owned storage, for fast FK and IK),
 //! [`pose`] (pose error, conversions), [`identify`] (identifiability, OLS/OPT1/OPT2),
 //! [`validation`] (metrics, biopsy requirement), [`registration`] (markers), [`view_point`]
-//! (where camera poses look, a pose moved to a point), [`aria`] (built-in arm).
+//! (where camera poses look, a pose moved to a point), [`aria`] (built-in arm); in std builds [`model_read`] (model files, through
+//! kincal-io).
 #![cfg_attr(not(feature = "std"), no_std)]
 #![deny(missing_docs)]
 #![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
@@ -35,6 +36,8 @@ pub mod effects;
 pub mod identify;
 pub mod ik;
 pub mod kinematics;
+#[cfg(feature = "std")]
+pub mod model_read;
 pub mod observability;
 pub mod params;
 pub mod pose;

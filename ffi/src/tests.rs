@@ -7,6 +7,7 @@ mod calibration;
 mod fuzz_regressions;
 mod header;
 mod hostile;
+mod model_read;
 mod observability;
 mod prepared;
 mod view_point;

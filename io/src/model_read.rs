@@ -4,8 +4,8 @@
 
 use std::path::Path;
 
-use kincal::EffectSet;
 use kincal::any::AnyRobot;
+use kincal::{EffectSet, Robot};
 
 use crate::error::Error;
 use crate::model_file::{self, ModelFile};
@@ -78,6 +78,43 @@ pub fn read_model_file(path: &Path) -> Result<Model, Error> {
     read_model_bytes(&bytes, &source)
 }
 
+/// The names [`variant`] accepts besides the calibrated runs: the stored model and `NOM`.
+pub const STORED: &str = "";
+
+/// One model of the file: `""` ([`STORED`]) the model it stores; `NOM` every parameter at
+/// its nominal value (the model the calibration started from); `OLS`, `OPT1`, `OPT2` the
+/// stored model with that algorithm's identified parameters (as `kincal validate` compares
+/// them; case-insensitive). A name the file does not hold is a usage error listing those it
+/// holds.
+pub fn variant(model: &Model, name: &str, source: &str) -> Result<AnyRobot, Error> {
+    if name == STORED {
+        return Ok(model.robot.clone());
+    }
+    kincal::with_any_robot!(&model.robot, r => pick_variant(r, &model.file, name, source).map(AnyRobot::from))
+}
+
+fn pick_variant<const N: usize>(
+    _shape: &Robot<N>,
+    file: &ModelFile,
+    name: &str,
+    source: &str,
+) -> Result<Robot<N>, Error> {
+    let variants = file
+        .variants::<N>()
+        .map_err(|m| Error::input(format!("{source}: {m}")))?;
+    let names: Vec<&str> = variants.iter().map(|(n, _)| n.as_str()).collect();
+    let list = names.join(", ");
+    variants
+        .iter()
+        .find(|(n, _)| n.eq_ignore_ascii_case(name))
+        .map(|(_, r)| *r)
+        .ok_or_else(|| {
+            Error::usage(format!(
+                "{source}: no model \"{name}\" in this file (it holds the stored model and {list})"
+            ))
+        })
+}
+
 /// 1-based line and column (in bytes) of byte `offset`.
 fn line_column(bytes: &[u8], offset: usize) -> (usize, usize) {
     let before = bytes.get(..offset).unwrap_or(bytes);
@@ -147,5 +184,15 @@ mod tests {
         let e = read_model_str(&v.to_string(), "m.json").unwrap_err();
         assert_eq!(e.kind, crate::Kind::Input);
         assert!(e.message.contains("theta0_4"), "{e}");
+    }
+
+    #[test]
+    fn variants_of_an_uncalibrated_file_are_the_stored_model_and_nom() {
+        let m = read_model_str(&aria_model_text(), "m.json").unwrap();
+        assert_eq!(variant(&m, STORED, "m.json").unwrap(), m.robot);
+        assert_eq!(variant(&m, "nom", "m.json").unwrap(), m.robot);
+        let e = variant(&m, "OLS", "m.json").unwrap_err();
+        assert_eq!(e.kind, crate::Kind::Usage);
+        assert!(e.message.contains("NOM"), "{e}");
     }
 }
