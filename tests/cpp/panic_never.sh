@@ -77,7 +77,7 @@ link() {
         "$lld" -flavor gnu --gc-sections -e kincal_version "${args[@]}" "$lib" -o "$out"
     else
         for f in $roots; do args+=(-Wl,-u,"$f"); done
-        "$CC" -std=c11 -O2 -Wall -Wextra -Werror -pedantic -I"$root/include" \
+        "$CC" -std=c11 -O2 -Wall -Wextra -Werror -pedantic -DKINCAL_NO_STD -I"$root/include" \
             "$here/panic_never.c" "$lib" -Wl,--gc-sections "${args[@]}" -lm -o "$out"
     fi
 }
