@@ -32,6 +32,14 @@
 #define KINCAL_NO_INDEX SIZE_MAX
 
 /*
+ File readers (kincal_model_read, ...) exist in the std library only: firmware code
+ linking the no_std library defines KINCAL_NO_STD to hide their declarations.
+ */
+#if !defined(KINCAL_NO_STD) && !defined(KINCAL_STD)
+#define KINCAL_STD 1
+#endif
+
+/*
  Joint count of ARIA.
  */
 #define KINCAL_ARIA_NUM_JOINTS 6
@@ -75,6 +83,13 @@
  Largest `frames_len` of `kincal_fk_frames`: 16·(`KINCAL_MAX_JOINTS` + 2).
  */
 #define KINCAL_MAX_FRAMES_LEN 176
+
+#if defined(KINCAL_STD)
+/*
+ Capacity of `kincal_read_error.message` in bytes, including the terminating NUL.
+ */
+#define KINCAL_READ_MESSAGE_LEN 512
+#endif
 
 /*
  Largest design `kincal_select_poses` selects (`m`; the core's exchange needs 3 more slots).
@@ -290,6 +305,11 @@ enum kincal_status
      weight (`index` = distance).
      */
     KINCAL_STATUS_BAD_DISTANCE = 120,
+    /*
+     A file could not be read or its reader refused it (std builds: `kincal_model_read`);
+     the reason and its line and column are in the call's `kincal_read_error`.
+     */
+    KINCAL_STATUS_BAD_FILE = 121,
     /*
      Inverse kinematics found no configuration within the limits that reaches the pose
      (`residual_pos_m`, `residual_rot_rad`: the best residual found).
@@ -1359,6 +1379,30 @@ typedef struct kincal_ik_info {
      */
     size_t seed_index;
 } kincal_ik_info;
+
+#if defined(KINCAL_STD)
+/*
+ Why a file was refused, where in it, in words: a caller-owned plain struct (pass NULL when
+ not wanted). Every call that takes one overwrites all of it: on success `line` and
+ `column` 0 and `message` empty; on `KINCAL_STATUS_BAD_FILE` the reader's message (the
+ CLI's, e.g. `"model.json:12:5: not valid JSON: …"`) and its position; on any other status
+ that status's text.
+ */
+typedef struct kincal_read_error {
+    /*
+     1-based line of the fault, 0 when the message names no line.
+     */
+    size_t line;
+    /*
+     1-based column (bytes) of the fault, 0 when the message names none.
+     */
+    size_t column;
+    /*
+     NUL-terminated UTF-8 message, cut at a character boundary if longer than the buffer.
+     */
+    char message[KINCAL_READ_MESSAGE_LEN];
+} kincal_read_error;
+#endif
 
 /*
  Column scaling of the observability exports. Plain data.
@@ -2814,6 +2858,51 @@ kincal_status kincal_robot_check_limits(const struct kincal_robot *robot,
                                         const double *q,
                                         size_t q_len,
                                         struct kincal_error *err);
+
+#if defined(KINCAL_STD)
+/*
+ Reads the model file at `path` (written by `kincal calibrate`, `diagnose`, …) into
+ `robot_out`, with the CLI's validation: schema version, every parameter present once by
+ its label, joint count, length parameters, effects, finite plausible numbers.
+
+ - `path`: NUL-terminated file name (any bytes on Unix).
+ - `variant`: NULL or `""` for the model the file stores; `"NOM"` for every parameter at
+   its nominal value (the model the calibration started from); `"OLS"`, `"OPT1"`, `"OPT2"`
+   for the stored model with that algorithm's identified parameters (case-insensitive).
+ - `robot_out`: written on success only; need not be initialised.
+ - `read_err`: why the file was refused and where (line, column, message), or NULL.
+ - `err`: detail on failure, or NULL.
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_FILE (unreadable or refused: see
+ `read_err`) or INVALID_ARGUMENT (a variant the file does not hold, or not UTF-8).
+ Available in std builds only (not in the firmware library).
+
+ # Safety
+ `path` and non-NULL `variant` are NUL-terminated strings; `robot_out`, `read_err` and
+ `err` are NULL or writable.
+ */
+kincal_status kincal_model_read(const char *path,
+                                const char *variant,
+                                struct kincal_robot *robot_out,
+                                struct kincal_read_error *read_err,
+                                struct kincal_error *err);
+#endif
+
+#if defined(KINCAL_STD)
+/*
+ As `kincal_model_read`, from the file's bytes in memory (`bytes`, `bytes_len` bytes of
+ UTF-8; no NUL needed). Messages name the source `"buffer"` (e.g. `"buffer:3:7: …"`).
+
+ # Safety
+ `bytes` readable for `bytes_len` bytes; the other pointers as in `kincal_model_read`.
+ */
+kincal_status kincal_model_read_buffer(const char *bytes,
+                                       size_t bytes_len,
+                                       const char *variant,
+                                       struct kincal_robot *robot_out,
+                                       struct kincal_read_error *read_err,
+                                       struct kincal_error *err);
+#endif
 
 /*
  Bytes of caller memory `kincal_observability` and `kincal_pose_singular_values` need for

@@ -11,8 +11,13 @@ function model = kincal_load_model(file)
 %                    iterations, sigma2
 %       calibration  the file's "calibration" object as decoded (data, options,
 %                    identifiability, residuals, consensus)
-%   Numbers: Matlab's JSONDECODE reads them exactly; GNU Octave 7's may round the last bit
-%   (about 2e-16 relative), which is far below any calibration tolerance.
+%   The models (robot, initial, results.*.robot and .params) are read by kincal's one
+%   model-file reader (kincal-io, through the MEX and the C ABI's kincal_model_read): a file
+%   the CLI refuses (a missing or relabelled parameter, an unknown length parameter, a wrong
+%   joint count, a newer schema) raises kincal:badFile with the CLI's message
+%   (file:line:column: reason), and the parameters are bit for bit the CLI's. Only the report
+%   fields (name, generator, calibration, std_errors, iterations, sigma2) are decoded here,
+%   after the reader accepted the file; Octave 7's JSONDECODE may round their last bit.
 %
 %   Example:
 %       system('kincal calibrate poses.csv --robot aria --algorithm all --out model.json');
@@ -22,44 +27,13 @@ function model = kincal_load_model(file)
 %
 %   See also KINCAL_ROBOT, KINCAL_IDENTIFY.
 check_string(file, 'file');
-try
-    j = jsondecode(fileread(file));
-catch err
-    error('kincal:modelFile', '%s: not a JSON model file: %s', file, err.message);
-end
-if ~isstruct(j) || ~isfield(j, 'format') || ~strcmp(j.format, 'kincal-model') || ...
-        ~isfield(j, 'robot')
-    error('kincal:modelFile', '%s: not a kincal model file (format "kincal-model")', file);
-end
-major = sscanf(j.schema_version, '%d', 1);
-if isempty(major) || major ~= 1
-    error('kincal:modelFile', '%s: schema version %s is not supported (this reader: 1.x)', ...
-        file, j.schema_version);
-end
-rj = j.robot;
-n = rj.n_joints;
-links = as_rows(rj.nominal.links, {'theta0', 'd', 'a', 'alpha', 'beta'});
-limits = as_rows(rj.joint_limits, {'lower', 'upper'});
-table = struct('links', links, 'limits', limits, 'base', rj.nominal.base(:)', ...
-    'tool', rj.nominal.tool(:)', 'link_masses_kg', rj.mass.link_masses_kg(:), ...
-    'tool_mass_kg', rj.mass.tool_mass_kg, 'gravity', rj.mass.gravity_m_s2(:), ...
-    'name', rj.name);
-base = kincal_robot(table);
-choices = cellstr(rj.length_params);
-for i = 1:n
-    base = kincal_mex('robot_set', base, 'length_param', [i, double(strcmp(choices{i}, 'beta'))]);
-end
-params = as_list(rj.parameters);
-initial = base;
-model.robot = base;
-for k = 1:numel(params)
-    idx = label_index(base, params{k}.label, file);
-    initial.params(idx) = params{k}.nominal;
-    model.robot.params(idx) = params{k}.value;
-end
-model.initial = kincal_robot(initial);
-model.robot = kincal_robot(model.robot);
-model.name = rj.name;
+model.robot = kincal_robot(kincal_mex('model_read', file, ''));
+model.initial = kincal_robot(kincal_mex('model_read', file, 'NOM'));
+% The report fields: the reader has accepted the file, so it is a kincal model JSON object.
+j = jsondecode(fileread(file));
+model.robot.name = j.robot.name;
+model.initial.name = j.robot.name;
+model.name = j.robot.name;
 model.schema_version = j.schema_version;
 model.generator = '';
 if isfield(j, 'generator')
@@ -72,27 +46,17 @@ if isfield(j, 'calibration') && ~isempty(j.calibration)
     runs = as_list(j.calibration.results);
     for k = 1:numel(runs)
         run = runs{k};
-        r = model.initial;
+        r = kincal_robot(kincal_mex('model_read', file, upper(run.algorithm)));
+        r.name = j.robot.name;
         se = zeros(size(r.params));
         fitted = as_list(run.parameters);
         for p = 1:numel(fitted)
-            idx = label_index(r, fitted{p}.label, file);
-            r.params(idx) = fitted{p}.value;
-            se(idx) = fitted{p}.std_error;
+            if isfield(fitted{p}, 'std_error')
+                se(strcmp(r.labels, fitted{p}.label)) = fitted{p}.std_error;
+            end
         end
-        res = struct('robot', kincal_robot(r), 'params', r.params, 'std_errors', se, ...
-            'iterations', run.iterations, 'sigma2', run.sigma2);
-        model.results.(run.algorithm) = res;
-    end
-end
-end
-
-function m = as_rows(list, fields)
-list = as_list(list);
-m = zeros(numel(list), numel(fields));
-for i = 1:numel(list)
-    for k = 1:numel(fields)
-        m(i, k) = list{i}.(fields{k});
+        model.results.(run.algorithm) = struct('robot', r, 'params', r.params, ...
+            'std_errors', se, 'iterations', run.iterations, 'sigma2', run.sigma2);
     end
 end
 end
@@ -105,12 +69,5 @@ elseif isempty(x)
     c = {};
 else
     c = num2cell(x);
-end
-end
-
-function idx = label_index(robot, label, file)
-idx = find(strcmp(robot.labels, label), 1);
-if isempty(idx)
-    error('kincal:modelFile', '%s: unknown parameter label ''%s''', file, label);
 end
 end

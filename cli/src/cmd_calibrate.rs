@@ -607,7 +607,7 @@ fn failure_error<const N: usize>(
             };
             match algorithm {
                 Some(a) => CliError {
-                    exit: e.exit,
+                    kind: e.kind,
                     message: format!("{} failed: {}{hint}", a.name().to_uppercase(), e.message),
                 },
                 None => e,

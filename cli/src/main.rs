@@ -83,7 +83,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("kincal: error: {}", e.message);
-            ExitCode::from(e.exit as u8)
+            ExitCode::from(e.kind as u8)
         }
     }
 }

@@ -15,7 +15,8 @@
 //! [`validation`] (metrics, biopsy requirement), [`registration`] (markers), [`view_point`]
 //! (where camera poses look, a pose moved to a point), [`aria`] (built-in arm),
 //! [`constraints`] (instrument-free calibration: targets, planes, distances, sessions),
-//! [`diagnosis`] (the sim-to-real gap diagnosis and its report).
+//! [`diagnosis`] (the sim-to-real gap diagnosis and its report); in std builds
+//! [`model_read`] (model files, through kincal-io).
 #![cfg_attr(not(feature = "std"), no_std)]
 #![deny(missing_docs)]
 #![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
@@ -37,6 +38,8 @@ pub mod effects;
 pub mod identify;
 pub mod ik;
 pub mod kinematics;
+#[cfg(feature = "std")]
+pub mod model_read;
 pub mod observability;
 pub mod params;
 pub mod pose;

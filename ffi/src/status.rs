@@ -69,6 +69,9 @@ pub enum kincal_status {
     /// A known distance names a missing or non-target group, or has a bad length or
     /// weight (`index` = distance).
     BadDistance = 120,
+    /// A file could not be read or its reader refused it (std builds: `kincal_model_read`);
+    /// the reason and its line and column are in the call's `kincal_read_error`.
+    BadFile = 121,
     /// Inverse kinematics found no configuration within the limits that reaches the pose
     /// (`residual_pos_m`, `residual_rot_rad`: the best residual found).
     Unreachable = 200,
@@ -93,7 +96,7 @@ pub enum kincal_status {
 
 impl kincal_status {
     /// Every status, in numeric order (used by the tests and `kincal_status_str`).
-    pub(crate) const ALL: [kincal_status; 29] = [
+    pub(crate) const ALL: [kincal_status; 30] = [
         kincal_status::Ok,
         kincal_status::NullPointer,
         kincal_status::BadLength,
@@ -116,6 +119,7 @@ impl kincal_status {
         kincal_status::BadGroup,
         kincal_status::DegenerateGroup,
         kincal_status::BadDistance,
+        kincal_status::BadFile,
         kincal_status::Unreachable,
         kincal_status::NotConverged,
         kincal_status::RankDeficient,
@@ -188,6 +192,9 @@ impl kincal_status {
             }
             kincal_status::BadDistance => {
                 c"KINCAL_STATUS_BAD_DISTANCE: a known distance is invalid"
+            }
+            kincal_status::BadFile => {
+                c"KINCAL_STATUS_BAD_FILE: a file could not be read or was refused (see kincal_read_error)"
             }
             kincal_status::Unreachable => {
                 c"KINCAL_STATUS_UNREACHABLE: no configuration within the limits reaches the pose"

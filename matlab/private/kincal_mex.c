@@ -2641,6 +2641,36 @@ static int op_test_panic(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *pr
 /* Instrument-free calibration and the diagnosis (a file of their own, same helpers). */
 #include "kincal_mex_calibration.c"
 
+#if defined(KINCAL_STD)
+/* model_read(file, variant) -> robot: a model file read by kincal-io's reader (the CLI's),
+ * the stored model ('') or its 'NOM', 'OLS', 'OPT1', 'OPT2' variant. A refused file raises
+ * kincal:badFile with the reader's message (file:line:column: reason). */
+static int op_model_read(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prhs[])
+{
+    char path[4096];
+    char variant[16];
+    kincal_robot r;
+    kincal_read_error re;
+    kincal_error err;
+    kincal_status st;
+    (void)nlhs;
+    if (get_string(c, prhs[0], "file", path, sizeof path) != 0 ||
+        get_string(c, prhs[1], "variant", variant, sizeof variant) != 0) {
+        return -1;
+    }
+    st = kincal_model_read(path, variant, &r, &re, &err);
+    if (st == KINCAL_STATUS_BAD_FILE || st == KINCAL_STATUS_INVALID_ARGUMENT) {
+        char id[48];
+        status_identifier(st, id, sizeof id);
+        return fail(c, id, "%s", re.message);
+    }
+    if (st != KINCAL_STATUS_OK) {
+        return fail_status(c, st, &err, NULL);
+    }
+    return put_robot(c, &r, "", &plhs[0]);
+}
+#endif
+
 typedef struct kc_operation {
     const char *name;
     kc_handler handler;
@@ -2693,6 +2723,9 @@ static const kc_operation OPERATIONS[] = {
 #endif
     {"robot_from_axes", op_robot_from_axes, 6, 1},
     {"view_point", op_view_point, 2, 2},
+#if defined(KINCAL_STD)
+    {"model_read", op_model_read, 2, 1},
+#endif
 #if defined(KC_HAS_OBSERVABILITY)
     {"observability", op_observability, 5, 2},
     {"select_poses", op_select_poses, 10, 2},

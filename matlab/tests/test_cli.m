@@ -6,6 +6,7 @@ tests = {
     'calibrate_matches_identify', @calibrate_matches_identify
     'validate_matches_validate', @validate_matches_validate
     'model_file_matches_robot', @model_file_matches_robot
+    'model_files_the_cli_refuses_are_refused', @model_files_the_cli_refuses_are_refused
     };
 end
 
@@ -113,4 +114,61 @@ kincal_write_measurements(joints, qs, []);
 cli('predict', model, joints, '--out', poses);
 p = kincal_read_measurements(poses);
 expect_near(p.T, kincal_fk(m.robot, qs), 1e-12, 'FK of the loaded model vs CLI predict');
+end
+
+% Issue #16 item 10: kincal_load_model used to accept files the CLI refuses (a missing
+% parameter kept its nominal value, a relabelled one won, an unknown length parameter became
+% d, n_joints was ignored). Both front ends read through kincal-io now: each broken copy of
+% a CLI-written model is refused by the CLI (exit 3) and by Octave (kincal:badFile, the
+% CLI's file:line:column message).
+function model_files_the_cli_refuses_are_refused()
+require_cli_command('calibrate');
+d = work_dir();
+[q, T] = tool_data(kincal_robot('aria_true'));
+data = fullfile(d, 'data.csv');
+model = fullfile(d, 'model.json');
+kincal_write_measurements(data, q, T);
+cli('calibrate', data, '--robot', 'aria', '--algorithm', 'all', '--out', model);
+text = fileread(model);
+m = kincal_load_model(model);
+expect_true(isfield(m.results, 'opt2'), 'the calibrated runs are read');
+broken = {
+    'missing parameter', 'theta0_4', ...
+        regexprep(text, '\{\s*"label": "theta0_4"[^}]*\},\s*', '', 'once')
+    'relabelled parameter', 'theta0_5', ...
+        regexprep(text, '"label": "theta0_4"', '"label": "theta0_5"', 'once')
+    'unknown length parameter', 'length', ...
+        regexprep(text, '("length_params": \[\s*)"(d|beta)"', '$1"q"', 'once')
+    'wrong joint count', 'parameter', ...
+        regexprep(text, '"n_joints": 6', '"n_joints": 5', 'once')
+    };
+joints = fullfile(d, 'joints.csv');
+kincal_write_measurements(joints, q, []);
+for k = 1:size(broken, 1)
+    expect_true(~strcmp(broken{k, 3}, text), 'the edit "%s" changed the file', broken{k, 1});
+    bad = fullfile(d, sprintf('broken_%d.json', k));
+    fid = fopen(bad, 'w');
+    fwrite(fid, broken{k, 3});
+    fclose(fid);
+    status = cli_status('predict', bad, joints, '--out', fullfile(d, 'poses.csv'));
+    expect_true(status == 3, '%s: the CLI exits 3 (got %d)', broken{k, 1}, status);
+    expect_error('kincal:badFile', @() kincal_load_model(bad), [bad ':']);
+end
+% The message names the line and column of a syntax error, as the CLI's does.
+bad = fullfile(d, 'syntax.json');
+fid = fopen(bad, 'w');
+fwrite(fid, strrep(text, '"robot":', '"robot":,'));
+fclose(fid);
+line = numel(strfind(text(1:strfind(text, '"robot":')), sprintf('\n'))) + 1;
+expect_error('kincal:badFile', @() kincal_load_model(bad), sprintf('%s:%d:', bad, line));
+end
+
+function status = cli_status(varargin)
+try
+    cli(varargin{:});
+    status = 0;
+catch err
+    tok = regexp(err.message, 'exited with status (\d+)', 'tokens', 'once');
+    status = str2double(tok{1});
+end
 end

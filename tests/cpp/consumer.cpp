@@ -20,15 +20,22 @@
 // - instrument-free calibration (kincal_identify_constraints): contacts made by IK on a
 //   perturbed ARIA recover its parameters, targets, plane and distance to 1e-9; bad rows
 //   are named;
-// - the diagnosis (kincal_diagnose): a planted joint compliance is `explained` by it.
+// - the diagnosis (kincal_diagnose): a planted joint compliance is `explained` by it;
+// - a model file the CLI wrote (KINCAL_TEST_MODEL, from run.sh) read by kincal_model_read:
+//   kincal_fk_pq equals the CLI's `kincal predict` (KINCAL_TEST_PREDICT) on every row, and a
+//   broken copy is refused with its line and column.
 
 #include <kincal.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstddef>
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <sstream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -1208,6 +1215,88 @@ void test_observability_table2() {
                  KINCAL_STATUS_BAD_LENGTH, err, "workspace");
 }
 
+// ------------------------------------------------------------------ model files (std build)
+
+std::vector<std::string> split_csv(const std::string &line) {
+    std::vector<std::string> out;
+    std::stringstream ss(line);
+    std::string cell;
+    while (std::getline(ss, cell, ',')) out.push_back(cell);
+    return out;
+}
+
+int column_of(const std::vector<std::string> &header, const std::string &name) {
+    for (size_t i = 0; i < header.size(); ++i)
+        if (header[i] == name) return static_cast<int>(i);
+    return -1;
+}
+
+void test_model_file_from_cli() {
+    const char *model_path = std::getenv("KINCAL_TEST_MODEL");
+    const char *predict_path = std::getenv("KINCAL_TEST_PREDICT");
+    CHECK(model_path != nullptr && predict_path != nullptr);  // run.sh sets both
+    if (model_path == nullptr || predict_path == nullptr) return;
+    kincal_robot robot;
+    kincal_read_error re;
+    kincal_error err;
+    CHECK_STATUS(kincal_model_read(model_path, nullptr, &robot, &re, &err), KINCAL_STATUS_OK, err,
+                 nullptr);
+    CHECK(re.line == 0 && re.message[0] == '\0');
+    std::ifstream in(predict_path);
+    std::string line;
+    std::vector<std::string> header;
+    while (std::getline(in, line) && (line.empty() || line[0] == '#')) {
+    }
+    header = split_csv(line);
+    const int q1 = column_of(header, "q1");
+    const int x = column_of(header, "x");
+    CHECK(q1 >= 0 && x >= 0);
+    if (q1 < 0 || x < 0) return;
+    const size_t n = robot.n_joints;
+    int rows = 0;
+    double worst = 0.0;
+    while (std::getline(in, line)) {
+        if (line.empty() || line[0] == '#') continue;
+        const std::vector<std::string> cells = split_csv(line);
+        std::vector<double> q(n);
+        double expected[7];
+        for (size_t j = 0; j < n; ++j) q[j] = std::strtod(cells.at(q1 + j).c_str(), nullptr);
+        for (int k = 0; k < 7; ++k) expected[k] = std::strtod(cells.at(x + k).c_str(), nullptr);
+        double pq[7];
+        CHECK_STATUS(kincal_fk_pq(&robot, q.data(), n, nullptr, pq, 7, &err), KINCAL_STATUS_OK,
+                     err, nullptr);
+        worst = std::fmax(worst, max_abs_diff(pq, expected, 7));
+        ++rows;
+    }
+    CHECK(rows >= 10);
+    // The CLI prints the shortest decimal that reads back to the same double: equal bits.
+    CHECK(worst == 0.0);
+    std::printf("model file from the CLI: %d rows, max |C ABI - kincal predict| = %g\n", rows,
+                worst);
+
+    // The variants the file holds (a calibrated demo model: NOM, OLS, OPT1, OPT2).
+    kincal_robot nom;
+    CHECK_STATUS(kincal_model_read(model_path, "NOM", &nom, &re, &err), KINCAL_STATUS_OK, err,
+                 nullptr);
+    CHECK(max_abs_diff(nom.params, robot.params, kincal_num_params(n)) > 0.0);
+
+    // A broken copy: refused with the reader's line and column.
+    std::ifstream whole(model_path);
+    std::stringstream text;
+    text << whole.rdbuf();
+    std::string broken = text.str();
+    const size_t at = broken.find("\"robot\"");
+    CHECK(at != std::string::npos);
+    broken.insert(at, "@");
+    const size_t line_of_at =
+        1 + static_cast<size_t>(std::count(broken.begin(), broken.begin() + at, '\n'));
+    CHECK_STATUS(kincal_model_read_buffer(broken.data(), broken.size(), nullptr, &robot, &re, &err),
+                 KINCAL_STATUS_BAD_FILE, err, nullptr);
+    CHECK(re.line == line_of_at);
+    CHECK(re.column > 0);
+    CHECK(std::strncmp(re.message, "buffer:", 7) == 0);
+}
+
 int main() {
     test_version_and_layout();
     test_fk_against_reference();
@@ -1225,6 +1314,7 @@ int main() {
     test_panic_boundary();
     test_constraints();
     test_diagnosis();
+    test_model_file_from_cli();
     std::printf("kincal %s C++ consumer: %d checks, %d failed\n", kincal_version(), g_checks,
                 g_failures);
     return g_failures == 0 ? 0 : 1;

@@ -3,7 +3,8 @@
 #
 #  1. builds kincal-ffi in release (through ffi/install.sh), and in debug with the
 #     `test-panic` export;
-#  2. C++17 consumer (tests/cpp/consumer.cpp, -Wall -Wextra -Werror -pedantic) against the
+#  2. C++17 consumer (tests/cpp/consumer.cpp; it also reads a model file `kincal demo` wrote
+#     and compares its FK with `kincal predict`, -Wall -Wextra -Werror -pedantic) against the
 #     release staticlib and cdylib (both under ASan/UBSan when the compiler has them) and the
 #     debug test-panic staticlib (checks that a panic comes back as KINCAL_STATUS_PANIC);
 #  3. the header as C99 and C11 (-pedantic); a `kincal export --c-header` of ARIA compiled as
@@ -73,6 +74,14 @@ native=$(sed -n 's/^Libs: [^ ]*libkincal\.a //p' "$prefix/lib/pkgconfig/kincal-s
 read -r -a native_libs <<<"$native"
 [[ ${#native_libs[@]} -gt 0 ]] || fail "no native-static-libs in kincal-static.pc"
 
+step "a model file and its predictions written by the CLI (for the consumer's model-file test)"
+cargo build -q -p kincal-cli --bin kincal
+"$target/debug/kincal" demo --out "$work/demo" >/dev/null 2>&1 || fail "kincal demo"
+export KINCAL_TEST_MODEL=$work/demo/model_noisy.json
+export KINCAL_TEST_PREDICT=$work/predict.csv
+"$target/debug/kincal" predict "$KINCAL_TEST_MODEL" "$work/demo/validation.csv" \
+    --out "$KINCAL_TEST_PREDICT"
+
 step "C++ consumer against the staticlib ${sanitize[*]:+(sanitizers on)}"
 "$CXX" "${cxxflags[@]}" "${sanitize[@]}" "$here/consumer.cpp" "$target/release/libkincal.a" \
     "${native_libs[@]}" -o "$work/consumer_static"
@@ -108,7 +117,6 @@ for std in c99 c11; do
 done
 
 step "kincal export --c-header: the exported ARIA as strict C11, FK through kincal_fk"
-cargo build -q -p kincal-cli --bin kincal
 "$target/debug/kincal" export aria --c-header "$work/exported_aria.h" --c-name exported_aria
 "$CC" -std=c11 -Wall -Wextra -Werror -pedantic -I"$root/include" -I"$work" \
     "$here/exported_model.c" "$target/release/libkincal.a" "${native_libs[@]}" \

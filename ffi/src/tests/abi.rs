@@ -142,6 +142,7 @@ fn status_numbers_are_fixed() {
         (S::BadGroup, 118),
         (S::DegenerateGroup, 119),
         (S::BadDistance, 120),
+        (S::BadFile, 121),
         (S::Unreachable, 200),
         (S::NotConverged, 201),
         (S::RankDeficient, 202),
@@ -175,7 +176,7 @@ fn status_str_is_static_and_names_the_code() {
             s as u32
         );
     }
-    for unknown in [1, 99, 121, 205, 901, 1000, u32::MAX] {
+    for unknown in [1, 99, 122, 205, 901, 1000, u32::MAX] {
         let text = unsafe { CStr::from_ptr(kincal_status_str(unknown)) };
         assert_eq!(text.to_str().unwrap(), "unknown kincal status code");
     }

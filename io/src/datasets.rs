@@ -31,7 +31,7 @@ use kincal::pose::{Transform, matrix_to_quaternion, pose_from_xyz_rpy};
 use kincal::with_any_robot;
 use nalgebra::{Matrix3, Vector3};
 
-use crate::error::CliError;
+use crate::error::Error as CliError;
 use crate::measurements::{MeasurementRow, MeasurementSet, Orientation, OrientationForm};
 use crate::robot_file::RobotDescription;
 use crate::urdf::{ChainSelection, import_urdf_file, import_urdf_str};

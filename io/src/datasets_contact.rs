@@ -21,7 +21,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use crate::error::CliError;
+use crate::error::Error as CliError;
 use crate::robot_arg::UrdfChainArgs;
 use crate::robot_file::RobotDescription;
 use crate::urdf::{ChainSelection, import_urdf_file};

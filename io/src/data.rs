@@ -8,7 +8,7 @@ use kincal::pose::{pose_from_xyz_rpy, quaternion_to_matrix, transform};
 use kincal::{Effect, EffectSet, JointState, Robot, Transform};
 use nalgebra::Vector3;
 
-use crate::error::CliError;
+use crate::error::Error as CliError;
 use crate::measurements::{MeasurementRow, MeasurementSet, Orientation, ReadOptions};
 
 /// How a command reads DATA.

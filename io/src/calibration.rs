@@ -191,9 +191,9 @@ pub fn init_frames<const N: usize>(
     start: &Robot<N>,
     data: &[Measurement<N>],
     source: &str,
-) -> Result<(Robot<N>, String), crate::error::CliError> {
+) -> Result<(Robot<N>, String), crate::error::Error> {
     let est = kincal::frames::estimate_frames(start, data).map_err(|e| {
-        crate::error::CliError::numeric(format!(
+        crate::error::Error::numeric(format!(
             "{source}: cannot estimate the base and tool frames from these poses: {e}"
         ))
     })?;

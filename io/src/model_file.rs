@@ -39,7 +39,7 @@ use kincal::{Effect, EffectSet, ParamId, ParamIndex, ParamSet, Robot};
 use serde::{Deserialize, Serialize};
 
 use crate::calibration::{Calibration, Consensus, Disagreement, RobustRun};
-use crate::error::CliError;
+use crate::error::Error as CliError;
 use crate::units::si_unit;
 
 /// Version written by this build.
@@ -1082,7 +1082,7 @@ mod tests {
         let text = file.to_json();
         let newer = text.replace("\"schema_version\": \"1.0\"", "\"schema_version\": \"2.0\"");
         let e = parse(&newer, "m.json").unwrap_err();
-        assert_eq!(e.exit, crate::error::Exit::Input);
+        assert_eq!(e.kind, crate::error::Kind::Input);
         assert!(e.message.contains("newer"), "{}", e.message);
         let minor = text.replace(
             "\"schema_version\": \"1.0\"",

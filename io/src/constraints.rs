@@ -13,7 +13,7 @@ use kincal::{Error, Robot};
 use serde::Deserialize;
 use toml::Spanned;
 
-use crate::error::CliError;
+use crate::error::Error as CliError;
 use crate::measurements::{MeasurementRow, MeasurementSet};
 use crate::model_file::{ConstraintsJson, DistanceJson, GroupJson};
 

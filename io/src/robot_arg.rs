@@ -6,7 +6,7 @@ use std::path::Path;
 use kincal::any::AnyRobot;
 use kincal::aria;
 
-use crate::error::CliError;
+use crate::error::Error as CliError;
 use crate::model_file::{self, ModelFile};
 
 /// Built-in robots: name and description.
@@ -17,14 +17,15 @@ pub const BUILT_IN: &[(&str, &str)] = &[(
 
 /// `--base-link` / `--tip-link`: which chain of a URDF robot to use (any tree; the
 /// default is the unique chain from the single root to the single leaf).
-#[derive(clap::Args, Debug, Clone, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::Args))]
 pub struct UrdfChainArgs {
     /// URDF robot only: the link that becomes the base frame [default: the single root link]
-    #[arg(long, value_name = "LINK")]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "LINK"))]
     pub base_link: Option<String>,
     /// URDF robot only: the link that becomes the tool frame [default: the single leaf
     /// below the base link]
-    #[arg(long, value_name = "LINK")]
+    #[cfg_attr(feature = "clap", arg(long, value_name = "LINK"))]
     pub tip_link: Option<String>,
 }
 
@@ -124,7 +125,7 @@ pub struct ModelSpec {
 
 /// Refuses MODEL text that is neither a model file nor a robot description, rather than
 /// reporting TOML errors for it: an empty file, or JSON that is not an object.
-fn refuse_what_is_neither(text: &str, arg: &str) -> Result<(), CliError> {
+pub(crate) fn refuse_what_is_neither(text: &str, arg: &str) -> Result<(), CliError> {
     let body = text.trim_start_matches('\u{feff}');
     if body.trim().is_empty() {
         return Err(CliError::input(format!(
@@ -158,13 +159,8 @@ pub fn resolve_model(arg: &str, chain: &UrdfChainArgs) -> Result<ModelSpec, CliE
         // A UTF-8 byte-order mark is not part of the JSON.
         let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
         if model_file::looks_like_json(text) {
-            let file = model_file::parse(text, arg)?;
-            let robot = file
-                .robot
-                .any_robot()
-                .map_err(|m| CliError::input(format!("{arg}: robot: {m}")))?;
-            file.effects()
-                .map_err(|m| CliError::input(format!("{arg}: robot: {m}")))?;
+            let crate::model_read::Model { file, robot, .. } =
+                crate::model_read::model_from_json(text, arg)?;
             return Ok(ModelSpec {
                 robot,
                 file,

@@ -1,0 +1,27 @@
+//! kincal's file formats and the runs every front end shares: the measurement CSV, model
+//! files, robot descriptions (TOML), URDF in and out, tool files, the real-data importers,
+//! atomic output files, and the calibration runs over the core. The command line (`cli/`),
+//! the C ABI's std build (`ffi/`) and the MEX gateway read files through this crate only, so
+//! a file one front end refuses every front end refuses, with the same file:line:column.
+//!
+//! Errors are [`Error`] values whose [`Kind`] says whose fault a failure is.
+
+pub mod calibration;
+pub mod constraints;
+pub mod data;
+pub mod datasets;
+pub mod datasets_contact;
+pub mod error;
+pub mod files;
+pub mod measurements;
+pub mod model_file;
+pub mod model_read;
+pub mod plausibility;
+pub mod robot_arg;
+pub mod robot_file;
+pub mod tool_file;
+pub mod units;
+pub mod urdf;
+pub mod urdf_update;
+
+pub use error::{Error, Kind};
