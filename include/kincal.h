@@ -807,6 +807,15 @@ enum kincal_diagnosis_reason
      `no_significant_candidate`.
      */
     KINCAL_DIAGNOSIS_REASON_NO_SIGNIFICANT_CANDIDATE = 6,
+    /*
+     `does_not_extrapolate` (`reason_z`: the worst half-range split's z; `reason_joint`).
+     */
+    KINCAL_DIAGNOSIS_REASON_DOES_NOT_EXTRAPOLATE = 7,
+    /*
+     `form_not_determined` (`reason_z`: the out-of-library alternative's paired z, below
+     the equivalence threshold: the library's form is not singled out by the data).
+     */
+    KINCAL_DIAGNOSIS_REASON_FORM_NOT_DETERMINED = 8,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
@@ -2302,9 +2311,15 @@ typedef struct kincal_diagnosis_report {
      */
     uint32_t reason_part;
     /*
-     The z of the reason (remaining gap, remaining structure, worsening); NaN otherwise.
+     The z of the reason (remaining gap, remaining structure, worsening, extrapolation,
+     form check); NaN otherwise.
      */
     double reason_z;
+    /*
+     For `does_not_extrapolate`: the joint (zero-based) whose half range was held out;
+     `KINCAL_NO_INDEX` otherwise.
+     */
+    size_t reason_joint;
     /*
      The verdict's effects (the winner; mask of `kincal_effect` bits; 0 for none).
      */
