@@ -35,6 +35,7 @@ pub mod file_plan;
 pub mod files;
 pub mod measurements;
 pub mod model_file;
+pub mod plate;
 pub mod plausibility;
 pub mod plot;
 pub mod progress;
