@@ -314,11 +314,22 @@ fn evaluate<const N: usize>(
     )?;
     let robust = args.selection.settings()?.robust_robots;
     let probe = ctx.study(args.scenario.scenario(), ctx.seed);
+    // Robustly reachable contacts take a while for large plates: a bar per plate.
+    let pb = crate::progress::counter(
+        args.plates.len() as u64,
+        "socket plates: robustly reachable contacts",
+    );
     let plates = args
         .plates
         .iter()
-        .map(|p| crate::plate::build_plate(&ctx, &crate::plate::parse_plate(p)?, &probe, robust))
+        .map(|p| {
+            let plate =
+                crate::plate::build_plate(&ctx, &crate::plate::parse_plate(p)?, &probe, robust);
+            pb.inc(1);
+            plate
+        })
         .collect::<Result<Vec<_>, _>>()?;
+    pb.finish_and_clear();
     for (i, p) in plates.iter().enumerate() {
         let name = &p.spec.name;
         let clash = designs.iter().any(|d| &d.name == name)
