@@ -38,6 +38,12 @@ mutually different cubes of --cube-mm), used as a tool; table2 = the paper's cal
 tool. Add tools with --tool NAME=FILE.csv (e.g. from design-tool) and instrument-measured
 configurations with --commanded NAME=FILE.csv (e.g. from select-poses).
 
+Socket plates (--plate NAME=D_MM,PLACEMENTS,CONTACTS, instrument-free: two ball sockets at
+unknown positions, one known distance, the plate placed several times) are compared with the
+designs above on the same robots, each scored absolute (base frame) and registered (after
+the best rigid base registration, the only figure a plate can give): a second table, which
+plates match --plate-match (registered e_p median and p95), and --plate-plot.
+
 Prints a table (median, 95th percentile and maximum over the runs of the worst-pose errors),
 the ordering and the paper's targets (1 mm, 0.66°) as verdicts, and the timing; --plot writes
 the comparison figure (SVG), --json the numbers (no run times: the file is byte-for-byte
@@ -79,6 +85,18 @@ pub struct Args {
     /// CSV; only q1..qN are used; repeatable)
     #[arg(long = "commanded", value_name = "NAME=FILE")]
     pub commanded: Vec<String>,
+    /// A socket plate to compare with the tools (instrument-free: two sockets D_MM apart at
+    /// unknown positions, PLACEMENTS placements, CONTACTS contacts in all), as
+    /// NAME=D_MM,PLACEMENTS,CONTACTS (repeatable; see docs/socket-plate.md)
+    #[arg(long = "plate", value_name = "NAME=D_MM,PLACEMENTS,CONTACTS")]
+    pub plates: Vec<String>,
+    /// The design the plates must match (registered e_p median and p95) [default: optimised
+    /// if given, else table2]
+    #[arg(long, value_name = "NAME")]
+    pub plate_match: Option<String>,
+    /// Write the plate comparison figure (SVG; with --plate)
+    #[arg(long, value_name = "FILE.svg")]
+    pub plate_plot: Option<PathBuf>,
     /// Monte-Carlo runs per design
     #[arg(long, default_value_t = 10000)]
     pub runs: u64,
@@ -110,6 +128,12 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     }
     for c in &args.commanded {
         named(c, "--commanded")?;
+    }
+    for p in &args.plates {
+        crate::plate::parse_plate(p)?;
+    }
+    if args.plate_plot.is_some() && args.plates.is_empty() {
+        return Err(CliError::usage("--plate-plot: give at least one --plate"));
     }
     let spec = resolve_robot(&args.setup.robot, &args.setup.chain)?;
     kincal::with_any_robot!(&spec.robot, r => evaluate(*r, &spec.name, args))
@@ -288,12 +312,43 @@ fn evaluate<const N: usize>(
         &args.scenario,
         &mut log,
     )?;
+    let robust = args.selection.settings()?.robust_robots;
+    let probe = ctx.study(args.scenario.scenario(), ctx.seed);
+    // Robustly reachable contacts take a while for large plates: a bar per plate.
+    let pb = crate::progress::counter(
+        args.plates.len() as u64,
+        "socket plates: robustly reachable contacts",
+    );
+    let plates = args
+        .plates
+        .iter()
+        .map(|p| {
+            let plate =
+                crate::plate::build_plate(&ctx, &crate::plate::parse_plate(p)?, &probe, robust);
+            pb.inc(1);
+            plate
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    pb.finish_and_clear();
+    for (i, p) in plates.iter().enumerate() {
+        let name = &p.spec.name;
+        let clash = designs.iter().any(|d| &d.name == name)
+            || plates[..i].iter().any(|o| &o.spec.name == name);
+        if clash {
+            return Err(CliError::usage(format!(
+                "--plate: two designs are named '{name}'"
+            )));
+        }
+    }
     let mut out = String::new();
     let _ = writeln!(out, "Design evaluation: {}", ctx.describe());
     let _ = writeln!(out, "Scenario: {}", args.scenario.describe());
     let _ = writeln!(out, "Designs:");
     for d in &designs {
         let _ = writeln!(out, "  {}: {}", d.name, d.note);
+    }
+    for p in &plates {
+        let _ = writeln!(out, "  {}: {}", p.spec.name, p.note);
     }
     out.push_str(&log);
     let (results, timing) = study::run_study(
@@ -313,8 +368,48 @@ fn evaluate<const N: usize>(
     let _ = writeln!(out, "\nVerdicts:");
     out.push_str(&verdicts(&results));
     let _ = writeln!(out, "\nTiming: {}", timing_line(&timing));
+    let plate_rows = if plates.is_empty() {
+        None
+    } else {
+        let (rows, wall_s) =
+            crate::plate::compare(&ctx, &designs, &plates, args.scenario.scenario(), args.runs)?;
+        let reference = args.plate_match.clone().unwrap_or_else(|| {
+            if designs.iter().any(|d| d.name == "optimised") {
+                "optimised".into()
+            } else {
+                "table2".into()
+            }
+        });
+        let _ = writeln!(
+            out,
+            "\nSocket plates vs the designs above, on the same {} robots: worst validation pose per run, absolute (base frame) and registered (after the best rigid base registration):",
+            args.runs
+        );
+        out.push_str(&crate::plate::table(&rows));
+        let _ = writeln!(out, "\nPlate verdicts:");
+        out.push_str(&crate::plate::verdicts(&rows, &reference));
+        let _ = writeln!(
+            out,
+            "  ({} calibrations in {wall_s:.2} s)",
+            rows.len() as u64 * args.runs
+        );
+        Some(rows)
+    };
     crate::report::emit(&out);
     let inputs: Vec<&Path> = Vec::new();
+    if let (Some(p), Some(rows)) = (&args.plate_plot, &plate_rows) {
+        crate::plate::write_plot(
+            p,
+            &inputs,
+            &format!(
+                "{} runs per design, seed {}; {}",
+                args.runs,
+                ctx.seed,
+                args.scenario.describe()
+            ),
+            rows,
+        )?;
+    }
     if let Some(p) = &args.plot {
         crate::study_plot::write_comparison(
             p,
@@ -330,7 +425,10 @@ fn evaluate<const N: usize>(
         )?;
     }
     if let Some(p) = &args.json {
-        let json = report_json(&ctx, args, &results, &timing);
+        let mut json = report_json(&ctx, args, &results, &timing);
+        if let Some(rows) = &plate_rows {
+            json["plates"] = crate::plate::json(rows);
+        }
         crate::files::write_atomic(p, &inputs, |w| {
             serde_json::to_writer_pretty(&mut *w, &json).map_err(std::io::Error::other)?;
             w.write_all(b"\n")

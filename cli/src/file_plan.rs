@@ -217,6 +217,7 @@ pub fn evaluate_designs(a: &crate::cmd_evaluate::Args) -> FilePlan {
     }
     p.output_opt("--plot", a.plot.as_deref())
         .output_opt("--json", a.json.as_deref())
+        .output_opt("--plate-plot", a.plate_plot.as_deref())
 }
 
 /// `diagnose`: REPORT.json, the readable report, MODEL and the three plots named after

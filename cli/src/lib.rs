@@ -27,6 +27,7 @@ pub mod diagnose_contacts;
 pub mod diagnosis_plot;
 pub mod error;
 pub mod file_plan;
+pub mod plate;
 pub mod plot;
 pub mod progress;
 pub mod report;

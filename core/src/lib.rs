@@ -29,6 +29,7 @@ pub mod montecarlo;
 pub mod noise;
 pub mod observability;
 pub mod params;
+pub mod plate_study;
 pub mod pose;
 pub mod registration;
 pub mod rng;
