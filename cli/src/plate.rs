@@ -784,7 +784,7 @@ mod tests {
             "x=a,1,10",
         ] {
             let e = parse_plate(bad).unwrap_err();
-            assert_eq!(e.exit, crate::error::Exit::Usage, "{bad}");
+            assert_eq!(e.kind, crate::error::Exit::Usage, "{bad}");
         }
     }
 }
