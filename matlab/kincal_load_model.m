@@ -49,6 +49,14 @@ choices = cellstr(rj.length_params);
 for i = 1:n
     base = kincal_mex('robot_set', base, 'length_param', [i, double(strcmp(choices{i}, 'beta'))]);
 end
+% joint_types: written only for models with a prismatic joint (absent: all revolute).
+if isfield(rj, 'joint_types') && ~isempty(rj.joint_types)
+    kinds = cellstr(rj.joint_types);
+    for i = 1:n
+        base.joint_kind(i) = double(strcmp(kinds{i}, 'prismatic'));
+    end
+    base = kincal_robot(base);
+end
 params = as_list(rj.parameters);
 initial = base;
 model.robot = base;
