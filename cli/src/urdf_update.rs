@@ -74,7 +74,7 @@ pub fn update_urdf<const N: usize>(
         return Err(err(
             None,
             format!(
-                "the chain from `{base}` to `{tip}` has {moving} moving joints, the model has {N}: choose --base-link/--tip-link of the chain the model was calibrated from"
+                "the chain from `{base}` to `{tip}` has {moving} revolute/prismatic joints, the model has {N}: choose --base-link/--tip-link of the chain the model was calibrated from"
             ),
         ));
     }
