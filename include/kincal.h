@@ -82,7 +82,7 @@
 /*
  Largest `frames_len` of `kincal_fk_frames`: 16·(`KINCAL_MAX_JOINTS` + 2).
  */
-#define KINCAL_MAX_FRAMES_LEN 176
+#define KINCAL_MAX_FRAMES_LEN 224
 
 #if defined(KINCAL_STD)
 /*
@@ -110,7 +110,7 @@
 /*
  Size in bytes of `kincal_prepared` (`sizeof(kincal_prepared)`; also `kincal_prepared_size()`).
  */
-#define KINCAL_PREPARED_SIZE 3072
+#define KINCAL_PREPARED_SIZE 4096
 
 /*
  Alignment in bytes of `kincal_prepared` (`alignof(kincal_prepared)`, that of `uint64_t`).
@@ -120,7 +120,7 @@
 /*
  Number of `uint64_t` words of `kincal_prepared.opaque`: `KINCAL_PREPARED_SIZE / 8`.
  */
-#define KINCAL_PREPARED_WORDS 384
+#define KINCAL_PREPARED_WORDS 512
 
 /*
  Most markers on one body.
@@ -135,18 +135,18 @@
 /*
  Largest joint count of a `kincal_robot`.
  */
-#define KINCAL_MAX_JOINTS 9
+#define KINCAL_MAX_JOINTS 12
 
 /*
- Capacity of `kincal_robot.params`: `kincal_num_params(KINCAL_MAX_JOINTS)` = 12·9 + 13.
+ Capacity of `kincal_robot.params`: `kincal_num_params(KINCAL_MAX_JOINTS)` = 12·12 + 13.
  */
-#define KINCAL_MAX_PARAMS 121
+#define KINCAL_MAX_PARAMS 157
 
 /*
  Capacity of `kincal_robot.nominal`: `kincal_num_geometric_params(KINCAL_MAX_JOINTS)` =
- 5·9 + 12.
+ 5·12 + 12.
  */
-#define KINCAL_MAX_GEOMETRIC_PARAMS 57
+#define KINCAL_MAX_GEOMETRIC_PARAMS 72
 
 /*
  The paper's position target of Section 4.4: every pose error below 1 mm [m].
@@ -424,6 +424,32 @@ enum kincal_length_param
 typedef enum kincal_length_param kincal_length_param;
 #else
 typedef uint32_t kincal_length_param;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
+ What a joint's reading moves (values of `kincal_robot.joint_kind`).
+ */
+enum kincal_joint_kind
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     Rotation about the joint axis: `Rz(q + θ0)·Tz(d)·…`, reading and limits in radians.
+     */
+    KINCAL_JOINT_KIND_REVOLUTE = 0,
+    /*
+     Translation along the joint axis: `Rz(θ0)·Tz(d + q)·…`, reading and limits in metres;
+     its cyclic effect parameters must be zero.
+     */
+    KINCAL_JOINT_KIND_PRISMATIC = 1,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_joint_kind kincal_joint_kind;
+#else
+typedef uint32_t kincal_joint_kind;
 #endif // __STDC_VERSION__ >= 202311L
 #endif // __cplusplus
 
@@ -989,7 +1015,7 @@ typedef struct kincal_error {
 } kincal_error;
 
 /*
- A robot model with 1..=`KINCAL_MAX_JOINTS` revolute joints: Hayati/mDH geometry, base and
+ A robot model with 1..=`KINCAL_MAX_JOINTS` revolute or prismatic joints: Hayati/mDH geometry, base and
  tool frames, joint limits, point-mass model and effect parameters. Caller-owned plain data:
  declare it anywhere (stack, static, flash), fill it with `kincal_robot_init` or
  `kincal_robot_aria`, edit it with the `kincal_robot_*` setters or directly, and pass it to
@@ -1011,6 +1037,11 @@ typedef struct kincal_robot {
      */
     uint32_t length_param[KINCAL_MAX_JOINTS];
     /*
+     Per joint: `KINCAL_JOINT_KIND_REVOLUTE` (0, what a zeroed struct holds) or
+     `KINCAL_JOINT_KIND_PRISMATIC` (1).
+     */
+    uint32_t joint_kind[KINCAL_MAX_JOINTS];
+    /*
      Current parameters, first `kincal_num_params(N)` = 12N + 13 entries, in the flat layout
      of the core: `5i..5i+5` link i+1 [θ0, d, a, α, β]; `5N..5N+6` base [px, py, pz, rx, ry,
      rz] (Trans(p)·Rot(r), r a rotation vector); `5N+6..5N+12` tool, same form; then
@@ -1025,11 +1056,11 @@ typedef struct kincal_robot {
      */
     double nominal[KINCAL_MAX_GEOMETRIC_PARAMS];
     /*
-     Lower joint limits [rad], inclusive.
+     Lower joint limits [rad] ([m] for a prismatic joint), inclusive.
      */
     double limits_lower[KINCAL_MAX_JOINTS];
     /*
-     Upper joint limits [rad], inclusive.
+     Upper joint limits [rad] ([m] for a prismatic joint), inclusive.
      */
     double limits_upper[KINCAL_MAX_JOINTS];
     /*

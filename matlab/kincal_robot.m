@@ -25,14 +25,16 @@ function robot = kincal_robot(spec)
 %   The struct is the whole model: nothing is kept inside the MEX file between calls, so a
 %   robot can be saved, copied and edited like any other variable. Fields:
 %       name            label (informative)
-%       n_joints        N (1..9)
+%       n_joints        N (1..12)
 %       length_param    1 x N: 0 = link identifies d, 1 = link identifies beta
+%       joint_kind      1 x N: 0 = revolute, 1 = prismatic (reading and limits in metres;
+%                       optional on input, all revolute when absent)
 %       params          P x 1 current parameters, P = 12N+13, flat layout: link i in
 %                       5(i-1)+(1:5) as [theta0 d a alpha beta]; base (6), tool (6);
 %                       compliance (N), scale (N), cyclic (4N), backlash (N), thermal (1)
 %       labels          P x 1 cell of parameter labels ('theta0_3', 'beta_2', 'base_px', ...)
 %       nominal         (5N+12) x 1 nominal geometry (links, base, tool), same layout
-%       limits          N x 2 joint limits [lower upper] (rad)
+%       limits          N x 2 joint limits [lower upper] (rad; m for prismatic joints)
 %       link_masses_kg  N x 1, tool_mass_kg, gravity (3 x 1): the point-mass model used by
 %                       the joint-compliance effect
 %   Units: metres and radians. Change parameters with KINCAL_PARAM (by label).

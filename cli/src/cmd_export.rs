@@ -34,10 +34,10 @@ the model's geometry alone).
 --urdf OUT.urdf --from ROBOT.urdf [--base-link L --tip-link T]: your own URDF (the one the
 model was calibrated from) with the calibrated geometry: each chain link keeps its offset
 from the model's joint frame as in the nominal model, so meshes, inertials and branches
-move with the identified axes; only the <origin> of the chain's revolute joints and of the
-last fixed joint before the tip link (the tool frame) change, everything else is kept byte
-for byte. Refused (exit 3) when the chain's revolute joint count differs from the model's
-or a URDF joint axis is not the nominal model's axis.
+move with the identified axes; only the <origin> of the chain's revolute and prismatic
+joints and of the last fixed joint before the tip link (the tool frame) change, everything
+else is kept byte for byte. Refused (exit 3) when the chain's moving joints differ from the
+model's in count or kind, or a URDF joint axis is not the nominal model's axis.
 
 --mdh-table OUT.csv | OUT.yaml: the identified mDH/Hayati table. The CSV has one row per
 frame: `base`, links 1..N, `tool`, then one row per effect parameter (its label). Columns
@@ -577,6 +577,21 @@ fn c_header_generic<const N: usize>(
             kincal::model::LengthParam::Beta => "KINCAL_LENGTH_PARAM_BETA".to_string(),
         })
         .collect();
+    // Written only for a model with a prismatic joint (a zeroed entry is revolute), so the
+    // headers of revolute models are unchanged.
+    let kinds = if r.has_prismatic() {
+        let k: Vec<&str> = r
+            .joint_kinds()
+            .iter()
+            .map(|k| match k {
+                kincal::JointKind::Revolute => "KINCAL_JOINT_KIND_REVOLUTE",
+                kincal::JointKind::Prismatic => "KINCAL_JOINT_KIND_PRISMATIC",
+            })
+            .collect();
+        format!("\n    .joint_kind = {{{}}},", k.join(", "))
+    } else {
+        String::new()
+    };
     let lower: Vec<f64> = r.limits().iter().map(|l| l.lower).collect();
     let upper: Vec<f64> = r.limits().iter().map(|l| l.upper).collect();
     let mass = r.mass();
@@ -594,7 +609,7 @@ fn c_header_generic<const N: usize>(
 
 static const kincal_robot {name} = {{
     .n_joints = {N},
-    .length_param = {{{length}}},
+    .length_param = {{{length}}},{kinds}
     .params = {{{params}}},
     .nominal = {{{nominal}}},
     .limits_lower = {{{lower}}},

@@ -985,7 +985,7 @@ fn from_refuses_a_chain_that_is_not_the_models() {
     );
     assert_eq!(code(&o), 3, "{}", stderr(&o));
     assert!(
-        stderr(&o).contains("has 4 revolute joints, the model has 6"),
+        stderr(&o).contains("has 4 revolute/prismatic joints, the model has 6"),
         "{}",
         stderr(&o)
     );

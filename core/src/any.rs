@@ -4,10 +4,10 @@
 //! as large as its largest variant.
 
 use crate::error::{Error, Result};
-use crate::model::{JointLimits, Link, Robot};
+use crate::model::{JointKind, JointLimits, Link, Robot};
 
 /// Largest joint count a run-time robot may have.
-pub const MAX_JOINTS: usize = 9;
+pub const MAX_JOINTS: usize = 12;
 
 /// A [`Robot`] with 1 to [`MAX_JOINTS`] joints.
 #[derive(Debug, Clone, PartialEq)]
@@ -24,6 +24,9 @@ pub enum AnyRobot {
     J7(Robot<7>),
     J8(Robot<8>),
     J9(Robot<9>),
+    J10(Robot<10>),
+    J11(Robot<11>),
+    J12(Robot<12>),
 }
 
 /// Runs `$body` with `$r` bound to the concrete `Robot<N>` inside an [`AnyRobot`] (by value,
@@ -49,6 +52,9 @@ macro_rules! with_any_robot {
             $crate::any::AnyRobot::J7($r) => $body,
             $crate::any::AnyRobot::J8($r) => $body,
             $crate::any::AnyRobot::J9($r) => $body,
+            $crate::any::AnyRobot::J10($r) => $body,
+            $crate::any::AnyRobot::J11($r) => $body,
+            $crate::any::AnyRobot::J12($r) => $body,
         }
     };
 }
@@ -62,7 +68,7 @@ macro_rules! impl_from {
         }
     )*};
 }
-impl_from!(J1 1, J2 2, J3 3, J4 4, J5 5, J6 6, J7 7, J8 8, J9 9);
+impl_from!(J1 1, J2 2, J3 3, J4 4, J5 5, J6 6, J7 7, J8 8, J9 9, J10 10, J11 11, J12 12);
 
 fn build<const N: usize>(links: &[Link], limits: &[JointLimits]) -> Result<Robot<N>> {
     let l: [Link; N] = links.try_into().map_err(|_| Error::DimensionMismatch {
@@ -97,6 +103,9 @@ impl AnyRobot {
             7 => build::<7>(links, limits)?.into(),
             8 => build::<8>(links, limits)?.into(),
             9 => build::<9>(links, limits)?.into(),
+            10 => build::<10>(links, limits)?.into(),
+            11 => build::<11>(links, limits)?.into(),
+            12 => build::<12>(links, limits)?.into(),
             0 => {
                 return Err(Error::DimensionMismatch {
                     expected: 1,
@@ -116,5 +125,16 @@ impl AnyRobot {
     #[must_use]
     pub fn n_joints(&self) -> usize {
         with_any_robot!(self, r => r.links().len())
+    }
+
+    /// Sets the kind of joint `j` (zero-based), see [`Robot::set_joint_kind`].
+    pub fn set_joint_kind(&mut self, j: usize, kind: JointKind) -> Result<()> {
+        with_any_robot!(self, r => r.set_joint_kind(j, kind))
+    }
+
+    /// The kind of joint `j` (revolute out of range).
+    #[must_use]
+    pub fn joint_kind(&self, j: usize) -> JointKind {
+        with_any_robot!(self, r => r.joint_kind(j))
     }
 }

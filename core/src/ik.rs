@@ -227,14 +227,15 @@ pub fn solve_ik<const N: usize>(
 
 /// Moves joints by ±2π towards `seed` where the limits allow (same pose, nearer readings).
 /// Joints with a scale error are left alone: Δθ_j = k_j·q_j is not 2π-periodic, so the
-/// shifted reading would reach a different pose.
+/// shifted reading would reach a different pose; so are prismatic joints (a slide).
 fn shift_towards<const N: usize>(q: &mut [f64; N], seed: &[f64; N], robot: &Robot<N>) {
     let joints = seed
         .iter()
         .zip(robot.limits().iter())
-        .zip(robot.effect_params().scale.iter());
-    for (qj, ((&seed_j, lim), &scale)) in q.iter_mut().zip(joints) {
-        if scale != 0.0 {
+        .zip(robot.effect_params().scale.iter())
+        .zip(robot.turn_mask());
+    for (qj, (((&seed_j, lim), &scale), turn)) in q.iter_mut().zip(joints) {
+        if scale != 0.0 || turn == 0.0 {
             continue;
         }
         for k in [-2.0 * PI, 2.0 * PI] {
@@ -330,8 +331,9 @@ fn descend<const N: usize>(
 }
 
 /// The 6×N Jacobian of the pose with respect to the readings: the θ0 columns times
-/// dθ_j/dq_j of the scale and cyclic effects (compliance's dependence on q is neglected;
-/// it only slows convergence slightly).
+/// dθ_j/dq_j of the scale and cyclic effects, or for a prismatic joint `[z_{j−1}; 0]` times
+/// (1 + scale) (compliance's dependence on q is neglected; it only slows convergence
+/// slightly).
 pub(crate) fn joint_jacobian<const N: usize>(
     robot: &Robot<N>,
     state: &JointState<N>,
@@ -347,8 +349,9 @@ pub(crate) fn joint_jacobian<const N: usize>(
     let joints = f
         .t_base_link
         .iter()
-        .zip(state.q.iter().zip(e.cyclic.iter()).zip(e.scale.iter()));
-    for (column, (ti, ((&q, c), &scale))) in j.data.0.iter_mut().zip(joints) {
+        .zip(state.q.iter().zip(e.cyclic.iter()).zip(e.scale.iter()))
+        .zip(robot.turn_mask());
+    for (column, ((ti, ((&q, c), &scale)), turn)) in j.data.0.iter_mut().zip(joints) {
         let p_prev = prev.translation.vector;
         let z_prev = crate::math::column3(prev.rotation.matrix(), 2);
         prev = ti;
@@ -360,8 +363,9 @@ pub(crate) fn joint_jacobian<const N: usize>(
             0.0
         };
         let dtheta = 1.0 + scale + dcyclic;
-        let lin = z_prev.cross(&(pe - p_prev)) * dtheta;
-        let ang = z_prev * dtheta;
+        // Revolute: [z × (p_e − p); z]·dθ/dq; prismatic: [z; 0]·(1 + scale).
+        let lin = (z_prev.cross(&(pe - p_prev)) * turn + z_prev * (1.0 - turn)) * dtheta;
+        let ang = z_prev * (dtheta * turn);
         *column = [lin.x, lin.y, lin.z, ang.x, ang.y, ang.z];
     }
     j

@@ -55,9 +55,11 @@ fn check_pose(t: &Transform) -> Result<()> {
     )
 }
 
-/// FK of a geometry at angles `angles` (q + Δθ, without θ0), lengths times `scale`.
-/// `on_link(i, x_mid, R_i, p_i)` sees each link's intermediate x axis (after `Rz·Tz·Tx`,
-/// before `Rx(α)·Ry(β)`) and its frame.
+/// FK of a geometry at joint displacements `disp` (q + Δθ, without θ0), fixed lengths times
+/// `scale`. `turn[i]` is 1 for a revolute joint (the displacement is an angle added to θ0)
+/// and 0 for a prismatic one (a slide added to d, not scaled: the reading is not a length
+/// of the structure). `on_link(i, x_mid, R_i, p_i)` sees each link's intermediate x axis
+/// (after `Rz·Tz·Tx`, before `Rx(α)·Ry(β)`) and its frame.
 ///
 /// Speed (FK is dominated by this loop): every `sincos` is taken before the chain so the
 /// calls do not interleave with its dependent arithmetic; each link then turns column
@@ -67,23 +69,27 @@ fn check_pose(t: &Transform) -> Result<()> {
 #[inline(always)]
 fn chain<const N: usize>(
     g: &Geometry<N>,
-    angles: &[f64; N],
+    turn: &[f64; N],
+    disp: &[f64; N],
     scale: f64,
     on_link: impl FnMut(usize, &Vector3<f64>, &Matrix3<f64>, &Vector3<f64>),
 ) -> Transform {
     let mut sc = [(0.0, 1.0); N];
+    let mut slide = [0.0; N];
     for i in 0..N {
-        sc[i] = crate::math::sin_cos(angles[i] + g.links[i].theta0);
+        sc[i] = crate::math::sin_cos(disp[i] * turn[i] + g.links[i].theta0);
+        slide[i] = disp[i] * (1.0 - turn[i]);
     }
-    chain_sc(g, &sc, scale, on_link)
+    chain_sc(g, &sc, &slide, scale, on_link)
 }
 
 /// [`chain`] from the sines and cosines `(sin θ_i, cos θ_i)` of the full joint angles
-/// `θ_i = angle_i + θ0_i`.
+/// `θ_i = angle_i + θ0_i` and the slides of the prismatic joints (0 for revolute ones).
 #[inline(always)]
 fn chain_sc<const N: usize>(
     g: &Geometry<N>,
     sc: &[(f64, f64); N],
+    slide: &[f64; N],
     scale: f64,
     mut on_link: impl FnMut(usize, &Vector3<f64>, &Matrix3<f64>, &Vector3<f64>),
 ) -> Transform {
@@ -98,8 +104,8 @@ fn chain_sc<const N: usize>(
         // R_prev·Rz(θ): x and y turn about z.
         let xm = x * c + y * s;
         let ym = y * c - x * s;
-        // p_i = p_{i-1} + R_prev·Rz(θ)·(a, 0, d).
-        p += xm * (l.a * scale) + z * (l.d * scale);
+        // p_i = p_{i-1} + R_prev·Rz(θ)·(a, 0, d + slide).
+        p += xm * (l.a * scale) + z * (l.d * scale + slide[i]);
         let [ca, sa, cb, sb] = g.link_cs[i];
         // ·Rx(α): y and z turn about x.
         y = ym * ca + z * sa;
@@ -130,7 +136,13 @@ impl<const N: usize> Robot<N> {
     pub fn fk(&self, state: &JointState<N>) -> Result<Transform> {
         let angles = self.joint_angles(state)?;
         let scale = self.length_scale(state)?;
-        let t = chain(&self.geom, &angles, scale, |_, _, _, _| {});
+        let t = chain(
+            &self.geom,
+            &self.turn_mask(),
+            &angles,
+            scale,
+            |_, _, _, _| {},
+        );
         check_pose(&t)?;
         Ok(t)
     }
@@ -140,8 +152,21 @@ impl<const N: usize> Robot<N> {
     /// for evaluating many models at the same configurations (validation in Monte-Carlo
     /// studies). Equals [`Robot::fk_q`] to rounding. A model with joint or thermal effects
     /// is refused with [`Error::InvalidParameter`] naming its first non-zero effect
-    /// parameter.
+    /// parameter; one with a prismatic joint (whose reading is a slide, not an angle) with
+    /// [`Error::InvalidParameter`] naming that joint's d.
     pub fn fk_sincos(&self, sincos_q: &[[f64; 2]; N]) -> Result<Transform> {
+        if let Some(j) = (0..N).find(|&j| self.joint_kind(j) == crate::JointKind::Prismatic) {
+            let index = ParamId::Link {
+                link: j,
+                kind: LinkParam::D,
+            }
+            .index(N)
+            .0;
+            return Err(Error::InvalidParameter {
+                index,
+                value: self.param(crate::error::ParamIndex(index))?,
+            });
+        }
         if self.active_effects() != crate::EffectSet::NONE {
             let first = crate::params::num_geometric_params(N);
             for i in first..Self::NUM_PARAMS {
@@ -157,7 +182,7 @@ impl<const N: usize> Robot<N> {
             let [ct, st] = self.geom.theta0_cs[i];
             sc[i] = (sq * ct + cq * st, cq * ct - sq * st);
         }
-        Ok(chain_sc(&self.geom, &sc, 1.0, |_, _, _, _| {}))
+        Ok(chain_sc(&self.geom, &sc, &[0.0; N], 1.0, |_, _, _, _| {}))
     }
 
     /// End-effector pose for readings `q` alone (models without backlash/thermal).
@@ -177,20 +202,29 @@ impl<const N: usize> Robot<N> {
         frames.t_base_0 = self.geom.t_base;
         frames.length_scale = scale;
         let (links, x_mid) = (&mut frames.t_base_link, &mut frames.x_mid);
-        frames.t_base_ee = chain(&self.geom, angles, scale, |i, xm, r, p| {
-            links[i] = transform(*r, *p);
-            x_mid[i] = *xm;
-        });
+        frames.t_base_ee = chain(
+            &self.geom,
+            &self.turn_mask(),
+            angles,
+            scale,
+            |i, xm, r, p| {
+                links[i] = transform(*r, *p);
+                x_mid[i] = *xm;
+            },
+        );
     }
 
     /// Gravity torque τ_j about each joint axis [N·m] at readings `q`, from the mass model
     /// and the nominal geometry (spec/effects.md): `τ_j = z_{j−1}·Σ_{k≥j}(c_k − p_{j−1}) ×
-    /// (m_k·g)`. With this sign a positive compliance moves a joint the way gravity pulls.
+    /// (m_k·g)`; for a prismatic joint the gravity force along its axis \[N\],
+    /// `F_j = z_{j−1}·Σ_{k≥j} m_k·g`. With this sign a positive compliance moves a joint the
+    /// way gravity pulls.
     #[must_use]
     pub fn gravity_torques(&self, q: &[f64; N]) -> [f64; N] {
         let mut p = [Vector3::zeros(); N];
         let mut z = [Vector3::zeros(); N];
-        let ee = chain(&self.nominal, q, 1.0, |i, _, r, pi| {
+        let turn = self.turn_mask();
+        let ee = chain(&self.nominal, &turn, q, 1.0, |i, _, r, pi| {
             p[i] = *pi;
             z[i] = r.column(2).into_owned();
         });
@@ -210,7 +244,11 @@ impl<const N: usize> Robot<N> {
             let m = self.mass.link_masses_kg[j];
             moment += (p_prev + p[j]) * (0.5 * m);
             mass += m;
-            tau[j] = z_prev.dot(&(moment - p_prev * mass).cross(&g));
+            tau[j] = if turn[j] == 0.0 {
+                z_prev.dot(&(g * mass))
+            } else {
+                z_prev.dot(&(moment - p_prev * mass).cross(&g))
+            };
         }
         tau
     }
@@ -223,8 +261,11 @@ impl<const N: usize> Robot<N> {
     /// θ0_i → `[z_{i−1} × (p_e − p_{i−1}); z_{i−1}]`, d_i → `[z_{i−1}; 0]`, a_i → `[x_i; 0]`,
     /// α_i → `[x_i × (p_e − p_i); x_i]`, β_i → `[y_i × (p_e − p_i); y_i]`, with x_i the x
     /// axis before Ry(β_i) (exact for β ≠ 0). Base and tool columns use the SO(3) left
-    /// Jacobian of their rotation vectors, so they are exact away from zero too. Effect
-    /// columns are the θ0 column times ∂Δθ_j/∂param; the thermal column is
+    /// Jacobian of their rotation vectors, so they are exact away from zero too. The link
+    /// columns are the same for a prismatic joint (its slide only moves the frames). Effect
+    /// columns are the joint's column (θ0's for a revolute joint, `[z_{j−1}; 0]` for a
+    /// prismatic one) times ∂Δ_j/∂param (cyclic columns of a prismatic joint are zero); the
+    /// thermal column is
     /// `(T − 20)·Σ_i (d_i·col(d_i) + a_i·col(a_i))`. Columns of effects whose input is
     /// missing (approach directions, temperature) are zero.
     pub fn jacobian(&self, state: &JointState<N>, jac: &mut [JacobianColumn]) -> Result<Transform> {
@@ -308,32 +349,50 @@ impl<const N: usize> Robot<N> {
             put(jac, ParamId::Tool(k).index(N).0, t);
         }
         if full {
-            self.effect_columns(state, scale, jac);
+            self.effect_columns(state, scale, &f, jac);
         }
         check_pose(&f.t_base_ee)?;
         Ok(f.t_base_ee)
     }
 
-    /// Effect columns, from the θ0, d and a columns already in `jac`.
-    fn effect_columns(&self, state: &JointState<N>, scale: f64, jac: &mut [JacobianColumn]) {
+    /// Effect columns, from the θ0, d and a columns already in `jac` and the frames `f`
+    /// (the axes of prismatic joints).
+    fn effect_columns(
+        &self,
+        state: &JointState<N>,
+        scale: f64,
+        f: &Frames<N>,
+        jac: &mut [JacobianColumn],
+    ) {
         let tau = self.gravity_torques(&state.q);
         let approach = state.approach.unwrap_or([0.0; N]);
         let scaled = |c: JacobianColumn, f: f64| c.map(|v| v * f);
         let mut thermal = [0.0; 6];
+        let turn = self.turn_mask();
         // Iterators rather than `q[j]`, `tau[j]`, …: no bounds check left to the optimiser.
         let per_joint = state.q.iter().zip(tau.iter()).zip(approach.iter());
-        for (j, ((&q, &tau_j), &approach_j)) in per_joint.enumerate() {
-            let th = col_at(
-                jac,
-                ParamId::Link {
-                    link: j,
-                    kind: LinkParam::Theta0,
-                }
-                .index(N)
-                .0,
-            );
+        let mut prev = &f.t_base_0;
+        let frames = f.t_base_link.iter().zip(turn.iter());
+        for ((j, ((&q, &tau_j), &approach_j)), (ti, &turn_j)) in per_joint.enumerate().zip(frames) {
+            let z_prev = column3(prev.rotation.matrix(), 2);
+            prev = ti;
+            // ∂pose/∂(joint displacement): θ0's column, or the unscaled slide direction.
+            let th = if turn_j == 0.0 {
+                [z_prev.x, z_prev.y, z_prev.z, 0.0, 0.0, 0.0]
+            } else {
+                col_at(
+                    jac,
+                    ParamId::Link {
+                        link: j,
+                        kind: LinkParam::Theta0,
+                    }
+                    .index(N)
+                    .0,
+                )
+            };
             let (s1, c1) = crate::math::sin_cos(q);
-            let terms = [s1, c1, 2.0 * s1 * c1, c1 * c1 - s1 * s1];
+            // No cyclic error on a slide (the terms are periodic in an angle).
+            let terms = [s1, c1, 2.0 * s1 * c1, c1 * c1 - s1 * s1].map(|t| t * turn_j);
             put(jac, ParamId::Compliance(j).index(N).0, scaled(th, tau_j));
             put(jac, ParamId::Scale(j).index(N).0, scaled(th, q));
             for (t, term) in CyclicTerm::ALL.into_iter().zip(terms) {

@@ -79,12 +79,39 @@ pub enum LengthParam {
     Beta = 1,
 }
 
-/// Inclusive joint limits \[rad\].
+/// What a joint's reading moves: a rotation about its axis (revolute) or a translation along
+/// it (prismatic).
+///
+/// Revolute joint i: `A_i(q) = Rz(q + θ0_i)·Tz(d_i)·…`, q in radians, the joint offset is
+/// θ0_i. Prismatic joint i: `A_i(q) = Rz(θ0_i)·Tz(d_i + q)·…`, q in metres, the joint offset
+/// is d_i and θ0_i is a fixed (still identifiable) rotation about the axis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u8)]
+pub enum JointKind {
+    /// Rotation about the joint axis, reading in radians.
+    #[default]
+    Revolute = 0,
+    /// Translation along the joint axis, reading in metres.
+    Prismatic = 1,
+}
+
+impl JointKind {
+    /// `"revolute"` or `"prismatic"` (the robot file's `type` and the URDF joint type).
+    #[must_use]
+    pub const fn name(self) -> &'static str {
+        match self {
+            JointKind::Revolute => "revolute",
+            JointKind::Prismatic => "prismatic",
+        }
+    }
+}
+
+/// Inclusive joint limits \[rad\] (\[m\] for a prismatic joint).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct JointLimits {
-    /// Lower limit \[rad\].
+    /// Lower limit \[rad\] (\[m\] for a prismatic joint).
     pub lower: f64,
-    /// Upper limit \[rad\].
+    /// Upper limit \[rad\] (\[m\] for a prismatic joint).
     pub upper: f64,
 }
 
@@ -128,7 +155,7 @@ impl<const N: usize> MassModel<N> {
 /// Joint readings and the auxiliary data some effects need.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct JointState<const N: usize> {
-    /// Joint readings as the controller reports them \[rad\].
+    /// Joint readings as the controller reports them \[rad\] (\[m\] for prismatic joints).
     pub q: [f64; N],
     /// Direction from which each joint approached the pose (−1, 0, +1), for backlash.
     pub approach: Option<[f64; N]>,
@@ -167,15 +194,20 @@ impl<const N: usize> JointState<N> {
 }
 
 /// Parameters of the non-geometric joint effects (all zero: the geometric model).
+///
+/// On a prismatic joint the same parameters act on the slide instead of the angle, in
+/// metres: compliance Δd = c·F with F the gravity force along the axis \[m/N\], scale
+/// Δd = k·q, backlash Δd = b·s \[m\]. The cyclic terms (periodic in the angle) do not apply
+/// to a prismatic joint: they stay zero ([`Robot::set_param`] refuses a non-zero value).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EffectParams<const N: usize> {
-    /// Joint compliance c_j [rad/(N·m)].
+    /// Joint compliance c_j [rad/(N·m)] (\[m/N\] for a prismatic joint).
     pub compliance: [f64; N],
     /// Joint scale k_j \[1\].
     pub scale: [f64; N],
     /// Cyclic error [a_j, b_j, c_j, d_j] \[rad\] on sin q, cos q, sin 2q, cos 2q.
     pub cyclic: [[f64; 4]; N],
-    /// Backlash b_j \[rad\].
+    /// Backlash b_j \[rad\] (\[m\] for a prismatic joint).
     pub backlash: [f64; N],
     /// Thermal expansion κ [1/K].
     pub thermal_kappa: f64,
@@ -243,14 +275,15 @@ impl<const N: usize> Geometry<N> {
     }
 }
 
-/// A robot model with `N` revolute joints: geometry (links, base, tool), joint limits, mass
+/// A robot model with `N` joints, each revolute or prismatic ([`JointKind`]): geometry (links, base, tool), joint limits, mass
 /// model, and effect parameters. Plain data; every algorithm is a method or a free function
 /// taking it by reference, so there is no hidden state.
 ///
 /// Layout contract with the C ABI (ffi/src/prepared.rs keeps a built model byte for byte in
 /// caller-owned storage and validates it before use): every field except `length_param` is
-/// made of `f64` only, so any bit pattern of them is a valid value; `length_param` is the only
-/// field with invalid bit patterns and sits at [`Robot::LENGTH_PARAM_OFFSET`]. A field of
+/// made of `f64` (or, for `prismatic`, one `u64`) only, so any bit pattern of them is a valid
+/// value; `length_param` is the only field with invalid bit patterns and sits at
+/// [`Robot::LENGTH_PARAM_OFFSET`]. A field of
 /// another type breaks that contract: update ffi/src/prepared.rs with it (its size assertion
 /// catches most such changes).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -260,6 +293,10 @@ pub struct Robot<const N: usize> {
     /// (spec/effects.md), so calibrating the geometry does not move the mass model.
     pub(crate) nominal: Geometry<N>,
     pub(crate) length_param: [LengthParam; N],
+    /// Bit j set: joint j is prismatic ([`JointKind`]); bits at and above N are zero. A
+    /// `u64` rather than `[JointKind; N]` so that every bit pattern is a valid value (the
+    /// C ABI's prepared handle; it limits N to 64).
+    pub(crate) prismatic: u64,
     pub(crate) limits: [JointLimits; N],
     pub(crate) mass: MassModel<N>,
     pub(crate) effects: EffectParams<N>,
@@ -319,6 +356,7 @@ impl<const N: usize> Robot<N> {
             geom,
             nominal: geom,
             length_param: [LengthParam::D; N],
+            prismatic: 0,
             limits,
             mass,
             effects: EffectParams::default(),
@@ -401,6 +439,80 @@ impl<const N: usize> Robot<N> {
                 found: link + 1,
             }),
         }
+    }
+
+    /// The kind of joint `j` (zero-based; revolute out of range).
+    #[must_use]
+    pub fn joint_kind(&self, j: usize) -> JointKind {
+        if j < N && j < 64 && (self.prismatic >> j) & 1 == 1 {
+            JointKind::Prismatic
+        } else {
+            JointKind::Revolute
+        }
+    }
+
+    /// The kind of every joint.
+    #[must_use]
+    pub fn joint_kinds(&self) -> [JointKind; N] {
+        let mut out = [JointKind::Revolute; N];
+        for (j, k) in out.iter_mut().enumerate() {
+            *k = self.joint_kind(j);
+        }
+        out
+    }
+
+    /// Whether any joint is prismatic.
+    #[must_use]
+    pub fn has_prismatic(&self) -> bool {
+        self.prismatic != 0
+    }
+
+    /// Sets the kind of joint `j` (zero-based). Making a joint prismatic is refused
+    /// ([`Error::InvalidParameter`] naming the parameter) while it has a non-zero cyclic
+    /// term, which has no meaning on a slide. Limits are not converted: give them in metres.
+    pub fn set_joint_kind(&mut self, j: usize, kind: JointKind) -> Result<()> {
+        if j >= N || j >= 64 {
+            return Err(Error::DimensionMismatch {
+                expected: N,
+                found: j + 1,
+            });
+        }
+        if kind == JointKind::Prismatic {
+            for t in CyclicTerm::ALL {
+                let v = self.effects.cyclic[j][t as usize];
+                if v != 0.0 {
+                    return Err(Error::InvalidParameter {
+                        index: ParamId::Cyclic(j, t).index(N).0,
+                        value: v,
+                    });
+                }
+            }
+            self.prismatic |= 1 << j;
+        } else {
+            self.prismatic &= !(1u64 << j);
+        }
+        Ok(())
+    }
+
+    /// This robot with the joint kinds `kinds` (see [`Robot::set_joint_kind`]).
+    pub fn with_joint_kinds(mut self, kinds: &[JointKind; N]) -> Result<Self> {
+        for (j, &k) in kinds.iter().enumerate() {
+            self.set_joint_kind(j, k)?;
+        }
+        Ok(self)
+    }
+
+    /// `[1 or 0; N]`: 1.0 where the joint is revolute, 0.0 where prismatic. FK takes each
+    /// displacement into the angle (times the mask) or the slide (times 1 − mask) without a
+    /// branch.
+    pub(crate) fn turn_mask(&self) -> [f64; N] {
+        let mut m = [1.0; N];
+        for (j, v) in m.iter_mut().enumerate() {
+            if self.joint_kind(j) == JointKind::Prismatic {
+                *v = 0.0;
+            }
+        }
+        m
     }
 
     /// The links (current geometry).
@@ -497,7 +609,8 @@ impl<const N: usize> Robot<N> {
         })
     }
 
-    /// Sets parameter `i` (must be finite) and refreshes the precomputed link constants.
+    /// Sets parameter `i` (must be finite) and refreshes the precomputed link constants. A
+    /// non-zero cyclic term of a prismatic joint is refused ([`Error::InvalidParameter`]).
     pub fn set_param(&mut self, i: ParamIndex, value: f64) -> Result<()> {
         if !value.is_finite() {
             return Err(Error::NonFinite {
@@ -528,6 +641,9 @@ impl<const N: usize> Robot<N> {
             ParamId::Compliance(j) => set_at(&mut self.effects.compliance, j, value),
             ParamId::Scale(j) => set_at(&mut self.effects.scale, j, value),
             ParamId::Cyclic(j, t) => {
+                if value != 0.0 && self.joint_kind(j) == JointKind::Prismatic {
+                    return Err(Error::InvalidParameter { index: i.0, value });
+                }
                 if let Some(c) = self.effects.cyclic.get_mut(j) {
                     set_at(c, t as usize, value);
                 }
@@ -591,10 +707,25 @@ impl<const N: usize> Robot<N> {
         set
     }
 
-    /// Geometric parameters plus every parameter of `effects`.
+    /// Geometric parameters plus every parameter of `effects` that applies (the cyclic
+    /// terms of prismatic joints do not).
     #[must_use]
     pub fn param_set(&self, effects: EffectSet) -> ParamSet {
-        self.geometric_param_set().union(&effects.params(N))
+        let mut set = self.geometric_param_set().union(&effects.params(N));
+        self.remove_inapplicable(&mut set);
+        set
+    }
+
+    /// Removes from `set` the parameters that do not apply to this robot: the cyclic terms
+    /// of its prismatic joints.
+    pub fn remove_inapplicable(&self, set: &mut ParamSet) {
+        for j in 0..N {
+            if self.joint_kind(j) == JointKind::Prismatic {
+                for t in CyclicTerm::ALL {
+                    set.remove(ParamId::Cyclic(j, t).index(N).0);
+                }
+            }
+        }
     }
 
     /// Which effects have a non-zero parameter in this model.
@@ -621,8 +752,9 @@ impl<const N: usize> Robot<N> {
         set
     }
 
-    /// The joint angles the geometry sees, `q_j + Δθ_j` (without θ0), after the joint
-    /// effects: compliance, scale, cyclic, backlash. Fails with [`Error::MissingInput`] when
+    /// The joint displacements the geometry sees, `q_j + Δθ_j` (without θ0; an angle in
+    /// radians for a revolute joint, a slide in metres added to d for a prismatic one),
+    /// after the joint effects: compliance, scale, cyclic, backlash. Fails with [`Error::MissingInput`] when
     /// the model has backlash but `state` has no approach directions.
     pub fn joint_angles(&self, state: &JointState<N>) -> Result<[f64; N]> {
         state.validate()?;

@@ -138,7 +138,8 @@ pub struct Constraints {
     pub region: Option<Region>,
     /// End-effector z axis inside this cone.
     pub cone: Option<Cone>,
-    /// Distance kept from every joint limit \[rad\].
+    /// Distance kept from every revolute joint's limits \[rad\] (none for prismatic joints,
+    /// whose limits are in metres).
     pub joint_margin_rad: f64,
     /// Smallest admissible [`dexterity`] (0: no test). Tool poses need it: near a
     /// singularity a slightly different real robot may not reach the pose, or only with
@@ -168,11 +169,18 @@ impl Constraints {
     /// Whether `q` keeps the margin to every limit.
     #[must_use]
     pub fn within_limits<const N: usize>(&self, robot: &Robot<N>, q: &[f64; N]) -> bool {
-        q.iter().zip(robot.limits().iter()).all(|(&v, l)| {
-            v.is_finite()
-                && v >= l.lower + self.joint_margin_rad
-                && v <= l.upper - self.joint_margin_rad
-        })
+        let kinds = robot.joint_kinds();
+        q.iter()
+            .zip(robot.limits().iter())
+            .zip(kinds.iter())
+            .all(|((&v, l), &k)| {
+                let m = if k == crate::JointKind::Prismatic {
+                    0.0
+                } else {
+                    self.joint_margin_rad
+                };
+                v.is_finite() && v >= l.lower + m && v <= l.upper - m
+            })
     }
     /// Whether `q` is admissible: limits with margin, and its FK pose inside region and cone.
     pub fn admits<const N: usize>(&self, robot: &Robot<N>, q: &[f64; N]) -> Result<bool> {
@@ -219,6 +227,9 @@ pub fn dexterity<const N: usize>(robot: &Robot<N>, q: &[f64; N]) -> Result<f64> 
 /// joints that turn further (the geometry repeats).
 fn joint_range<const N: usize>(robot: &Robot<N>, c: &Constraints, j: usize) -> (f64, f64) {
     let l = robot.limits()[j];
+    if robot.joint_kind(j) == crate::JointKind::Prismatic {
+        return (l.lower, l.upper);
+    }
     let (mut lo, mut hi) = (l.lower + c.joint_margin_rad, l.upper - c.joint_margin_rad);
     if hi - lo > 2.0 * core::f64::consts::PI {
         lo = lo.max(-core::f64::consts::PI);

@@ -358,14 +358,18 @@ fn any_robot_joint_counts() {
             found: 0
         })
     );
-    let ten_links = [link; 10];
-    let ten_limits = [lim; 10];
+    let ten_links = [link; 13];
+    let ten_limits = [lim; 13];
     assert_eq!(
         AnyRobot::new(&ten_links, &ten_limits).map(|_| ()),
         Err(Error::CapacityExceeded {
-            needed: 10,
+            needed: 13,
             capacity: MAX_JOINTS
         })
+    );
+    assert_eq!(
+        AnyRobot::new(&ten_links[..12], &ten_limits[..12]).map(|r| r.n_joints()),
+        Ok(12)
     );
     assert_eq!(
         AnyRobot::new(&ten_links[..3], &ten_limits[..4]).map(|_| ()),

@@ -208,7 +208,7 @@ fn fk(c: &mut Criterion) {
     let aux = kincal_joint_aux {
         has_approach: 1,
         has_temp: 1,
-        approach: [1.0, -1.0, 0.0, 1.0, 1.0, -1.0, 1.0, 0.0, 0.0],
+        approach: [1.0, -1.0, 0.0, 1.0, 1.0, -1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
         temp_c: 31.5,
     };
     let mut g = c.benchmark_group("fk_7joint_all_effects");

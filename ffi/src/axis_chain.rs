@@ -111,7 +111,10 @@ pub unsafe extern "C" fn kincal_robot_from_axes(
             6 => build::<6>(points, directions, base, tool, limits),
             7 => build::<7>(points, directions, base, tool, limits),
             8 => build::<8>(points, directions, base, tool, limits),
-            _ => build::<9>(points, directions, base, tool, limits),
+            9 => build::<9>(points, directions, base, tool, limits),
+            10 => build::<10>(points, directions, base, tool, limits),
+            11 => build::<11>(points, directions, base, tool, limits),
+            _ => build::<12>(points, directions, base, tool, limits),
         }?;
         // SAFETY: checked by `arg_out1!`; writable by contract.
         unsafe { out.put(r) };

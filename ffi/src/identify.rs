@@ -251,6 +251,9 @@ fn workspace_size(n_joints: usize, n_poses: usize, n_requested: usize) -> Option
         7 => bytes_for::<7>(cap, n_poses),
         8 => bytes_for::<8>(cap, n_poses),
         9 => bytes_for::<9>(cap, n_poses),
+        10 => bytes_for::<10>(cap, n_poses),
+        11 => bytes_for::<11>(cap, n_poses),
+        12 => bytes_for::<12>(cap, n_poses),
         _ => None,
     }
 }

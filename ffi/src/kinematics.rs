@@ -201,7 +201,7 @@ pub unsafe extern "C" fn kincal_fk_pq(
 }
 
 /// Largest `frames_len` of `kincal_fk_frames`: 16·(`KINCAL_MAX_JOINTS` + 2).
-pub const KINCAL_MAX_FRAMES_LEN: usize = 176;
+pub const KINCAL_MAX_FRAMES_LEN: usize = 224;
 const _: () = assert!(KINCAL_MAX_FRAMES_LEN == 16 * (KINCAL_MAX_JOINTS + 2));
 
 fn frames_of<const N: usize>(

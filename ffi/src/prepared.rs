@@ -43,11 +43,11 @@ use crate::robot::{KINCAL_MAX_JOINTS, kincal_robot, to_any};
 use crate::status::{FfiResult, kincal_error, kincal_status};
 
 /// Size in bytes of `kincal_prepared` (`sizeof(kincal_prepared)`; also `kincal_prepared_size()`).
-pub const KINCAL_PREPARED_SIZE: usize = 3072;
+pub const KINCAL_PREPARED_SIZE: usize = 4096;
 /// Alignment in bytes of `kincal_prepared` (`alignof(kincal_prepared)`, that of `uint64_t`).
 pub const KINCAL_PREPARED_ALIGN: usize = 8;
 /// Number of `uint64_t` words of `kincal_prepared.opaque`: `KINCAL_PREPARED_SIZE / 8`.
-pub const KINCAL_PREPARED_WORDS: usize = 384;
+pub const KINCAL_PREPARED_WORDS: usize = 512;
 
 /// A prepared robot model: the core model built and validated once by `kincal_prepare`, for
 /// fast repeated FK and IK (`kincal_prepared_*`). Caller-owned storage of
@@ -92,14 +92,14 @@ const fn lp_words<const N: usize>() -> usize {
 }
 
 /// Whether a `Robot<N>` fits the storage with the layout this module relies on: 8-byte words
-/// (all `f64`: `32N + 77` of them) plus the N bytes of `[LengthParam; N]` at an 8-aligned
+/// (all `f64` and the one `u64` of the prismatic-joint bits: `32N + 78` of them) plus the N bytes of `[LengthParam; N]` at an 8-aligned
 /// offset padded to whole words ([`lp_words`]). A core change of `Robot`'s fields fails this
 /// at compile time.
 const fn payload_fits<const N: usize>() -> bool {
     let size = size_of::<Robot<N>>();
     let lp = Robot::<N>::LENGTH_PARAM_OFFSET;
     N <= 64
-        && size == 8 * (32 * N + 77) + 8 * lp_words::<N>()
+        && size == 8 * (32 * N + 78) + 8 * lp_words::<N>()
         && (HEADER_WORDS * 8 + size) <= KINCAL_PREPARED_SIZE
         && align_of::<Robot<N>>() <= KINCAL_PREPARED_ALIGN
         && (HEADER_WORDS * 8).is_multiple_of(align_of::<Robot<N>>())
@@ -117,8 +117,11 @@ const _: () = assert!(
         && payload_fits::<7>()
         && payload_fits::<8>()
         && payload_fits::<9>()
+        && payload_fits::<10>()
+        && payload_fits::<11>()
+        && payload_fits::<12>()
 );
-const _: () = assert!(KINCAL_MAX_JOINTS == 9);
+const _: () = assert!(KINCAL_MAX_JOINTS == 12);
 const _: () = assert!(LengthParam::D as u8 == 0 && LengthParam::Beta as u8 == 1);
 
 /// Word 1 of a handle holding a `Robot<N>`.
@@ -237,6 +240,9 @@ pub(crate) enum PreparedRobot<'a> {
     J7(&'a Robot<7>),
     J8(&'a Robot<8>),
     J9(&'a Robot<9>),
+    J10(&'a Robot<10>),
+    J11(&'a Robot<11>),
+    J12(&'a Robot<12>),
 }
 
 /// Runs `$body` with `$r` bound to the `&Robot<N>` of a [`PreparedRobot`].
@@ -252,6 +258,9 @@ macro_rules! with_prepared_robot {
             PreparedRobot::J7($r) => $body,
             PreparedRobot::J8($r) => $body,
             PreparedRobot::J9($r) => $body,
+            PreparedRobot::J10($r) => $body,
+            PreparedRobot::J11($r) => $body,
+            PreparedRobot::J12($r) => $body,
         }
     };
 }
@@ -313,6 +322,9 @@ pub(crate) unsafe fn prepared_robot<'a>(p: *const kincal_prepared) -> FfiResult<
         7 => PreparedRobot::J7(unsafe { view::<7>(base) }?),
         8 => PreparedRobot::J8(unsafe { view::<8>(base) }?),
         9 => PreparedRobot::J9(unsafe { view::<9>(base) }?),
+        10 => PreparedRobot::J10(unsafe { view::<10>(base) }?),
+        11 => PreparedRobot::J11(unsafe { view::<11>(base) }?),
+        12 => PreparedRobot::J12(unsafe { view::<12>(base) }?),
         _ => return Err(bad_handle()),
     })
 }

@@ -12,17 +12,19 @@
 
 use kincal::any::{AnyRobot, MAX_JOINTS};
 use kincal::params::{num_geometric_params, num_params};
-use kincal::{JointLimits, LengthParam, Link, MassModel, ParamIndex, Robot, with_any_robot};
+use kincal::{
+    JointKind, JointLimits, LengthParam, Link, MassModel, ParamIndex, Robot, with_any_robot,
+};
 
 use crate::status::{FfiResult, kincal_error, kincal_status};
 
 /// Largest joint count of a `kincal_robot`.
-pub const KINCAL_MAX_JOINTS: usize = 9;
-/// Capacity of `kincal_robot.params`: `kincal_num_params(KINCAL_MAX_JOINTS)` = 12·9 + 13.
-pub const KINCAL_MAX_PARAMS: usize = 121;
+pub const KINCAL_MAX_JOINTS: usize = 12;
+/// Capacity of `kincal_robot.params`: `kincal_num_params(KINCAL_MAX_JOINTS)` = 12·12 + 13.
+pub const KINCAL_MAX_PARAMS: usize = 157;
 /// Capacity of `kincal_robot.nominal`: `kincal_num_geometric_params(KINCAL_MAX_JOINTS)` =
-/// 5·9 + 12.
-pub const KINCAL_MAX_GEOMETRIC_PARAMS: usize = 57;
+/// 5·12 + 12.
+pub const KINCAL_MAX_GEOMETRIC_PARAMS: usize = 72;
 
 const _: () = assert!(KINCAL_MAX_JOINTS == MAX_JOINTS);
 const _: () = assert!(KINCAL_MAX_PARAMS == num_params(KINCAL_MAX_JOINTS));
@@ -39,7 +41,19 @@ pub enum kincal_length_param {
     Beta = 1,
 }
 
-/// A robot model with 1..=`KINCAL_MAX_JOINTS` revolute joints: Hayati/mDH geometry, base and
+/// What a joint's reading moves (values of `kincal_robot.joint_kind`).
+#[repr(u32)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[allow(non_camel_case_types)]
+pub enum kincal_joint_kind {
+    /// Rotation about the joint axis: `Rz(q + θ0)·Tz(d)·…`, reading and limits in radians.
+    Revolute = 0,
+    /// Translation along the joint axis: `Rz(θ0)·Tz(d + q)·…`, reading and limits in metres;
+    /// its cyclic effect parameters must be zero.
+    Prismatic = 1,
+}
+
+/// A robot model with 1..=`KINCAL_MAX_JOINTS` revolute or prismatic joints: Hayati/mDH geometry, base and
 /// tool frames, joint limits, point-mass model and effect parameters. Caller-owned plain data:
 /// declare it anywhere (stack, static, flash), fill it with `kincal_robot_init` or
 /// `kincal_robot_aria`, edit it with the `kincal_robot_*` setters or directly, and pass it to
@@ -58,6 +72,9 @@ pub struct kincal_robot {
     pub n_joints: u32,
     /// Per link: `KINCAL_LENGTH_PARAM_D` (0) or `KINCAL_LENGTH_PARAM_BETA` (1).
     pub length_param: [u32; KINCAL_MAX_JOINTS],
+    /// Per joint: `KINCAL_JOINT_KIND_REVOLUTE` (0, what a zeroed struct holds) or
+    /// `KINCAL_JOINT_KIND_PRISMATIC` (1).
+    pub joint_kind: [u32; KINCAL_MAX_JOINTS],
     /// Current parameters, first `kincal_num_params(N)` = 12N + 13 entries, in the flat layout
     /// of the core: `5i..5i+5` link i+1 [θ0, d, a, α, β]; `5N..5N+6` base [px, py, pz, rx, ry,
     /// rz] (Trans(p)·Rot(r), r a rotation vector); `5N+6..5N+12` tool, same form; then
@@ -68,9 +85,9 @@ pub struct kincal_robot {
     /// entries in the same layout as `params` (links, base, tool). Gravity torques are
     /// evaluated with it, so calibrating `params` does not move the mass model.
     pub nominal: [f64; KINCAL_MAX_GEOMETRIC_PARAMS],
-    /// Lower joint limits [rad], inclusive.
+    /// Lower joint limits [rad] ([m] for a prismatic joint), inclusive.
     pub limits_lower: [f64; KINCAL_MAX_JOINTS],
-    /// Upper joint limits [rad], inclusive.
+    /// Upper joint limits [rad] ([m] for a prismatic joint), inclusive.
     pub limits_upper: [f64; KINCAL_MAX_JOINTS],
     /// Mass of each link [kg], at the midpoint between the origins of frames k−1 and k.
     pub link_masses_kg: [f64; KINCAL_MAX_JOINTS],
@@ -84,6 +101,7 @@ impl kincal_robot {
     pub(crate) const ZERO: kincal_robot = kincal_robot {
         n_joints: 0,
         length_param: [0; KINCAL_MAX_JOINTS],
+        joint_kind: [0; KINCAL_MAX_JOINTS],
         params: [0.0; KINCAL_MAX_PARAMS],
         nominal: [0.0; KINCAL_MAX_GEOMETRIC_PARAMS],
         limits_lower: [0.0; KINCAL_MAX_JOINTS],
@@ -176,6 +194,23 @@ fn to_robot<const N: usize>(r: &kincal_robot) -> FfiResult<Robot<N>> {
         };
         robot.set_length_param(i, lp)?;
     }
+    for (i, &kind) in r.joint_kind.iter().take(N).enumerate() {
+        let k = match kind {
+            0 => JointKind::Revolute,
+            1 => JointKind::Prismatic,
+            v => {
+                return Err(kincal_error::new(kincal_status::InvalidArgument)
+                    .arg(c"robot->joint_kind")
+                    .at(i)
+                    .value(f64::from(v)));
+            }
+        };
+        if k == JointKind::Prismatic {
+            robot
+                .set_joint_kind(i, k)
+                .map_err(|e| field_error(e, c"robot->params"))?;
+        }
+    }
     for (i, &v) in params.iter().enumerate() {
         if robot.param(ParamIndex(i))? != v {
             robot
@@ -208,6 +243,12 @@ pub(crate) fn from_robot<const N: usize>(r: &Robot<N>) -> FfiResult<kincal_robot
             *hi = lim.upper;
         }
     }
+    for (j, dst) in out.joint_kind.iter_mut().take(N).enumerate() {
+        *dst = match r.joint_kind(j) {
+            JointKind::Revolute => kincal_joint_kind::Revolute as u32,
+            JointKind::Prismatic => kincal_joint_kind::Prismatic as u32,
+        };
+    }
     for (dst, lp) in out.length_param.iter_mut().zip(r.length_params()) {
         *dst = match lp {
             LengthParam::D => kincal_length_param::D as u32,
@@ -235,6 +276,9 @@ pub(crate) fn to_any(r: &kincal_robot) -> FfiResult<AnyRobot> {
         7 => to_robot::<7>(r)?.into(),
         8 => to_robot::<8>(r)?.into(),
         9 => to_robot::<9>(r)?.into(),
+        10 => to_robot::<10>(r)?.into(),
+        11 => to_robot::<11>(r)?.into(),
+        12 => to_robot::<12>(r)?.into(),
         n => {
             return Err(bad_joint_count(n as usize));
         }

@@ -69,15 +69,16 @@ pub const USABLE: &[(&str, &str)] = &[
 pub const UNUSABLE: &[(&str, &str)] = &[
     (
         "figaroh-tiago-mocap",
-        "TIAGo's torso_lift_joint is prismatic (it moves 0.015-0.350 m in this recording) and \
-         kincal models revolute joints only; the file's 4 hand points are moreover computed from \
+        "TIAGo's torso_lift_joint is prismatic (it moves 0.015-0.350 m in this recording): kincal \
+         models it, but the set ships no URDF and import-dataset does not read it yet; the file's \
+         4 hand points are moreover computed from \
          one tracked rigid body (points 3 and 4 are identical, distances constant to 1e-7 m), \
          not independent marker measurements",
     ),
     (
         "hilti-jaibot-stationing",
-        "licensed CC BY-NC-SA 3.0 (non-commercial), and the lifting column is a prismatic joint \
-         with mimic joints, which kincal does not model",
+        "licensed CC BY-NC-SA 3.0 (non-commercial); its URDF (a prismatic lifting column with \
+         mimic stages) imports, but import-dataset does not read this set yet",
     ),
 ];
 

@@ -7,11 +7,13 @@
 //! { "schema_version": "1.0", "format": "kincal-model", "generator": "kincal 0.1.0",
 //!   "robot": { "name", "n_joints",
 //!              "length_params": ["d" | "beta", …]          per link: which of d/β is identified
+//!              "joint_types": ["revolute" | "prismatic", …] per joint; written only when a
+//!                            joint is prismatic, absent = every joint revolute
 //!              "parameters": [ { "label": "theta0_1", "value", "unit", "nominal",
 //!                                "identified", "status", "std_error"?, "at_bound"? }, … ]
 //!                            every parameter of the flat layout (links, base, tool, effects)
 //!              "nominal": { "links": [{theta0, d, a, alpha, beta}], "base": [6], "tool": [6] }
-//!              "joint_limits": [{ "lower", "upper" }]  [rad]
+//!              "joint_limits": [{ "lower", "upper" }]  [rad] ([m] for a prismatic joint)
 //!              "mass": { "link_masses_kg", "tool_mass_kg", "gravity_m_s2" },
 //!              "effects": ["joint_compliance", …] },
 //!   "calibration": { "data": { "path", "sha256", "poses", "rows" },
@@ -34,7 +36,7 @@
 
 use kincal::any::AnyRobot;
 use kincal::identify::{Algorithm, Identifiability, ResidualStats};
-use kincal::model::{JointLimits, LengthParam, Link, MassModel};
+use kincal::model::{JointKind, JointLimits, LengthParam, Link, MassModel};
 use kincal::{Effect, EffectSet, ParamId, ParamIndex, ParamSet, Robot};
 use serde::{Deserialize, Serialize};
 
@@ -65,6 +67,10 @@ pub struct RobotJson {
     pub name: String,
     pub n_joints: usize,
     pub length_params: Vec<LengthChoice>,
+    /// Per joint; empty (absent in the file) when every joint is revolute, so files of
+    /// revolute robots are unchanged and older files read as revolute.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub joint_types: Vec<JointTypeJson>,
     pub parameters: Vec<ParamJson>,
     pub nominal: GeometryJson,
     pub joint_limits: Vec<LimitsJson>,
@@ -78,6 +84,13 @@ pub struct RobotJson {
 pub enum LengthChoice {
     D,
     Beta,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum JointTypeJson {
+    Revolute,
+    Prismatic,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -479,6 +492,18 @@ impl RobotJson {
                     LengthParam::Beta => LengthChoice::Beta,
                 })
                 .collect(),
+            joint_types: if robot.has_prismatic() {
+                robot
+                    .joint_kinds()
+                    .iter()
+                    .map(|k| match k {
+                        JointKind::Revolute => JointTypeJson::Revolute,
+                        JointKind::Prismatic => JointTypeJson::Prismatic,
+                    })
+                    .collect()
+            } else {
+                Vec::new()
+            },
             parameters,
             nominal: GeometryJson {
                 links: nominal_links
@@ -870,6 +895,16 @@ impl RobotJson {
             };
             r.set_length_param(link, lp).map_err(e("length_params"))?;
         }
+        if !self.joint_types.is_empty() {
+            let kinds: [JointTypeJson; N] = arr(&self.joint_types, "joint_types")?;
+            for (j, k) in kinds.iter().enumerate() {
+                let kind = match k {
+                    JointTypeJson::Revolute => JointKind::Revolute,
+                    JointTypeJson::Prismatic => JointKind::Prismatic,
+                };
+                r.set_joint_kind(j, kind).map_err(e("joint_types"))?;
+            }
+        }
         let mut seen = vec![false; Robot::<N>::NUM_PARAMS];
         for p in &self.parameters {
             let id = ParamId::parse(&p.label, N)
@@ -917,7 +952,7 @@ impl RobotJson {
                 }
             };
         }
-        by_n!(1 2 3 4 5 6 7 8 9)
+        by_n!(1 2 3 4 5 6 7 8 9 10 11 12)
     }
 }
 

@@ -15,7 +15,7 @@ use std::ops::Range;
 use std::path::Path;
 
 use kincal::any::AnyRobot;
-use kincal::model::{JointLimits, LengthParam, Link, MassModel, Robot};
+use kincal::model::{JointKind, JointLimits, LengthParam, Link, MassModel, Robot};
 use kincal::pose::{pose_from_xyz_rpy, pose_to_vector6};
 use kincal::with_any_robot;
 use serde::Deserialize;
@@ -164,10 +164,15 @@ struct RawJoint {
     beta_deg: SF,
     lower: SF,
     lower_deg: SF,
+    lower_mm: SF,
     upper: SF,
     upper_deg: SF,
+    upper_mm: SF,
     mass_kg: SF,
     length_param: Option<Spanned<String>>,
+    /// `"revolute"` (default) or `"prismatic"`.
+    #[serde(rename = "type")]
+    kind: Option<Spanned<String>>,
 }
 
 #[derive(Clone, Copy)]
@@ -390,6 +395,7 @@ pub fn parse_robot_description(
     let mut masses = Vec::with_capacity(n);
     let mut overrides = Vec::with_capacity(n);
     let mut joint_names = Vec::with_capacity(n);
+    let mut kinds = Vec::with_capacity(n);
     for (i, js) in joints.iter().enumerate() {
         let j = js.get_ref();
         let k = |s: &str| format!("joint[{}].{s}", i + 1);
@@ -402,18 +408,44 @@ pub fn parse_robot_description(
         let a = req("a", &j.a, &j.a_mm, Unit::Length)?;
         let alpha = req("alpha", &j.alpha, &j.alpha_deg, Unit::Angle)?;
         let beta = pick(&src, &k("beta"), &j.beta, &j.beta_deg, Unit::Angle, false)?.unwrap_or(0.0);
-        let lower = req("lower", &j.lower, &j.lower_deg, Unit::Angle)?;
-        let upper = req("upper", &j.upper, &j.upper_deg, Unit::Angle)?;
+        let kind = match &j.kind {
+            None => JointKind::Revolute,
+            Some(t) => match t.get_ref().as_str() {
+                "revolute" => JointKind::Revolute,
+                "prismatic" => JointKind::Prismatic,
+                other => {
+                    return Err(DescriptionError::at(
+                        &src,
+                        Some(t.span()),
+                        Some(k("type")),
+                        format!(
+                            "`{other}` is not a joint type; expected \"revolute\" or \"prismatic\""
+                        ),
+                    ));
+                }
+            },
+        };
+        let (lower, upper) = limits_of(&src, j, kind, &k)?;
         if lower > upper {
-            let span = j.upper.as_ref().or(j.upper_deg.as_ref()).map(Spanned::span);
+            let span = j
+                .upper
+                .as_ref()
+                .or(j.upper_deg.as_ref())
+                .or(j.upper_mm.as_ref())
+                .map(Spanned::span);
+            let unit = match kind {
+                JointKind::Revolute => "rad",
+                JointKind::Prismatic => "m",
+            };
             return Err(DescriptionError::at(
                 &src,
                 span,
                 Some(k("upper")),
-                format!("upper limit {upper} rad is below the lower limit {lower} rad"),
+                format!("upper limit {upper} {unit} is below the lower limit {lower} {unit}"),
             ));
         }
         let mass = pick(&src, &k("mass_kg"), &j.mass_kg, &None, Unit::Plain, false)?.unwrap_or(0.0);
+        kinds.push(kind);
         if mass < 0.0 {
             return Err(DescriptionError::at(
                 &src,
@@ -496,7 +528,10 @@ pub fn parse_robot_description(
             e.to_string(),
         )
     };
-    let robot = AnyRobot::new(&links, &limits).map_err(core_err)?;
+    let mut robot = AnyRobot::new(&links, &limits).map_err(core_err)?;
+    for (i, &kind) in kinds.iter().enumerate() {
+        robot.set_joint_kind(i, kind).map_err(core_err)?;
+    }
     let robot = with_any_robot!(robot, r => finish(r, base, tool, &masses, tool_kg, gravity, &overrides).map(AnyRobot::from))
         .map_err(core_err)?;
     Ok(RobotDescription {
@@ -504,6 +539,64 @@ pub fn parse_robot_description(
         joint_names,
         robot,
     })
+}
+
+/// The limits of a joint: radians (`lower`/`upper` or `_deg`) for a revolute joint, metres
+/// (`lower`/`upper` or `_mm`) for a prismatic one, whose limits must also pass
+/// [`crate::urdf::implausible_prismatic_limits`] (at most 10 m, not ±π-like).
+fn limits_of(
+    src: &Source<'_>,
+    j: &RawJoint,
+    kind: JointKind,
+    k: &dyn Fn(&str) -> String,
+) -> Result<(f64, f64), DescriptionError> {
+    let req = |key: &str, p: &SF, s: &SF, u: Unit| -> Result<f64, DescriptionError> {
+        pick(src, &k(key), p, s, u, true).map(|v| v.unwrap_or(0.0))
+    };
+    let wrong_unit = |key: &str, v: &SF, why: &str| match v {
+        Some(v) => Err(DescriptionError::at(
+            src,
+            Some(v.span()),
+            Some(k(key)),
+            why.to_string(),
+        )),
+        None => Ok(()),
+    };
+    match kind {
+        JointKind::Revolute => {
+            for (key, v) in [("lower_mm", &j.lower_mm), ("upper_mm", &j.upper_mm)] {
+                wrong_unit(
+                    key,
+                    v,
+                    "a revolute joint's limits are angles: give `lower`/`upper` in radians or `_deg`",
+                )?;
+            }
+            Ok((
+                req("lower", &j.lower, &j.lower_deg, Unit::Angle)?,
+                req("upper", &j.upper, &j.upper_deg, Unit::Angle)?,
+            ))
+        }
+        JointKind::Prismatic => {
+            for (key, v) in [("lower_deg", &j.lower_deg), ("upper_deg", &j.upper_deg)] {
+                wrong_unit(
+                    key,
+                    v,
+                    "a prismatic joint's limits are lengths: give `lower`/`upper` in metres or `_mm`",
+                )?;
+            }
+            let lower = req("lower", &j.lower, &j.lower_mm, Unit::Length)?;
+            let upper = req("upper", &j.upper, &j.upper_mm, Unit::Length)?;
+            if let Some(why) = crate::urdf::implausible_prismatic_limits(lower, upper) {
+                let span = [&j.lower, &j.lower_mm, &j.upper, &j.upper_mm]
+                    .into_iter()
+                    .flatten()
+                    .next()
+                    .map(Spanned::span);
+                return Err(DescriptionError::at(src, span, Some(k("lower")), why));
+            }
+            Ok((lower, upper))
+        }
+    }
 }
 
 fn finish<const N: usize>(
@@ -580,6 +673,9 @@ pub fn write_generic<const N: usize>(name: &str, joint_names: &[String], r: &Rob
         s.push_str("\n[[joint]]\n");
         if let Some(n) = joint_names.get(i) {
             s.push_str(&format!("name = {}\n", toml_str(n)));
+        }
+        if r.joint_kind(i) == JointKind::Prismatic {
+            s.push_str("type = \"prismatic\"\n");
         }
         s.push_str(&format!(
             "theta0 = {}\nd = {}\na = {}\nalpha = {}\nbeta = {}\nlower = {}\nupper = {}\nmass_kg = {}\n",

@@ -10,8 +10,12 @@
 //! that lie on the chain are consecutive, turn about one line and add up to a multiplier
 //! of ±1 (e.g. a finger that mimics a driver on another branch): the model joint reads the
 //! driver, with the mimic offsets folded into the geometry; anything else is an error.
-//! Prismatic, floating and planar joints on the chain are errors naming the joint; every
-//! error names the URDF element and, for text input, its line.
+//! Prismatic joints become prismatic model joints (their reading in metres; limits in
+//! metres, at most [`MAX_PRISMATIC_LIMIT_M`], and refused when they look like radians:
+//! ±π/2, ±π or ±2π); a prismatic mimic collapses into its driver as a revolute one does
+//! (same direction, multipliers adding up to ±1). Floating and planar joints on the chain
+//! are errors naming the joint; every error names the URDF element and, for text input, its
+//! line.
 //! The robot's base frame is the base link's frame and its tool frame the tip link's, so
 //! `fk(q)` is the tip link in the base link for the URDF's own joint values `q`.
 //!
@@ -23,7 +27,8 @@
 //!
 //! **Export** writes a calibrated model as a URDF a ROS user can load: link `i`'s frame is
 //! mDH frame `i−1` turned by `q_i`, so joint `i` rotates about its z axis and the joint
-//! origins carry the identified geometry: joint 1's origin is the base transform, joint
+//! origins carry the identified geometry (a prismatic model joint becomes a prismatic URDF
+//! joint sliding along that z axis): joint 1's origin is the base transform, joint
 //! `i+1`'s is `A_i(0) = Rz(θ0_i)·Tz(d_i)·Tx(a_i)·Rx(α_i)·Ry(β_i)`, and a fixed joint to
 //! the tip link carries `A_N(0)·T_tool`. Joint limits and the point masses are written;
 //! effort and velocity limits are unknown to the model and written as 0. Non-geometric
@@ -36,7 +41,7 @@ use std::path::Path;
 
 use kincal::any::{AnyRobot, MAX_JOINTS};
 use kincal::axis_chain::{AxisChain, JointAxis, link_transform_at_zero};
-use kincal::model::{JointLimits, MassModel, Robot};
+use kincal::model::{JointKind, JointLimits, MassModel, Robot};
 use kincal::pose::{Transform, matrix_to_rpy, pose_from_xyz_rpy};
 use kincal::{EffectSet, with_any_robot};
 use nalgebra::Vector3;
@@ -46,6 +51,30 @@ use crate::robot_file::DescriptionError;
 
 /// Limits given to a continuous joint [rad]: one turn either way.
 pub const CONTINUOUS_LIMIT_RAD: f64 = 2.0 * std::f64::consts::PI;
+
+/// Largest magnitude of a prismatic joint limit [m]: a larger one is most likely in another
+/// unit (millimetres), and no lifting column, rail or gantry axis kincal calibrates is longer.
+pub const MAX_PRISMATIC_LIMIT_M: f64 = 10.0;
+
+/// Why the limits `lo`, `hi` of a prismatic joint are implausible, if they are: beyond
+/// ±[`MAX_PRISMATIC_LIMIT_M`], or a bound equal to ±π/2, ±π or ±2π (to 1e-4), which is a
+/// revolute joint's range written on a slide.
+pub fn implausible_prismatic_limits(lo: f64, hi: f64) -> Option<String> {
+    if !(lo.abs() <= MAX_PRISMATIC_LIMIT_M && hi.abs() <= MAX_PRISMATIC_LIMIT_M) {
+        return Some(format!(
+            "prismatic joint limits [{lo}, {hi}] exceed ±{MAX_PRISMATIC_LIMIT_M} m; give them in metres"
+        ));
+    }
+    let pi = std::f64::consts::PI;
+    let radian_like = [pi / 2.0, pi, 2.0 * pi]
+        .into_iter()
+        .find(|&r| [lo, hi].iter().any(|v| (v.abs() - r).abs() < 1e-4));
+    radian_like.map(|r| {
+        format!(
+            "prismatic joint limits [{lo}, {hi}] look like radians (±{r:.4} rad); a prismatic joint's limits are in metres"
+        )
+    })
+}
 
 /// Which chain of the URDF tree to import.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -65,7 +94,7 @@ pub struct ImportedUrdf {
     pub base_link: String,
     /// The tip link used (the model's tool frame).
     pub tip_link: String,
-    /// Names of the revolute/continuous joints, in chain order (the model's joints).
+    /// Names of the revolute/continuous/prismatic joints, in chain order (the model's joints).
     pub joint_names: Vec<String>,
     /// Names of the fixed joints folded into the geometry.
     pub fixed_joints: Vec<String>,
@@ -370,6 +399,7 @@ pub fn import_urdf(
     let mut axes = Vec::new();
     let mut limits = Vec::new();
     let mut joint_names = Vec::new();
+    let mut kinds = Vec::new();
     let mut fixed_joints = Vec::new();
     let mut notes = Vec::new();
     // Segment of each path link: 0 before joint 1, k after joint k.
@@ -392,7 +422,12 @@ pub fn import_urdf(
         t *= origin_transform(o);
         match j.joint_type {
             JointType::Fixed => fixed_joints.push(j.name.clone()),
-            JointType::Revolute | JointType::Continuous => {
+            JointType::Revolute | JointType::Continuous | JointType::Prismatic => {
+                let kind = if j.joint_type == JointType::Prismatic {
+                    JointKind::Prismatic
+                } else {
+                    JointKind::Revolute
+                };
                 let a = Vector3::from(j.axis.xyz.0);
                 let n = a.norm();
                 if !(n.is_finite() && n > 1e-9) {
@@ -405,7 +440,7 @@ pub fn import_urdf(
                     .last_mut()
                     .filter(|g| g.driver.name == driver.name && g.axis_index + 1 == axes.len());
                 if let Some(g) = last_same {
-                    g.absorb(j, point, direction, multiplier)
+                    g.absorb(j, kind, point, direction, multiplier)
                         .map_err(|r| jerr(j, r))?;
                 } else {
                     if let Some(g) = groups.iter().find(|g| g.driver.name == driver.name) {
@@ -420,8 +455,10 @@ pub fn import_urdf(
                     axes.push(JointAxis { point, direction });
                     limits.push(driver_limits(driver, &mut notes).map_err(|r| jerr(driver, r))?);
                     joint_names.push(driver.name.clone());
+                    kinds.push(kind);
                     groups.push(MimicGroup {
                         driver,
+                        kind,
                         axis_index: axes.len() - 1,
                         point,
                         direction,
@@ -430,10 +467,16 @@ pub fn import_urdf(
                     });
                 }
                 // The geometry at q = 0 of the model joint: the mimic at its offset.
-                t *= Transform::from_parts(
-                    nalgebra::Translation3::identity(),
-                    nalgebra::Rotation3::from_scaled_axis(a / n * offset),
-                );
+                t *= match kind {
+                    JointKind::Revolute => Transform::from_parts(
+                        nalgebra::Translation3::identity(),
+                        nalgebra::Rotation3::from_scaled_axis(a / n * offset),
+                    ),
+                    JointKind::Prismatic => Transform::from_parts(
+                        nalgebra::Translation3::from(a / n * offset),
+                        nalgebra::Rotation3::identity(),
+                    ),
+                };
             }
             ref other => {
                 let mimic = j
@@ -444,7 +487,7 @@ pub fn import_urdf(
                 return Err(jerr(
                     j,
                     format!(
-                        "is {}{mimic} on the chain `{base}` -> `{tip}`; kincal models revolute joints only (choose a base link after it)",
+                        "is {}{mimic} on the chain `{base}` -> `{tip}`; kincal models revolute and prismatic joints only (choose a base link after it)",
                         format!("{other:?}").to_lowercase()
                     ),
                 ));
@@ -483,7 +526,7 @@ pub fn import_urdf(
             file,
             None,
             format!(
-                "{n} revolute joints between `{base}` and `{tip}`; 1 to {MAX_JOINTS} supported"
+                "{n} revolute/prismatic joints between `{base}` and `{tip}`; 1 to {MAX_JOINTS} supported"
             ),
         ));
     }
@@ -533,7 +576,11 @@ pub fn import_urdf(
     let core_err = |e: kincal::Error| {
         DescriptionError::new(file, None, format!("chain `{base}` -> `{tip}`: {e}"))
     };
-    let robot = build_any(&axes, t, &limits, &link_masses, tool_kg, gravity).map_err(core_err)?;
+    let mut robot =
+        build_any(&axes, t, &limits, &link_masses, tool_kg, gravity).map_err(core_err)?;
+    for (i, &k) in kinds.iter().enumerate() {
+        robot.set_joint_kind(i, k).map_err(core_err)?;
+    }
     Ok(ImportedUrdf {
         robot_name: urdf.name.clone(),
         base_link: base,
@@ -545,10 +592,11 @@ pub fn import_urdf(
     })
 }
 
-/// Revolute joints of the chain that turn with one driver joint about one line: the
-/// model's joint for them reads the driver.
+/// Joints of the chain that turn with one driver joint about one line (or, prismatic, slide
+/// along one direction): the model's joint for them reads the driver.
 struct MimicGroup<'u> {
     driver: &'u urdf_rs::Joint,
+    kind: JointKind,
     axis_index: usize,
     point: Vector3<f64>,
     direction: Vector3<f64>,
@@ -558,16 +606,28 @@ struct MimicGroup<'u> {
 }
 
 impl MimicGroup<'_> {
-    /// Adds a consecutive member: it must turn about the same line (in the base frame).
+    /// Adds a consecutive member: it must turn about the same line (slide along the same
+    /// direction) in the base frame.
     fn absorb(
         &mut self,
         j: &urdf_rs::Joint,
+        kind: JointKind,
         point: Vector3<f64>,
         direction: Vector3<f64>,
         multiplier: f64,
     ) -> Result<(), String> {
+        if kind != self.kind {
+            return Err(format!(
+                "is {} and driven by `{}` like `{}`, which is {}: the mimic cannot be collapsed into its driver",
+                kind.name(),
+                self.driver.name,
+                self.members[0],
+                self.kind.name()
+            ));
+        }
         let parallel = self.direction.cross(&direction).norm() < 1e-9;
-        let on_line = (point - self.point).cross(&self.direction).norm() < 1e-9;
+        let on_line = kind == JointKind::Prismatic
+            || (point - self.point).cross(&self.direction).norm() < 1e-9;
         if !(parallel && on_line) {
             return Err(format!(
                 "is driven by `{}` like `{}` but turns about another line: the mimic cannot be collapsed into its driver exactly",
@@ -602,11 +662,16 @@ fn mimic_of<'u>(
             driver.name, dm.joint
         ));
     }
+    let prismatic = |t: &JointType| *t == JointType::Prismatic;
     if !matches!(
         driver.joint_type,
-        JointType::Revolute | JointType::Continuous
-    ) {
-        return Err(format!("mimics `{}`, which is not revolute", driver.name));
+        JointType::Revolute | JointType::Continuous | JointType::Prismatic
+    ) || prismatic(&driver.joint_type) != prismatic(&j.joint_type)
+    {
+        return Err(format!(
+            "mimics `{}`, which is {:?} (a mimic must be of its driver's kind, revolute or prismatic)",
+            driver.name, driver.joint_type
+        ));
     }
     let (mul, off) = (m.multiplier.unwrap_or(1.0), m.offset.unwrap_or(0.0));
     if !(mul.is_finite() && off.is_finite()) {
@@ -629,6 +694,17 @@ fn driver_limits(j: &urdf_rs::Joint, notes: &mut Vec<String>) -> Result<JointLim
         ));
     }
     let (lo, hi) = (j.limit.lower, j.limit.upper);
+    if j.joint_type == JointType::Prismatic {
+        if let Some(why) = implausible_prismatic_limits(lo, hi) {
+            return Err(why);
+        }
+        if lo >= hi {
+            return Err(format!(
+                "prismatic joint without usable limits (lower {lo}, upper {hi}); expected lower < upper in metres"
+            ));
+        }
+        return Ok(JointLimits::new(lo, hi));
+    }
     let bound = crate::units::MAX_MAGNITUDE_SI;
     if !(lo.abs() <= bound && hi.abs() <= bound) || lo >= hi {
         return Err(format!(
@@ -680,6 +756,9 @@ fn build_any(
         7 => arm!(7),
         8 => arm!(8),
         9 => arm!(9),
+        10 => arm!(10),
+        11 => arm!(11),
+        12 => arm!(12),
         n => Err(kincal::Error::CapacityExceeded {
             needed: n,
             capacity: MAX_JOINTS,
@@ -826,7 +905,10 @@ fn export_generic<const N: usize>(
         ));
         joints.push(urdf_joint(
             &joint_names[i],
-            JointType::Revolute,
+            match r.joint_kind(i) {
+                JointKind::Revolute => JointType::Revolute,
+                JointKind::Prismatic => JointType::Prismatic,
+            },
             &parent,
             &link_names[i],
             &origin,

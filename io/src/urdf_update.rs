@@ -6,13 +6,14 @@
 //! link's pose at q = 0, the offset `C_k = G⁰_k(0)⁻¹·P_k` is taken from the model's
 //! **nominal** geometry and kept, so the calibrated link pose is `G_k(0)·C_k`: meshes,
 //! inertials and branches hanging off a link move with the identified joint axis. Only the
-//! `<origin>` of the chain's revolute joints changes (axes are unchanged, since `C_k` is),
+//! `<origin>` of the chain's revolute and prismatic joints changes (axes are unchanged, since `C_k` is),
 //! plus the last fixed joint before the tip link, which carries the calibrated tool frame.
 //! Fixed joints elsewhere, limits, other branches, comments and unknown tags are untouched.
 //!
 //! The nominal model must be this URDF's chain (the model was calibrated from it): the
-//! revolute joint count must match and every URDF joint axis must lie on the nominal
-//! model's joint axis (same line and direction, 1e-9), else the export is refused.
+//! moving (revolute, continuous, prismatic) joint count and kinds must match and every URDF
+//! joint axis must lie on the nominal model's joint axis (same line and direction, 1e-9),
+//! else the export is refused.
 
 use kincal::Robot;
 use kincal::axis_chain::link_transform_at_zero;
@@ -55,24 +56,25 @@ pub fn update_urdf<const N: usize>(
     let err = |key: Option<String>, reason: String| DescriptionError::new(file, key, reason);
     let moving = path
         .iter()
-        .filter(|j| matches!(j.joint_type, JointType::Revolute | JointType::Continuous))
+        .filter(|j| j.joint_type != JointType::Fixed)
         .count();
     if let Some(j) = path.iter().find(|j| {
         !matches!(
             j.joint_type,
-            JointType::Revolute | JointType::Continuous | JointType::Fixed
+            JointType::Revolute | JointType::Continuous | JointType::Prismatic | JointType::Fixed
         )
     }) {
         return Err(err(
             Some(format!("joint {}", j.name)),
-            "is neither revolute, continuous nor fixed: kincal models revolute chains".into(),
+            "is neither revolute, continuous, prismatic nor fixed: kincal models chains of those"
+                .into(),
         ));
     }
     if moving != N {
         return Err(err(
             None,
             format!(
-                "the chain from `{base}` to `{tip}` has {moving} revolute joints, the model has {N}: choose --base-link/--tip-link of the chain the model was calibrated from"
+                "the chain from `{base}` to `{tip}` has {moving} revolute/prismatic joints, the model has {N}: choose --base-link/--tip-link of the chain the model was calibrated from"
             ),
         ));
     }
@@ -90,6 +92,18 @@ pub fn update_urdf<const N: usize>(
         let (Some(g), Some(c)) = (g_nom.get(k), offsets.get_mut(k)) else {
             break;
         };
+        let urdf_prismatic = j.joint_type == JointType::Prismatic;
+        if urdf_prismatic != (nominal.joint_kind(k) == kincal::JointKind::Prismatic) {
+            return Err(err(
+                Some(format!("joint {}", j.name)),
+                format!(
+                    "is {:?} but the model's joint {} is {}: the model was not calibrated from this URDF",
+                    j.joint_type,
+                    k + 1,
+                    nominal.joint_kind(k).name()
+                ),
+            ));
+        }
         let a = Vector3::from(j.axis.xyz.0);
         let axis = t.rotation * (a / a.norm());
         let z = g.rotation * Vector3::z();

@@ -536,7 +536,7 @@ static int copy_field_vector(kc_ctx *c, const mxArray *s, const char *sname, con
 /* Fields of the robot struct (see kincal_robot.m). `name` and `labels` are informative: they
  * are written on output and ignored on input. */
 static const char *const ROBOT_FIELDS[] = {
-    "name", "n_joints", "length_param", "params", "labels", "nominal", "limits",
+    "name", "n_joints", "length_param", "joint_kind", "params", "labels", "nominal", "limits",
     "link_masses_kg", "tool_mass_kg", "gravity", NULL,
 };
 
@@ -577,6 +577,22 @@ static int get_robot(kc_ctx *c, const mxArray *s, kincal_robot *r)
                         one_based(i), p[i]);
         }
         r->length_param[i] = (uint32_t)p[i];
+    }
+    /* Optional (structs written before prismatic joints have none): all revolute. */
+    if (mxGetField(s, 0, "joint_kind") != NULL) {
+        if ((f = get_field(c, s, name, "joint_kind")) == NULL ||
+            get_vector(c, f, "robot.joint_kind", n, &p) != 0) {
+            return -1;
+        }
+        for (i = 0; i < n; ++i) {
+            if (p[i] != 0.0 && p[i] != 1.0) {
+                return fail(c, "badValue",
+                            "argument 'robot.joint_kind': joint %.0f must be 0 (revolute) or 1 "
+                            "(prismatic), got %.17g",
+                            one_based(i), p[i]);
+            }
+            r->joint_kind[i] = (uint32_t)p[i];
+        }
     }
     if (copy_field_vector(c, s, name, "params", np, r->params) != 0 ||
         copy_field_vector(c, s, name, "nominal", ng, r->nominal) != 0) {
@@ -642,6 +658,12 @@ static int put_robot(kc_ctx *c, const kincal_robot *r, const char *robot_name, m
         d[i] = (double)r->length_param[i];
     }
     mxSetField(s, 0, "length_param", lp);
+    lp = mxCreateDoubleMatrix(1, (mwSize)n, mxREAL);
+    d = KC_DOUBLES(lp);
+    for (i = 0; i < n; ++i) {
+        d[i] = (double)r->joint_kind[i];
+    }
+    mxSetField(s, 0, "joint_kind", lp);
     mxSetField(s, 0, "params", column(r->params, np));
     mxSetField(s, 0, "labels", labels);
     mxSetField(s, 0, "nominal", column(r->nominal, ng));

@@ -510,10 +510,10 @@ void test_bad_arguments() {
                  KINCAL_STATUS_INVALID_TRANSFORM, err, "target");
     // A corrupt robot struct.
     kincal_robot bad = r;
-    bad.n_joints = 10;
+    bad.n_joints = KINCAL_MAX_JOINTS + 1;
     CHECK_STATUS(kincal_fk(&bad, q, 6, nullptr, t, 16, &err), KINCAL_STATUS_BAD_JOINT_COUNT, err,
                  "robot->n_joints");
-    CHECK(err.found == 10 && err.expected == KINCAL_MAX_JOINTS);
+    CHECK(err.found == KINCAL_MAX_JOINTS + 1 && err.expected == KINCAL_MAX_JOINTS);
     bad = r;
     bad.params[7] = NAN;
     CHECK_STATUS(kincal_fk(&bad, q, 6, nullptr, t, 16, &err), KINCAL_STATUS_NON_FINITE, err,

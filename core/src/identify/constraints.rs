@@ -42,7 +42,9 @@
 //! its parameters go to [`super::Identifiability::gauge`]. Without a length reference (no
 //! known distance, instrument row, known target or known plane) scaling every length
 //! scales every tool point: one length, the longest nominal one, is held as the scale
-//! gauge. These are named, never silently fixed; the rest is the usual greedy rank test on
+//! gauge — unless a prismatic joint moves in the data: its encoder reads a length, so the
+//! scale is observable and nothing is held
+//! ([`ConstraintData::prismatic_fixes_scale`]). These are named, never silently fixed; the rest is the usual greedy rank test on
 //! the reduced Jacobian.
 
 use super::data::{
@@ -229,6 +231,42 @@ impl<'a, const N: usize> ConstraintData<'a, N> {
     #[must_use]
     pub fn has_length_reference(&self) -> bool {
         !self.distances.is_empty() || self.has_external_reference()
+    }
+
+    /// Whether the readings of a prismatic joint fix the scale: a slide is a length the
+    /// encoder measures, not one of the structure, so scaling every length of the model no
+    /// longer moves the tool points exactly once some prismatic joint of `robot` takes two
+    /// different readings among the active rows — unless that joint's scale effect is
+    /// `requested`, which absorbs the slide's share of the scaling.
+    #[must_use]
+    pub fn prismatic_fixes_scale(&self, robot: &Robot<N>, requested: &crate::ParamSet) -> bool {
+        let states = self
+            .instrument
+            .iter()
+            .filter(|m| m.weight > 0.0)
+            .map(|m| &m.state)
+            .chain(
+                self.contacts
+                    .iter()
+                    .filter(|c| c.weight > 0.0)
+                    .map(|c| &c.state),
+            );
+        let mut first: Option<[f64; N]> = None;
+        for st in states {
+            let Some(f) = first else {
+                first = Some(st.q);
+                continue;
+            };
+            for (j, (&q, &q0)) in st.q.iter().zip(f.iter()).enumerate() {
+                if q != q0
+                    && robot.joint_kind(j) == crate::JointKind::Prismatic
+                    && !requested.contains(ParamId::Scale(j).index(N).0)
+                {
+                    return true;
+                }
+            }
+        }
+        false
     }
 }
 
@@ -1026,11 +1064,12 @@ fn analyze_constrained_into<const N: usize, const P: usize>(
             }
         }
     }
-    let scale_gauge = if data.has_length_reference() {
-        None
-    } else {
-        scale_gauge_param::<N, P>(robot, ws.free.get(..n_struct).unwrap_or(&[]))
-    };
+    let scale_gauge =
+        if data.has_length_reference() || data.prismatic_fixes_scale(robot, &requested) {
+            None
+        } else {
+            scale_gauge_param::<N, P>(robot, ws.free.get(..n_struct).unwrap_or(&[]))
+        };
     let mut n = 0;
     for k in 0..n_struct {
         let col = ws.free[k];

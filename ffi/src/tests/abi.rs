@@ -477,7 +477,7 @@ fn robot_from_a_parameter_table() {
         (s, arg_name(&e), e.found),
         (kincal_status::BadJointCount, "n_joints", 0)
     );
-    let (s, _) = bad(10, &table, &limits);
+    let (s, _) = bad(13, &table, &limits);
     assert_eq!(s, kincal_status::BadJointCount);
     let (s, e) = bad(6, &table[..29], &limits);
     assert_eq!(
@@ -531,7 +531,7 @@ fn a_corrupt_robot_is_reported_not_trusted() {
     let (s, e) = check(&r);
     assert_eq!(
         (s, e.found, e.expected),
-        (kincal_status::BadJointCount, 1000, 9)
+        (kincal_status::BadJointCount, 1000, 12)
     );
     let mut r = good;
     r.params[33] = f64::INFINITY;
@@ -1003,7 +1003,20 @@ fn effects_needing_inputs() {
     let mut aux = kincal_joint_aux {
         has_approach: 1,
         has_temp: 0,
-        approach: [1.0, -1.0, 1.0, 0.0, 1.0, 1.0, 5.0, f64::NAN, f64::NAN],
+        approach: [
+            1.0,
+            -1.0,
+            1.0,
+            0.0,
+            1.0,
+            1.0,
+            5.0,
+            f64::NAN,
+            f64::NAN,
+            f64::NAN,
+            f64::NAN,
+            f64::NAN,
+        ],
         temp_c: f64::NAN,
     };
     let s = unsafe { kincal_fk(&r, Q.as_ptr(), 6, &aux, t.as_mut_ptr(), 16, &mut e) };
@@ -1525,7 +1538,7 @@ fn test_panic_export_is_caught() {
 fn counts_and_effect_names() {
     assert_eq!(kincal_num_params(6), 85);
     assert_eq!(kincal_num_geometric_params(6), 42);
-    assert_eq!((kincal_num_params(0), kincal_num_params(10)), (0, 0));
+    assert_eq!((kincal_num_params(0), kincal_num_params(13)), (0, 0));
     for (e, name) in [
         (kincal_effect::BaseFrame, "base_frame"),
         (kincal_effect::ToolFrame, "tool_frame"),

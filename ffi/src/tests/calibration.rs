@@ -348,8 +348,8 @@ fn identification_argument_errors() {
     };
     assert_ne!(s, kincal_status::Ok);
     assert_eq!(r, before);
-    assert_eq!(kincal_identify_workspace_size(10, 10, 24), 0);
-    assert_eq!(kincal_identify_workspace_size(6, 10, 122), 0);
+    assert_eq!(kincal_identify_workspace_size(13, 10, 24), 0);
+    assert_eq!(kincal_identify_workspace_size(6, 10, 158), 0);
     assert_eq!(kincal_identify_workspace_size(6, usize::MAX, 24), 0);
     assert!(kincal_identify_workspace_size(6, 10, 33) > kincal_identify_workspace_size(6, 10, 32));
 }

@@ -60,7 +60,7 @@ fn seven_joint_arm() -> kincal_robot {
     arm_with_every_effect(&links, &[4.0, 4.0, 3.0, 2.7, 1.7, 1.8, 0.3])
 }
 
-/// A 9-joint arm (`KINCAL_MAX_JOINTS`): a two-joint torso before the 7-joint arm, set up
+/// A 9-joint arm: a two-joint torso before the 7-joint arm, set up
 /// like [`seven_joint_arm`].
 fn nine_joint_arm() -> kincal_robot {
     use core::f64::consts::FRAC_PI_2 as H;
@@ -75,7 +75,7 @@ fn nine_joint_arm() -> kincal_robot {
         0.0, 0.0, 0.0, H, 0.0, //
         0.0, 0.126, 0.0, 0.0, 0.0,
     ];
-    assert_eq!(links.len(), 5 * KINCAL_MAX_JOINTS);
+    assert_eq!(links.len(), 5 * 9);
     arm_with_every_effect(&links, &[2.3, 17.0, 4.0, 4.0, 3.0, 2.7, 1.7, 1.8, 0.3])
 }
 
@@ -144,7 +144,7 @@ fn aux7() -> kincal_joint_aux {
     kincal_joint_aux {
         has_approach: 1,
         has_temp: 1,
-        approach: [1.0, -1.0, 0.0, 1.0, 1.0, -1.0, 1.0, 0.0, 0.0],
+        approach: [1.0, -1.0, 0.0, 1.0, 1.0, -1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
         temp_c: 31.5,
     }
 }
@@ -569,7 +569,7 @@ fn a_failed_prepare_leaves_the_handle_intact() {
     let mut p = prepare(&r);
     let before = *p;
     let mut bad = r;
-    bad.n_joints = 10;
+    bad.n_joints = 13;
     let mut e = kincal_error::CLEAR;
     assert_eq!(
         unsafe { kincal_prepare(&bad, &mut *p, &mut e) },
@@ -671,4 +671,82 @@ fn argument_errors_through_the_handle() {
         (s, arg(&e)),
         (kincal_status::InvalidArgument, "opts->tol_pos_m")
     );
+}
+
+/// A 12-joint chain with prismatic joints (`joint_kind`): FK through the struct and through
+/// a prepared handle equal the core's bit for bit; a slide moves the tool along its axis;
+/// a joint kind other than 0/1 is refused.
+#[test]
+fn twelve_joint_chain_with_prismatic_joints() {
+    use core::f64::consts::FRAC_PI_2 as H;
+    let mut links = [0.0; 5 * KINCAL_MAX_JOINTS];
+    for (i, row) in links.chunks_exact_mut(5).enumerate() {
+        row.copy_from_slice(&[
+            0.1 * i as f64,
+            0.05 + 0.01 * i as f64,
+            0.02,
+            if i % 2 == 0 { H } else { -H },
+            0.0,
+        ]);
+    }
+    let limits: Vec<f64> = (0..KINCAL_MAX_JOINTS).flat_map(|_| [-1.0, 1.0]).collect();
+    let mut r = kincal_robot::ZERO;
+    let s = unsafe {
+        kincal_robot_init(
+            &mut r,
+            KINCAL_MAX_JOINTS,
+            links.as_ptr(),
+            links.len(),
+            limits.as_ptr(),
+            limits.len(),
+            null_mut(),
+        )
+    };
+    assert_eq!(s, kincal_status::Ok);
+    for j in [0, 1, 3] {
+        r.joint_kind[j] = kincal_joint_kind::Prismatic as u32;
+    }
+    let p = prepare(&r);
+    let core = crate::robot::to_any(&r).unwrap();
+    let q: Vec<f64> = (0..KINCAL_MAX_JOINTS)
+        .map(|j| 0.3 - 0.05 * j as f64)
+        .collect();
+    let (mut t1, mut t2) = ([0.0; 16], [0.0; 16]);
+    let n = KINCAL_MAX_JOINTS;
+    unsafe {
+        assert_eq!(
+            kincal_fk(&r, q.as_ptr(), n, null(), t1.as_mut_ptr(), 16, null_mut()),
+            kincal_status::Ok
+        );
+        assert_eq!(
+            kincal_prepared_fk(&*p, q.as_ptr(), n, null(), t2.as_mut_ptr(), 16, null_mut()),
+            kincal_status::Ok
+        );
+    }
+    assert_eq!(t1, t2);
+    let kincal::any::AnyRobot::J12(c) = core else {
+        panic!("12 joints")
+    };
+    assert_eq!(c.joint_kind(3), kincal::JointKind::Prismatic);
+    let qa: [f64; 12] = q.clone().try_into().unwrap();
+    let t = c.fk_q(&qa).unwrap().to_homogeneous();
+    for i in 0..4 {
+        for k in 0..4 {
+            assert_eq!(t[(i, k)].to_bits(), t1[4 * k + i].to_bits(), "({i},{k})");
+        }
+    }
+    // Slide 1 along base z (the first axis; column-major, translation in 12..15): the tool
+    // moves by exactly that.
+    let mut q2 = q.clone();
+    q2[0] += 0.125;
+    let mut t3 = [0.0; 16];
+    unsafe { kincal_fk(&r, q2.as_ptr(), n, null(), t3.as_mut_ptr(), 16, null_mut()) };
+    assert!((t3[14] - t1[14] - 0.125).abs() < 1e-15 && (t3[12] - t1[12]).abs() < 1e-15);
+    // Round trip through the struct keeps the kinds.
+    let back = crate::robot::from_any(&kincal::any::AnyRobot::from(c)).unwrap();
+    assert_eq!(back.joint_kind, r.joint_kind);
+    r.joint_kind[5] = 2;
+    let mut e = kincal_error::CLEAR;
+    let s = unsafe { kincal_fk(&r, q.as_ptr(), n, null(), t1.as_mut_ptr(), 16, &mut e) };
+    assert_eq!(s, kincal_status::InvalidArgument);
 }
