@@ -23,8 +23,15 @@ use kincal::{Effect, EffectSet, JointState, ParamId, Robot, aria};
 use nalgebra::Vector3;
 
 /// The enforced bound on the stack of the workload [bytes]. The issue requires < 64 KiB;
-/// the measured need is stated in the test output and the reliability note.
-const STACK_BOUND: usize = 48 * 1024;
+/// the measured need is stated in the test output and the reliability note. Release (the
+/// firmware's profile): 48 KiB, measured 44.5 KiB at 12 joints with a prior. The dev
+/// profile's unoptimised frames need 49.0 KiB: its bound is 52 KiB, so growth in either
+/// profile still fails the test.
+const STACK_BOUND: usize = if cfg!(debug_assertions) {
+    52 * 1024
+} else {
+    48 * 1024
+};
 /// Resolution of the bisection [bytes].
 const RESOLUTION: usize = 512;
 /// Smallest stack a thread can be given on Linux (PTHREAD_STACK_MIN) [bytes].
