@@ -6,6 +6,11 @@
 //!
 //! Errors are [`Error`] values whose [`Kind`] says whose fault a failure is.
 
+// Units in doc comments read `[m]`, `[rad]`, as in the CLI these files came from, where the
+// argument structs' doc comments (robot_arg's, with the `clap` feature) are the `--help` text
+// and escaping them would print the backslashes there.
+#![allow(rustdoc::broken_intra_doc_links, rustdoc::private_intra_doc_links)]
+
 pub mod calibration;
 pub mod constraints;
 pub mod data;
