@@ -1136,6 +1136,15 @@ typedef struct kincal_identify_options {
      Upper ends of the OPT1 intervals.
      */
     double upper[KINCAL_MAX_PARAMS];
+    /*
+     Gaussian prior for weak directions, for every algorithm: per flat index, the σ of a
+     prior centred on the robot's own value (the model the fit starts from), in the
+     parameter's unit; `INFINITY` = no prior (the default everywhere). Each prior adds
+     one row weighted 1/σ² on the scale of `weight_pos`/`weight_rot`, so it means what
+     it says when those whiten the data (1/σ_instrument²). Counted in the standard
+     errors (posterior). `kincal_identify_options_set_prior` fills the link entries.
+     */
+    double prior_sigma[KINCAL_MAX_PARAMS];
 } kincal_identify_options;
 
 /*
@@ -1362,6 +1371,14 @@ typedef struct kincal_identify_report {
      The listed pairs.
      */
     struct kincal_correlation correlated[KINCAL_MAX_CORRELATED_PAIRS];
+    /*
+     With a prior: Σ((x − centre)/σ)² over the fitted parameters that carry one; else 0.
+     */
+    double prior_chi2;
+    /*
+     With a prior: its rows (fitted parameters with a finite σ); else 0.
+     */
+    size_t prior_rows;
 } kincal_identify_report;
 
 /*
@@ -2676,6 +2693,24 @@ kincal_status kincal_identify_options_default(const struct kincal_robot *robot,
                                               uint32_t effects,
                                               struct kincal_identify_options *opts_out,
                                               struct kincal_error *err);
+
+/*
+ Sets `opts->prior_sigma` for `robot`'s link parameters: `length_m` on every link length
+ (d, a) and `angle_rad` on every link angle (θ0, α, β); frames and effects get no prior
+ (`INFINITY`). The CLI's defaults are 5 mm and 1° (`kincal calibrate --prior`). Either
+ size may be `INFINITY` (no prior on that kind). Returns OK, NULL_POINTER,
+ MISALIGNED_POINTER, INVALID_ARGUMENT (a size NaN, zero or negative; a bad robot).
+
+ # Safety
+ `robot` points to a readable `kincal_robot`; `opts` to a writable
+ `kincal_identify_options` (typically filled by `kincal_identify_options_default`); `err`
+ is NULL or writable.
+ */
+kincal_status kincal_identify_options_set_prior(const struct kincal_robot *robot,
+                                                double length_m,
+                                                double angle_rad,
+                                                struct kincal_identify_options *opts,
+                                                struct kincal_error *err);
 
 /*
  Identification: fits the identifiable subset of `opts->requested` to the measurements,

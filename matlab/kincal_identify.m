@@ -17,6 +17,10 @@ function [fitted, report] = kincal_identify(robot, varargin)
 %       'lower', 'upper'  OPT1 intervals, P x 1 absolute values (+-Inf allowed); default
 %                    +-5 mm on lengths and +-5 deg on angles around ROBOT (paper, Sec. 2.4)
 %       'weights'    [w_pos, w_rot] row weights, 1/m^2 and 1/rad^2 (default [1 1])
+%       'prior'      [length_m, angle_rad]: Gaussian prior around ROBOT on every link length
+%                    and angle (the CLI's --prior; e.g. [5e-3, pi/180]), for any algorithm;
+%                    meaningful with whitening weights [1/sigma_pos^2, 1/sigma_rot^2]
+%       'prior_sigma' P x 1 prior sigma per parameter (Inf: none), after 'prior'
 %       'pose_weights' 1 x M weight of each pose (>= 0; 0 holds a pose out, e.g. for
 %                    cross-validation; default all 1)
 %       'orientation' 'exact' (default) or 'small_angle' (eq. 16)
@@ -28,7 +32,8 @@ function [fitted, report] = kincal_identify(robot, varargin)
 %   identifiable / structural / data_deficient masks and labels, partner labels and
 %   cosines), initial and fitted residual statistics (cost, rms/max position [m] and
 %   rotation [rad]), sigma2, std_errors (P x 1, SI), at_bound (OPT1), correlations
-%   (pairs with |rho| > 0.95: labels a, b and rho).
+%   (pairs with |rho| > 0.95: labels a, b and rho), prior_chi2 and prior_rows (with a prior;
+%   std_errors are then the posterior ones).
 %   Errors: kincal:rankDeficient when the data leave requested parameters undetermined
 %   (see KINCAL_IDENTIFIABILITY, or 'allow_data_deficiency', true), kincal:notConverged,
 %   kincal:invalidParameter (OPT1 start outside its interval), argument errors.

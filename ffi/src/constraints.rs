@@ -969,7 +969,9 @@ unsafe fn run_p<const N: usize, const P: usize>(
     est: &mut EstimateOut<'_>,
 ) -> FfiResult<Results> {
     let mut bounds = kincal::identify::Bounds::paper_default(r);
-    let opts = options(o, N, &mut bounds)?;
+    let prior = crate::identify::prior_of(o, r)?;
+    let mut opts = options(o, N, &mut bounds)?;
+    opts.prior = prior.as_ref();
     // SAFETY: forwarded contract.
     let arrays = unsafe { carve::<N, P>(ws, ws_len, v) }?;
     let (b, workspace) = build::<N, P>(v, arrays)?;

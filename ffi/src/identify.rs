@@ -11,7 +11,7 @@ use core::ffi::c_void;
 
 use kincal::identify::{
     Algorithm, Bounds, ComponentMask, Identifiability, Identification, IdentifyOptions,
-    MAX_CORRELATED_PAIRS, Measurement, Workspace, analyze, identify,
+    MAX_CORRELATED_PAIRS, Measurement, Prior, PriorSizes, Workspace, analyze, identify,
 };
 use kincal::params::num_params;
 use kincal::{EffectSet, ParamSet, Robot, with_any_robot};
@@ -110,6 +110,13 @@ pub struct kincal_identify_options {
     pub lower: [f64; KINCAL_MAX_PARAMS],
     /// Upper ends of the OPT1 intervals.
     pub upper: [f64; KINCAL_MAX_PARAMS],
+    /// Gaussian prior for weak directions, for every algorithm: per flat index, the σ of a
+    /// prior centred on the robot's own value (the model the fit starts from), in the
+    /// parameter's unit; `INFINITY` = no prior (the default everywhere). Each prior adds
+    /// one row weighted 1/σ² on the scale of `weight_pos`/`weight_rot`, so it means what
+    /// it says when those whiten the data (1/σ_instrument²). Counted in the standard
+    /// errors (posterior). `kincal_identify_options_set_prior` fills the link entries.
+    pub prior_sigma: [f64; KINCAL_MAX_PARAMS],
 }
 
 /// Residual statistics of a model on a set of measurements.
@@ -202,6 +209,10 @@ pub struct kincal_identify_report {
     pub n_correlated: usize,
     /// The listed pairs.
     pub correlated: [kincal_correlation; KINCAL_MAX_CORRELATED_PAIRS],
+    /// With a prior: Σ((x − centre)/σ)² over the fitted parameters that carry one; else 0.
+    pub prior_chi2: f64,
+    /// With a prior: its rows (fitted parameters with a finite σ); else 0.
+    pub prior_rows: usize,
 }
 
 /// Workspace capacities (parameters fitted at once) the C ABI instantiates.
@@ -317,6 +328,7 @@ fn defaults<const N: usize>(
         requested: mask_of(&set),
         lower: b.lower,
         upper: b.upper,
+        prior_sigma: [f64::INFINITY; KINCAL_MAX_PARAMS],
     }
 }
 
@@ -345,6 +357,46 @@ pub unsafe extern "C" fn kincal_identify_options_default(
         let set = crate::effects::effect_set(effects)?;
         let any = to_any(r)?;
         let o = with_any_robot!(&any, r => defaults(r, alg, set));
+        // SAFETY: checked by `arg_out1!`; writable by contract.
+        unsafe { out.put(o) };
+        Ok(())
+    })
+}
+
+/// Sets `opts->prior_sigma` for `robot`'s link parameters: `length_m` on every link length
+/// (d, a) and `angle_rad` on every link angle (θ0, α, β); frames and effects get no prior
+/// (`INFINITY`). The CLI's defaults are 5 mm and 1° (`kincal calibrate --prior`). Either
+/// size may be `INFINITY` (no prior on that kind). Returns OK, NULL_POINTER,
+/// MISALIGNED_POINTER, INVALID_ARGUMENT (a size NaN, zero or negative; a bad robot).
+///
+/// # Safety
+/// `robot` points to a readable `kincal_robot`; `opts` to a writable
+/// `kincal_identify_options` (typically filled by `kincal_identify_options_default`); `err`
+/// is NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn kincal_identify_options_set_prior(
+    robot: *const kincal_robot,
+    length_m: f64,
+    angle_rad: f64,
+    opts: *mut kincal_identify_options,
+    err: *mut kincal_error,
+) -> kincal_status {
+    ffi_boundary!(err = err; {
+        let r = arg_ref!(robot);
+        for (v, name) in [(length_m, c"length_m"), (angle_rad, c"angle_rad")] {
+            if v.is_nan() || v <= 0.0 {
+                return Err(kincal_error::new(kincal_status::InvalidArgument).arg(name).value(v));
+            }
+        }
+        let any = to_any(r)?;
+        let sigma = with_any_robot!(&any, r => {
+            Prior::around(r, &PriorSizes::links(length_m, angle_rad)).sigma
+        });
+        let mut o: kincal_identify_options = *arg_ref!(opts);
+        for (d, s) in o.prior_sigma.iter_mut().zip(sigma) {
+            *d = s;
+        }
+        let out = arg_out1!(opts);
         // SAFETY: checked by `arg_out1!`; writable by contract.
         unsafe { out.put(o) };
         Ok(())
@@ -421,6 +473,35 @@ pub(crate) fn options<'a>(
     io.weight_rot = o.weight_rot;
     io.bounds = Some(bounds);
     Ok(io)
+}
+
+/// The prior of checked C options around `r` (the model the fit starts from), or `None`
+/// when every σ is infinite. A σ that is NaN, zero or negative is refused.
+pub(crate) fn prior_of<const N: usize>(
+    o: &kincal_identify_options,
+    r: &Robot<N>,
+) -> FfiResult<Option<Prior>> {
+    let n = num_params(N);
+    if let Some((i, &s)) = o
+        .prior_sigma
+        .iter()
+        .enumerate()
+        .take(n)
+        .find(|(_, s)| s.is_nan() || **s <= 0.0)
+    {
+        return Err(kincal_error::new(kincal_status::InvalidArgument)
+            .arg(c"opts->prior_sigma")
+            .at(i)
+            .value(s));
+    }
+    if !o.prior_sigma.iter().take(n).any(|s| s.is_finite()) {
+        return Ok(None);
+    }
+    let mut p = Prior::around(r, &PriorSizes::NONE);
+    for (d, &s) in p.sigma.iter_mut().zip(o.prior_sigma.iter()).take(n) {
+        *d = s;
+    }
+    Ok(Some(p))
 }
 
 /// The caller's measurement arrays, checked (NULL, alignment, lengths), not yet converted.
@@ -662,6 +743,8 @@ pub(crate) fn report_of<const N: usize, const P: usize>(
         at_bound: mask_of(&r.at_bound),
         n_correlated: r.n_correlated,
         correlated: [kincal_correlation::default(); KINCAL_MAX_CORRELATED_PAIRS],
+        prior_chi2: r.prior_chi2,
+        prior_rows: r.prior_rows,
     };
     for (d, c) in out.correlated.iter_mut().zip(r.correlations()) {
         *d = kincal_correlation {
@@ -723,7 +806,9 @@ unsafe fn run<const N: usize>(
     task: Task,
 ) -> FfiResult<Outcome> {
     let mut bounds = Bounds::paper_default(r);
-    let opts = options(o, N, &mut bounds)?;
+    let prior = prior_of(o, r)?;
+    let mut opts = options(o, N, &mut bounds)?;
+    opts.prior = prior.as_ref();
     let n_requested = opts.requested.len();
     if n_requested == 0 {
         return Err(kincal_error::new(kincal_status::TooFewData)

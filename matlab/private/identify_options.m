@@ -2,12 +2,12 @@ function [opts, rest] = identify_options(robot, args, extra_names)
 %IDENTIFY_OPTIONS  The identification options struct for the gateway from name-value
 %   pairs (private). Names: algorithm, effects, requested (labels or logical mask), lower,
 %   upper, max_iterations, allow_data_deficiency, orientation, weights ([w_pos, w_rot]),
-%   pose_weights (1 x M), xtol, ftol, abs_cost_tol, rank_tol, plus EXTRA_NAMES returned in
-%   REST.
+%   pose_weights (1 x M), xtol, ftol, abs_cost_tol, rank_tol, prior ([length_m, angle_rad]),
+%   prior_sigma (P x 1), plus EXTRA_NAMES returned in REST.
 defaults = struct('algorithm', 'ols', 'effects', {{}}, 'requested', [], 'lower', [], ...
     'upper', [], 'max_iterations', [], 'allow_data_deficiency', [], 'orientation', [], ...
     'weights', [], 'pose_weights', [], 'xtol', [], 'ftol', [], 'abs_cost_tol', [], ...
-    'rank_tol', []);
+    'rank_tol', [], 'prior', [], 'prior_sigma', []);
 for k = 1:numel(extra_names)
     defaults.(extra_names{k}) = [];
 end
@@ -38,7 +38,7 @@ if ~isempty(o.requested)
     opts.requested = req(:);
 end
 for f = {'lower', 'upper', 'max_iterations', 'allow_data_deficiency', 'orientation', ...
-        'pose_weights', 'xtol', 'ftol', 'abs_cost_tol', 'rank_tol'}
+        'pose_weights', 'xtol', 'ftol', 'abs_cost_tol', 'rank_tol', 'prior', 'prior_sigma'}
     if ~isempty(o.(f{1}))
         opts.(f{1}) = o.(f{1});
     end

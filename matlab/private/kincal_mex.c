@@ -1930,7 +1930,7 @@ static int get_measurements(kc_ctx *c, const kincal_robot *r, const mxArray *q_a
 static const char *const IDENTIFY_FIELDS[] = {
     "algorithm", "effects", "requested", "lower", "upper", "max_iterations",
     "allow_data_deficiency", "orientation", "xtol", "ftol", "abs_cost_tol", "rank_tol",
-    "weight_pos", "weight_rot", "pose_weights", NULL,
+    "weight_pos", "weight_rot", "pose_weights", "prior", "prior_sigma", NULL,
 };
 
 /* options.pose_weights (1 x M, >= 0; 0 holds a pose out) into the measurements: the values
@@ -2016,6 +2016,28 @@ static int get_identify_options(kc_ctx *c, const kincal_robot *r, const mxArray 
             }
             memcpy(dst, KC_DOUBLES(f), np * sizeof *dst);
         }
+    }
+    /* prior = [length_m, angle_rad]: the library's per-kind link prior around the robot;
+     * prior_sigma = P x 1 sigmas (Inf: none), applied after it. */
+    if ((f = mxGetField(a, 0, "prior")) != NULL && !is_default(f)) {
+        const double *p;
+        if (get_vector(c, f, "options.prior", 2, &p) != 0) {
+            return -1;
+        }
+        st = kincal_identify_options_set_prior(r, p[0], p[1], o, &err);
+        if (st != KINCAL_STATUS_OK) {
+            return fail_status(c, st, &err, NULL);
+        }
+    }
+    if ((f = mxGetField(a, 0, "prior_sigma")) != NULL && !is_default(f)) {
+        if (check_double(c, f, "options.prior_sigma", 0) != 0) {
+            return -1;
+        }
+        if (mxGetNumberOfElements(f) != np || (mxGetM(f) != 1 && mxGetN(f) != 1)) {
+            return fail(c, "badSize", "argument 'options.prior_sigma' must be a vector of %lu "
+                        "elements", (unsigned long)np);
+        }
+        memcpy(o->prior_sigma, KC_DOUBLES(f), np * sizeof *o->prior_sigma);
     }
     if ((f = mxGetField(a, 0, "max_iterations")) != NULL) {
         if (get_count(c, f, "options.max_iterations", 4294967295.0, &v) != 0) {
@@ -2180,7 +2202,8 @@ static mxArray *stats_struct(const kincal_residual_stats *t)
 
 static const char *const REPORT_FIELDS[] = {
     "algorithm", "iterations", "analysis", "initial", "fitted", "sigma2", "std_errors",
-    "at_bound", "at_bound_labels", "correlations", "n_correlated", NULL,
+    "at_bound", "at_bound_labels", "correlations", "n_correlated", "prior_chi2", "prior_rows",
+    NULL,
 };
 static const char *const CORRELATION_FIELDS[] = {"a", "b", "rho", NULL};
 
@@ -2189,7 +2212,7 @@ static mxArray *report_struct(const kincal_robot *r, const kincal_identify_repor
     size_t np = kincal_num_params(r->n_joints), i;
     size_t nc = p->n_correlated < KINCAL_MAX_CORRELATED_PAIRS ? p->n_correlated
                                                               : KINCAL_MAX_CORRELATED_PAIRS;
-    mxArray *s = mxCreateStructMatrix(1, 1, 11, (const char **)REPORT_FIELDS);
+    mxArray *s = mxCreateStructMatrix(1, 1, 13, (const char **)REPORT_FIELDS);
     mxArray *corr = mxCreateStructMatrix(1, (mwSize)nc, 3, (const char **)CORRELATION_FIELDS);
     for (i = 0; i < nc; ++i) {
         mxSetField(corr, (mwIndex)i, "a", label_of(r, p->correlated[i].a));
@@ -2207,6 +2230,8 @@ static mxArray *report_struct(const kincal_robot *r, const kincal_identify_repor
     mxSetField(s, 0, "at_bound_labels", mask_labels(r, p->at_bound, np));
     mxSetField(s, 0, "correlations", corr);
     mxSetField(s, 0, "n_correlated", mxCreateDoubleScalar((double)p->n_correlated));
+    mxSetField(s, 0, "prior_chi2", mxCreateDoubleScalar(p->prior_chi2));
+    mxSetField(s, 0, "prior_rows", mxCreateDoubleScalar((double)p->prior_rows));
     return s;
 }
 

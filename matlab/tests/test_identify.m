@@ -11,6 +11,7 @@ tests = {
     'too_few_poses', @too_few_poses
     'effects', @effects
     'pose_weights_hold_poses_out', @pose_weights
+    'priors_pin_weak_directions', @priors
     'validate_metrics', @validate_metrics
     'biopsy_rotation', @biopsy
     'bad_inputs', @bad_inputs
@@ -29,6 +30,34 @@ if ~any(strcmp(ops, 'identify'))
     error('test:pendingExport', ['the gateway has no identify operation: the C ABI it was ' ...
         'built against lacks kincal_identify']);
 end
+end
+
+function priors()
+% A prior through the gateway: counted (prior_rows), vanishing when weak, holding every
+% link parameter at the start when overwhelming; bad sizes refused.
+require_identify();
+nominal = kincal_robot('aria');
+truth = kincal_robot('aria_true');
+[q, T] = tool_data(truth);
+w = [1 / 1e-4^2, 1 / (0.02 * pi / 180)^2];
+[plain, rep0] = kincal_identify(nominal, q, T, 'weights', w);
+expect_true(rep0.prior_rows == 0 && rep0.prior_chi2 == 0, 'no prior by default');
+[~, rep] = kincal_identify(nominal, q, T, 'weights', w, 'prior', [5e-3, pi / 180]);
+expect_true(rep.prior_rows == 24 && rep.prior_chi2 > 0, 'prior rows %d', rep.prior_rows);
+links = ~cellfun('isempty', regexp(nominal.labels, '^(theta0|d|a|alpha|beta)_\d+$'));
+weak = inf(size(nominal.params));
+weak(links) = 1e9;
+fit = kincal_identify(nominal, q, T, 'weights', w, 'prior_sigma', weak);
+expect_near(fit.params, plain.params, 1e-12, 'a vanishing prior');
+strong = inf(size(nominal.params));
+strong(links) = 1e-12;
+fit = kincal_identify(nominal, q, T, 'weights', w, 'prior_sigma', strong);
+expect_near(fit.params(links), nominal.params(links), 1e-9, 'an overwhelming prior');
+bad = strong;
+bad(2) = 0;
+expect_error('kincal:invalidArgument', @() kincal_identify(nominal, q, T, 'prior_sigma', bad));
+expect_error('kincal:invalidArgument', @() kincal_identify(nominal, q, T, 'prior', [-1, 1]));
+expect_error('kincal:nonFinite', @() kincal_identify(nominal, q, T, 'prior', [NaN, 1]));
 end
 
 function recovers_truth()

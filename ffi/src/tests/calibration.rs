@@ -642,3 +642,115 @@ fn absurd_pose_counts_are_refused() {
     };
     assert_eq!(s, kincal_status::BadLength);
 }
+
+/// One OLS identification of the Table 3 truth from the tool poses with `opts`.
+fn identify_with(
+    nominal: &kincal_robot,
+    data: &kincal_measurements,
+    opts: &kincal_identify_options,
+) -> Result<(kincal_robot, Box<kincal_identify_report>), kincal_error> {
+    let n_req = opts.requested.iter().filter(|&&m| m != 0).count();
+    let size = kincal_identify_workspace_size(6, 10, n_req);
+    let mut ws = workspace(size);
+    let mut fitted = kincal_robot::ZERO;
+    let mut report = Box::new(core::mem::MaybeUninit::<kincal_identify_report>::uninit());
+    let mut e = kincal_error::CLEAR;
+    let s = unsafe {
+        kincal_identify(
+            nominal,
+            data,
+            opts,
+            ws.as_mut_ptr().cast::<c_void>(),
+            size,
+            &mut fitted,
+            report.as_mut_ptr(),
+            &mut e,
+        )
+    };
+    if s != kincal_status::Ok {
+        return Err(e);
+    }
+    // SAFETY: written on OK.
+    Ok((fitted, unsafe {
+        Box::from_raw(Box::into_raw(report).cast())
+    }))
+}
+
+#[test]
+fn priors_through_the_abi_pin_weak_directions_and_vanish_when_weak() {
+    let nominal = aria_robot(kincal_aria_model::Nominal);
+    let truth = aria_robot(kincal_aria_model::VirtualTruth);
+    let (q, poses) = tool_data(&truth);
+    let data = measurements(&q, &poses);
+    let mut e = kincal_error::CLEAR;
+    let mut opts = core::mem::MaybeUninit::<kincal_identify_options>::uninit();
+    let s = unsafe {
+        kincal_identify_options_default(
+            &nominal,
+            kincal_algorithm::Ols as u32,
+            0,
+            opts.as_mut_ptr(),
+            &mut e,
+        )
+    };
+    assert_eq!(s, kincal_status::Ok);
+    let mut opts = unsafe { opts.assume_init() };
+    // The default: no prior anywhere.
+    assert!(opts.prior_sigma.iter().all(|s| s.is_infinite()));
+    // Whitened rows (0.1 mm, 0.02°), so that the prior's σ means what it says.
+    opts.weight_pos = 1.0 / 1e-4f64.powi(2);
+    opts.weight_rot = 1.0 / 0.02f64.to_radians().powi(2);
+    let (plain, plain_report) = identify_with(&nominal, &data, &opts).expect("no prior");
+    assert_eq!(plain_report.prior_rows, 0);
+    assert_eq!(plain_report.prior_chi2, 0.0);
+
+    // The setter: link lengths and angles, nothing on frames or effects.
+    let mut with = opts;
+    let s = unsafe {
+        kincal_identify_options_set_prior(&nominal, 5e-3, 1f64.to_radians(), &mut with, &mut e)
+    };
+    assert_eq!(s, kincal_status::Ok, "{e:?}");
+    let n_links = with.prior_sigma.iter().filter(|s| s.is_finite()).count();
+    // θ0, d, a, α, β of each joint (d or β is the fitted length parameter: 24 fitted).
+    assert_eq!(n_links, 30, "five link parameters per joint");
+    let (_, report) = identify_with(&nominal, &data, &with).expect("prior");
+    assert_eq!(report.prior_rows, 24);
+    assert!(report.prior_chi2 > 0.0);
+
+    // A vanishing prior (σ = 1e9) leaves the fit as it was.
+    let mut weak = with;
+    for s in weak.prior_sigma.iter_mut().filter(|s| s.is_finite()) {
+        *s = 1e9;
+    }
+    let (fitted, _) = identify_with(&nominal, &data, &weak).expect("weak prior");
+    for i in 0..85 {
+        assert!(
+            (fitted.params[i] - plain.params[i]).abs() < 1e-12,
+            "param {i}: {} vs {}",
+            fitted.params[i],
+            plain.params[i]
+        );
+    }
+    // An overwhelming prior (σ = 1e-12) holds every parameter at the starting model.
+    let mut strong = with;
+    for s in strong.prior_sigma.iter_mut().filter(|s| s.is_finite()) {
+        *s = 1e-12;
+    }
+    let (fitted, _) = identify_with(&nominal, &data, &strong).expect("strong prior");
+    for i in (0..85).filter(|&i| strong.prior_sigma[i].is_finite()) {
+        assert!(
+            (fitted.params[i] - nominal.params[i]).abs() < 1e-9,
+            "param {i}"
+        );
+    }
+
+    // Bad sizes are refused, naming the argument.
+    let mut bad = with;
+    bad.prior_sigma[3] = 0.0;
+    let err = identify_with(&nominal, &data, &bad).expect_err("σ = 0");
+    assert_eq!(err.status, kincal_status::InvalidArgument as u32);
+    assert_eq!(err.index, 3);
+    let mut o = opts;
+    let s = unsafe { kincal_identify_options_set_prior(&nominal, f64::NAN, 0.01, &mut o, &mut e) };
+    assert_eq!(s, kincal_status::InvalidArgument);
+}
