@@ -112,7 +112,7 @@ expect_error('kincal:unknownField', @() gateway('fk', bad, q, []), 'extra_field'
 bad = r;
 bad.n_joints = 0;
 expect_error('kincal:badJointCount', @() gateway('fk', bad, q, []));
-bad.n_joints = 10;
+bad.n_joints = 13;   % KINCAL_MAX_JOINTS is 12
 expect_error('kincal:badValue', @() gateway('fk', bad, q, []), 'n_joints');
 bad.n_joints = 2.5;
 expect_error('kincal:badValue', @() gateway('fk', bad, q, []), 'n_joints');
