@@ -39,6 +39,9 @@ pub const KINCAL_MIN_SESSION_ROWS: usize = 3;
 /// this fraction of their extent along it are collinear (`KINCAL_STATUS_DEGENERATE_GROUP`):
 /// the plane's tilt about that line is undetermined. The CLI's threshold.
 pub const KINCAL_PLANE_MIN_ASPECT: f64 = 0.1;
+// The header needs literals (cbindgen); the values are core's, checked at compile time.
+const _: () = assert!(KINCAL_PLANE_MIN_ASPECT == kincal::identify::USABLE_PLANE_MIN_ASPECT);
+const _: () = assert!(KINCAL_MIN_SESSION_ROWS == kincal::identify::MIN_SESSION_ROWS);
 
 /// A target of `kincal_constraint_data`: unknown (3 nuisance coordinates, eliminated) or
 /// known in the base frame.

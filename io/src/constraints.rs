@@ -17,14 +17,10 @@ use crate::error::Error as CliError;
 use crate::measurements::{MeasurementRow, MeasurementSet};
 use crate::model_file::{ConstraintsJson, DistanceJson, GroupJson};
 
-/// A session needs at least this many rows: fewer fix nothing a set-up adds (a base frame
-/// of its own needs three points; a target needs two contacts).
-pub const MIN_SESSION_ROWS: usize = 3;
-/// Plane contacts whose spread across their best-fit line is below this fraction of their
-/// extent along it at the starting model count as collinear (the plane's tilt about that
-/// line is then undetermined; a model error of a few mm over a line of a few cm stays
-/// below it).
-pub const CLI_PLANE_MIN_ASPECT: f64 = 0.1;
+/// A session needs at least this many rows (core's rule, shared with the C ABI).
+pub use kincal::identify::MIN_SESSION_ROWS;
+/// Plane contacts below this aspect are collinear (core's rule, shared with the C ABI).
+pub use kincal::identify::USABLE_PLANE_MIN_ASPECT as CLI_PLANE_MIN_ASPECT;
 /// An unknown plane needs at least this many contacts (three define it; only the fourth
 /// and later say anything about the robot).
 pub const MIN_PLANE_CONTACTS: usize = 3;

@@ -395,6 +395,16 @@ pub(crate) fn sym3_smallest(mut a: [[f64; 3]; 3]) -> ([f64; 3], [f64; 3]) {
 /// along it ([`Error::DegenerateGroup`]).
 pub const PLANE_MIN_ASPECT: f64 = 1e-3;
 
+/// The stricter test the front ends apply to plane contacts before a fit, at the starting
+/// model: a spread across the best-fit line below this fraction of the extent along it
+/// counts as collinear (the plane's tilt about that line is then undetermined; a model
+/// error of a few mm over a line of a few cm stays below it). The CLI and the C ABI refuse
+/// such planes with this one threshold.
+pub const USABLE_PLANE_MIN_ASPECT: f64 = 0.1;
+/// A session needs at least this many rows: fewer fix nothing a set-up adds (a base frame
+/// of its own needs three points; a target needs two contacts).
+pub const MIN_SESSION_ROWS: usize = 3;
+
 /// Normal of an unknown plane from the scatter, or [`Error::DegenerateGroup`].
 fn plane_normal(scatter: [[f64; 3]; 3], group: usize) -> Result<[f64; 3]> {
     let (ev, n) = sym3_smallest(scatter);

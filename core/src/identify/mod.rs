@@ -23,8 +23,9 @@ mod solvers;
 mod workspace;
 
 pub use constraints::{
-    ConstraintData, Contact, Distance, Group, GroupEstimate, GroupKind, analyze_constrained,
-    distance_estimate, group_estimate, identify_constrained,
+    ConstraintData, Contact, Distance, Group, GroupEstimate, GroupKind, MIN_SESSION_ROWS,
+    USABLE_PLANE_MIN_ASPECT, analyze_constrained, distance_estimate, group_estimate,
+    identify_constrained,
 };
 pub use data::{ComponentMask, Measurement, ResidualStats, residual_stats};
 pub(crate) use data::{distinct_points, validate as validate_data};
