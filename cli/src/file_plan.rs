@@ -2,7 +2,7 @@
 //! any work starts: an output never names an input (also through a symlink, a hard link or
 //! another spelling), two outputs never name the same file, and each output is writable
 //! (an existing regular file or an absent name in an existing folder, see
-//! [`crate::files::output_target`]). A failure is a usage error (exit 2) that names the
+//! [`kincal_io::files::output_target`]). A failure is a usage error (exit 2) that names the
 //! flags, so a long computation never ends in an unwritable output or a lost input.
 //!
 //! A command with a new file argument adds it to its function below; `write_atomic` checks
@@ -11,7 +11,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::error::CliError;
-use crate::files::{is_same_file, output_target};
+use kincal_io::files::{is_same_file, output_target};
 
 /// A path and the argument (flag or positional name) it came from.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -162,7 +162,7 @@ fn probe_folder(target: &Path) -> Result<(), String> {
 }
 
 /// `calibrate`.
-pub fn calibrate(a: &crate::cmd_calibrate::Args) -> FilePlan {
+pub fn calibrate(a: &crate::commands::calibrate::Args) -> FilePlan {
     FilePlan::new()
         .input("DATA", &a.data)
         .input_if_file("--robot", &a.robot)
@@ -171,7 +171,7 @@ pub fn calibrate(a: &crate::cmd_calibrate::Args) -> FilePlan {
 }
 
 /// `predict`.
-pub fn predict(a: &crate::cmd_predict::Args) -> FilePlan {
+pub fn predict(a: &crate::commands::predict::Args) -> FilePlan {
     FilePlan::new()
         .input_if_file("MODEL", &a.model)
         .input("DATA", &a.data)
@@ -179,7 +179,7 @@ pub fn predict(a: &crate::cmd_predict::Args) -> FilePlan {
 }
 
 /// `validate`.
-pub fn validate(a: &crate::cmd_validate::Args) -> FilePlan {
+pub fn validate(a: &crate::commands::validate::Args) -> FilePlan {
     FilePlan::new()
         .input_if_file("MODEL", &a.model)
         .input("DATA", &a.data)
@@ -189,14 +189,14 @@ pub fn validate(a: &crate::cmd_validate::Args) -> FilePlan {
 }
 
 /// `select-poses`.
-pub fn select_poses(a: &crate::cmd_select::Args) -> FilePlan {
+pub fn select_poses(a: &crate::commands::select::Args) -> FilePlan {
     FilePlan::new()
         .input_if_file("--robot", &a.setup.robot)
         .output("--out", &a.out)
 }
 
 /// `design-tool`.
-pub fn design_tool(a: &crate::cmd_design_tool::Args) -> FilePlan {
+pub fn design_tool(a: &crate::commands::design_tool::Args) -> FilePlan {
     let mut p = FilePlan::new().input_if_file("--robot", &a.setup.robot);
     if let Some(b) = &a.baseline {
         p = p.named_input("--baseline", b);
@@ -207,7 +207,7 @@ pub fn design_tool(a: &crate::cmd_design_tool::Args) -> FilePlan {
 }
 
 /// `evaluate-designs`.
-pub fn evaluate_designs(a: &crate::cmd_evaluate::Args) -> FilePlan {
+pub fn evaluate_designs(a: &crate::commands::evaluate::Args) -> FilePlan {
     let mut p = FilePlan::new().input_if_file("--robot", &a.setup.robot);
     for t in &a.tools {
         p = p.named_input("--tool", t);
@@ -222,8 +222,8 @@ pub fn evaluate_designs(a: &crate::cmd_evaluate::Args) -> FilePlan {
 
 /// `diagnose`: REPORT.json, the readable report, MODEL and the three plots named after
 /// REPORT.json.
-pub fn diagnose(a: &crate::cmd_diagnose::Args) -> FilePlan {
-    let o = crate::cmd_diagnose::Outputs::new(&a.json, a.report.as_deref(), &a.out);
+pub fn diagnose(a: &crate::commands::diagnose::Args) -> FilePlan {
+    let o = crate::plots::diagnosis::Outputs::new(&a.json, a.report.as_deref(), &a.out);
     FilePlan::new()
         .input("DATA", &a.data)
         .input_if_file("--robot", &a.robot)
@@ -243,7 +243,7 @@ pub fn diagnose(a: &crate::cmd_diagnose::Args) -> FilePlan {
 }
 
 /// `crossval`.
-pub fn crossval(a: &crate::cmd_crossval::Args) -> FilePlan {
+pub fn crossval(a: &crate::commands::crossval::Args) -> FilePlan {
     FilePlan::new()
         .input("DATA", &a.data)
         .input_if_file("--robot", &a.robot)
@@ -254,7 +254,7 @@ pub fn crossval(a: &crate::cmd_crossval::Args) -> FilePlan {
 }
 
 /// `markers`.
-pub fn markers(a: &crate::cmd_markers::Args) -> FilePlan {
+pub fn markers(a: &crate::commands::markers::Args) -> FilePlan {
     FilePlan::new()
         .input("EXPORT", &a.export)
         .input("--design", &a.design)
@@ -265,7 +265,7 @@ pub fn markers(a: &crate::cmd_markers::Args) -> FilePlan {
 }
 
 /// `import-dataset`.
-pub fn import_dataset(a: &crate::cmd_import::Args) -> FilePlan {
+pub fn import_dataset(a: &crate::commands::import::Args) -> FilePlan {
     let mut p = FilePlan::new();
     if let Some(d) = &a.dir {
         p = p.input_folder("DIR", d);
@@ -276,14 +276,14 @@ pub fn import_dataset(a: &crate::cmd_import::Args) -> FilePlan {
 }
 
 /// `observed-point`.
-pub fn observed_point(a: &crate::cmd_observed_point::Args) -> FilePlan {
+pub fn observed_point(a: &crate::commands::observed_point::Args) -> FilePlan {
     FilePlan::new()
         .input("DATA", &a.data)
         .output("--out", &a.out)
 }
 
 /// `export`.
-pub fn export(a: &crate::cmd_export::Args) -> FilePlan {
+pub fn export(a: &crate::commands::export::Args) -> FilePlan {
     let mut p = FilePlan::new().input_if_file("MODEL", &a.model);
     if let Some(f) = &a.from {
         p = p.input("--from", f);

@@ -1,9 +1,10 @@
 //! `kincal`: the command-line tool of the kincal calibration toolkit (spec/cli.md).
 
-use kincal_cli::{
-    cmd_calibrate, cmd_crossval, cmd_demo, cmd_design_tool, cmd_diagnose, cmd_evaluate, cmd_export,
-    cmd_import, cmd_markers, cmd_observed_point, cmd_predict, cmd_select, cmd_validate, file_plan,
+use kincal_cli::commands::{
+    calibrate, crossval, demo, design_tool, diagnose, evaluate, export, import, markers,
+    observed_point, predict, select, validate,
 };
+use kincal_cli::file_plan;
 
 use std::process::ExitCode;
 
@@ -32,48 +33,48 @@ struct Cli {
 #[derive(Subcommand, Debug)]
 enum Command {
     /// The paper's simulation study end to end on the built-in ARIA (no files needed)
-    #[command(long_about = cmd_demo::LONG_ABOUT, after_help = cmd_demo::EXAMPLE)]
-    Demo(cmd_demo::Args),
+    #[command(long_about = demo::LONG_ABOUT, after_help = demo::EXAMPLE)]
+    Demo(demo::Args),
     /// Identify the parameters from measured poses and write a model file
-    #[command(long_about = cmd_calibrate::LONG_ABOUT, after_help = cmd_calibrate::EXAMPLE)]
-    Calibrate(cmd_calibrate::Args),
+    #[command(long_about = calibrate::LONG_ABOUT, after_help = calibrate::EXAMPLE)]
+    Calibrate(calibrate::Args),
     /// The model's pose for every row of DATA
-    #[command(long_about = cmd_predict::LONG_ABOUT, after_help = cmd_predict::EXAMPLE)]
-    Predict(cmd_predict::Args),
+    #[command(long_about = predict::LONG_ABOUT, after_help = predict::EXAMPLE)]
+    Predict(predict::Args),
     /// Per-pose and summary errors of MODEL against measured poses
-    #[command(long_about = cmd_validate::LONG_ABOUT, after_help = cmd_validate::EXAMPLE)]
-    Validate(cmd_validate::Args),
+    #[command(long_about = validate::LONG_ABOUT, after_help = validate::EXAMPLE)]
+    Validate(validate::Args),
     /// Observability-optimal calibration poses (standard, local or workspace clustering)
-    #[command(long_about = cmd_select::LONG_ABOUT, after_help = cmd_select::EXAMPLE)]
-    SelectPoses(Box<cmd_select::Args>),
+    #[command(long_about = select::LONG_ABOUT, after_help = select::EXAMPLE)]
+    SelectPoses(Box<select::Args>),
     /// An optimised calibration tool that beats a baseline tool, as a workshop specification
-    #[command(long_about = cmd_design_tool::LONG_ABOUT, after_help = cmd_design_tool::EXAMPLE)]
-    DesignTool(Box<cmd_design_tool::Args>),
+    #[command(long_about = design_tool::LONG_ABOUT, after_help = design_tool::EXAMPLE)]
+    DesignTool(Box<design_tool::Args>),
     /// Monte-Carlo comparison of data-acquisition designs on the same random robots
-    #[command(long_about = cmd_evaluate::LONG_ABOUT, after_help = cmd_evaluate::EXAMPLE)]
-    EvaluateDesigns(Box<cmd_evaluate::Args>),
+    #[command(long_about = evaluate::LONG_ABOUT, after_help = evaluate::EXAMPLE)]
+    EvaluateDesigns(Box<evaluate::Args>),
     /// The sim-to-real diagnosis: where the residual lies, which effect causes it, how far
     /// it shrinks
-    #[command(long_about = cmd_diagnose::LONG_ABOUT, after_help = cmd_diagnose::EXAMPLE)]
-    Diagnose(cmd_diagnose::Args),
+    #[command(long_about = diagnose::LONG_ABOUT, after_help = diagnose::EXAMPLE)]
+    Diagnose(diagnose::Args),
     /// Held-out residuals of the nominal and the calibrated model (k-fold by pose_id), noise
     /// floor, outliers
-    #[command(long_about = cmd_crossval::LONG_ABOUT, after_help = cmd_crossval::EXAMPLE)]
-    Crossval(cmd_crossval::Args),
+    #[command(long_about = crossval::LONG_ABOUT, after_help = crossval::EXAMPLE)]
+    Crossval(crossval::Args),
     /// Motion-capture marker export + marker design + joint readings -> measurement CSV
-    #[command(long_about = cmd_markers::LONG_ABOUT, after_help = cmd_markers::EXAMPLE)]
-    Markers(cmd_markers::Args),
+    #[command(long_about = markers::LONG_ABOUT, after_help = markers::EXAMPLE)]
+    Markers(markers::Args),
     /// A public real-robot data set, read as published, as measurement CSV and robot file
-    #[command(name = "import-dataset", long_about = cmd_import::LONG_ABOUT, after_help = cmd_import::EXAMPLE)]
-    ImportDataset(cmd_import::Args),
+    #[command(name = "import-dataset", long_about = import::LONG_ABOUT, after_help = import::EXAMPLE)]
+    ImportDataset(import::Args),
     /// Camera poses re-expressed at the point the camera looks at (position rows where
     /// the measurement is precise)
-    #[command(name = "observed-point", long_about = cmd_observed_point::LONG_ABOUT, after_help = cmd_observed_point::EXAMPLE)]
-    ObservedPoint(cmd_observed_point::Args),
+    #[command(name = "observed-point", long_about = observed_point::LONG_ABOUT, after_help = observed_point::EXAMPLE)]
+    ObservedPoint(observed_point::Args),
     /// The model as a URDF and/or an mDH/Hayati table (CSV, YAML) for ROS, controllers and
     /// Matlab
-    #[command(long_about = cmd_export::LONG_ABOUT, after_help = cmd_export::EXAMPLE)]
-    Export(cmd_export::Args),
+    #[command(long_about = export::LONG_ABOUT, after_help = export::EXAMPLE)]
+    Export(export::Args),
 }
 
 fn main() -> ExitCode {
@@ -111,18 +112,18 @@ fn plan(command: &Command) -> file_plan::FilePlan {
 
 fn run(command: &Command) -> Result<(), kincal_cli::error::CliError> {
     match command {
-        Command::Demo(a) => cmd_demo::run(a),
-        Command::Calibrate(a) => cmd_calibrate::run(a),
-        Command::Predict(a) => cmd_predict::run(a),
-        Command::Validate(a) => cmd_validate::run(a),
-        Command::SelectPoses(a) => cmd_select::run(a),
-        Command::DesignTool(a) => cmd_design_tool::run(a),
-        Command::EvaluateDesigns(a) => cmd_evaluate::run(a),
-        Command::Diagnose(a) => cmd_diagnose::run(a),
-        Command::ImportDataset(a) => cmd_import::run(a),
-        Command::Crossval(a) => cmd_crossval::run(a),
-        Command::Markers(a) => cmd_markers::run(a),
-        Command::ObservedPoint(a) => cmd_observed_point::run(a),
-        Command::Export(a) => cmd_export::run(a),
+        Command::Demo(a) => demo::run(a),
+        Command::Calibrate(a) => calibrate::run(a),
+        Command::Predict(a) => predict::run(a),
+        Command::Validate(a) => validate::run(a),
+        Command::SelectPoses(a) => select::run(a),
+        Command::DesignTool(a) => design_tool::run(a),
+        Command::EvaluateDesigns(a) => evaluate::run(a),
+        Command::Diagnose(a) => diagnose::run(a),
+        Command::ImportDataset(a) => import::run(a),
+        Command::Crossval(a) => crossval::run(a),
+        Command::Markers(a) => markers::run(a),
+        Command::ObservedPoint(a) => observed_point::run(a),
+        Command::Export(a) => export::run(a),
     }
 }

@@ -1,13 +1,16 @@
 //! Human-readable reports: aligned tables of parameters, identifiability, residuals,
-//! correlations, the consensus check and validation errors. Formatting only.
+//! correlations, the consensus check and validation errors, with the labels, units and
+//! targets they are printed against. Formatting only.
 
 use std::fmt::Write as _;
 
+use kincal::diagnosis::QuantityKind;
 use kincal::identify::{Identifiability, ResidualStats};
+use kincal::validation::{TARGET_POS_M, TARGET_ROT_RAD};
 use kincal::{ParamId, ParamIndex, ParamSet};
 
-use crate::calibration::{Calibration, Consensus};
-use crate::units::display_unit;
+use kincal_io::calibration::{Calibration, Consensus};
+use kincal_io::units::display_unit;
 
 /// Writes a report to stdout. A closed pipe (`kincal … | head`) is not an error: the
 /// outputs are already written.
@@ -320,8 +323,49 @@ pub fn side_by_side<const N: usize>(cal: &Calibration<N>) -> String {
     s
 }
 
+/// Targets of the verdict [m], [rad].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Targets {
+    pub pos_m: f64,
+    pub rot_rad: f64,
+}
+
+impl Default for Targets {
+    fn default() -> Self {
+        Targets {
+            pos_m: TARGET_POS_M,
+            rot_rad: TARGET_ROT_RAD,
+        }
+    }
+}
+
+/// An error in mm or degrees: 6 decimals, exponent form below 0.001.
+pub fn fmt_err(v: f64) -> String {
+    if v == 0.0 || v.abs() >= 1e-3 {
+        format!("{v:.6}")
+    } else {
+        format!("{v:.3e}")
+    }
+}
+
+/// The label of a correlated quantity (`q2`, `tau2`, `s2`, `temp_c`).
+pub fn quantity_label(q: QuantityKind) -> String {
+    let mut s = String::new();
+    let _ = q.write_label(&mut s);
+    s
+}
+
+/// Unit of a correlated quantity.
+pub fn quantity_unit(q: QuantityKind) -> &'static str {
+    match q {
+        QuantityKind::JointAngle(_) => "rad",
+        QuantityKind::GravityTorque(_) => "N·m",
+        QuantityKind::Approach(_) => "",
+        QuantityKind::Temperature => "°C",
+    }
+}
+
 fn stats_row(name: &str, s: &ResidualStats) -> Vec<String> {
-    use crate::cmd_validate::fmt_err;
     vec![
         name.to_string(),
         fmt_err(s.rms_pos_m * 1e3),

@@ -12,7 +12,7 @@ use std::process::{Command, Output};
 use kincal::model::{JointLimits, Link};
 use kincal::pose::matrix_to_quaternion;
 use kincal::{ParamId, Robot, aria};
-use kincal_cli::model_file::{self, ModelFile};
+use kincal_io::model_file::{self, ModelFile};
 
 const BIN: &str = env!("CARGO_BIN_EXE_kincal");
 /// FK agreement of the exported URDF with the model [m] and rotation-matrix entries.
@@ -515,7 +515,7 @@ fn mdh_tables_read_back_to_the_exact_parameters() {
 
 #[test]
 fn yaml_numbers_are_floats_for_yaml_1_1_and_read_back() {
-    use kincal_cli::cmd_export::yaml_number;
+    use kincal_cli::commands::export::yaml_number;
     for v in [1e-7, -2.5e-9, 1e20, 0.1, 1.0 / 3.0, -0.0048, 0.0, 6.02e23] {
         let s = yaml_number(v);
         assert_eq!(s.parse::<f64>().unwrap().to_bits(), v.to_bits(), "{s}");
@@ -895,10 +895,10 @@ fn check_from<const N: usize>(
 /// The nominal robot of an imported URDF chain as a `Robot<N>` (parameters, length choices
 /// and limits copied).
 fn import<const N: usize>(text: &str, base: Option<&str>, tip: &str) -> Robot<N> {
-    let imp = kincal_cli::urdf::import_urdf_str(
+    let imp = kincal_io::urdf::import_urdf_str(
         text,
         "own.urdf",
-        &kincal_cli::urdf::ChainSelection {
+        &kincal_io::urdf::ChainSelection {
             base_link: base,
             tip_link: Some(tip),
         },

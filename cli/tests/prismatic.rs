@@ -10,9 +10,9 @@ use std::process::{Command, Output};
 
 use kincal::any::AnyRobot;
 use kincal::{JointKind, Robot, with_any_robot};
-use kincal_cli::model_file::{self, ModelFile};
-use kincal_cli::robot_file::{parse_robot_description, write_robot_description};
-use kincal_cli::urdf::{ChainSelection, UrdfExport, export_urdf, import_urdf_str};
+use kincal_io::model_file::{self, ModelFile};
+use kincal_io::robot_file::{parse_robot_description, write_robot_description};
+use kincal_io::urdf::{ChainSelection, UrdfExport, export_urdf, import_urdf_str};
 
 const BIN: &str = env!("CARGO_BIN_EXE_kincal");
 const FK_TOL: f64 = 1e-12;

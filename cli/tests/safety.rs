@@ -9,7 +9,7 @@ use std::path::Path;
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
-use kincal_cli::files::{OutputErrorKind, write_atomic};
+use kincal_io::files::{OutputErrorKind, write_atomic};
 
 const BIN: &str = env!("CARGO_BIN_EXE_kincal");
 
@@ -457,7 +457,7 @@ fn implausible_robot_lengths_are_refused_in_every_description_format() {
     // Model file: a parameter of 1e200 m.
     let o = kincal(&["predict", "aria", "d.csv", "--out", "p.csv"], dir.path());
     assert_eq!(code(&o), 0, "{}", stderr(&o));
-    let model = kincal_cli::model_file::ModelFile::nominal("aria", &kincal::aria::nominal());
+    let model = kincal_io::model_file::ModelFile::nominal("aria", &kincal::aria::nominal());
     let mut v: serde_json::Value = serde_json::from_str(&model.to_json()).unwrap();
     let params = v["robot"]["parameters"].as_array_mut().unwrap();
     let d1 = params.iter_mut().find(|p| p["label"] == "a_2").unwrap();
@@ -484,7 +484,7 @@ fn implausible_robot_lengths_are_refused_in_every_description_format() {
 #[test]
 fn plots_refuse_non_finite_values_instead_of_spinning() {
     use kincal::validation::PoseErrors;
-    use kincal_cli::plot::{Series, error_figure_svg};
+    use kincal_cli::plots::pose_errors::{Series, error_figure_svg};
     let bad = PoseErrors {
         pos_m: [f64::INFINITY, 0.0, 0.0],
         rot_rad: [0.0; 3],
@@ -495,7 +495,7 @@ fn plots_refuse_non_finite_values_instead_of_spinning() {
         name: "NOM".into(),
         errors: vec![bad],
     }];
-    let targets = kincal_cli::cmd_validate::Targets {
+    let targets = kincal_cli::report::Targets {
         pos_m: 1e-3,
         rot_rad: 0.01,
     };
@@ -529,7 +529,7 @@ fn a_deeply_nested_urdf_is_refused_without_overflowing_the_stack() {
     assert!(e.contains("nested more than"), "{e}");
     // Ordinary nesting, comments and quoted '>' pass the scan.
     let ok = "<?xml version=\"1.0\"?><!-- <a><b><c> --><robot name=\"a>b\"><link name=\"x\"><visual><geometry><box size=\"1 1 1\"/></geometry></visual></link></robot>";
-    kincal_cli::urdf::check_nesting(ok, "ok.urdf").unwrap();
+    kincal_io::urdf::check_nesting(ok, "ok.urdf").unwrap();
 }
 
 // ---- 5. unbounded lines --------------------------------------------------------------
@@ -607,7 +607,7 @@ fn robot_toml_arrays_of_the_wrong_length_are_refused() {
     ] {
         assert!(base.contains(from), "aria.toml changed: {from}");
         let text = base.replacen(from, to, 1);
-        let e = kincal_cli::robot_file::parse_robot_description(&text, "r.toml").unwrap_err();
+        let e = kincal_io::robot_file::parse_robot_description(&text, "r.toml").unwrap_err();
         let msg = e.to_string();
         assert!(msg.contains(key), "{msg}");
         assert!(msg.contains("expected 3 numbers"), "{msg}");
@@ -732,7 +732,7 @@ fn a_model_file_that_is_not_one_is_not_parsed_as_toml() {
         stderr(&o)
     );
     // A model file with a UTF-8 byte-order mark reads like one without.
-    let model = kincal_cli::model_file::ModelFile::nominal("aria", &kincal::aria::nominal());
+    let model = kincal_io::model_file::ModelFile::nominal("aria", &kincal::aria::nominal());
     fs::write(dir.path().join("plain.json"), model.to_json()).unwrap();
     fs::write(
         dir.path().join("bom.json"),
@@ -1042,7 +1042,7 @@ fn a_result_worse_than_the_start_is_warned() {
     // Started from the true robot, the orientations fit exactly before calibration.
     let names: Vec<String> = (1..=6).map(|k| format!("joint{k}")).collect();
     let truth =
-        kincal_cli::robot_file::write_generic("truth", &names, &kincal::aria::virtual_truth());
+        kincal_io::robot_file::write_generic("truth", &names, &kincal::aria::virtual_truth());
     fs::write(dir.path().join("truth.toml"), truth).unwrap();
     let o = kincal(
         &[

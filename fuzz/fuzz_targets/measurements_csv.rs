@@ -3,7 +3,7 @@
 //! bit-exact). The first byte picks the reader's options.
 #![no_main]
 
-use kincal_cli::measurements::{ReadOptions, parse_measurements, write_measurements_csv};
+use kincal_io::measurements::{ReadOptions, parse_measurements, write_measurements_csv};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

@@ -3,7 +3,7 @@
 //! and serialises back to a file that parses to the same content.
 #![no_main]
 
-use kincal_cli::model_file::parse;
+use kincal_io::model_file::parse;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|text: &str| {

@@ -2,7 +2,7 @@
 //! accepts writes back (full precision) and reads back to the same robot.
 #![no_main]
 
-use kincal_cli::robot_file::{parse_robot_description, write_robot_description};
+use kincal_io::robot_file::{parse_robot_description, write_robot_description};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|text: &str| {

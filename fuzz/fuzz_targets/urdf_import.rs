@@ -4,7 +4,7 @@
 #![no_main]
 
 use kincal::with_any_robot;
-use kincal_cli::urdf::{ChainSelection, UrdfExport, export_urdf, import_urdf_str};
+use kincal_io::urdf::{ChainSelection, UrdfExport, export_urdf, import_urdf_str};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|text: &str| {

@@ -9,12 +9,12 @@ use kincal::identify::{Algorithm, RobustOptions};
 use kincal::{EffectSet, Robot};
 
 use crate::args::{AlgorithmArg, LossArg, OrientationArg, parse_effect, positive};
-use crate::calibration::{self, Failure, Settings, Weighting};
-use crate::data::{self, DataOptions};
 use crate::error::{CliError, core_error};
-use crate::model_file::{DataJson, ModelFile, PoseLabel};
 use crate::report;
-use crate::robot_arg;
+use kincal_io::calibration::{self, Failure, Settings, Weighting};
+use kincal_io::data::{self, DataOptions};
+use kincal_io::model_file::{DataJson, ModelFile, PoseLabel};
+use kincal_io::robot_arg;
 
 pub const LONG_ABOUT: &str = "\
 Identifies the robot's parameters from measured poses: the geometric (modified DH / Hayati)
@@ -117,7 +117,7 @@ pub struct Args {
     #[arg(long, value_name = "ROBOT")]
     pub robot: String,
     #[command(flatten)]
-    pub chain: crate::robot_arg::UrdfChainArgs,
+    pub chain: kincal_io::robot_arg::UrdfChainArgs,
     /// Effects to identify with the geometry (comma-separated names of spec/effects.md)
     #[arg(long, value_name = "E1,E2", value_delimiter = ',', value_parser = parse_effect)]
     pub effects: Vec<kincal::Effect>,
@@ -247,11 +247,11 @@ fn calibrate<const N: usize>(start: &Robot<N>, name: &str, args: &Args) -> Resul
             allow_out_of_limits: args.allow_out_of_limits,
         },
     )?;
-    if args.constraints.is_some() || crate::constraints::has_contacts(&set) {
+    if args.constraints.is_some() || kincal_io::constraints::has_contacts(&set) {
         return calibrate_contacts(start, name, args, &settings, &set);
     }
     let meas = data::measurements::<N>(&set)?;
-    let findings = crate::plausibility::check_data(start, &meas, &set.source, args.init_frames);
+    let findings = kincal_io::plausibility::check_data(start, &meas, &set.source, args.init_frames);
     if let (Some(e), false) = (findings.errors.first(), args.allow_implausible) {
         return Err(CliError::input(format!(
             "{e}\nhint: pass --allow-implausible to fit these data anyway"
@@ -308,7 +308,7 @@ fn calibrate<const N: usize>(start: &Robot<N>, name: &str, args: &Args) -> Resul
     file.record_robust(&cal, 0, &labels);
     let mut warnings = findings.errors;
     warnings.extend(findings.warnings);
-    let result_warnings = crate::plausibility::check_result(&file);
+    let result_warnings = kincal_io::plausibility::check_result(&file);
     for w in &result_warnings {
         eprintln!("kincal: warning: {w}");
     }
@@ -322,7 +322,7 @@ fn calibrate<const N: usize>(start: &Robot<N>, name: &str, args: &Args) -> Resul
     if robot_path.is_file() {
         inputs.push(robot_path);
     }
-    crate::files::write_atomic(&args.out, &inputs, |w| w.write_all(text.as_bytes()))?;
+    kincal_io::files::write_atomic(&args.out, &inputs, |w| w.write_all(text.as_bytes()))?;
 
     let mut out = summary(&cal, name, &set.source, meas.len(), rows);
     out.push_str(&robust_report(&cal, &labels));
@@ -623,7 +623,7 @@ fn calibrate_contacts<const N: usize>(
     name: &str,
     args: &Args,
     settings: &Settings,
-    set: &crate::measurements::MeasurementSet,
+    set: &kincal_io::measurements::MeasurementSet,
 ) -> Result<(), CliError> {
     if args.robust.is_some() {
         return Err(CliError::usage(
@@ -638,10 +638,14 @@ fn calibrate_contacts<const N: usize>(
     let cons = args
         .constraints
         .as_deref()
-        .map(crate::constraints::read_constraints)
+        .map(kincal_io::constraints::read_constraints)
         .transpose()?;
-    let cd =
-        crate::constraints::build::<N>(set, cons.as_ref(), start, settings.weighting.weights().0)?;
+    let cd = kincal_io::constraints::build::<N>(
+        set,
+        cons.as_ref(),
+        start,
+        settings.weighting.weights().0,
+    )?;
     let view = cd.view();
     let rows = kincal_rows(&cd);
     let pb = crate::progress::spinner("identifying from contacts".to_string());
@@ -673,10 +677,10 @@ fn calibrate_contacts<const N: usize>(
     if let Some(c) = &args.constraints {
         inputs.push(c);
     }
-    crate::files::write_atomic(&args.out, &inputs, |w| w.write_all(text.as_bytes()))?;
+    kincal_io::files::write_atomic(&args.out, &inputs, |w| w.write_all(text.as_bytes()))?;
     let mut out = summary(&cal, name, &set.source, cd.rows(), rows);
-    out.push_str(&crate::constraints::reference_note(&view));
-    out.push_str(&crate::constraints::report_text(&cons_json));
+    out.push_str(&kincal_io::constraints::reference_note(&view));
+    out.push_str(&kincal_io::constraints::report_text(&cons_json));
     out.push_str(&format!(
         "Model written to {} ({} model).\n",
         args.out.display(),
@@ -687,7 +691,7 @@ fn calibrate_contacts<const N: usize>(
 }
 
 /// Residual rows of contact data (before eliminating the nuisance parameters).
-fn kincal_rows<const N: usize>(cd: &crate::constraints::ContactData<N>) -> usize {
+fn kincal_rows<const N: usize>(cd: &kincal_io::constraints::ContactData<N>) -> usize {
     let inst: usize = cd
         .instrument
         .iter()

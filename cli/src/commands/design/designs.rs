@@ -9,18 +9,17 @@ use kincal::aria;
 use kincal::identify::Workspace;
 use kincal::montecarlo::{Acquisition, Design as CoreDesign, Study, robustly_reachable};
 use kincal::observability::{
-    Index, Indices, ObservabilityOptions, PoseBlock, observability, pose_singular_values,
+    Indices, ObservabilityOptions, PoseBlock, observability, pose_singular_values,
 };
 use kincal::pose::Transform;
 use kincal::rng::SplitMix64;
 use kincal::selection::{
-    ClusterOptions, ClusterSelection, Constraints, Objective, Pool, Region, SelectOptions,
-    SelectScratch, Selection, cluster_select, fill_pool, sample_joint_space, sample_region,
-    select_start,
+    ClusterOptions, ClusterSelection, Constraints, Objective, Pool, SelectOptions, SelectScratch,
+    Selection, cluster_select, fill_pool, sample_joint_space, sample_region, select_start,
 };
 use rayon::prelude::*;
 
-use crate::design_args::{Context, P};
+use crate::commands::design::args::{Context, P, SelectionSettings};
 use crate::error::CliError;
 
 /// A design: its poses and how they are measured.
@@ -258,22 +257,6 @@ pub fn select_best<const N: usize>(
     Ok((q, Selection { evaluations, ..sel }))
 }
 
-/// Settings of the selection-based designs.
-#[derive(Debug, Clone)]
-pub struct SelectionSettings {
-    pub m: usize,
-    pub index: Index,
-    pub pool: usize,
-    pub starts: usize,
-    pub refine_trials: usize,
-    /// The standard design's whole-workspace box (above the base plate).
-    pub workspace: Region,
-    pub cube_m: f64,
-    pub tolerance: f64,
-    pub min_dexterity: f64,
-    pub robust_robots: u64,
-}
-
 /// The standard design: `m` configurations anywhere in the joint ranges (end effector
 /// inside the workspace box, joint margin kept) that maximise the index; measured by an
 /// instrument. Returns the design, the selection and the pool.
@@ -427,7 +410,7 @@ pub fn tool_from_file<const N: usize>(
     name: &str,
     path: &std::path::Path,
 ) -> Result<Design<N>, CliError> {
-    let poses = crate::tool_file::read_tool(path)?;
+    let poses = kincal_io::tool_file::read_tool(path)?;
     let mut q = Vec::with_capacity(poses.len());
     for p in &poses {
         // The file's nominal configuration (if any) chooses the branch.
@@ -463,7 +446,7 @@ pub fn commanded_from_file<const N: usize>(
     name: &str,
     path: &std::path::Path,
 ) -> Result<Design<N>, CliError> {
-    let mut opts = crate::measurements::ReadOptions::new(N);
+    let mut opts = kincal_io::measurements::ReadOptions::new(N);
     opts.joint_limits = Some(
         ctx.robot
             .limits()
@@ -471,7 +454,7 @@ pub fn commanded_from_file<const N: usize>(
             .map(|l| (l.lower, l.upper))
             .collect(),
     );
-    let set = crate::measurements::read_measurements(path, &opts)?;
+    let set = kincal_io::measurements::read_measurements(path, &opts)?;
     let q: Vec<[f64; N]> = set
         .rows
         .iter()

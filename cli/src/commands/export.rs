@@ -9,11 +9,11 @@ use std::path::{Path, PathBuf};
 use kincal::{Effect, EffectSet, ParamId};
 
 use crate::error::CliError;
-use crate::measurements::format_f64;
-use crate::model_file::{LengthChoice, ModelFile, ParamJson};
-use crate::robot_arg;
-use crate::urdf::{ChainSelection, UrdfExport, export_urdf};
-use crate::urdf_update::update_urdf;
+use kincal_io::measurements::format_f64;
+use kincal_io::model_file::{LengthChoice, ModelFile, ParamJson};
+use kincal_io::robot_arg;
+use kincal_io::urdf::{ChainSelection, UrdfExport, export_urdf};
+use kincal_io::urdf_update::update_urdf;
 
 pub const LONG_ABOUT: &str = "\
 Writes MODEL (a model file written by `kincal calibrate`, or a ROBOT for its nominal model)
@@ -158,15 +158,15 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         None => None,
     };
     if let (Some(out), Some(text)) = (&args.c_header, &header_text) {
-        crate::files::write_atomic(out, &inputs, |w| w.write_all(text.as_bytes()))?;
+        kincal_io::files::write_atomic(out, &inputs, |w| w.write_all(text.as_bytes()))?;
         eprintln!("C header written to {}", out.display());
     }
     if let (Some(out), Some(text)) = (&args.urdf, &urdf_text) {
-        crate::files::write_atomic(out, &inputs, |w| w.write_all(text.as_bytes()))?;
+        kincal_io::files::write_atomic(out, &inputs, |w| w.write_all(text.as_bytes()))?;
         eprintln!("URDF written to {}", out.display());
     }
     if let (Some(out), Some(text)) = (&args.mdh_table, &table_text) {
-        crate::files::write_atomic(out, &inputs, |w| w.write_all(text.as_bytes()))?;
+        kincal_io::files::write_atomic(out, &inputs, |w| w.write_all(text.as_bytes()))?;
         eprintln!("mDH table written to {}", out.display());
     }
     Ok(())

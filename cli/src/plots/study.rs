@@ -9,8 +9,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
+use crate::commands::design::study::DesignResult;
 use crate::error::CliError;
-use crate::study::DesignResult;
 
 type Res<T> = Result<T, Box<dyn std::error::Error>>;
 
@@ -58,7 +58,10 @@ fn panel(
         .margin_bottom(40)
         .x_label_area_size(10)
         .y_label_area_size(64)
-        .build_cartesian_2d(0.4f64..(n as f64 + 0.6), 0.0..crate::plot::finite_top(top)?)?;
+        .build_cartesian_2d(
+            0.4f64..(n as f64 + 0.6),
+            0.0..crate::plots::finite_top(top)?,
+        )?;
     chart
         .configure_mesh()
         .disable_x_mesh()
@@ -193,6 +196,6 @@ pub fn write_comparison(
 ) -> Result<(), CliError> {
     let svg = comparison_svg(title, subtitle, results, 1.0, 0.66)
         .map_err(|e| CliError::io(format!("{}: cannot draw the figure: {e}", path.display())))?;
-    crate::files::write_atomic(path, inputs, |w| w.write_all(svg.as_bytes()))?;
+    kincal_io::files::write_atomic(path, inputs, |w| w.write_all(svg.as_bytes()))?;
     Ok(())
 }

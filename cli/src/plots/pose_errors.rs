@@ -8,8 +8,9 @@ use kincal::validation::PoseErrors;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::cmd_validate::Targets;
 use crate::error::CliError;
+use crate::plots::require_finite;
+use crate::report::Targets;
 
 /// One model's per-pose errors.
 #[derive(Debug, Clone)]
@@ -43,25 +44,6 @@ fn tick(v: f64, span: f64) -> String {
 }
 
 type Res<T> = Result<T, Box<dyn std::error::Error>>;
-
-/// `top` if finite (see [`require_finite`]).
-pub fn finite_top(top: f64) -> Result<f64, String> {
-    if top.is_finite() {
-        Ok(top)
-    } else {
-        Err("non-finite values (an overflow upstream): the figure is not drawn".into())
-    }
-}
-
-/// Refuses to draw non-finite values: plotters' tick computation on an infinite axis range
-/// never ends (`validate --plot` spun forever on an overflowed error norm).
-pub fn require_finite<'a>(values: impl IntoIterator<Item = &'a f64>) -> Res<()> {
-    if values.into_iter().all(|v| v.is_finite()) {
-        Ok(())
-    } else {
-        Err("non-finite values (an overflow upstream): the figure is not drawn".into())
-    }
-}
 
 fn panel(
     area: &DrawingArea<SVGBackend<'_>, Shift>,
@@ -223,7 +205,7 @@ pub fn write_error_figure(
 ) -> Result<(), CliError> {
     let svg = error_figure_svg(title, series, with_orientation, targets)
         .map_err(|e| CliError::io(format!("{}: cannot draw the figure: {e}", path.display())))?;
-    crate::files::write_atomic(path, inputs, |w| w.write_all(svg.as_bytes()))?;
+    kincal_io::files::write_atomic(path, inputs, |w| w.write_all(svg.as_bytes()))?;
     Ok(())
 }
 

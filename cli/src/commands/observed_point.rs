@@ -6,9 +6,9 @@ use std::path::{Path, PathBuf};
 
 use kincal::view_point::{Axis, ViewPoint, moved_to_point, view_point};
 
-use crate::data;
 use crate::error::{CliError, core_error};
-use crate::measurements::{ReadOptions, read_measurements, write_measurements_csv};
+use kincal_io::data;
+use kincal_io::measurements::{ReadOptions, read_measurements, write_measurements_csv};
 
 pub const LONG_ABOUT: &str = "\
 Re-expresses measured camera poses at the point the camera looks at. A camera that gets
@@ -152,7 +152,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
          T'·Trans(-point)",
         args.axis
     ));
-    crate::files::write_atomic(&args.out, &[&args.data], |w| {
+    kincal_io::files::write_atomic(&args.out, &[&args.data], |w| {
         write_measurements_csv(w, &set)
     })?;
 

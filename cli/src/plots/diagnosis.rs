@@ -8,10 +8,40 @@ use kincal::diagnosis::{Diagnosis, PoseDiagnosis, QuantityKind};
 use kincal::identify::Measurement;
 use plotters::prelude::*;
 
-use crate::cmd_diagnose::{Outputs, quantity_label, quantity_unit};
 use crate::error::CliError;
+use crate::report::{quantity_label, quantity_unit};
 
 type Res<T> = Result<T, Box<dyn std::error::Error>>;
+
+/// Where `diagnose` writes: REPORT.json, the readable report, the model, and the three plots
+/// named after REPORT.json.
+#[derive(Debug, Clone)]
+pub struct Outputs {
+    pub json: PathBuf,
+    pub report: PathBuf,
+    pub model: PathBuf,
+    pub plot_residuals: PathBuf,
+    pub plot_correlate: PathBuf,
+    pub plot_candidates: PathBuf,
+}
+
+impl Outputs {
+    /// Outputs named after REPORT.json (plots `<stem>_residuals.svg` … beside it).
+    pub fn new(json: &Path, report: Option<&Path>, model: &Path) -> Self {
+        let stem = json
+            .file_stem()
+            .map_or_else(|| "REPORT".into(), |s| s.to_string_lossy().into_owned());
+        let dir = json.parent().unwrap_or(Path::new(""));
+        Outputs {
+            json: json.to_path_buf(),
+            report: report.map_or_else(|| json.with_extension("txt"), Path::to_path_buf),
+            model: model.to_path_buf(),
+            plot_residuals: dir.join(format!("{stem}_residuals.svg")),
+            plot_correlate: dir.join(format!("{stem}_correlate.svg")),
+            plot_candidates: dir.join(format!("{stem}_candidates.svg")),
+        }
+    }
+}
 
 const GEOMETRIC: RGBColor = RGBColor(230, 120, 20);
 const FINAL: RGBColor = RGBColor(31, 119, 180);

@@ -6,11 +6,11 @@ use std::path::{Path, PathBuf};
 
 use kincal::montecarlo::Acquisition;
 
-use crate::design_args::{Context, ScenarioArgs, SelectionArgs, SetupArgs};
-use crate::designs::{self, Design};
+use crate::commands::design::args::{Context, ScenarioArgs, SelectionArgs, SetupArgs};
+use crate::commands::design::designs::{self, Design};
+use crate::commands::design::study::{self, DesignResult, Timing};
 use crate::error::CliError;
-use crate::robot_arg::resolve_robot;
-use crate::study::{self, DesignResult, Summary, Timing};
+use kincal_io::robot_arg::resolve_robot;
 
 pub const LONG_ABOUT: &str = "\
 Monte-Carlo evaluation of data-acquisition designs (the paper's Section 4.4 and Fig. 7, as a
@@ -130,7 +130,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         named(c, "--commanded")?;
     }
     for p in &args.plates {
-        crate::plate::parse_plate(p)?;
+        crate::commands::design::plate::parse_plate(p)?;
     }
     if args.plate_plot.is_some() && args.plates.is_empty() {
         return Err(CliError::usage("--plate-plot: give at least one --plate"));
@@ -221,21 +221,6 @@ pub fn build_designs<const N: usize>(
     Ok(out)
 }
 
-/// Timing line.
-pub fn timing_line(t: &Timing) -> String {
-    let per = t.wall_s / t.calibrations.max(1) as f64 * 1e6;
-    let cpu = t.cpu_s.map_or(String::new(), |c| {
-        format!(
-            ", {c:.2} s CPU ({:.0} µs per calibration)",
-            c / t.calibrations.max(1) as f64 * 1e6
-        )
-    });
-    format!(
-        "{} calibrations in {:.2} s on {} threads ({per:.0} µs each){cpu}",
-        t.calibrations, t.wall_s, t.threads
-    )
-}
-
 fn verdicts(results: &[DesignResult]) -> String {
     let mut s = String::new();
     let get = |n: &str| results.iter().find(|r| r.name == n);
@@ -323,8 +308,12 @@ fn evaluate<const N: usize>(
         .plates
         .iter()
         .map(|p| {
-            let plate =
-                crate::plate::build_plate(&ctx, &crate::plate::parse_plate(p)?, &probe, robust);
+            let plate = crate::commands::design::plate::build_plate(
+                &ctx,
+                &crate::commands::design::plate::parse_plate(p)?,
+                &probe,
+                robust,
+            );
             pb.inc(1);
             plate
         })
@@ -367,12 +356,17 @@ fn evaluate<const N: usize>(
     out.push_str(&study::table(&results));
     let _ = writeln!(out, "\nVerdicts:");
     out.push_str(&verdicts(&results));
-    let _ = writeln!(out, "\nTiming: {}", timing_line(&timing));
+    let _ = writeln!(out, "\nTiming: {}", study::timing_line(&timing));
     let plate_rows = if plates.is_empty() {
         None
     } else {
-        let (rows, wall_s) =
-            crate::plate::compare(&ctx, &designs, &plates, args.scenario.scenario(), args.runs)?;
+        let (rows, wall_s) = crate::commands::design::plate::compare(
+            &ctx,
+            &designs,
+            &plates,
+            args.scenario.scenario(),
+            args.runs,
+        )?;
         let reference = args.plate_match.clone().unwrap_or_else(|| {
             if designs.iter().any(|d| d.name == "optimised") {
                 "optimised".into()
@@ -385,9 +379,9 @@ fn evaluate<const N: usize>(
             "\nSocket plates vs the designs above, on the same {} robots: worst validation pose per run, absolute (base frame) and registered (after the best rigid base registration):",
             args.runs
         );
-        out.push_str(&crate::plate::table(&rows));
+        out.push_str(&crate::commands::design::plate::table(&rows));
         let _ = writeln!(out, "\nPlate verdicts:");
-        out.push_str(&crate::plate::verdicts(&rows, &reference));
+        out.push_str(&crate::commands::design::plate::verdicts(&rows, &reference));
         let _ = writeln!(
             out,
             "  ({} calibrations in {wall_s:.2} s)",
@@ -398,7 +392,7 @@ fn evaluate<const N: usize>(
     crate::report::emit(&out);
     let inputs: Vec<&Path> = Vec::new();
     if let (Some(p), Some(rows)) = (&args.plate_plot, &plate_rows) {
-        crate::plate::write_plot(
+        crate::commands::design::plate::write_plot(
             p,
             &inputs,
             &format!(
@@ -411,7 +405,7 @@ fn evaluate<const N: usize>(
         )?;
     }
     if let Some(p) = &args.plot {
-        crate::study_plot::write_comparison(
+        crate::plots::study::write_comparison(
             p,
             &inputs,
             "Design comparison: errors after calibration inside the working region",
@@ -427,45 +421,14 @@ fn evaluate<const N: usize>(
     if let Some(p) = &args.json {
         let mut json = report_json(&ctx, args, &results, &timing);
         if let Some(rows) = &plate_rows {
-            json["plates"] = crate::plate::json(rows);
+            json["plates"] = crate::commands::design::plate::json(rows);
         }
-        crate::files::write_atomic(p, &inputs, |w| {
+        kincal_io::files::write_atomic(p, &inputs, |w| {
             serde_json::to_writer_pretty(&mut *w, &json).map_err(std::io::Error::other)?;
             w.write_all(b"\n")
         })?;
     }
     Ok(())
-}
-
-fn summary_json(s: Summary) -> serde_json::Value {
-    serde_json::json!({"median": s.median, "p95": s.p95, "max": s.max, "mean": s.mean})
-}
-
-/// The numbers of a study as JSON.
-pub fn results_json(results: &[DesignResult]) -> serde_json::Value {
-    serde_json::Value::Array(
-        results
-            .iter()
-            .map(|r| {
-                serde_json::json!({
-                    "name": r.name,
-                    "acquisition": match r.acquisition { Acquisition::Instrument => "instrument", Acquisition::Tool => "tool" },
-                    "poses": r.poses,
-                    "o_eq17": r.o,
-                    "runs": r.runs,
-                    "failed": r.failed,
-                    "first_failure": r.first_failure,
-                    "worst_pose_e_p_mm": summary_json(r.pos()),
-                    "worst_pose_e_phi_deg": summary_json(r.rot()),
-                    "rms_e_p_mm": summary_json(Summary::of(&r.rms_pos_mm)),
-                    "rms_e_phi_deg": summary_json(Summary::of(&r.rms_rot_deg)),
-                    "before_worst_pose_e_p_mm": summary_json(Summary::of(&r.before_pos_mm)),
-                    "before_worst_pose_e_phi_deg": summary_json(Summary::of(&r.before_rot_deg)),
-                    "mean_iterations": r.mean_iterations,
-                })
-            })
-            .collect(),
-    )
 }
 
 fn report_json<const N: usize>(
@@ -485,7 +448,7 @@ fn report_json<const N: usize>(
             "noise_pos_m": s.noise_pos_m, "noise_rot_rad": s.noise_rot_rad,
             "tool_tol_pos_m": s.tool_tol_pos_m, "tool_tol_rot_rad": s.tool_tol_rot_rad,
         },
-        "designs": results_json(results),
+        "designs": study::results_json(results),
         // Run times and the thread count are on the screen only (the Timing line): the
         // file is byte-for-byte reproducible whatever the machine.
         "calibrations": t.calibrations,

@@ -20,17 +20,17 @@ use nalgebra::Vector3;
 use rayon::prelude::*;
 
 use crate::args::positive;
-use crate::calibration::{self, Calibration, Settings};
-use crate::cmd_validate::{Evaluation, Targets, evaluate, fmt_err, summary_table};
-use crate::data::{self, DataOptions};
+use crate::commands::validate::{Evaluation, evaluate, summary_table};
 use crate::error::CliError;
-use crate::measurements::{
+use crate::plots::pose_errors::{self, Series};
+use crate::report::{self, Table, Targets, fmt_err};
+use kincal_io::calibration::{self, Calibration, Settings};
+use kincal_io::data::{self, DataOptions};
+use kincal_io::measurements::{
     MeasurementRow, MeasurementSet, Orientation, OrientationForm, write_measurements_csv,
 };
-use crate::model_file::{DataJson, ModelFile};
-use crate::plot::{self, Series};
-use crate::report::{self, Table};
-use crate::units::display_unit;
+use kincal_io::model_file::{DataJson, ModelFile};
+use kincal_io::units::display_unit;
 
 pub const LONG_ABOUT: &str = "\
 The paper's simulation study end to end on the built-in ARIA, with no set-up:
@@ -211,7 +211,7 @@ pub fn sim_to_real_diagnosis(ctx: &DemoContext<'_>) -> Result<String, CliError> 
         val.len(),
         validation.display()
     );
-    let args = crate::cmd_diagnose::Args {
+    let args = crate::commands::diagnose::Args {
         data: session.clone(),
         robot: "aria".into(),
         chain: Default::default(),
@@ -228,7 +228,7 @@ pub fn sim_to_real_diagnosis(ctx: &DemoContext<'_>) -> Result<String, CliError> 
         constraints: None,
     };
     let nominal = aria::nominal();
-    let outcome = crate::cmd_diagnose::execute::<N>(&nominal, "aria", &args)?;
+    let outcome = crate::commands::diagnose::execute::<N>(&nominal, "aria", &args)?;
     let d = &outcome.diagnosis;
     let before = errors(&nominal, &val);
     let geo = errors(&d.geometric, &val);
@@ -346,7 +346,7 @@ fn write_set(path: &Path, comments: &[String], rows: Vec<MeasurementRow>) -> Res
         sha256: String::new(),
         header_line: 0,
     };
-    crate::files::write_atomic(path, &[], |w| write_measurements_csv(w, &set))?;
+    kincal_io::files::write_atomic(path, &[], |w| write_measurements_csv(w, &set))?;
     Ok(())
 }
 
@@ -606,7 +606,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             false,
         );
         let json = mf.to_json();
-        crate::files::write_atomic(&model_path, &[path.as_path()], |w| {
+        kincal_io::files::write_atomic(&model_path, &[path.as_path()], |w| {
             w.write_all(json.as_bytes())
         })?;
 
@@ -667,7 +667,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                 errors: e.errors.clone(),
             })
             .collect();
-        plot::write_error_figure(
+        pose_errors::write_error_figure(
             &svg,
             &[],
             &format!(
@@ -727,7 +727,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         out_dir.join("real_aria_session.csv").display()
     );
     let report_path = out_dir.join("report.txt");
-    crate::files::write_atomic(&report_path, &[], |w| w.write_all(text.as_bytes()))?;
+    kincal_io::files::write_atomic(&report_path, &[], |w| w.write_all(text.as_bytes()))?;
     // The run time goes to the screen only: report.txt is byte-for-byte reproducible.
     let _ = writeln!(text, "Done in {:.2} s.", t0.elapsed().as_secs_f64());
     report::emit(&text);

@@ -85,7 +85,7 @@ pub struct SetupArgs {
     #[arg(long, default_value = "aria", value_name = "ROBOT")]
     pub robot: String,
     #[command(flatten)]
-    pub chain: crate::robot_arg::UrdfChainArgs,
+    pub chain: kincal_io::robot_arg::UrdfChainArgs,
     /// Working region [m], the box the validation grid and the local designs live in
     /// [ARIA default: the assumed biopsy region 0.066,0.116,0.235,0.566,0.592,0.335]
     #[arg(long, value_name = "X0,Y0,Z0,X1,Y1,Z1", value_parser = parse_box)]
@@ -211,12 +211,12 @@ pub struct SelectionArgs {
 }
 
 impl SelectionArgs {
-    pub fn settings(&self) -> Result<crate::designs::SelectionSettings, CliError> {
+    pub fn settings(&self) -> Result<SelectionSettings, CliError> {
         if self.poses == 0 || self.poses > 48 {
             return Err(CliError::usage("--poses: expected 1..=48"));
         }
         let w = self.workspace;
-        Ok(crate::designs::SelectionSettings {
+        Ok(SelectionSettings {
             m: self.poses,
             index: self.index,
             pool: self.pool.max(self.poses),
@@ -230,6 +230,22 @@ impl SelectionArgs {
             robust_robots: self.robust_robots,
         })
     }
+}
+
+/// Settings of the selection-based designs.
+#[derive(Debug, Clone)]
+pub struct SelectionSettings {
+    pub m: usize,
+    pub index: kincal::observability::Index,
+    pub pool: usize,
+    pub starts: usize,
+    pub refine_trials: usize,
+    /// The standard design's whole-workspace box (above the base plate).
+    pub workspace: Region,
+    pub cube_m: f64,
+    pub tolerance: f64,
+    pub min_dexterity: f64,
+    pub robust_robots: u64,
 }
 
 /// The resolved setting of a design command.

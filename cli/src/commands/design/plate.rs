@@ -29,10 +29,10 @@ use kincal::rng::SplitMix64;
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
-use crate::design_args::{Context, P};
-use crate::designs::Design;
+use crate::commands::design::args::{Context, P};
+use crate::commands::design::designs::Design;
+use crate::commands::design::study::{DesignResult, Summary};
 use crate::error::CliError;
-use crate::study::{DesignResult, Summary};
 
 /// Workspace of the plate identification: the design capacity plus the tool translation
 /// and the base frame the analysis sets aside.
@@ -619,7 +619,7 @@ pub fn write_plot(
 ) -> Result<(), CliError> {
     let svg = plot_svg(subtitle, rows)
         .map_err(|e| CliError::io(format!("{}: cannot draw the figure: {e}", path.display())))?;
-    crate::files::write_atomic(path, inputs, |w| w.write_all(svg.as_bytes()))?;
+    kincal_io::files::write_atomic(path, inputs, |w| w.write_all(svg.as_bytes()))?;
     Ok(())
 }
 
@@ -675,7 +675,7 @@ fn plot_svg(subtitle: &str, rows: &[Row]) -> Result<String, Box<dyn std::error::
             .y_label_area_size(64)
             .build_cartesian_2d(
                 (cmin..cmax).log_scale(),
-                0.0..crate::plot::finite_top(top.max(1e-3))?,
+                0.0..crate::plots::finite_top(top.max(1e-3))?,
             )?;
         chart
             .configure_mesh()

@@ -16,11 +16,11 @@ use serde::Deserialize;
 
 use crate::args::positive;
 use crate::error::CliError;
-use crate::measurements::{
+use kincal_io::measurements::{
     MeasurementRow, MeasurementSet, Orientation, OrientationForm, ReadOptions, parse_measurements,
     write_measurements_csv,
 };
-use crate::robot_arg;
+use kincal_io::robot_arg;
 
 pub const LONG_ABOUT: &str = "\
 Turns a motion-capture marker export into the measurement CSV. In every frame the base
@@ -85,7 +85,7 @@ pub struct Args {
     #[arg(long, value_name = "ROBOT")]
     pub robot: String,
     #[command(flatten)]
-    pub chain: crate::robot_arg::UrdfChainArgs,
+    pub chain: kincal_io::robot_arg::UrdfChainArgs,
     /// Measurement CSV to write
     #[arg(long, value_name = "DATA.csv")]
     pub out: PathBuf,
@@ -811,7 +811,7 @@ fn markers<const N: usize>(robot: &Robot<N>, args: &Args) -> Result<(), CliError
         header_line: 0,
     };
     let inputs: Vec<&Path> = vec![&args.export, &args.design, &args.joints];
-    crate::files::write_atomic(&args.out, &inputs, |w| write_measurements_csv(w, &set))?;
+    kincal_io::files::write_atomic(&args.out, &inputs, |w| write_measurements_csv(w, &set))?;
     let _ = writeln!(
         s,
         "{n_rows} {} written to {}{}",
@@ -826,7 +826,7 @@ fn markers<const N: usize>(robot: &Robot<N>, args: &Args) -> Result<(), CliError
     if let Some(p) = &args.residuals {
         let mut ins = inputs.clone();
         ins.push(&args.out);
-        crate::files::write_atomic(p, &ins, |w| w.write_all(resid_csv.as_bytes()))?;
+        kincal_io::files::write_atomic(p, &ins, |w| w.write_all(resid_csv.as_bytes()))?;
         let _ = writeln!(s, "Per-marker residuals written to {}", p.display());
     }
     crate::report::emit(&s);

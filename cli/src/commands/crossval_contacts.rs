@@ -19,10 +19,10 @@ use kincal::identify::{
 use kincal::{ParamSet, Robot};
 use serde_json::{Value, json};
 
-use crate::calibration::new_workspace;
-use crate::constraints::ContactData;
 use crate::error::CliError;
-use crate::measurements::MeasurementSet;
+use kincal_io::calibration::new_workspace;
+use kincal_io::constraints::ContactData;
+use kincal_io::measurements::MeasurementSet;
 
 /// What a fold holds out.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -163,7 +163,7 @@ pub struct Plan<'a> {
     pub requested: ParamSet,
     pub weight_pos: f64,
     pub max_iterations: u32,
-    pub constraints: Option<&'a crate::constraints::ConstraintsFile>,
+    pub constraints: Option<&'a kincal_io::constraints::ConstraintsFile>,
 }
 
 /// Runs the cross-validation; returns the report text and its JSON.
@@ -172,7 +172,7 @@ pub fn run<const N: usize>(
     set: &MeasurementSet,
     plan: &Plan<'_>,
 ) -> Result<(String, Value), CliError> {
-    let base = crate::constraints::build::<N>(set, plan.constraints, nominal, plan.weight_pos)?;
+    let base = kincal_io::constraints::build::<N>(set, plan.constraints, nominal, plan.weight_pos)?;
     let (group_of, labels) = groups_of(set, plan.group_by)?;
     let k = plan.folds.min(labels.len());
     if k < 2 {

@@ -5,17 +5,15 @@ use std::path::{Path, PathBuf};
 
 use kincal::Robot;
 use kincal::identify::Measurement;
-use kincal::validation::{
-    ErrorSummary, PoseErrors, TARGET_POS_M, TARGET_ROT_RAD, Verdict, biopsy_allowed_rotation_rad,
-};
+use kincal::validation::{ErrorSummary, PoseErrors, Verdict, biopsy_allowed_rotation_rad};
 use serde::Serialize;
 
 use crate::args::{non_negative, positive};
-use crate::data::{self, DataOptions};
 use crate::error::{CliError, core_error};
-use crate::plot::{self, Series};
-use crate::report::Table;
-use crate::robot_arg;
+use crate::plots::pose_errors::{self, Series};
+use crate::report::{Table, Targets, fmt_err};
+use kincal_io::data::{self, DataOptions};
+use kincal_io::robot_arg;
 
 pub const LONG_ABOUT: &str = "\
 Compares the model's poses with the measured poses of DATA (measured minus model, in the base
@@ -52,7 +50,7 @@ pub struct Args {
     #[arg(value_name = "MODEL")]
     pub model: String,
     #[command(flatten)]
-    pub chain: crate::robot_arg::UrdfChainArgs,
+    pub chain: kincal_io::robot_arg::UrdfChainArgs,
     /// Measurement CSV with measured poses
     #[arg(value_name = "DATA")]
     pub data: PathBuf,
@@ -101,7 +99,7 @@ pub struct Evaluation {
 /// first row.
 fn refuse_non_finite(
     e: &Evaluation,
-    set: &crate::measurements::MeasurementSet,
+    set: &kincal_io::measurements::MeasurementSet,
 ) -> Result<(), CliError> {
     let bad = e.errors.iter().position(|p| {
         !p.pos_m
@@ -144,31 +142,6 @@ pub fn evaluate<const N: usize>(
         errors,
         summary,
     })
-}
-
-/// Targets of the verdict [m], [rad].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Targets {
-    pub pos_m: f64,
-    pub rot_rad: f64,
-}
-
-impl Default for Targets {
-    fn default() -> Self {
-        Targets {
-            pos_m: TARGET_POS_M,
-            rot_rad: TARGET_ROT_RAD,
-        }
-    }
-}
-
-/// An error in mm or degrees: 6 decimals, exponent form below 0.001.
-pub fn fmt_err(v: f64) -> String {
-    if v == 0.0 || v.abs() >= 1e-3 {
-        format!("{v:.6}")
-    } else {
-        format!("{v:.3e}")
-    }
 }
 
 fn verdict_text(v: &Verdict, has_rot: bool) -> String {
@@ -242,7 +215,7 @@ pub fn pose_table(e: &Evaluation, ids: &[String], has_rot: bool, rot_measured: &
 }
 
 /// "10 poses (46 rows)" when rows share pose ids, else "46 poses".
-pub fn poses_text(set: &crate::measurements::MeasurementSet) -> String {
+pub fn poses_text(set: &kincal_io::measurements::MeasurementSet) -> String {
     let poses = set.pose_count();
     let rows = set.rows.len();
     if poses == rows {
@@ -260,14 +233,14 @@ fn model_label(algorithm: String, effects: kincal::EffectSet) -> String {
 }
 
 /// True if the model was calibrated on exactly these bytes (same SHA-256).
-fn calibrated_on(file: &crate::model_file::ModelFile, sha256: &str) -> bool {
+fn calibrated_on(file: &kincal_io::model_file::ModelFile, sha256: &str) -> bool {
     file.calibration
         .as_ref()
         .is_some_and(|c| c.data.sha256.eq_ignore_ascii_case(sha256))
 }
 
 /// The ARIA biopsy robot the paper's targets (1 mm, 0.66°) and eq. (3) were set for.
-fn is_aria(file: &crate::model_file::ModelFile) -> bool {
+fn is_aria(file: &kincal_io::model_file::ModelFile) -> bool {
     file.robot.name.eq_ignore_ascii_case("aria")
 }
 
@@ -364,7 +337,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
 fn validate<const N: usize>(
     robot: &Robot<N>,
     name: &str,
-    file: &crate::model_file::ModelFile,
+    file: &kincal_io::model_file::ModelFile,
     effects: kincal::EffectSet,
     args: &Args,
 ) -> Result<(), CliError> {
@@ -381,7 +354,7 @@ fn validate<const N: usize>(
             allow_out_of_limits: args.allow_out_of_limits,
         },
     )?;
-    if args.constraints.is_some() || crate::constraints::has_contacts(&set) {
+    if args.constraints.is_some() || kincal_io::constraints::has_contacts(&set) {
         return validate_contacts(robot, name, file, args, &set);
     }
     let meas = data::measurements::<N>(&set)?;
@@ -466,7 +439,7 @@ fn validate<const N: usize>(
         };
         let text = serde_json::to_string_pretty(&report)
             .map_err(|e| CliError::io(format!("{}: {e}", p.display())))?;
-        crate::files::write_atomic(p, &inputs, |w| {
+        kincal_io::files::write_atomic(p, &inputs, |w| {
             w.write_all(text.as_bytes())?;
             w.write_all(b"\n")
         })?;
@@ -480,7 +453,7 @@ fn validate<const N: usize>(
             })
             .collect();
         let title = format!("{} on {}", args.model, args.data.display());
-        plot::write_error_figure(p, &inputs, &title, &series, has_rot, targets)?;
+        pose_errors::write_error_figure(p, &inputs, &title, &series, has_rot, targets)?;
     }
 
     let mut out = String::new();
@@ -577,16 +550,16 @@ fn validate<const N: usize>(
 fn validate_contacts<const N: usize>(
     robot: &Robot<N>,
     name: &str,
-    file: &crate::model_file::ModelFile,
+    file: &kincal_io::model_file::ModelFile,
     args: &Args,
-    set: &crate::measurements::MeasurementSet,
+    set: &kincal_io::measurements::MeasurementSet,
 ) -> Result<(), CliError> {
     let cons = args
         .constraints
         .as_deref()
-        .map(crate::constraints::read_constraints)
+        .map(kincal_io::constraints::read_constraints)
         .transpose()?;
-    let cd = crate::constraints::build::<N>(set, cons.as_ref(), robot, 1.0)?;
+    let cd = kincal_io::constraints::build::<N>(set, cons.as_ref(), robot, 1.0)?;
     let line_of = |i: usize| cd.row_of(i).and_then(|r| set.rows.get(r)).map(|r| r.line);
     let variants: Vec<(String, Robot<N>)> = file
         .variants::<N>()
@@ -650,10 +623,10 @@ fn validate_contacts<const N: usize>(
     if let Some((_, j)) = reports.first()
         && !args.quiet
     {
-        out.push_str(&crate::constraints::report_text(j));
+        out.push_str(&kincal_io::constraints::report_text(j));
     }
     if let Some(path) = &args.json {
-        let map: std::collections::BTreeMap<&str, &crate::model_file::ConstraintsJson> =
+        let map: std::collections::BTreeMap<&str, &kincal_io::model_file::ConstraintsJson> =
             reports.iter().map(|(n, j)| (n.as_str(), j)).collect();
         let text = serde_json::to_string_pretty(&map)
             .map_err(|e| CliError::io(format!("{}: {e}", path.display())))?;
@@ -661,7 +634,7 @@ fn validate_contacts<const N: usize>(
         if let Some(c) = &args.constraints {
             inputs.push(c);
         }
-        crate::files::write_atomic(path, &inputs, |w| w.write_all(text.as_bytes()))?;
+        kincal_io::files::write_atomic(path, &inputs, |w| w.write_all(text.as_bytes()))?;
     }
     crate::report::emit(&out);
     Ok(())

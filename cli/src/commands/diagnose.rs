@@ -10,19 +10,20 @@ use std::time::Instant;
 
 use kincal::diagnosis::{
     self, BeyondLibrary, Config, DiagWorkspace, Diagnosis, Method, ModelScore, Part, PoseDiagnosis,
-    QuantityKind, Reason, Status, Warning,
+    Reason, Status, Warning,
 };
 use kincal::identify::{Algorithm, Measurement};
 use kincal::{Effect, EffectSet, ParamId, ParamIndex, ParamSet, Robot};
 use serde::Serialize;
 
 use crate::args::parse_effect;
-use crate::calibration::{Calibration, Run, Settings, Weighting};
-use crate::data::{self, DataOptions};
 use crate::error::{CliError, core_error};
-use crate::measurements::MeasurementSet;
-use crate::model_file::{DataJson, ModelFile};
-use crate::report::{self, Table};
+use crate::plots::diagnosis::Outputs;
+use crate::report::{self, Table, quantity_label, quantity_unit};
+use kincal_io::calibration::{Calibration, Run, Settings, Weighting};
+use kincal_io::data::{self, DataOptions};
+use kincal_io::measurements::MeasurementSet;
+use kincal_io::model_file::{DataJson, ModelFile};
 
 pub const LONG_ABOUT: &str = "\
 The sim-to-real gap diagnosis (spec/effects.md): after a geometric calibration, where does
@@ -81,7 +82,7 @@ pub struct Args {
     #[arg(long, value_name = "ROBOT")]
     pub robot: String,
     #[command(flatten)]
-    pub chain: crate::robot_arg::UrdfChainArgs,
+    pub chain: kincal_io::robot_arg::UrdfChainArgs,
     /// Instrument position noise, 1σ per axis [mm] (default: from repeats)
     #[arg(long, value_name = "S", value_parser = crate::args::sigma_mm)]
     pub sigma_pos_mm: Option<f64>,
@@ -130,35 +131,6 @@ pub fn new_workspace() -> Box<DiagWorkspace<DIAG_PARAMS>> {
     unsafe { b.assume_init() }
 }
 
-/// Where the outputs go.
-#[derive(Debug, Clone)]
-pub struct Outputs {
-    pub json: PathBuf,
-    pub report: PathBuf,
-    pub model: PathBuf,
-    pub plot_residuals: PathBuf,
-    pub plot_correlate: PathBuf,
-    pub plot_candidates: PathBuf,
-}
-
-impl Outputs {
-    /// Outputs named after REPORT.json (plots `<stem>_residuals.svg` … beside it).
-    pub fn new(json: &Path, report: Option<&Path>, model: &Path) -> Self {
-        let stem = json
-            .file_stem()
-            .map_or_else(|| "REPORT".into(), |s| s.to_string_lossy().into_owned());
-        let dir = json.parent().unwrap_or(Path::new(""));
-        Outputs {
-            json: json.to_path_buf(),
-            report: report.map_or_else(|| json.with_extension("txt"), Path::to_path_buf),
-            model: model.to_path_buf(),
-            plot_residuals: dir.join(format!("{stem}_residuals.svg")),
-            plot_correlate: dir.join(format!("{stem}_correlate.svg")),
-            plot_candidates: dir.join(format!("{stem}_candidates.svg")),
-        }
-    }
-}
-
 /// What a diagnosis produced (for the demo, which validates the models further).
 #[derive(Debug, Clone)]
 pub struct Outcome<const N: usize> {
@@ -170,7 +142,7 @@ pub struct Outcome<const N: usize> {
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
-    let spec = crate::robot_arg::resolve_robot(&args.robot, &args.chain)?;
+    let spec = kincal_io::robot_arg::resolve_robot(&args.robot, &args.chain)?;
     kincal::with_any_robot!(&spec.robot, r => {
         if let Some(text) = contact_diagnosis(r, args)? {
             report::emit(&text);
@@ -184,7 +156,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     })
 }
 
-/// The diagnosis of data with target/plane rows ([`crate::diagnose_contacts`]); `None`
+/// The diagnosis of data with target/plane rows ([`crate::commands::diagnose_contacts`]); `None`
 /// for instrument data. Writes REPORT.json and the readable report; no model (contact data
 /// are calibrated by `kincal calibrate`).
 fn contact_diagnosis<const N: usize>(
@@ -200,10 +172,17 @@ fn contact_diagnosis<const N: usize>(
             allow_out_of_limits: args.allow_out_of_limits,
         },
     )?;
-    if args.constraints.is_none() && !crate::constraints::has_contacts(&set) {
+    if args.constraints.is_none() && !kincal_io::constraints::has_contacts(&set) {
         return Ok(None);
     }
-    let (mut text, json) = crate::diagnose_contacts::run(robot, &set, args)?;
+    let options = crate::commands::diagnose_contacts::Options {
+        candidates: &args.candidates,
+        no_pairs: args.no_pairs,
+        constraints: args.constraints.as_deref(),
+        sigma_pos_mm: args.sigma_pos_mm,
+        folds: args.folds,
+    };
+    let (mut text, json) = crate::commands::diagnose_contacts::run(robot, &set, &options)?;
     let _ = writeln!(
         text,
         "No model written to {}: calibrate contact data with `kincal calibrate DATA --robot R \
@@ -217,8 +196,8 @@ fn contact_diagnosis<const N: usize>(
     }
     let body = serde_json::to_string_pretty(&json)
         .map_err(|e| CliError::io(format!("{}: {e}", outputs.json.display())))?;
-    crate::files::write_atomic(&outputs.json, &inputs, |w| w.write_all(body.as_bytes()))?;
-    crate::files::write_atomic(&outputs.report, &inputs, |w| w.write_all(text.as_bytes()))?;
+    kincal_io::files::write_atomic(&outputs.json, &inputs, |w| w.write_all(body.as_bytes()))?;
+    kincal_io::files::write_atomic(&outputs.report, &inputs, |w| w.write_all(text.as_bytes()))?;
     Ok(Some(text))
 }
 
@@ -369,7 +348,7 @@ pub fn execute<const N: usize>(
         args.allow_out_of_limits,
     )
     .to_json();
-    let plots = crate::diagnosis_plot::render_all::<N>(&d, &meas, &poses, &outputs)?;
+    let plots = crate::plots::diagnosis::render_all::<N>(&d, &meas, &poses, &outputs)?;
     let json = report_json::<N>(&d, &meas, &set, &poses, &args.data, &outputs);
     let json_text = serde_json::to_string_pretty(&json).unwrap_or_default() + "\n";
     let mut text = readable::<N>(name, &set, &d, &meas);
@@ -397,7 +376,10 @@ pub fn execute<const N: usize>(
     ];
     files.extend(plots.iter().map(|(p, svg)| (p.as_path(), svg.as_str())));
     for (k, (path, _)) in files.iter().enumerate() {
-        if let Some(input) = inputs.iter().find(|i| crate::files::is_same_file(path, i)) {
+        if let Some(input) = inputs
+            .iter()
+            .find(|i| kincal_io::files::is_same_file(path, i))
+        {
             return Err(CliError::usage(format!(
                 "{}: refusing to write: this is the input file '{}' (an input is never overwritten; choose another output path)",
                 path.display(),
@@ -406,7 +388,7 @@ pub fn execute<const N: usize>(
         }
         if let Some((other, _)) = files[..k]
             .iter()
-            .find(|(o, _)| crate::files::is_same_file(path, o) || o == path)
+            .find(|(o, _)| kincal_io::files::is_same_file(path, o) || o == path)
         {
             return Err(CliError::usage(format!(
                 "{}: two outputs name the same file ({}): give --json, --report and --out different paths",
@@ -416,7 +398,7 @@ pub fn execute<const N: usize>(
         }
     }
     for (path, content) in &files {
-        crate::files::write_atomic(path, &inputs, |w| w.write_all(content.as_bytes()))?;
+        kincal_io::files::write_atomic(path, &inputs, |w| w.write_all(content.as_bytes()))?;
     }
     Ok(Outcome {
         diagnosis: d,
@@ -466,23 +448,6 @@ fn label<const N: usize>(i: usize) -> String {
 
 fn labels<const N: usize>(set: &ParamSet) -> Vec<String> {
     set.iter().map(label::<N>).collect()
-}
-
-/// The label of a correlated quantity (`q2`, `tau2`, `s2`, `temp_c`).
-pub fn quantity_label(q: QuantityKind) -> String {
-    let mut s = String::new();
-    let _ = q.write_label(&mut s);
-    s
-}
-
-/// Unit of a correlated quantity.
-pub fn quantity_unit(q: QuantityKind) -> &'static str {
-    match q {
-        QuantityKind::JointAngle(_) => "rad",
-        QuantityKind::GravityTorque(_) => "N·m",
-        QuantityKind::Approach(_) => "",
-        QuantityKind::Temperature => "°C",
-    }
 }
 
 #[derive(Serialize)]
@@ -864,7 +829,7 @@ fn report_json<const N: usize>(
         .map(|i| ParamValueJson {
             label: label::<N>(i),
             value: d.model.param(ParamIndex(i)).unwrap_or(f64::NAN),
-            unit: ParamId::from_index(ParamIndex(i), N).map_or("", crate::units::si_unit),
+            unit: ParamId::from_index(ParamIndex(i), N).map_or("", kincal_io::units::si_unit),
             std_error: d.fit.std_errors[i],
         })
         .collect();
@@ -1585,7 +1550,7 @@ pub fn readable<const N: usize>(
                 label::<N>(i),
                 format!("{:.4e}", d.model.param(ParamIndex(i)).unwrap_or(f64::NAN)),
                 format!("{:.2e}", d.fit.std_errors[i]),
-                id.map_or("", crate::units::si_unit).to_string(),
+                id.map_or("", kincal_io::units::si_unit).to_string(),
             ]);
         }
         let _ = writeln!(s, "  identified effect parameters (all rows):");

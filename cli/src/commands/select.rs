@@ -7,11 +7,11 @@ use std::path::PathBuf;
 use kincal::observability::{Index, Indices};
 use kincal::selection::Constraints;
 
-use crate::design_args::{Context, ScenarioArgs, SelectionArgs, SetupArgs};
-use crate::designs::{self, Design, OwnedPool};
+use crate::commands::design::args::{Context, ScenarioArgs, SelectionArgs, SetupArgs};
+use crate::commands::design::designs::{self, Design, OwnedPool};
 use crate::error::CliError;
-use crate::measurements::{PoseRow, write_poses_csv};
-use crate::robot_arg::resolve_robot;
+use kincal_io::measurements::{PoseRow, write_poses_csv};
+use kincal_io::robot_arg::resolve_robot;
 
 pub const LONG_ABOUT: &str = "\
 Selects m calibration poses (eq. 18: maximise an observability index of the stacked,
@@ -234,10 +234,10 @@ fn select<const N: usize>(
             pose_id: Some((l + 1).to_string()),
             q_rad: q.to_vec(),
             position_m: [t.translation.x, t.translation.y, t.translation.z],
-            quaternion_wxyz: crate::tool_file::quaternion(t),
+            quaternion_wxyz: kincal_io::tool_file::quaternion(t),
         })
         .collect();
-    crate::files::write_atomic(&args.out, &[], |w| write_poses_csv(w, N, true, &rows))?;
+    kincal_io::files::write_atomic(&args.out, &[], |w| write_poses_csv(w, N, true, &rows))?;
     crate::report::emit(&head);
     Ok(())
 }

@@ -11,8 +11,8 @@ use kincal::montecarlo::{Acquisition, RunResult, Scenario, prepare, simulate_run
 use kincal::pose::Transform;
 use rayon::prelude::*;
 
-use crate::design_args::{Context, P};
-use crate::designs::Design;
+use crate::commands::design::args::{Context, P};
+use crate::commands::design::designs::Design;
 use crate::error::CliError;
 
 /// Median, 95th percentile (nearest rank), maximum and mean of a sample.
@@ -264,6 +264,52 @@ pub fn table(results: &[DesignResult]) -> String {
         ));
     }
     out
+}
+
+/// Timing line.
+pub fn timing_line(t: &Timing) -> String {
+    let per = t.wall_s / t.calibrations.max(1) as f64 * 1e6;
+    let cpu = t.cpu_s.map_or(String::new(), |c| {
+        format!(
+            ", {c:.2} s CPU ({:.0} µs per calibration)",
+            c / t.calibrations.max(1) as f64 * 1e6
+        )
+    });
+    format!(
+        "{} calibrations in {:.2} s on {} threads ({per:.0} µs each){cpu}",
+        t.calibrations, t.wall_s, t.threads
+    )
+}
+
+fn summary_json(s: Summary) -> serde_json::Value {
+    serde_json::json!({"median": s.median, "p95": s.p95, "max": s.max, "mean": s.mean})
+}
+
+/// The numbers of a study as JSON.
+pub fn results_json(results: &[DesignResult]) -> serde_json::Value {
+    serde_json::Value::Array(
+        results
+            .iter()
+            .map(|r| {
+                serde_json::json!({
+                    "name": r.name,
+                    "acquisition": match r.acquisition { Acquisition::Instrument => "instrument", Acquisition::Tool => "tool" },
+                    "poses": r.poses,
+                    "o_eq17": r.o,
+                    "runs": r.runs,
+                    "failed": r.failed,
+                    "first_failure": r.first_failure,
+                    "worst_pose_e_p_mm": summary_json(r.pos()),
+                    "worst_pose_e_phi_deg": summary_json(r.rot()),
+                    "rms_e_p_mm": summary_json(Summary::of(&r.rms_pos_mm)),
+                    "rms_e_phi_deg": summary_json(Summary::of(&r.rms_rot_deg)),
+                    "before_worst_pose_e_p_mm": summary_json(Summary::of(&r.before_pos_mm)),
+                    "before_worst_pose_e_phi_deg": summary_json(Summary::of(&r.before_rot_deg)),
+                    "mean_iterations": r.mean_iterations,
+                })
+            })
+            .collect(),
+    )
 }
 
 #[cfg(test)]

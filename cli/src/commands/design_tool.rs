@@ -13,11 +13,11 @@ use kincal::selection::{Constraints, Objective, SelectOptions};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
-use crate::design_args::{Context, P, ScenarioArgs, SelectionArgs, SetupArgs, finite};
-use crate::designs::{self, Design, OwnedPool};
+use crate::commands::design::args::{Context, P, ScenarioArgs, SelectionArgs, SetupArgs, finite};
+use crate::commands::design::designs::{self, Design, OwnedPool};
+use crate::commands::design::study::{self, DesignResult};
 use crate::error::CliError;
-use crate::robot_arg::resolve_robot;
-use crate::study::{self, DesignResult};
+use kincal_io::robot_arg::resolve_robot;
 
 pub const LONG_ABOUT: &str = "\
 Designs a calibration tool that beats a baseline tool (ARIA: the paper's Table 2) on the
@@ -498,7 +498,7 @@ fn design<const N: usize>(
         b.rot().median,
         b.rot().p95
     );
-    let _ = writeln!(log, "Timing: {}", crate::cmd_evaluate::timing_line(&timing));
+    let _ = writeln!(log, "Timing: {}", study::timing_line(&timing));
     // Tool specification.
     let mut comments = vec![
         "kincal calibration-tool specification (design-tool)".to_string(),
@@ -533,12 +533,12 @@ fn design<const N: usize>(
         "extra_q*_rad: the nominal robot's configuration at each pose (for programming the approach)".into(),
     ];
     comments.retain(|c| !c.is_empty());
-    crate::files::write_atomic(&args.out, &[], |w| {
-        crate::tool_file::write_tool(w, &comments, &tool.reference, &tool.q)
+    kincal_io::files::write_atomic(&args.out, &[], |w| {
+        kincal_io::tool_file::write_tool(w, &comments, &tool.reference, &tool.q)
     })?;
     let _ = writeln!(log, "Wrote {}", args.out.display());
     if let Some(pth) = &args.plot {
-        crate::study_plot::write_comparison(
+        crate::plots::study::write_comparison(
             pth,
             &[],
             &format!("Optimised calibration tool vs {}", b.name),
@@ -559,9 +559,9 @@ fn design<const N: usize>(
             "objective": chosen.objective,
             "screening_score": best_score,
             "beats_baseline": beats,
-            "designs": crate::cmd_evaluate::results_json(&fres),
+            "designs": study::results_json(&fres),
         });
-        crate::files::write_atomic(pth, &[], |w| {
+        kincal_io::files::write_atomic(pth, &[], |w| {
             serde_json::to_writer_pretty(&mut *w, &json).map_err(std::io::Error::other)?;
             w.write_all(b"\n")
         })?;

@@ -5,10 +5,10 @@ use std::path::{Path, PathBuf};
 use kincal::Robot;
 use kincal::pose::matrix_to_quaternion;
 
-use crate::data::{self, DataOptions};
 use crate::error::{CliError, core_error};
-use crate::measurements::{PoseRow, write_poses_csv};
-use crate::robot_arg;
+use kincal_io::data::{self, DataOptions};
+use kincal_io::measurements::{PoseRow, write_poses_csv};
+use kincal_io::robot_arg;
 
 pub const LONG_ABOUT: &str = "\
 Computes the model's end-effector pose T_e^b (forward kinematics, effects included) for the
@@ -34,7 +34,7 @@ pub struct Args {
     #[arg(value_name = "MODEL")]
     pub model: String,
     #[command(flatten)]
-    pub chain: crate::robot_arg::UrdfChainArgs,
+    pub chain: kincal_io::robot_arg::UrdfChainArgs,
     /// CSV with joint readings q1..qN
     #[arg(value_name = "DATA")]
     pub data: PathBuf,
@@ -101,7 +101,7 @@ fn predict<const N: usize>(
     if model_is_file {
         inputs.push(model_path);
     }
-    crate::files::write_atomic(&args.out, &inputs, |w| {
+    kincal_io::files::write_atomic(&args.out, &inputs, |w| {
         write_poses_csv(w, N, with_id, &rows)
     })?;
     eprintln!(

@@ -19,17 +19,33 @@
 //! thermal without `temp_c`, joint compliance without a mass model.
 
 use std::fmt::Write as _;
+use std::path::Path;
 
 use kincal::diagnosis::contacts::{contact_gap_z, signed_rank_z};
 use kincal::identify::group_estimate;
 use kincal::{Effect, EffectSet, Robot};
 use serde_json::{Value, json};
 
-use crate::cmd_diagnose::Args;
-use crate::constraints::ContactData;
-use crate::crossval_contacts::{GroupBy, fit, groups_of};
+use crate::commands::crossval_contacts::{GroupBy, fit, groups_of};
 use crate::error::CliError;
-use crate::measurements::MeasurementSet;
+use kincal_io::constraints::ContactData;
+use kincal_io::measurements::MeasurementSet;
+
+/// What the contact diagnosis takes from `kincal diagnose`'s arguments (the command's
+/// `Args` build it, so that this module does not import the command).
+#[derive(Debug, Clone, Copy)]
+pub struct Options<'a> {
+    /// `--candidates` (empty: every effect whose inputs the data have).
+    pub candidates: &'a [Effect],
+    /// `--no-pairs`: single effects only.
+    pub no_pairs: bool,
+    /// `--constraints`: known distances, targets and planes.
+    pub constraints: Option<&'a Path>,
+    /// `--sigma-pos-mm`: instrument position noise, 1σ per axis [mm].
+    pub sigma_pos_mm: Option<f64>,
+    /// `--folds`: folds of whole targets/planes when there is no session column.
+    pub folds: usize,
+}
 
 /// Significance threshold of the paired and gap tests (one-sided z), as the instrument
 /// diagnosis.
@@ -110,7 +126,7 @@ type NotTestable = Vec<(Effect, &'static str)>;
 fn candidates<const N: usize>(
     robot: &Robot<N>,
     set: &MeasurementSet,
-    args: &Args,
+    args: &Options<'_>,
 ) -> Result<(Vec<EffectSet>, NotTestable), CliError> {
     let mut not_testable = vec![
         (
@@ -192,16 +208,15 @@ struct Model {
 pub fn run<const N: usize>(
     nominal: &Robot<N>,
     set: &MeasurementSet,
-    args: &Args,
+    args: &Options<'_>,
 ) -> Result<(String, Value), CliError> {
     let cons = args
         .constraints
-        .as_deref()
-        .map(crate::constraints::read_constraints)
+        .map(kincal_io::constraints::read_constraints)
         .transpose()?;
     let sigma_m = args.sigma_pos_mm.map(|s| s * 1e-3);
     let weight_pos = sigma_m.map_or(1.0, |s| 1.0 / (s * s));
-    let base = crate::constraints::build::<N>(set, cons.as_ref(), nominal, weight_pos)?;
+    let base = kincal_io::constraints::build::<N>(set, cons.as_ref(), nominal, weight_pos)?;
     if !base.instrument.is_empty() {
         return Err(CliError::input(format!(
             "{}: diagnose on data with target/plane rows: instrument rows (x, y, z) in the same \

@@ -20,11 +20,11 @@ use rayon::prelude::*;
 use serde_json::{Value, json};
 
 use crate::args::parse_effect;
-use crate::calibration::new_workspace;
-use crate::data::{self, DataOptions};
 use crate::error::CliError;
-use crate::measurements::MeasurementSet;
-use crate::robot_arg;
+use kincal_io::calibration::new_workspace;
+use kincal_io::data::{self, DataOptions};
+use kincal_io::measurements::MeasurementSet;
+use kincal_io::robot_arg;
 
 pub const LONG_ABOUT: &str = "\
 Cross-validates a calibration on held-out poses. The poses are dealt to K folds (rows
@@ -91,7 +91,7 @@ pub struct Args {
     #[arg(long, value_name = "ROBOT")]
     pub robot: String,
     #[command(flatten)]
-    pub chain: crate::robot_arg::UrdfChainArgs,
+    pub chain: kincal_io::robot_arg::UrdfChainArgs,
     /// Effects to identify with the geometry (comma-separated names of spec/effects.md)
     #[arg(long, value_name = "E1,E2", value_delimiter = ',', value_parser = parse_effect)]
     pub effects: Vec<Effect>,
@@ -140,7 +140,7 @@ pub struct Args {
     /// Data with target/plane rows: what a fold holds out (default: session when the data
     /// have sessions, else target); see docs/constraints.md
     #[arg(long, value_enum, value_name = "BY")]
-    pub group_by: Option<crate::crossval_contacts::GroupBy>,
+    pub group_by: Option<crate::commands::crossval_contacts::GroupBy>,
     /// Known geometry of the fixtures (TOML) for data with target/plane rows
     #[arg(long, value_name = "FILE")]
     pub constraints: Option<PathBuf>,
@@ -169,7 +169,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     for (i, a) in outputs.iter().enumerate() {
         if outputs[i + 1..]
             .iter()
-            .any(|b| crate::files::is_same_file(a, b) || a == b)
+            .any(|b| kincal_io::files::is_same_file(a, b) || a == b)
         {
             return Err(CliError::usage(format!(
                 "{} is named by two outputs",
@@ -666,7 +666,7 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
             allow_out_of_limits: args.allow_out_of_limits,
         },
     )?;
-    if args.constraints.is_some() || crate::constraints::has_contacts(&set) {
+    if args.constraints.is_some() || kincal_io::constraints::has_contacts(&set) {
         return crossval_contacts(nominal, args, &set, effects);
     }
     if args.group_by.is_some() {
@@ -1125,18 +1125,18 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
             "poses": poses,
         });
         let text = serde_json::to_string_pretty(&doc).map_err(|e| CliError::io(e.to_string()))?;
-        crate::files::write_atomic(p, &inputs, |w| w.write_all(text.as_bytes()))?;
+        kincal_io::files::write_atomic(p, &inputs, |w| w.write_all(text.as_bytes()))?;
         let _ = writeln!(s, "JSON written to {}.", p.display());
     }
     if let Some(p) = &args.plot {
-        let svg = crate::plot::heldout_svg(
+        let svg = crate::plots::pose_errors::heldout_svg(
             &format!("{name}: held-out errors per pose ({} folds)", args.folds),
             &held_nom,
             &held_cal,
             orientation,
         )
         .map_err(|e| CliError::io(format!("{}: cannot draw the figure: {e}", p.display())))?;
-        crate::files::write_atomic(p, &inputs, |w| w.write_all(svg.as_bytes()))?;
+        kincal_io::files::write_atomic(p, &inputs, |w| w.write_all(svg.as_bytes()))?;
         let _ = writeln!(s, "Figure written to {}.", p.display());
     }
     if let Some(p) = &args.robot_out {
@@ -1157,9 +1157,9 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
             "# {name}: nominal geometry with the base and tool frames of the calibration on all\n\
              # poses of {} (written by kincal crossval --robot-out)\n{}",
             set.source,
-            crate::robot_file::write_generic(&format!("{name}-frames"), &joint_names, &r)
+            kincal_io::robot_file::write_generic(&format!("{name}-frames"), &joint_names, &r)
         );
-        crate::files::write_atomic(p, &inputs, |w| w.write_all(text.as_bytes()))?;
+        kincal_io::files::write_atomic(p, &inputs, |w| w.write_all(text.as_bytes()))?;
         let _ = writeln!(
             s,
             "Robot with the calibrated frames written to {}.",
@@ -1170,7 +1170,7 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
     Ok(())
 }
 
-/// Cross-validation of contact data by whole groups (see [`crate::crossval_contacts`]).
+/// Cross-validation of contact data by whole groups (see [`crate::commands::crossval_contacts`]).
 fn crossval_contacts<const N: usize>(
     nominal: &Robot<N>,
     args: &Args,
@@ -1187,12 +1187,12 @@ fn crossval_contacts<const N: usize>(
     let cons = args
         .constraints
         .as_deref()
-        .map(crate::constraints::read_constraints)
+        .map(kincal_io::constraints::read_constraints)
         .transpose()?;
     let group_by = args.group_by.unwrap_or(if set.has_session {
-        crate::crossval_contacts::GroupBy::Session
+        crate::commands::crossval_contacts::GroupBy::Session
     } else {
-        crate::crossval_contacts::GroupBy::Target
+        crate::commands::crossval_contacts::GroupBy::Target
     });
     let mut requested = geometry_subset(nominal, &args.geometry).union(&effects.params(N));
     for k in 0..3 {
@@ -1200,7 +1200,7 @@ fn crossval_contacts<const N: usize>(
         let _ = requested.insert(5 * N + 6 + k);
     }
     let weight_pos = args.sigma_pos_mm.map_or(1.0, |s| 1.0 / (s * 1e-3).powi(2));
-    let plan = crate::crossval_contacts::Plan {
+    let plan = crate::commands::crossval_contacts::Plan {
         group_by,
         folds: args.folds,
         seed: args.seed,
@@ -1209,7 +1209,7 @@ fn crossval_contacts<const N: usize>(
         max_iterations: args.max_iterations,
         constraints: cons.as_ref(),
     };
-    let (text, json) = crate::crossval_contacts::run(nominal, set, &plan)?;
+    let (text, json) = crate::commands::crossval_contacts::run(nominal, set, &plan)?;
     if let Some(path) = &args.json {
         let body = serde_json::to_string_pretty(&json)
             .map_err(|e| CliError::io(format!("{}: {e}", path.display())))?;
@@ -1217,7 +1217,7 @@ fn crossval_contacts<const N: usize>(
         if let Some(c) = &args.constraints {
             inputs.push(c);
         }
-        crate::files::write_atomic(path, &inputs, |w| w.write_all(body.as_bytes()))?;
+        kincal_io::files::write_atomic(path, &inputs, |w| w.write_all(body.as_bytes()))?;
     }
     crate::report::emit(&text);
     Ok(())

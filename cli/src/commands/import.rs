@@ -4,10 +4,10 @@
 
 use std::path::PathBuf;
 
-use crate::datasets::{self, UNUSABLE, USABLE};
-use crate::datasets_contact::{self, ContactOptions};
 use crate::error::CliError;
-use crate::measurements::write_measurements_csv;
+use kincal_io::datasets::{self, UNUSABLE, USABLE};
+use kincal_io::datasets_contact::{self, ContactOptions};
+use kincal_io::measurements::write_measurements_csv;
 
 pub const LONG_ABOUT: &str = "\
 Reads one of the public real-robot calibration data sets in its published layout (DIR is
@@ -65,7 +65,7 @@ pub struct Args {
     #[arg(long, value_name = "ID")]
     pub robot_id: Option<String>,
     #[command(flatten)]
-    pub chain: crate::robot_arg::UrdfChainArgs,
+    pub chain: kincal_io::robot_arg::UrdfChainArgs,
     /// List the data sets and exit
     #[arg(long)]
     pub list: bool,
@@ -96,7 +96,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             datasets_contact::CONTACT_SETS.join(", ")
         )));
     }
-    if args.chain != crate::robot_arg::UrdfChainArgs::default() {
+    if args.chain != kincal_io::robot_arg::UrdfChainArgs::default() {
         return Err(CliError::usage(format!(
             "--base-link/--tip-link apply to the contact sets ({}); '{name}' has a fixed robot",
             datasets_contact::CONTACT_SETS.join(", ")
@@ -108,16 +108,16 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         .unwrap_or_default();
     let input_refs: Vec<&std::path::Path> = inputs.iter().map(PathBuf::as_path).collect();
     if let (Some(r), o) = (&args.robot_out, out)
-        && crate::files::is_same_file(r, o)
+        && kincal_io::files::is_same_file(r, o)
     {
         return Err(CliError::usage("--out and --robot-out name the same file"));
     }
-    crate::files::write_atomic(out, &input_refs, |w| {
+    kincal_io::files::write_atomic(out, &input_refs, |w| {
         write_measurements_csv(w, &imported.set)
     })?;
     if let Some(r) = &args.robot_out {
         let text = datasets::robot_text(&imported);
-        crate::files::write_atomic(r, &input_refs, |w| w.write_all(text.as_bytes()))?;
+        kincal_io::files::write_atomic(r, &input_refs, |w| w.write_all(text.as_bytes()))?;
     }
     let mut s = format!(
         "{name}: {} poses, {} joints, {} -> {}",
@@ -149,7 +149,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
 fn distinct(paths: &[&std::path::Path]) -> Result<(), CliError> {
     for (i, a) in paths.iter().enumerate() {
         for b in paths.iter().skip(i + 1) {
-            if crate::files::is_same_file(a, b) {
+            if kincal_io::files::is_same_file(a, b) {
                 return Err(CliError::usage(format!(
                     "--out, --robot-out and --constraints-out must name different files ({} twice)",
                     a.display()
@@ -192,9 +192,9 @@ fn run_contact(
     distinct(&outs)?;
     let inputs: Vec<PathBuf> = walk_files(dir);
     let input_refs: Vec<&std::path::Path> = inputs.iter().map(PathBuf::as_path).collect();
-    crate::files::write_atomic(out, &input_refs, |w| w.write_all(imported.csv.as_bytes()))?;
+    kincal_io::files::write_atomic(out, &input_refs, |w| w.write_all(imported.csv.as_bytes()))?;
     if let (Some(c), Some(text)) = (&args.constraints_out, &imported.constraints) {
-        crate::files::write_atomic(c, &input_refs, |w| w.write_all(text.as_bytes()))?;
+        kincal_io::files::write_atomic(c, &input_refs, |w| w.write_all(text.as_bytes()))?;
     }
     let mut s = format!(
         "{name}: {} rows ({}), {} joints -> {}",
@@ -208,8 +208,10 @@ fn run_contact(
         for c in &imported.robot_comments {
             text.push_str(&format!("#{c}\n"));
         }
-        text.push_str(&crate::robot_file::write_robot_description(&imported.robot));
-        crate::files::write_atomic(r, &input_refs, |w| w.write_all(text.as_bytes()))?;
+        text.push_str(&kincal_io::robot_file::write_robot_description(
+            &imported.robot,
+        ));
+        kincal_io::files::write_atomic(r, &input_refs, |w| w.write_all(text.as_bytes()))?;
         s.push_str(&format!(
             ", robot '{}' -> {}",
             imported.robot.name,
