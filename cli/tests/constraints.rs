@@ -434,3 +434,45 @@ fn bad_contact_input_exits_3_naming_file_line_and_column() {
     );
     assert_refused(f.dir.path(), &cal, &want);
 }
+
+#[test]
+fn robust_calibration_from_contacts_names_a_bad_contact() {
+    let f = fixture(12, 3, 6);
+    let dir = f.dir.path();
+    // Line 9 (a contact of t1): joint 2 read 0.02 rad off, the tool point some 10 mm away.
+    edit_line(dir, "contacts.csv", 9, |l| {
+        let mut c: Vec<String> = l.split(',').map(str::to_string).collect();
+        c[1] = format!("{}", c[1].parse::<f64>().unwrap() + 0.02);
+        c.join(",")
+    });
+    let o = kincal(
+        &[
+            "calibrate",
+            "contacts.csv",
+            "--robot",
+            "aria",
+            "--constraints",
+            "constraints.toml",
+            "--robust",
+            "cauchy",
+            "--out",
+            "model.json",
+        ],
+        dir,
+    );
+    let out = text(&o);
+    assert!(o.status.success(), "{out}");
+    assert!(out.contains("Robust fit (cauchy IRLS"), "{out}");
+    let suspects = out
+        .lines()
+        .skip_while(|l| !l.starts_with("Suspect rows"))
+        .collect::<Vec<_>>();
+    assert!(
+        suspects.first().is_some_and(|l| l.ends_with(": 1")),
+        "{out}"
+    );
+    assert!(
+        suspects.iter().any(|l| l.trim_start().starts_with("9 ")),
+        "{out}"
+    );
+}

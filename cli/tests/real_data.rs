@@ -546,9 +546,11 @@ fn mate_imports_single_coordinate_contacts_and_poses() {
         ]
     );
     // Raw first rows: x: 0.3044,102.93,18.17,55.512 (deg); z: -0.004,-35.02,45.84,113.976.
+    // q_1 is negated (the files' q_1 turns the other way than mate.urdf's axis).
     let x2 = &rows[0];
     assert_eq!(x2[0], "x/2");
-    assert!((x2[1].parse::<f64>().unwrap() - 102.93_f64.to_radians()).abs() < 1e-15);
+    assert!((x2[1].parse::<f64>().unwrap() + 102.93_f64.to_radians()).abs() < 1e-15);
+    assert!((x2[2].parse::<f64>().unwrap() - 18.17_f64.to_radians()).abs() < 1e-12);
     assert_eq!(
         (x2[4].as_str(), x2[5].as_str(), x2[6].as_str()),
         ("0.3044", "", "")
@@ -561,6 +563,82 @@ fn mate_imports_single_coordinate_contacts_and_poses() {
     );
     let p = rows.iter().filter(|r| r[0].starts_with("pose/")).count();
     assert_eq!(p, 10);
+}
+
+/// MATE's 30 single-coordinate plane contacts with mate.urdf's own base frame: 5-fold
+/// held-out rows (docs/real-data.md, "MATE"), and the evidence for the q_1 sign: at the
+/// nominal model the x-plane contacts lie at x = 0.3029 m (the file: 0.3044).
+#[test]
+fn mate_plane_contacts_calibrate_held_out() {
+    let Some(root) = realdata() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    import(&root, "figaroh-mate-planes", dir.path());
+    let text_in = std::fs::read_to_string(dir.path().join("data.csv")).unwrap();
+    let planes: String = text_in
+        .lines()
+        .filter(|l| !l.starts_with("pose/"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(dir.path().join("planes.csv"), planes).unwrap();
+    let o = kincal(
+        &[
+            "crossval",
+            "planes.csv",
+            "--robot",
+            "robot.toml",
+            "--folds",
+            "5",
+            "--seed",
+            "1",
+            "--allow-out-of-limits",
+            "--json",
+            "cv.json",
+        ],
+        dir.path(),
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let cv: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("cv.json")).unwrap())
+            .unwrap();
+    let nominal = num(&cv, &["heldout", "nominal", "rms_pos_mm"]);
+    let calibrated = num(&cv, &["heldout", "calibrated", "rms_pos_mm"]);
+    close(nominal, 14.670, "MATE nominal held-out RMS [mm]");
+    close(calibrated, 3.624, "MATE calibrated held-out RMS [mm]");
+    // The x-plane contacts at the nominal model: mean predicted x.
+    let (_, rows) = csv_rows(&dir.path().join("data.csv"));
+    let x_rows: Vec<Vec<String>> = rows
+        .iter()
+        .filter(|r| r[0].starts_with("x/"))
+        .cloned()
+        .collect();
+    let mut csv = String::from("q1,q2,q3\n");
+    for r in &x_rows {
+        csv.push_str(&format!("{},{},{}\n", r[1], r[2], r[3]));
+    }
+    std::fs::write(dir.path().join("q.csv"), csv).unwrap();
+    let o = kincal(
+        &[
+            "predict",
+            "robot.toml",
+            "q.csv",
+            "--out",
+            "p.csv",
+            "--allow-out-of-limits",
+        ],
+        dir.path(),
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let (header, pred) = csv_rows(&dir.path().join("p.csv"));
+    let xc = header
+        .iter()
+        .position(|h| h == "x" || h == "x_m")
+        .expect("x column");
+    let mean_x = pred
+        .iter()
+        .map(|r| r[xc].parse::<f64>().unwrap())
+        .sum::<f64>()
+        / pred.len() as f64;
+    assert!((mean_x - 0.3029).abs() < 5e-4, "mean x {mean_x}");
 }
 
 #[test]

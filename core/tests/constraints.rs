@@ -494,3 +494,146 @@ fn known_targets_known_plane_and_partial_coordinates_make_the_base_observable() 
     assert_eq!(e.normal, [0.0, 0.0, 1.0]);
     assert!((e.offset_m - 0.3).abs() < 1e-15 && e.max_m < 1e-10);
 }
+
+/// Plain and robust fits of one set of contact data.
+fn robust_fit(
+    set: &mut Set,
+    loss: kincal::identify::Loss,
+) -> (
+    kincal::identify::Identification<7>,
+    kincal::identify::RobustIdentification<7>,
+    Vec<kincal::identify::PoseResidual>,
+) {
+    use kincal::identify::{RobustOptions, identify_constrained_robust};
+    let mut ws = workspace();
+    let opts = IdentifyOptions::new(Algorithm::Ols, geometric());
+    let plain = identify_constrained(&nominal(), &data(set), &opts, &mut ws).expect("identify");
+    let mut report = vec![kincal::identify::PoseResidual::default(); set.contacts.len()];
+    let weights: Vec<f64> = set.contacts.iter().map(|c| c.weight).collect();
+    let robust = identify_constrained_robust(
+        &nominal(),
+        &mut [],
+        &mut set.contacts,
+        &set.groups,
+        &set.distances,
+        &opts,
+        &RobustOptions::new(loss),
+        &mut report,
+        &mut ws,
+    )
+    .expect("robust");
+    // The caller's weights are restored.
+    assert!(
+        set.contacts
+            .iter()
+            .zip(&weights)
+            .all(|(c, &w)| c.weight == w)
+    );
+    (plain, robust, report)
+}
+
+#[test]
+fn robust_fit_of_clean_contacts_equals_the_plain_fit() {
+    let truth = truth(7);
+    let mut set = synthetic(&truth, 14, 3, 6, 11);
+    for loss in kincal::identify::Loss::ALL {
+        let (plain, robust, report) = robust_fit(&mut set, loss);
+        for i in plain.analysis.identifiable.iter() {
+            let (a, b) = (
+                plain.robot.param(ParamIndex(i)).unwrap(),
+                robust.fit.robot.param(ParamIndex(i)).unwrap(),
+            );
+            assert!((a - b).abs() < 1e-9, "{loss:?} {}: {a} vs {b}", name(i));
+        }
+        assert_eq!(robust.test.n_suspect, 0);
+        assert!(report.iter().all(|r| r.robust_weight > 0.999));
+    }
+}
+
+#[test]
+fn robust_fit_down_weights_outlier_contacts_and_recovers_the_geometry() {
+    let truth = truth(7);
+    let sigma = 1e-4;
+    let mut rng = SplitMix64::new(4242);
+    let mut set = Set {
+        contacts: vec![],
+        groups: vec![],
+        distances: vec![],
+        targets: vec![],
+    };
+    let mut outliers = Vec::new();
+    for t in 0..16 {
+        let q0 = rng.q_within(truth.limits()).map(|v| 0.6 * v);
+        let t0 = truth
+            .fk(&JointState::new(q0))
+            .expect("fk")
+            .translation
+            .vector;
+        let p = [t0.x, t0.y, t0.z];
+        let mut c = noisy_holds(&truth, p, q0, 8, sigma, &mut rng);
+        if t % 4 == 1 {
+            // The ball seated 9 mm off (a chip in the socket): 90 σ.
+            let off = [p[0] + 0.008, p[1] - 0.004, p[2]];
+            c.pop();
+            c.extend(noisy_holds(&truth, off, q0, 1, sigma, &mut rng));
+            outliers.push(set.contacts.len() + c.len() - 1);
+        }
+        set.groups.push(Group {
+            kind: GroupKind::Target,
+            start: set.contacts.len(),
+            len: c.len(),
+        });
+        set.contacts.extend(c);
+        set.targets.push(p);
+    }
+    set.distances.push(Distance {
+        a: 0,
+        b: 1,
+        m: dist(set.targets[0], set.targets[1]),
+        weight: 1.0,
+    });
+    let worst_z = |fit: &kincal::identify::Identification<7>, se: &[f64]| {
+        fit.analysis
+            .identifiable
+            .iter()
+            .map(|i| {
+                let e =
+                    fit.robot.param(ParamIndex(i)).unwrap() - truth.param(ParamIndex(i)).unwrap();
+                (e / se[i]).abs()
+            })
+            .fold(0.0, f64::max)
+    };
+    for loss in kincal::identify::Loss::ALL {
+        let (plain, robust, report) = robust_fit(&mut set, loss);
+        // Standard errors of the clean problem: the robust fit's own.
+        let se = robust.fit.std_errors;
+        let (z_plain, z_robust) = (worst_z(&plain, &se), worst_z(&robust.fit, &se));
+        eprintln!(
+            "{loss:?}: worst |error|/se plain {z_plain:.1}, robust {z_robust:.1}; scale {:.3e} m; outlier weights {:?}",
+            robust.test.scale_pos_m,
+            outliers
+                .iter()
+                .map(|&o| report[o].robust_weight)
+                .collect::<Vec<_>>()
+        );
+        // The outliers pull the plain fit far beyond its errors; the robust fit stays
+        // within 4 standard errors of the truth.
+        assert!(z_plain > 8.0, "{loss:?}: plain {z_plain}");
+        assert!(z_robust < 4.0, "{loss:?}: robust {z_robust}");
+        // Every outlier is down-weighted and flagged, the scale is the noise's.
+        for &o in &outliers {
+            assert!(report[o].robust_weight < 0.15, "{loss:?}: {:?}", report[o]);
+            assert!(report[o].suspect, "{loss:?}: {:?}", report[o]);
+        }
+        let inliers_full = (0..report.len())
+            .filter(|i| !outliers.contains(i))
+            .filter(|&i| report[i].robust_weight == 1.0 || loss == kincal::identify::Loss::Cauchy)
+            .count();
+        assert!(inliers_full as f64 >= 0.9 * (report.len() - outliers.len()) as f64);
+        assert!(
+            (robust.test.scale_pos_m / sigma - 1.0).abs() < 0.3,
+            "{loss:?}: scale {}",
+            robust.test.scale_pos_m
+        );
+    }
+}

@@ -6,16 +6,18 @@
 //! identified; the report adds the gauge (what the data cannot see at all) and every
 //! target's, plane's and distance's estimate at the identified model.
 //!
-//! Sessions: one set-up of the robot (a placement of the plate). As in the CLI, each target
-//! and plane belongs to one session, a session holds at least
-//! `KINCAL_MIN_SESSION_ROWS` rows, and instrument rows lie in one session (one base frame
-//! per session is not implemented in the core); sessions change nothing else.
+//! Sessions: one set-up of the robot (a placement of the plate). Each target and plane
+//! belongs to one session, a session holds at least `KINCAL_MIN_SESSION_ROWS` rows, and
+//! instrument rows lie in one session (one base frame per session is not implemented in the
+//! core); sessions change nothing else. These rules are the core's
+//! (`kincal::identify::check_sessions`), the same the CSV reader applies.
 
 use core::ffi::{CStr, c_void};
 
 use kincal::identify::{
-    ComponentMask, ConstraintData, Contact, Distance, Group, GroupKind, Measurement, Workspace,
-    distance_estimate, group_estimate, identify_constrained,
+    ComponentMask, ConstraintData, Contact, Distance, Group, GroupKind, Measurement, RowRole,
+    SessionFault, SessionLayout, SessionScratch, Workspace, check_sessions, distance_estimate,
+    group_estimate, identify_constrained,
 };
 use kincal::pose::Transform;
 use kincal::{Error, Robot, with_any_robot};
@@ -240,7 +242,7 @@ fn layout<const N: usize, const P: usize>(
     let (row_of, e) = array::<usize>(e, rows)?;
     let (group_count, e) = array::<usize>(e, groups)?;
     let (group_first, e) = array::<usize>(e, groups)?;
-    let (group_session, e) = array::<u32>(e, groups)?;
+    let (group_session, e) = array::<usize>(e, groups)?;
     let (session_count, e) = array::<usize>(e, sessions)?;
     let (session_first, e) = array::<usize>(e, sessions)?;
     Some(Layout {
@@ -575,7 +577,7 @@ struct Arrays<'w, const N: usize, const P: usize> {
     row_of: &'w mut [usize],
     group_count: &'w mut [usize],
     group_first: &'w mut [usize],
-    group_session: &'w mut [u32],
+    group_session: &'w mut [usize],
     session_count: &'w mut [usize],
     session_first: &'w mut [usize],
 }
@@ -651,7 +653,7 @@ unsafe fn carve<'w, const N: usize, const P: usize>(
             row_of: fill(base, lay.row_of, l, 0usize),
             group_count: fill(base, lay.group_count, g, 0usize),
             group_first: fill(base, lay.group_first, g, KINCAL_NO_INDEX),
-            group_session: fill(base, lay.group_session, g, 0u32),
+            group_session: fill(base, lay.group_session, g, 0usize),
             session_count: fill(base, lay.session_count, s, 0usize),
             session_first: fill(base, lay.session_first, s, KINCAL_NO_INDEX),
         })
@@ -664,6 +666,56 @@ struct Built<'w, const N: usize> {
     row_of: &'w [usize],
     group_first: &'w [usize],
     n_inst: usize,
+}
+
+/// A broken session or group rule, with the caller's row.
+fn session_fault(f: SessionFault, v: &View<'_>) -> kincal_error {
+    match f {
+        SessionFault::SessionOutOfRange { row, session } => at_row(
+            kincal_error::new(kincal_status::IndexOutOfRange)
+                .arg(c"data->session")
+                .at(row)
+                .counts(v.n_sessions, session),
+            row,
+        ),
+        SessionFault::GroupInTwoSessions { row, .. }
+        | SessionFault::InstrumentInTwoSessions { row, .. } => at_row(
+            kincal_error::new(kincal_status::InvalidArgument)
+                .arg(c"data->session")
+                .at(row)
+                .value(f64::from(v.session_of(row))),
+            row,
+        ),
+        SessionFault::SessionTooSmall {
+            session,
+            rows,
+            first,
+        } => at_row(
+            kincal_error::new(kincal_status::TooFewData)
+                .arg(c"data->session")
+                .at(session)
+                .counts(KINCAL_MIN_SESSION_ROWS, rows),
+            first,
+        ),
+        SessionFault::GroupTooSmall {
+            group,
+            rows,
+            needed,
+            first,
+        } => {
+            let (name, id) = v.group_name(group);
+            at_row(
+                kincal_error::new(kincal_status::BadGroup)
+                    .arg(name)
+                    .at(id)
+                    .counts(needed, rows),
+                first,
+            )
+        }
+        SessionFault::GroupOutOfRange { .. } | SessionFault::ScratchTooSmall => {
+            kincal_error::new(kincal_status::Internal)
+        }
+    }
 }
 
 /// Checks every row, group, session and distance, then groups the rows.
@@ -684,105 +736,40 @@ fn build<'w, const N: usize, const P: usize>(
         session_count,
         session_first,
     } = a;
-    // Pass 1: kinds, counts, sessions.
-    let mut inst_session: Option<u32> = None;
+    // Pass 1: every row's kind, every group's kind.
     for l in 0..v.rows {
-        let kind = v.kind(l)?;
-        let s = v.session_of(l);
-        let slot = if (s as usize) < v.n_sessions {
-            session_count.get_mut(s as usize)
-        } else {
-            None
-        };
-        let Some(sc) = slot else {
-            return Err(at_row(
-                kincal_error::new(kincal_status::IndexOutOfRange)
-                    .arg(c"data->session")
-                    .at(l)
-                    .counts(v.n_sessions, s as usize),
-                l,
-            ));
-        };
-        *sc += 1;
-        if let Some(f) = session_first.get_mut(s as usize)
-            && *f == KINCAL_NO_INDEX
-        {
-            *f = l;
-        }
-        let wrong_session = |name: &'static CStr| {
-            at_row(
-                kincal_error::new(kincal_status::InvalidArgument)
-                    .arg(name)
-                    .at(l)
-                    .value(f64::from(s)),
-                l,
-            )
-        };
-        match kind {
-            RowKind::Contact(g) => {
-                let (count, first, sess) = match (
-                    group_count.get_mut(g),
-                    group_first.get_mut(g),
-                    group_session.get_mut(g),
-                ) {
-                    (Some(c), Some(f), Some(s)) => (c, f, s),
-                    _ => return Err(kincal_error::new(kincal_status::Internal)),
-                };
-                if *count == 0 {
-                    *first = l;
-                    *sess = s;
-                } else if *sess != s {
-                    // A target or plane is a fixed point of one set-up.
-                    return Err(wrong_session(c"data->session"));
-                }
-                *count += 1;
-            }
-            RowKind::Instrument(_) => match inst_session {
-                None => inst_session = Some(s),
-                Some(first) if first != s => return Err(wrong_session(c"data->session")),
-                _ => {}
-            },
-        }
+        v.kind(l)?;
     }
-    if v.session.is_some() {
-        for (s, (&n, &first)) in session_count.iter().zip(session_first.iter()).enumerate() {
-            if n > 0 && n < KINCAL_MIN_SESSION_ROWS {
-                return Err(at_row(
-                    kincal_error::new(kincal_status::TooFewData)
-                        .arg(c"data->session")
-                        .at(s)
-                        .counts(KINCAL_MIN_SESSION_ROWS, n),
-                    first,
-                ));
-            }
-        }
-    }
-    // Groups: kinds, sizes, starts.
-    let mut start = 0usize;
     for (g, grp) in groups.iter_mut().enumerate() {
-        let (name, id) = v.group_name(g);
-        let kind = v.group_kind(g)?;
-        let n = group_count.get(g).copied().unwrap_or(0);
-        let needed = match kind {
-            GroupKind::Target => 2,
-            GroupKind::Plane => 3,
-            _ => 1,
+        grp.kind = v.group_kind(g)?;
+    }
+    // The session and group rules (core's, shared with the file reader).
+    let roles = (0..v.rows).map(|l| {
+        let role = match v.kind(l) {
+            Ok(RowKind::Contact(g)) => RowRole::Contact(g),
+            _ => RowRole::Instrument,
         };
-        if n < needed {
-            let first = group_first.get(g).copied().unwrap_or(KINCAL_NO_INDEX);
-            return Err(at_row(
-                kincal_error::new(kincal_status::BadGroup)
-                    .arg(name)
-                    .at(id)
-                    .counts(needed, n),
-                first,
-            ));
-        }
-        *grp = Group {
-            kind,
-            start,
-            len: n,
-        };
+        (role, v.session_of(l) as usize)
+    });
+    let layout = SessionLayout {
+        n_groups: v.n_groups(),
+        n_sessions: v.n_sessions,
+        sessions_given: v.session.is_some(),
+    };
+    let scratch = SessionScratch {
+        group_rows: group_count,
+        group_first,
+        group_session,
+        session_rows: session_count,
+        session_first,
+    };
+    let kind_of = |g: usize| groups.get(g).map_or(GroupKind::Target, |x| x.kind);
+    check_sessions(roles, kind_of, &layout, scratch).map_err(|f| session_fault(f, v))?;
+    // Group starts.
+    let mut start = 0usize;
+    for (grp, &n) in groups.iter_mut().zip(group_count.iter()) {
+        grp.start = start;
+        grp.len = n;
         start += n;
     }
     // Distances.

@@ -1,13 +1,15 @@
 //! Runs the core's identification for the CLI: the identifiability analysis once, then the
 //! requested algorithms in parallel (rayon), each by least squares or, with
 //! `Settings::robust`, by the core's robust IRLS fit, and the consensus check between them.
+//! Instrument data and contact data (targets, planes) go through the one runner.
 
 use std::time::Instant;
 
 use kincal::identify::{
-    Algorithm, Bounds, Identifiability, Identification, IdentifyOptions, MAX_MODEL_PARAMS,
-    Measurement, PoseResidual, Prior, PriorSizes, RobustOptions, Workspace, analyze, identify,
-    identify_robust, robust::ResidualTest,
+    Algorithm, Bounds, ConstraintData, Identifiability, Identification, IdentifyOptions,
+    MAX_MODEL_PARAMS, Measurement, PoseResidual, Prior, PriorSizes, RobustIdentification,
+    RobustOptions, Workspace, analyze, analyze_constrained, identify, identify_constrained,
+    identify_constrained_robust, identify_robust, robust::ResidualTest,
 };
 use kincal::pose::OrientationError;
 use kincal::{EffectSet, ParamIndex, ParamSet, Robot};
@@ -141,8 +143,9 @@ pub struct RobustRun {
     pub test: ResidualTest,
     /// Reweighted fits performed (both phases for Cauchy).
     pub reweights: u32,
-    /// One per pose, in data order: residuals, standardised residual d, final robust weight,
-    /// suspect flag.
+    /// One per pose, in data order (contact data: the core's order, instrument rows then
+    /// contacts by group, see `ContactData::row_of`): residuals, standardised residual d,
+    /// final robust weight, suspect flag.
     pub poses: Vec<PoseResidual>,
 }
 
@@ -230,12 +233,98 @@ pub fn calibrate<const N: usize>(
     data: &[Measurement<N>],
     settings: &Settings,
 ) -> Result<Calibration<N>, Failure> {
-    let requested = start.param_set(settings.effects);
+    run_all(
+        start,
+        Rows::Instrument(data),
+        start.param_set(settings.effects),
+        settings,
+    )
+}
+
+/// The rows a calibration runs on.
+#[derive(Clone, Copy)]
+enum Rows<'d, const N: usize> {
+    /// Instrument rows only (`identify`, `identify_robust`).
+    Instrument(&'d [Measurement<N>]),
+    /// Contacts, possibly with instrument rows (`identify_constrained`,
+    /// `identify_constrained_robust`).
+    Contacts(&'d ConstraintData<'d, N>),
+}
+
+impl<const N: usize> Rows<'_, N> {
+    fn analyze(
+        self,
+        start: &Robot<N>,
+        opts: &IdentifyOptions<'_>,
+        ws: &mut Workspace<WS_PARAMS>,
+    ) -> Result<Identifiability, kincal::Error> {
+        match self {
+            Rows::Instrument(d) => analyze(start, d, opts, ws),
+            Rows::Contacts(d) => analyze_constrained(start, d, opts, ws),
+        }
+    }
+
+    /// One fit: least squares, or with `robust` the IRLS fit on a copy of the rows (the
+    /// core writes the robust weights into the rows while it iterates).
+    fn fit(
+        self,
+        start: &Robot<N>,
+        opts: &IdentifyOptions<'_>,
+        robust: Option<&RobustOptions>,
+        ws: &mut Workspace<WS_PARAMS>,
+    ) -> Result<(Identification<N>, Option<RobustRun>), kincal::Error> {
+        let run = |r: RobustIdentification<N>, poses| {
+            (
+                r.fit,
+                Some(RobustRun {
+                    test: r.test,
+                    reweights: r.reweights,
+                    poses,
+                }),
+            )
+        };
+        match (self, robust) {
+            (Rows::Instrument(d), None) => Ok((identify(start, d, opts, ws)?, None)),
+            (Rows::Contacts(d), None) => Ok((identify_constrained(start, d, opts, ws)?, None)),
+            (Rows::Instrument(d), Some(ro)) => {
+                let mut own = d.to_vec();
+                let mut poses = vec![PoseResidual::default(); own.len()];
+                let r = identify_robust(start, &mut own, opts, ro, &mut poses, ws)?;
+                Ok(run(r, poses))
+            }
+            (Rows::Contacts(d), Some(ro)) => {
+                let (mut inst, mut contacts) = (d.instrument.to_vec(), d.contacts.to_vec());
+                let mut poses = vec![PoseResidual::default(); inst.len() + contacts.len()];
+                let r = identify_constrained_robust(
+                    start,
+                    &mut inst,
+                    &mut contacts,
+                    d.groups,
+                    d.distances,
+                    opts,
+                    ro,
+                    &mut poses,
+                    ws,
+                )?;
+                Ok(run(r, poses))
+            }
+        }
+    }
+}
+
+/// The one runner: the analysis of `requested` once (refused when deficient), then every
+/// algorithm of `settings` in parallel on the same rows, then the consensus check.
+fn run_all<const N: usize>(
+    start: &Robot<N>,
+    rows: Rows<'_, N>,
+    requested: ParamSet,
+    settings: &Settings,
+) -> Result<Calibration<N>, Failure> {
     let core = |algorithm| move |error| Failure::Core { algorithm, error };
     let mut ws = new_workspace();
     let prior = settings.prior_around(start);
     let opts = settings.options(Algorithm::Ols, requested, None, None);
-    let analysis = analyze(start, data, &opts, &mut ws).map_err(core(None))?;
+    let analysis = rows.analyze(start, &opts, &mut ws).map_err(core(None))?;
     let singular_values = ws.singular_values().to_vec();
     refuse_deficient(&analysis, &singular_values, settings, prior.as_deref())?;
     let results: Vec<Result<Run<N>, Failure>> = settings
@@ -250,28 +339,9 @@ pub fn calibrate<const N: usize>(
             ));
             let opts = settings.options(algorithm, requested, Some(&bounds), prior.as_deref());
             let mut ws = new_workspace();
-            let (ident, robust) = match &settings.robust {
-                None => (
-                    identify(start, data, &opts, &mut ws).map_err(core(Some(algorithm)))?,
-                    None,
-                ),
-                Some(ro) => {
-                    // The core writes the robust weights into the data while it iterates
-                    // (and restores them): each run works on its own copy.
-                    let mut own = data.to_vec();
-                    let mut poses = vec![PoseResidual::default(); own.len()];
-                    let r = identify_robust(start, &mut own, &opts, ro, &mut poses, &mut ws)
-                        .map_err(core(Some(algorithm)))?;
-                    (
-                        r.fit,
-                        Some(RobustRun {
-                            test: r.test,
-                            reweights: r.reweights,
-                            poses,
-                        }),
-                    )
-                }
-            };
+            let (ident, robust) = rows
+                .fit(start, &opts, settings.robust.as_ref(), &mut ws)
+                .map_err(core(Some(algorithm)))?;
             Ok(Run {
                 ident,
                 seconds: t0.elapsed().as_secs_f64(),
@@ -303,7 +373,6 @@ pub fn contact_params<const N: usize>(start: &Robot<N>, settings: &Settings) -> 
     requested
 }
 
-/// [`calibrate`] for instrument-free (or mixed) data: the core's constraint analysis and
 /// The analysis's refusal, shared by the instrument and the contact path: no identifiable
 /// parameter, or data-deficient directions without `allow_data_deficiency`.
 fn refuse_deficient(
@@ -326,53 +395,20 @@ fn refuse_deficient(
     Ok(())
 }
 
-/// `identify_constrained`, every algorithm in parallel; no robust fit (refused by the
-/// command).
+/// [`calibrate`] for instrument-free (or mixed) data: the core's constraint analysis and
+/// `identify_constrained` (or, with `Settings::robust`, `identify_constrained_robust`:
+/// IRLS weights per contact and instrument row), every algorithm in parallel.
 pub fn calibrate_constrained<const N: usize>(
     start: &Robot<N>,
-    data: &kincal::identify::ConstraintData<'_, N>,
+    data: &ConstraintData<'_, N>,
     settings: &Settings,
 ) -> Result<Calibration<N>, Failure> {
-    use kincal::identify::{analyze_constrained, identify_constrained};
-    let requested = contact_params(start, settings);
-    let core = |algorithm| move |error| Failure::Core { algorithm, error };
-    let mut ws = new_workspace();
-    let prior = settings.prior_around(start);
-    let opts = settings.options(Algorithm::Ols, requested, None, None);
-    let analysis = analyze_constrained(start, data, &opts, &mut ws).map_err(core(None))?;
-    let singular_values = ws.singular_values().to_vec();
-    refuse_deficient(&analysis, &singular_values, settings, prior.as_deref())?;
-    let results: Vec<Result<Run<N>, Failure>> = settings
-        .algorithms
-        .par_iter()
-        .map(|&algorithm| {
-            let t0 = Instant::now();
-            let bounds = Box::new(Bounds::around(
-                start,
-                settings.bounds_length_m,
-                settings.bounds_angle_rad,
-            ));
-            let opts = settings.options(algorithm, requested, Some(&bounds), prior.as_deref());
-            let mut ws = new_workspace();
-            let ident =
-                identify_constrained(start, data, &opts, &mut ws).map_err(core(Some(algorithm)))?;
-            Ok(Run {
-                ident,
-                seconds: t0.elapsed().as_secs_f64(),
-                robust: None,
-            })
-        })
-        .collect();
-    let runs = results.into_iter().collect::<Result<Vec<_>, _>>()?;
-    let consensus = (runs.len() >= 2).then(|| Consensus::check(&runs, &analysis.identifiable));
-    Ok(Calibration {
-        start: *start,
-        settings: settings.clone(),
-        analysis,
-        singular_values,
-        runs,
-        consensus,
-    })
+    run_all(
+        start,
+        Rows::Contacts(data),
+        contact_params(start, settings),
+        settings,
+    )
 }
 
 /// Two algorithms disagree on a parameter when the difference exceeds

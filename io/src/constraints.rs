@@ -7,7 +7,8 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use kincal::identify::{
-    ConstraintData, Contact, Distance, Group, GroupKind, Measurement, group_estimate,
+    ConstraintData, Contact, Distance, Group, GroupKind, Measurement, RowRole, SessionFault,
+    SessionLayout, SessionScratch, check_sessions, group_estimate,
 };
 use kincal::{Error, Robot};
 use serde::Deserialize;
@@ -23,7 +24,7 @@ pub use kincal::identify::MIN_SESSION_ROWS;
 pub use kincal::identify::USABLE_PLANE_MIN_ASPECT as CLI_PLANE_MIN_ASPECT;
 /// An unknown plane needs at least this many contacts (three define it; only the fourth
 /// and later say anything about the robot).
-pub const MIN_PLANE_CONTACTS: usize = 3;
+pub const MIN_PLANE_CONTACTS: usize = GroupKind::Plane.min_contacts();
 
 /// A known distance of the constraints file.
 #[derive(Debug, Clone, PartialEq)]
@@ -373,6 +374,111 @@ fn input(set: &MeasurementSet, line: u64, column: &str, why: String) -> CliError
     CliError::input(format!("{}:{line}: column '{column}': {why}", set.source))
 }
 
+/// Core's session and group rules ([`check_sessions`]) on the rows' roles, worded for
+/// the file: sessions and groups are indices into `sessions` and `order`.
+fn check_layout(
+    set: &MeasurementSet,
+    roles: &[(RowRole, usize)],
+    kinds: &[GroupKind],
+    order: &[(String, bool)],
+    sessions: &[(Option<&str>, u64)],
+) -> Result<(), CliError> {
+    let (g, s) = (kinds.len(), sessions.len());
+    let (mut gr, mut gf, mut gs) = (vec![0; g], vec![0; g], vec![0; g]);
+    let (mut sr, mut sf) = (vec![0; s], vec![0; s]);
+    let fault = check_sessions(
+        roles.iter().copied(),
+        |g| kinds.get(g).copied().unwrap_or(GroupKind::Target),
+        &SessionLayout {
+            n_groups: g,
+            n_sessions: s,
+            sessions_given: set.has_session,
+        },
+        SessionScratch {
+            group_rows: &mut gr,
+            group_first: &mut gf,
+            group_session: &mut gs,
+            session_rows: &mut sr,
+            session_first: &mut sf,
+        },
+    );
+    let Err(fault) = fault else {
+        return Ok(());
+    };
+    let row = |r: usize| &set.rows[r];
+    let session_name = |r: usize| row(r).session.as_deref().unwrap_or("").to_string();
+    let group = |g: usize| {
+        let (id, plane) = &order[g];
+        (id.as_str(), if *plane { "plane" } else { "target" })
+    };
+    Err(match fault {
+        SessionFault::GroupInTwoSessions {
+            group: g,
+            row: r,
+            first,
+        } => {
+            let (id, col) = group(g);
+            input(
+                set,
+                row(r).line,
+                col,
+                format!(
+                    "{col} {id:?} appears in session {:?} (from line {}) and in session {:?}: \
+                     expected each {col} in one session (a fixed point of one set-up)",
+                    session_name(first),
+                    row(first).line,
+                    session_name(r)
+                ),
+            )
+        }
+        SessionFault::InstrumentInTwoSessions { row: r, first } => input(
+            set,
+            row(r).line,
+            "session",
+            format!(
+                "instrument rows (x, y, z) in session {:?} and, from line {}, in session {:?}: \
+                 one base frame per session is not implemented yet; expected instrument rows \
+                 in one session only (contact rows may span sessions)",
+                session_name(r),
+                row(first).line,
+                session_name(first)
+            ),
+        ),
+        SessionFault::SessionTooSmall { session, rows, .. } => input(
+            set,
+            sessions[session].1,
+            "session",
+            format!(
+                "session {:?} has {rows} row(s): expected at least {MIN_SESSION_ROWS} (a set-up \
+                 must hold enough contacts to say something)",
+                sessions[session].0.unwrap_or("")
+            ),
+        ),
+        SessionFault::GroupTooSmall {
+            group: g,
+            rows,
+            needed,
+            first,
+        } => {
+            let (id, col) = group(g);
+            input(
+                set,
+                row(first).line,
+                col,
+                format!(
+                    "{col} {id:?} has {rows} row(s): expected at least {needed} (an unknown {col} \
+                     is estimated from its contacts; give it in the constraints file if it is \
+                     known)"
+                ),
+            )
+        }
+        other => CliError::input(format!(
+            "{}: internal error grouping the rows: {other:?}",
+            set.source
+        )),
+    })
+}
+
 /// Builds the core's data from `set` and the constraints file: rows grouped by target or
 /// plane (in order of first appearance), instrument rows as measurements, known targets
 /// and planes from the file, distances weighted by `sigma_m` (`1/(σ²·weight_pos)` relative
@@ -401,29 +507,34 @@ pub fn build<const N: usize>(
         distance_specs: cons.distances.clone(),
         file: (!cons.path.is_empty()).then(|| (cons.path.clone(), cons.sha256.clone())),
     };
-    // Sessions: row counts and which hold instrument rows.
-    let mut session_rows: Vec<(Option<&str>, usize, u64)> = Vec::new();
-    let mut instrument_session: Option<(Option<&str>, u64)> = None;
-    // Groups in order of first appearance: (id, plane) → rows.
+    // Sessions and groups (targets, planes) in order of first appearance; each row's role.
+    let mut sessions: Vec<(Option<&str>, u64)> = Vec::new();
     let mut order: Vec<(String, bool)> = Vec::new();
-    let mut members: HashMap<(String, bool), Vec<usize>> = HashMap::new();
+    let mut group_index: HashMap<(String, bool), usize> = HashMap::new();
+    let mut members: Vec<Vec<usize>> = Vec::new();
+    let mut roles: Vec<(RowRole, usize)> = Vec::with_capacity(set.rows.len());
     for (i, row) in set.rows.iter().enumerate() {
         let session = row.session.as_deref();
-        match session_rows.iter_mut().find(|s| s.0 == session) {
-            Some(s) => s.1 += 1,
-            None => session_rows.push((session, 1, row.line)),
-        }
+        let s = match sessions.iter().position(|s| s.0 == session) {
+            Some(s) => s,
+            None => {
+                sessions.push((session, row.line));
+                sessions.len() - 1
+            }
+        };
         let key = match (&row.target, &row.plane) {
             (Some(t), _) => Some((t.clone(), false)),
             (None, Some(p)) => Some((p.clone(), true)),
             _ => None,
         };
         if let Some(key) = key {
-            let list = members.entry(key.clone()).or_default();
-            if list.is_empty() {
+            let g = *group_index.entry(key.clone()).or_insert_with(|| {
                 order.push(key);
-            }
-            list.push(i);
+                members.push(Vec::new());
+                members.len() - 1
+            });
+            members[g].push(i);
+            roles.push((RowRole::Contact(g), s));
             continue;
         }
         let Some((pose, mask)) = crate::data::measured_pose(row, &set.source)? else {
@@ -435,25 +546,7 @@ pub fn build<const N: usize>(
                     .into(),
             ));
         };
-        match instrument_session {
-            None => instrument_session = Some((session, row.line)),
-            Some((s, first)) if s != session => {
-                return Err(input(
-                    set,
-                    row.line,
-                    "session",
-                    format!(
-                        "instrument rows (x, y, z) in session {:?} and, from line {first}, in \
-                         session {:?}: one base frame per session is not implemented yet; \
-                         expected instrument rows in one session only (contact rows may span \
-                         sessions)",
-                        session.unwrap_or(""),
-                        s.unwrap_or("")
-                    ),
-                ));
-            }
-            _ => {}
-        }
+        roles.push((RowRole::Instrument, s));
         out.instrument.push(Measurement {
             state: crate::data::joint_state::<N>(row),
             pose,
@@ -463,47 +556,13 @@ pub fn build<const N: usize>(
         });
         out.instrument_rows.push(i);
     }
-    if set.has_session {
-        for &(s, n, line) in &session_rows {
-            if n < MIN_SESSION_ROWS {
-                return Err(input(
-                    set,
-                    line,
-                    "session",
-                    format!(
-                        "session {:?} has {n} row(s): expected at least {MIN_SESSION_ROWS} (a \
-                         set-up must hold enough contacts to say something)",
-                        s.unwrap_or("")
-                    ),
-                ));
-            }
-        }
-    }
     let known_target = |id: &str| cons.targets.iter().find(|t| t.id == id);
     let known_plane = |id: &str| cons.planes.iter().find(|p| p.id == id);
-    for key in &order {
-        let rows = &members[key];
+    let mut kinds = Vec::with_capacity(order.len());
+    for (key, rows) in order.iter().zip(&members) {
         let first = &set.rows[rows[0]];
         let (id, plane) = (key.0.as_str(), key.1);
         let col = if plane { "plane" } else { "target" };
-        if let Some(other) = rows
-            .iter()
-            .map(|&r| &set.rows[r])
-            .find(|r| r.session != first.session)
-        {
-            return Err(input(
-                set,
-                other.line,
-                col,
-                format!(
-                    "{col} {id:?} appears in session {:?} (from line {}) and in session {:?}: \
-                     expected each {col} in one session (a fixed point of one set-up)",
-                    first.session.as_deref().unwrap_or(""),
-                    first.line,
-                    other.session.as_deref().unwrap_or("")
-                ),
-            ));
-        }
         if (plane && known_target(id).is_some()) || (!plane && known_plane(id).is_some()) {
             return Err(input(
                 set,
@@ -515,7 +574,7 @@ pub fn build<const N: usize>(
                 ),
             ));
         }
-        let kind = if plane {
+        kinds.push(if plane {
             match known_plane(id) {
                 Some(p) => GroupKind::KnownPlane {
                     normal: p.normal,
@@ -528,25 +587,12 @@ pub fn build<const N: usize>(
                 Some(t) => GroupKind::KnownTarget(t.xyz_m),
                 None => GroupKind::Target,
             }
-        };
-        let needed = match kind {
-            GroupKind::Target => 2,
-            GroupKind::Plane => MIN_PLANE_CONTACTS,
-            _ => 1,
-        };
-        if rows.len() < needed {
-            return Err(input(
-                set,
-                first.line,
-                col,
-                format!(
-                    "{col} {id:?} has {} row(s): expected at least {needed} (an unknown {col} \
-                     is estimated from its contacts; give it in the constraints file if it is \
-                     known)",
-                    rows.len()
-                ),
-            ));
-        }
+        });
+    }
+    check_layout(set, &roles, &kinds, &order, &sessions)?;
+    for ((key, rows), &kind) in order.iter().zip(&members).zip(&kinds) {
+        let first = &set.rows[rows[0]];
+        let (id, plane) = (key.0.as_str(), key.1);
         out.groups.push(Group {
             kind,
             start: out.contacts.len(),

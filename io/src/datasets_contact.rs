@@ -374,7 +374,7 @@ fn mate(dir: &Path, opts: &ContactOptions) -> Result<ContactImport, CliError> {
         for (line, v) in &data {
             let mut xyz = [String::new(), String::new(), String::new()];
             xyz[col] = num(v[0]);
-            let _ = write!(body, "{axis}/{line},{}", q_rad(&v[1..4]));
+            let _ = write!(body, "{axis}/{line},{}", q_rad(&mate_joints(&v[1..4])));
             let _ = writeln!(body, ",{},{},{},,,", xyz[0], xyz[1], xyz[2]);
         }
         rows += data.len();
@@ -395,7 +395,7 @@ fn mate(dir: &Path, opts: &ContactOptions) -> Result<ContactImport, CliError> {
             let _ = writeln!(
                 body,
                 "pose/{line},{},{},{},{},{},{},{}",
-                q_rad(&v[6..9]),
+                q_rad(&mate_joints(&v[6..9])),
                 num(v[0]),
                 num(v[1]),
                 num(v[2]),
@@ -415,6 +415,7 @@ fn mate(dir: &Path, opts: &ContactOptions) -> Result<ContactImport, CliError> {
         ),
         "contact rows x/LINE, y/LINE, z/LINE: the tool point on the plane x = 0.3044, y = -0.43791 or z = -0.004 m (the files' constant column), in the robot's base frame; only that coordinate is given".into(),
         "joint readings converted from degrees (the files' unit, as FIGAROH's calibration_plane.py reads them)".into(),
+        "q1 = -q_1: the files' q_1 turns the arm the other way than mate.urdf's joint q_1 (with the reading as published, the best-fit planes of the x and y contacts meet at 47 deg and lie 595 mm from x = 0.3044; negated, they meet at 83.5 deg and the nominal model puts them at x = 0.3029 and y = -0.4237 m, see docs/real-data.md)".into(),
         "pose/LINE rows: transformed_poses.csv as full poses, R = Rz(phiz1)·Ry(phiy1)·Rx(phix1) in degrees (assumed, the file does not say); their frame is unverified".into(),
         "10_points_in_radians.csv is not read: its positions are placeholders (all 0) and its rows match none of the plane files".into(),
         "provenance: the set's README cannot say whether the data are real".into(),
@@ -450,6 +451,20 @@ fn mate(dir: &Path, opts: &ContactOptions) -> Result<ContactImport, CliError> {
             rows - n_poses
         ),
     })
+}
+
+/// MATE's joint readings (degrees) in mate.urdf's sense: q_1 negated. With the published
+/// sign, the x- and y-plane contacts are individually flat (about 5 mm) but their planes
+/// meet at 47° instead of 90° at the nominal model; with q_1 negated they meet at
+/// 83.5° and lie at the files' plane positions to 1.5 mm (x) and 14 mm (y) with mate.urdf's
+/// own base frame. A reading that turns the other way than the model's axis is the one
+/// explanation that fits both (docs/real-data.md, "MATE").
+fn mate_joints(q_deg: &[f64]) -> Vec<f64> {
+    q_deg
+        .iter()
+        .enumerate()
+        .map(|(k, &q)| if k == 0 { -q } else { q })
+        .collect()
 }
 
 /// Joint readings in degrees as comma-separated radians.

@@ -65,7 +65,10 @@ recorded in the model file under calibration.robust with the loss and the scales
 residual table then covers every row (suspects included); the cost, σ² and standard errors
 are those of the robustly weighted fit. With --algorithm all each algorithm is fitted
 robustly (OPT1 inside its intervals), the consensus compares the robust fits, and the model
-is the robust OLS fit; suspects another algorithm names differently are listed too.
+is the robust OLS fit; suspects another algorithm names differently are listed too. With
+target/plane rows (core identify_constrained_robust) each contact is one row: its residual
+is its distance to its target (3 components) or plane (1), estimated from the group's
+weighted contacts; known distances keep their weight.
 
 Unknown base and tool frames (a camera on the wrist observing a board, a tracker set up
 anywhere): --effects base_frame,tool_frame identifies them with the geometry, starting from
@@ -625,11 +628,6 @@ fn calibrate_contacts<const N: usize>(
     settings: &Settings,
     set: &kincal_io::measurements::MeasurementSet,
 ) -> Result<(), CliError> {
-    if args.robust.is_some() {
-        return Err(CliError::usage(
-            "--robust is not implemented for data with target/plane rows: fit by least squares",
-        ));
-    }
     if args.init_frames {
         return Err(CliError::usage(
             "--init-frames needs instrument poses; data with target/plane rows start from the ROBOT's frames",
@@ -665,6 +663,15 @@ fn calibrate_contacts<const N: usize>(
         rows,
     };
     let mut file = ModelFile::from_calibration(name, &cal, 0, data_json, args.allow_out_of_limits);
+    // The robust fit's rows are the core's: instrument rows, then contacts by group.
+    let labels: Vec<PoseLabel> = (0..cd.rows())
+        .filter_map(|i| cd.row_of(i).and_then(|r| set.rows.get(r)))
+        .map(|r| PoseLabel {
+            line: r.line,
+            pose_id: r.pose_id.clone(),
+        })
+        .collect();
+    file.record_robust(&cal, 0, &labels);
     if let Some(c) = file.calibration.as_mut() {
         c.constraints = Some(cons_json.clone());
     }
@@ -679,6 +686,7 @@ fn calibrate_contacts<const N: usize>(
     }
     kincal_io::files::write_atomic(&args.out, &inputs, |w| w.write_all(text.as_bytes()))?;
     let mut out = summary(&cal, name, &set.source, cd.rows(), rows);
+    out.push_str(&robust_report(&cal, &labels));
     out.push_str(&kincal_io::constraints::reference_note(&view));
     out.push_str(&kincal_io::constraints::report_text(&cons_json));
     out.push_str(&format!(

@@ -135,7 +135,10 @@ impl GroupKind {
             GroupKind::KnownTarget(_) | GroupKind::KnownPlane { .. }
         )
     }
-    const fn min_contacts(self) -> usize {
+    /// Contacts a group of this kind needs: 2 for an unknown target, 3 for an unknown
+    /// plane, 1 when known (the front ends refuse fewer, see [`super::check_sessions`]).
+    #[must_use]
+    pub const fn min_contacts(self) -> usize {
         match self {
             GroupKind::Target => 2,
             GroupKind::Plane => 3,
@@ -668,6 +671,32 @@ fn contact_residual<const N: usize>(
         GroupKind::KnownPlane { offset_m, .. } => (offset_m - dot3(&normal, &p)).abs(),
         GroupKind::Plane => dot3(&normal, &[p[0] - pbar[0], p[1] - pbar[1], p[2] - pbar[2]]).abs(),
     })
+}
+
+/// The residual distance (3-D for targets, to the plane for planes) at `robot` of the
+/// contacts `from..from + out.len()` into `out`, each group's target or plane estimated
+/// from its contacts with a positive weight as the fit eliminates it; contacts with weight
+/// 0 (held out) are measured against that estimate too. Errors: as [`group_estimate`].
+pub(crate) fn contact_residuals_range<const N: usize>(
+    robot: &Robot<N>,
+    data: &ConstraintData<'_, N>,
+    from: usize,
+    out: &mut [f64],
+) -> Result<()> {
+    let to = from + out.len();
+    for (g, grp) in data.groups.iter().enumerate() {
+        let (lo, hi) = (grp.start.max(from), (grp.start + grp.len).min(to));
+        if lo >= hi {
+            continue;
+        }
+        let e = group_estimate(robot, data, g)?;
+        let contacts = data.contacts.get(lo..hi).unwrap_or(&[]);
+        let slots = out.get_mut(lo - from..hi - from).unwrap_or(&mut []);
+        for (c, slot) in contacts.iter().zip(slots.iter_mut()) {
+            *slot = contact_residual(robot, c, grp.kind, e.point, e.normal)?;
+        }
+    }
+    Ok(())
 }
 
 /// What a group's contacts say at a model: the estimated target or plane and the scatter

@@ -19,6 +19,7 @@ mod data;
 mod identifiability;
 mod prior;
 pub mod robust;
+mod sessions;
 mod solvers;
 mod workspace;
 
@@ -33,8 +34,10 @@ pub(crate) use identifiability::structural_step;
 pub use identifiability::{Identifiability, Partner, analyze};
 pub use prior::{DEFAULT_PRIOR_ANGLE_RAD, DEFAULT_PRIOR_LENGTH_M, Prior, PriorSizes};
 pub use robust::{
-    Loss, PoseResidual, RobustIdentification, RobustOptions, identify_robust, residual_test,
+    Loss, PoseResidual, RobustIdentification, RobustOptions, identify_constrained_robust,
+    identify_robust, residual_test,
 };
+pub use sessions::{NO_ROW, RowRole, SessionFault, SessionLayout, SessionScratch, check_sessions};
 pub use solvers::{identify, identify_with_analysis};
 pub(crate) use solvers::{identify_in_place, identify_into};
 pub use workspace::Workspace;

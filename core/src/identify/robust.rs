@@ -29,7 +29,8 @@
 //! returning, also on error. No heap; medians are exact order statistics found by bisection
 //! on the bit patterns of the (non-negative) norms.
 
-use super::data::{Measurement, residual_stats};
+use super::constraints::{ConstraintData, Contact, Distance, Group};
+use super::data::{Measurement, RowSource, residual_stats};
 use super::identifiability::analyze_into;
 use super::solvers::{check_identify_options, check_inputs, identify_into};
 use super::{Identification, IdentifyOptions, Workspace};
@@ -309,12 +310,29 @@ fn check_options(ropts: &RobustOptions) -> Result<()> {
     Ok(())
 }
 
-/// Degrees-of-freedom factor `sqrt(rows/(rows − dof_used))` over the poses in the fit.
-fn dof_factor<const N: usize>(data: &[Measurement<N>], dof_used: usize) -> f64 {
-    let rows: usize = data
-        .iter()
-        .filter(|m| m.weight > 0.0)
-        .map(|m| (0..6).filter(|&k| m.mask.has(k)).count())
+/// What the scale estimate needs of a row: whether it is in the fit, and its measured
+/// position and orientation components.
+#[derive(Debug, Clone, Copy)]
+struct RowShape {
+    used: bool,
+    pos: usize,
+    rot: usize,
+}
+
+fn shape_of<const N: usize>(m: &Measurement<N>) -> RowShape {
+    RowShape {
+        used: m.weight > 0.0,
+        pos: (0..3).filter(|&k| m.mask.has(k)).count(),
+        rot: (3..6).filter(|&k| m.mask.has(k)).count(),
+    }
+}
+
+/// Degrees-of-freedom factor `sqrt(rows/(rows − dof_used))` over the rows in the fit.
+fn dof_factor(n: usize, shape: impl Fn(usize) -> RowShape, dof_used: usize) -> f64 {
+    let rows: usize = (0..n)
+        .map(&shape)
+        .filter(|s| s.used)
+        .map(|s| s.pos + s.rot)
         .sum();
     if rows > dof_used {
         sqrt(rows as f64 / (rows - dof_used) as f64)
@@ -345,29 +363,20 @@ const SCALE_PASSES: usize = 8;
 /// 50 %), then — far more efficient — the root mean square per component over the poses
 /// that the residual test accepts at the current scales, repeated until that set settles.
 /// Both are corrected by [`dof_factor`] and floored by the options.
-fn estimate_scales<const N: usize>(
-    data: &[Measurement<N>],
+fn estimate_scales(
+    shape: impl Fn(usize) -> RowShape + Copy,
     dof_used: usize,
     ropts: &RobustOptions,
     report: &mut [PoseResidual],
 ) -> (f64, f64) {
-    let n = data.len();
-    let dof = dof_factor(data, dof_used);
-    let used = |i: usize| data[i].weight > 0.0;
+    let n = report.len();
+    let dof = dof_factor(n, shape, dof_used);
     let floor = |s: f64, min: f64| if s.is_finite() { s.max(min) } else { min };
     let (mp, mr) = {
         let rep: &[PoseResidual] = report;
         (
-            median(
-                n,
-                |i| rep[i].pos_m,
-                |i| used(i) && data[i].mask.has_position(),
-            ),
-            median(
-                n,
-                |i| rep[i].rot_rad,
-                |i| used(i) && data[i].mask.has_orientation(),
-            ),
+            median(n, |i| rep[i].pos_m, |i| shape(i).used && shape(i).pos > 0),
+            median(n, |i| rep[i].rot_rad, |i| shape(i).used && shape(i).rot > 0),
         )
     };
     let mut sp = floor(mp / CHI3_MEDIAN * dof, ropts.min_scale_pos_m);
@@ -375,14 +384,13 @@ fn estimate_scales<const N: usize>(
     mark(report, sp, sr, ropts);
     for _ in 0..SCALE_PASSES {
         let (mut sum_p, mut n_p, mut sum_r, mut n_r) = (0.0, 0usize, 0.0, 0usize);
-        for (m, r) in data.iter().zip(report.iter()) {
-            if m.weight > 0.0 && !r.suspect {
-                let kp = (0..3).filter(|&k| m.mask.has(k)).count();
-                let kr = (3..6).filter(|&k| m.mask.has(k)).count();
+        for (i, r) in report.iter().enumerate() {
+            let s = shape(i);
+            if s.used && !r.suspect {
                 sum_p += r.pos_m * r.pos_m;
-                n_p += kp;
+                n_p += s.pos;
                 sum_r += r.rot_rad * r.rot_rad;
-                n_r += kr;
+                n_r += s.rot;
             }
         }
         let new_sp = if n_p > 0 {
@@ -414,9 +422,29 @@ fn test_at<const N: usize>(
     report: &mut [PoseResidual],
 ) -> Result<ResidualTest> {
     residual_norms(robot, data, report)?;
+    let shape = |i: usize| {
+        data.get(i).map_or(
+            RowShape {
+                used: false,
+                pos: 0,
+                rot: 0,
+            },
+            shape_of,
+        )
+    };
+    Ok(test_norms(shape, dof_used, ropts, report))
+}
+
+/// The residual test on the norms in `report` (scales, suspects).
+fn test_norms(
+    shape: impl Fn(usize) -> RowShape + Copy,
+    dof_used: usize,
+    ropts: &RobustOptions,
+    report: &mut [PoseResidual],
+) -> ResidualTest {
     let (sp, sr) = match ropts.scale {
         Some(s) => s,
-        None => estimate_scales(data, dof_used, ropts, report),
+        None => estimate_scales(shape, dof_used, ropts, report),
     };
     let mut out = ResidualTest {
         scale_pos_m: sp,
@@ -435,7 +463,7 @@ fn test_at<const N: usize>(
             }
         }
     }
-    Ok(out)
+    out
 }
 
 /// Robust identification: as [`identify`](super::identify) (same options, same errors for bad or
@@ -532,5 +560,234 @@ fn reweighted<const N: usize, const P: usize>(
     // weights.
     out.fit.initial = residual_stats(robot, data, opts)?;
     out.test = test_at(&out.fit.robot, data, rank, ropts, report)?;
+    Ok(())
+}
+
+/// Robust identification from constraint data: as
+/// [`identify_constrained`](super::identify_constrained) (same options and errors), then
+/// iteratively reweighted fits with `ropts.loss` over the rows, then the residual test at
+/// the final model. Instrument rows are weighted as in [`identify_robust`]; each contact
+/// is one row whose residual is its distance to its group's target or plane, estimated
+/// from the group's weighted contacts as the fit eliminates it (3 position components for
+/// a target, 1 for a plane); known distances keep their weight. The fitted degrees of
+/// freedom include 3 per unknown target or plane. `report` (instrument rows, then
+/// contacts) receives every row's residual, standardised residual, final robust weight
+/// and suspect flag; the weights in `instrument` and `contacts` are restored before
+/// returning. Errors: as [`identify_robust`], plus those of the constraint data.
+#[allow(clippy::too_many_arguments)]
+pub fn identify_constrained_robust<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    instrument: &mut [Measurement<N>],
+    contacts: &mut [Contact<N>],
+    groups: &[Group],
+    distances: &[Distance],
+    opts: &IdentifyOptions<'_>,
+    ropts: &RobustOptions,
+    report: &mut [PoseResidual],
+    ws: &mut Workspace<P>,
+) -> Result<RobustIdentification<N>> {
+    let n_inst = instrument.len();
+    if report.len() != n_inst + contacts.len() {
+        return Err(Error::DimensionMismatch {
+            expected: n_inst + contacts.len(),
+            found: report.len(),
+        });
+    }
+    check_options(ropts)?;
+    let weights = instrument
+        .iter()
+        .map(|m| m.weight)
+        .chain(contacts.iter().map(|c| c.weight));
+    for (w, r) in weights.zip(report.iter_mut()) {
+        r.prior_weight = w;
+        r.robust_weight = 1.0;
+    }
+    let mut out = RobustIdentification {
+        fit: Identification::start(robot, opts.algorithm, None),
+        test: ResidualTest {
+            scale_pos_m: 0.0,
+            scale_rot_rad: 0.0,
+            n_suspect: 0,
+            worst: None,
+        },
+        reweights: 0,
+    };
+    let mut rows = ContactRows {
+        instrument,
+        contacts,
+        groups,
+        distances,
+    };
+    let status = reweighted_constrained(robot, &mut rows, opts, ropts, report, ws, &mut out);
+    let (inst, cont) = report.split_at(n_inst);
+    for (m, r) in rows.instrument.iter_mut().zip(inst) {
+        m.weight = r.prior_weight;
+    }
+    for (c, r) in rows.contacts.iter_mut().zip(cont) {
+        c.weight = r.prior_weight;
+    }
+    status.map(|()| out)
+}
+
+/// Constraint data whose row weights the iteration changes.
+struct ContactRows<'a, const N: usize> {
+    instrument: &'a mut [Measurement<N>],
+    contacts: &'a mut [Contact<N>],
+    groups: &'a [Group],
+    distances: &'a [Distance],
+}
+
+impl<const N: usize> ContactRows<'_, N> {
+    fn view(&self) -> ConstraintData<'_, N> {
+        ConstraintData {
+            instrument: self.instrument,
+            contacts: self.contacts,
+            groups: self.groups,
+            distances: self.distances,
+        }
+    }
+
+    /// Row `i` (instrument rows, then contacts) for the scale estimate.
+    fn shape(&self, i: usize) -> RowShape {
+        let none = RowShape {
+            used: false,
+            pos: 0,
+            rot: 0,
+        };
+        match i.checked_sub(self.instrument.len()) {
+            None => self.instrument.get(i).map_or(none, shape_of),
+            Some(c) => {
+                let g = self.groups.partition_point(|g| g.start + g.len <= c);
+                match (self.contacts.get(c), self.groups.get(g)) {
+                    (Some(contact), Some(grp)) => RowShape {
+                        used: contact.weight > 0.0,
+                        pos: if grp.kind.is_target() { 3 } else { 1 },
+                        rot: 0,
+                    },
+                    _ => none,
+                }
+            }
+        }
+    }
+
+    /// Unknown targets and planes (3 eliminated coordinates each).
+    fn nuisance_dof(&self) -> usize {
+        3 * self.groups.iter().filter(|g| !g.kind.is_known()).count()
+    }
+}
+
+/// The residual test of constraint data at `robot` (`report[..].prior_weight` set).
+fn test_contacts<const N: usize>(
+    robot: &Robot<N>,
+    rows: &ContactRows<'_, N>,
+    dof_used: usize,
+    ropts: &RobustOptions,
+    report: &mut [PoseResidual],
+) -> Result<ResidualTest> {
+    let n_inst = rows.instrument.len();
+    let (inst, cont) = report.split_at_mut(n_inst);
+    residual_norms(robot, rows.instrument, inst)?;
+    let mut norms = [0.0; 64];
+    // Contacts in chunks: their residual norms need no heap.
+    let view = rows.view();
+    let mut from = 0;
+    while from < cont.len() {
+        let to = (from + norms.len()).min(cont.len());
+        contact_norms(
+            robot,
+            &view,
+            from,
+            norms.get_mut(..to - from).unwrap_or(&mut []),
+        )?;
+        for (r, (c, &e)) in cont
+            .get_mut(from..to)
+            .unwrap_or(&mut [])
+            .iter_mut()
+            .zip(norms.iter())
+            .enumerate()
+        {
+            c.pos_m = e;
+            c.rot_rad = 0.0;
+            c.components = rows.shape(n_inst + from + r).pos as u8;
+        }
+        from = to;
+    }
+    Ok(test_norms(
+        |i| rows.shape(i),
+        dof_used + rows.nuisance_dof(),
+        ropts,
+        report,
+    ))
+}
+
+/// The residual distances of contacts `from..from + out.len()`.
+fn contact_norms<const N: usize>(
+    robot: &Robot<N>,
+    data: &ConstraintData<'_, N>,
+    from: usize,
+    out: &mut [f64],
+) -> Result<()> {
+    super::constraints::contact_residuals_range(robot, data, from, out)
+}
+
+/// The iteration of [`identify_constrained_robust`] (the weights in `rows` are left
+/// changed).
+fn reweighted_constrained<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    rows: &mut ContactRows<'_, N>,
+    opts: &IdentifyOptions<'_>,
+    ropts: &RobustOptions,
+    report: &mut [PoseResidual],
+    ws: &mut Workspace<P>,
+    out: &mut RobustIdentification<N>,
+) -> Result<()> {
+    // The plain fit and its analysis (kept: the weights stay positive).
+    out.fit = super::constraints::identify_constrained(robot, &rows.view(), opts, ws)?;
+    let rank = out.fit.analysis.rank;
+    let phases: &[Loss] = match ropts.loss {
+        Loss::Huber => &[Loss::Huber],
+        Loss::Cauchy => &[Loss::Huber, Loss::Cauchy],
+    };
+    let n_inst = rows.instrument.len();
+    for &loss in phases {
+        let mut converged = false;
+        for _ in 0..ropts.max_reweights {
+            test_contacts(&out.fit.robot, rows, rank, ropts, report)?;
+            let mut change: f64 = 0.0;
+            for (i, r) in report.iter_mut().enumerate() {
+                let k = usize::from(r.components.clamp(1, 6)) - 1;
+                let w = loss.weight(r.distance, ropts.tuning_chi2[k]);
+                change = change.max((w - r.robust_weight).abs());
+                r.robust_weight = w;
+                let weight = r.prior_weight * w;
+                match i.checked_sub(n_inst) {
+                    None => {
+                        if let Some(m) = rows.instrument.get_mut(i) {
+                            m.weight = weight;
+                        }
+                    }
+                    Some(c) => {
+                        if let Some(c) = rows.contacts.get_mut(c) {
+                            c.weight = weight;
+                        }
+                    }
+                }
+            }
+            if change <= ropts.weight_tol && out.reweights > 0 {
+                converged = true;
+                break;
+            }
+            // Warm start from the last fit.
+            identify_into(&rows.view(), opts, ws, &mut out.fit)?;
+            out.reweights += 1;
+        }
+        if !converged {
+            return Err(Error::NotConverged {
+                iterations: out.reweights,
+            });
+        }
+    }
+    out.fit.initial = RowSource::stats(&rows.view(), robot, opts)?;
+    out.test = test_contacts(&out.fit.robot, rows, rank, ropts, report)?;
     Ok(())
 }
