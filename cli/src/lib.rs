@@ -15,6 +15,7 @@ pub mod cmd_diagnose;
 pub mod cmd_evaluate;
 pub mod cmd_export;
 pub mod cmd_import;
+pub mod cmd_import_bag;
 pub mod cmd_markers;
 pub mod cmd_observed_point;
 pub mod cmd_predict;
@@ -37,6 +38,6 @@ pub mod study_plot;
 // The file formats moved to kincal-io; re-exported under their old paths so that the
 // commands (and code written against `kincal_cli::measurements` etc.) keep their imports.
 pub use kincal_io::{
-    calibration, constraints, data, datasets, datasets_contact, files, measurements, model_file,
-    plausibility, robot_arg, robot_file, tool_file, units, urdf, urdf_update,
+    calibration, cdr, constraints, data, datasets, datasets_contact, files, measurements,
+    model_file, plausibility, robot_arg, robot_file, rosbag, tool_file, units, urdf, urdf_update,
 };

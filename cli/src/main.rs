@@ -2,7 +2,8 @@
 
 use kincal_cli::{
     cmd_calibrate, cmd_crossval, cmd_demo, cmd_design_tool, cmd_diagnose, cmd_evaluate, cmd_export,
-    cmd_import, cmd_markers, cmd_observed_point, cmd_predict, cmd_select, cmd_validate, file_plan,
+    cmd_import, cmd_import_bag, cmd_markers, cmd_observed_point, cmd_predict, cmd_select,
+    cmd_validate, file_plan,
 };
 
 use std::process::ExitCode;
@@ -66,6 +67,10 @@ enum Command {
     /// A public real-robot data set, read as published, as measurement CSV and robot file
     #[command(name = "import-dataset", long_about = cmd_import::LONG_ABOUT, after_help = cmd_import::EXAMPLE)]
     ImportDataset(cmd_import::Args),
+    /// A ROS 2 bag (MCAP): joint readings and measured poses or points, one row per
+    /// standstill, as measurement CSV
+    #[command(name = "import-bag", long_about = cmd_import_bag::LONG_ABOUT, after_help = cmd_import_bag::EXAMPLE)]
+    ImportBag(Box<cmd_import_bag::Args>),
     /// Camera poses re-expressed at the point the camera looks at (position rows where
     /// the measurement is precise)
     #[command(name = "observed-point", long_about = cmd_observed_point::LONG_ABOUT, after_help = cmd_observed_point::EXAMPLE)]
@@ -102,6 +107,7 @@ fn plan(command: &Command) -> file_plan::FilePlan {
         Command::EvaluateDesigns(a) => file_plan::evaluate_designs(a),
         Command::Diagnose(a) => file_plan::diagnose(a),
         Command::ImportDataset(a) => file_plan::import_dataset(a),
+        Command::ImportBag(a) => file_plan::import_bag(a),
         Command::Crossval(a) => file_plan::crossval(a),
         Command::Markers(a) => file_plan::markers(a),
         Command::ObservedPoint(a) => file_plan::observed_point(a),
@@ -120,6 +126,7 @@ fn run(command: &Command) -> Result<(), kincal_cli::error::CliError> {
         Command::EvaluateDesigns(a) => cmd_evaluate::run(a),
         Command::Diagnose(a) => cmd_diagnose::run(a),
         Command::ImportDataset(a) => cmd_import::run(a),
+        Command::ImportBag(a) => cmd_import_bag::run(a),
         Command::Crossval(a) => cmd_crossval::run(a),
         Command::Markers(a) => cmd_markers::run(a),
         Command::ObservedPoint(a) => cmd_observed_point::run(a),
