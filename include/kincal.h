@@ -3672,6 +3672,23 @@ kincal_status kincal_robot_set_length_param(struct kincal_robot *robot,
                                             struct kincal_error *err);
 
 /*
+ Sets what joint `joint` (zero-based, < N) moves: `kind` is `KINCAL_JOINT_KIND_REVOLUTE`
+ or `KINCAL_JOINT_KIND_PRISMATIC` (reading and limits then in metres). The same check as
+ the core's: a prismatic joint's cyclic effect parameters must be zero. On failure
+ `*robot` is unchanged. Returns OK, NULL_POINTER, MISALIGNED_POINTER, INDEX_OUT_OF_RANGE
+ (`joint`), INVALID_ARGUMENT (`kind`, or nonzero cyclic parameters) or any status of
+ `kincal_robot_validate`.
+
+ # Safety
+ `robot` must be NULL or point to a readable and writable `kincal_robot`; `err` NULL or
+ writable.
+ */
+kincal_status kincal_robot_set_joint_kind(struct kincal_robot *robot,
+                                          size_t joint,
+                                          uint32_t kind,
+                                          struct kincal_error *err);
+
+/*
  Makes the current geometry (links, base, tool of `params`) the nominal one, e.g. to use a
  calibrated model as the description of a new calibration. On failure `*robot` is unchanged;
  statuses as `kincal_robot_validate`.

@@ -214,6 +214,66 @@ impl PriorArg {
     }
 }
 
+/// `--prior-frames MM,DEG` and `--prior-effects SIGMA`: prior sizes for the kinds that have
+/// none by default (`kincal::identify::PriorSizes`: the frames of a set-up are registered,
+/// not manufactured; effects are what a diagnosis asks about). They refine `--prior`, so
+/// they require it. The one place every command with `--prior` parses them.
+#[derive(clap::Args, Debug, Clone, Copy, Default, PartialEq)]
+pub struct PriorKinds {
+    /// With --prior: one σ for the base- and tool-frame translations [mm] and rotations
+    /// [deg] [default: no prior on the frames]
+    #[arg(long, value_name = "MM,DEG", value_parser = prior_pair, requires = "prior")]
+    pub prior_frames: Option<(f64, f64)>,
+    /// With --prior: one σ for every effect parameter, in the parameter's SI unit
+    /// (rad/(N·m), 1, rad, 1/K; m/N and m on prismatic joints) [default: none]
+    #[arg(long, value_name = "SIGMA", value_parser = prior_effect, requires = "prior")]
+    pub prior_effects: Option<f64>,
+}
+
+impl PriorKinds {
+    /// `sizes` with these kinds' σ set (given ones only).
+    #[must_use]
+    pub fn apply(self, mut sizes: kincal::identify::PriorSizes) -> kincal::identify::PriorSizes {
+        if let Some((mm, deg)) = self.prior_frames {
+            sizes.frame_length_m = mm * 1e-3;
+            sizes.frame_angle_rad = deg.to_radians();
+        }
+        if let Some(s) = self.prior_effects {
+            sizes.effect = s;
+        }
+        sizes
+    }
+
+    /// The core's sizes of `--prior` (links) refined by these flags; `None` without a
+    /// `--prior` size (none, or `auto`).
+    pub fn sizes(self, prior: Option<PriorArg>) -> Option<kincal::identify::PriorSizes> {
+        prior.and_then(PriorArg::sizes).map(|s| self.apply(s))
+    }
+}
+
+/// Parses `--prior-frames MM,DEG` (both > 0 and finite).
+pub fn prior_pair(s: &str) -> Result<(f64, f64), String> {
+    let Some((mm, deg)) = s.trim().split_once(',') else {
+        return Err(format!(
+            "expected MM,DEG (one σ for frame translations and rotations, e.g. 2,0.5), found '{s}'"
+        ));
+    };
+    Ok((within(mm, 1e-6, 1e6, "mm")?, within(deg, 1e-6, 1e4, "deg")?))
+}
+
+/// Parses `--prior-effects SIGMA` (> 0 and finite).
+pub fn prior_effect(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("expected a number, found '{s}'"))?;
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("expected a finite σ > 0, found '{s}'"))
+    }
+}
+
 /// Parses `MM,DEG` (both > 0 and finite) or `auto`.
 pub fn prior(s: &str) -> Result<PriorArg, String> {
     let s = s.trim();
@@ -231,4 +291,32 @@ pub fn prior(s: &str) -> Result<PriorArg, String> {
         length_mm,
         angle_deg,
     })
+}
+
+#[cfg(test)]
+mod prior_kind_tests {
+    use super::*;
+
+    #[test]
+    fn prior_kinds_refine_the_link_sizes_only_where_given() {
+        let links = PriorArg::Sizes {
+            length_mm: 5.0,
+            angle_deg: 1.0,
+        };
+        let none = PriorKinds::default().sizes(Some(links)).unwrap();
+        assert_eq!(none, links.sizes().unwrap());
+        assert!(none.frame_length_m.is_infinite() && none.effect.is_infinite());
+        let k = PriorKinds {
+            prior_frames: Some(prior_pair("2,0.5").unwrap()),
+            prior_effects: Some(prior_effect("1e-4").unwrap()),
+        };
+        let s = k.sizes(Some(links)).unwrap();
+        assert!((s.frame_length_m - 2e-3).abs() < 1e-18);
+        assert!((s.frame_angle_rad - 0.5f64.to_radians()).abs() < 1e-18);
+        assert_eq!(s.effect, 1e-4);
+        assert_eq!((s.length_m, s.angle_rad), (none.length_m, none.angle_rad));
+        assert_eq!(k.sizes(Some(PriorArg::Auto)), None);
+        assert!(prior_pair("2").is_err() && prior_pair("0,1").is_err());
+        assert!(prior_effect("-1").is_err() && prior_effect("inf").is_err());
+    }
 }

@@ -275,6 +275,18 @@ pub fn import_dataset(a: &crate::commands::import::Args) -> FilePlan {
         .output_opt("--constraints-out", a.constraints_out.as_deref())
 }
 
+/// `import-bag`: the bag (a file or the files of its folder), a ROBOT file, the CSV.
+pub fn import_bag(a: &crate::commands::import_bag::Args) -> FilePlan {
+    let mut p = FilePlan::new();
+    for f in crate::commands::import_bag::bag_inputs(&a.bag) {
+        p = p.input("BAG", &f);
+    }
+    if let Some(r) = &a.robot {
+        p = p.input_if_file("--robot", r);
+    }
+    p.output("--out", &a.out)
+}
+
 /// `observed-point`.
 pub fn observed_point(a: &crate::commands::observed_point::Args) -> FilePlan {
     FilePlan::new()

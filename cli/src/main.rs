@@ -1,8 +1,8 @@
 //! `kincal`: the command-line tool of the kincal calibration toolkit (spec/cli.md).
 
 use kincal_cli::commands::{
-    calibrate, crossval, demo, design_tool, diagnose, evaluate, export, import, markers,
-    observed_point, predict, select, validate,
+    calibrate, crossval, demo, design_tool, diagnose, evaluate, export, import, import_bag,
+    markers, observed_point, predict, select, validate,
 };
 use kincal_cli::file_plan;
 
@@ -67,6 +67,10 @@ enum Command {
     /// A public real-robot data set, read as published, as measurement CSV and robot file
     #[command(name = "import-dataset", long_about = import::LONG_ABOUT, after_help = import::EXAMPLE)]
     ImportDataset(import::Args),
+    /// A ROS 2 bag (MCAP): joint readings and measured poses or points, one row per
+    /// standstill, as measurement CSV
+    #[command(name = "import-bag", long_about = import_bag::LONG_ABOUT, after_help = import_bag::EXAMPLE)]
+    ImportBag(Box<import_bag::Args>),
     /// Camera poses re-expressed at the point the camera looks at (position rows where
     /// the measurement is precise)
     #[command(name = "observed-point", long_about = observed_point::LONG_ABOUT, after_help = observed_point::EXAMPLE)]
@@ -103,6 +107,7 @@ fn plan(command: &Command) -> file_plan::FilePlan {
         Command::EvaluateDesigns(a) => file_plan::evaluate_designs(a),
         Command::Diagnose(a) => file_plan::diagnose(a),
         Command::ImportDataset(a) => file_plan::import_dataset(a),
+        Command::ImportBag(a) => file_plan::import_bag(a),
         Command::Crossval(a) => file_plan::crossval(a),
         Command::Markers(a) => file_plan::markers(a),
         Command::ObservedPoint(a) => file_plan::observed_point(a),
@@ -121,6 +126,7 @@ fn run(command: &Command) -> Result<(), kincal_cli::error::CliError> {
         Command::EvaluateDesigns(a) => evaluate::run(a),
         Command::Diagnose(a) => diagnose::run(a),
         Command::ImportDataset(a) => import::run(a),
+        Command::ImportBag(a) => import_bag::run(a),
         Command::Crossval(a) => crossval::run(a),
         Command::Markers(a) => markers::run(a),
         Command::ObservedPoint(a) => observed_point::run(a),

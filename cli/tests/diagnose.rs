@@ -346,3 +346,58 @@ fn stated_noise_too_large_still_reports_the_effect_and_the_smooth_check_in_rms()
         "{stdout}"
     );
 }
+
+/// `diagnose --prior` (as `calibrate --prior`): the written model is fitted with the prior
+/// and records it; an overwhelming prior holds every link parameter at nominal while the
+/// plain fit moves them (the simulated arm is 2 mm / 1° off nominal); `auto` is refused.
+#[test]
+fn prior_holds_the_written_model_and_is_recorded() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("d.csv"), session_csv(None, 0, false, 5)).unwrap();
+    let base = [
+        "diagnose",
+        "d.csv",
+        "--robot",
+        "aria",
+        "--json",
+        "r.json",
+        "--out",
+        "m.json",
+        "--sigma-pos-mm",
+        "0.1",
+        "--sigma-rot-deg",
+        "0.02",
+        "--no-pairs",
+    ];
+    // Largest |value - nominal| of the link parameters [m or rad], and the recorded prior.
+    let largest_link_change = |extra: &[&str]| -> (f64, Value) {
+        let o = kincal(&[&base[..], extra].concat(), dir.path());
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        let m: Value =
+            serde_json::from_str(&fs::read_to_string(dir.path().join("m.json")).unwrap()).unwrap();
+        let change = m["robot"]["parameters"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|p| {
+                let l = p["label"].as_str().unwrap();
+                ["theta0_", "d_", "a_", "alpha_", "beta_"]
+                    .iter()
+                    .any(|k| l.starts_with(k))
+            })
+            .map(|p| (p["value"].as_f64().unwrap() - p["nominal"].as_f64().unwrap()).abs())
+            .fold(0.0, f64::max);
+        (change, m["calibration"]["options"]["prior"].clone())
+    };
+    let (plain, none) = largest_link_change(&[]);
+    assert!(none.is_null(), "{none}");
+    assert!(plain > 1e-4, "the plain fit moves the links: {plain}");
+    let (held, prior) = largest_link_change(&["--prior", "0.0001,0.00001"]);
+    assert_eq!(prior["length_mm"].as_f64(), Some(0.0001), "{prior}");
+    assert!(
+        held < 0.01 * plain,
+        "an overwhelming prior holds the links: {held} (plain fit {plain})"
+    );
+    let o = kincal(&[&base[..], &["--prior", "auto"]].concat(), dir.path());
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
+}

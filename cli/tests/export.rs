@@ -401,7 +401,14 @@ fn read_csv_table(text: &str) -> Vec<(String, f64, Option<f64>)> {
         for (col, cell) in header.iter().zip(&cells).skip(1) {
             if cell.is_empty()
                 || col.starts_with("std_")
-                || ["length_param", "lower_rad", "upper_rad", "unit"].contains(col)
+                || [
+                    "length_param",
+                    "joint_type",
+                    "lower_rad",
+                    "upper_rad",
+                    "unit",
+                ]
+                .contains(col)
             {
                 continue;
             }
@@ -574,8 +581,9 @@ fn effects_appear_in_the_table_and_block_the_urdf_unless_dropped() {
         .unwrap()
         .split(',')
         .collect();
-    assert_eq!(c2[15].parse::<f64>().unwrap(), 2.5e-5, "{csv}");
-    assert_eq!(c2[16], "rad/(N·m)");
+    // value and unit follow the 5 link, length_param, joint_type, 2 limit and 6 frame columns.
+    assert_eq!(c2[16].parse::<f64>().unwrap(), 2.5e-5, "{csv}");
+    assert_eq!(c2[17], "rad/(N·m)");
     assert!(
         !csv.contains("backlash_"),
         "effects the model lacks are left out"

@@ -408,3 +408,66 @@ fn bad_prismatic_input_exits_3_with_the_line() {
         assert!(e.contains(why), "{file}: `{why}` not in {e}");
     }
 }
+
+/// #14 leftovers: a prismatic joint's effect parameters are labelled as lengths in the
+/// model file (compliance m/N, backlash and cyclic m), the revolute ones as angles; the
+/// mDH table (CSV and YAML) says which joints are prismatic.
+#[test]
+fn model_units_and_mdh_table_name_the_prismatic_joints() {
+    let robot = import(&urdf_text(""));
+    let kinds: Vec<JointKind> = (0..robot.n_joints()).map(|j| robot.joint_kind(j)).collect();
+    assert!(kinds.contains(&JointKind::Prismatic) && kinds.contains(&JointKind::Revolute));
+    let file = with_any_robot!(&robot, r => ModelFile::nominal("lift", r));
+    let n = file.robot.n_joints;
+    let mut checked = 0;
+    for p in &file.robot.parameters {
+        let (j, prismatic_unit, revolute_unit) = match kincal::ParamId::parse(&p.label, n) {
+            Some(kincal::ParamId::Compliance(j)) => (j, "m/N", "rad/(N·m)"),
+            Some(kincal::ParamId::Backlash(j) | kincal::ParamId::Cyclic(j, _)) => (j, "m", "rad"),
+            _ => continue,
+        };
+        let want = if kinds[j] == JointKind::Prismatic {
+            prismatic_unit
+        } else {
+            revolute_unit
+        };
+        assert_eq!(p.unit, want, "{}", p.label);
+        checked += 1;
+    }
+    assert!(checked >= 3 * n, "only {checked} effect parameters checked");
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("m.json"), file.to_json()).unwrap();
+    let o = kincal(&["export", "m.json", "--mdh-table", "t.csv"], dir.path());
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let csv = fs::read_to_string(dir.path().join("t.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = header.iter().position(|h| *h == "joint_type").unwrap();
+    for (j, kind) in kinds.iter().enumerate() {
+        let row = csv
+            .lines()
+            .find(|l| l.split(',').next() == Some(&(j + 1).to_string()))
+            .unwrap();
+        let want = match kind {
+            JointKind::Prismatic => "prismatic",
+            JointKind::Revolute => "revolute",
+        };
+        assert_eq!(row.split(',').nth(col), Some(want), "link {}: {row}", j + 1);
+    }
+    let o = kincal(&["export", "m.json", "--mdh-table", "t.yaml"], dir.path());
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let yaml = fs::read_to_string(dir.path().join("t.yaml")).unwrap();
+    let prismatic_rows = yaml.matches("joint_type: prismatic").count();
+    let want = kinds.iter().filter(|k| **k == JointKind::Prismatic).count();
+    assert_eq!(prismatic_rows, want, "{yaml}");
+}

@@ -337,3 +337,67 @@ fn calibrate_records_the_prior_and_refuses_it_without_a_stated_noise() {
     }
     assert!(checked >= 30, "{checked} link parameters checked");
 }
+
+/// `--prior-frames` and `--prior-effects` (one parser, `args::PriorKinds`, shared by
+/// calibrate and crossval): the frame sizes are recorded, the prior gains one row per
+/// fitted frame parameter, and they need `--prior`.
+#[test]
+fn prior_kind_flags_add_frame_and_effect_rows() {
+    let Some(root) = realdata() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let data = prepare(&root, "figaroh-talos-arm", dir.path());
+    let base = [
+        "calibrate",
+        data,
+        "--robot",
+        "robot.toml",
+        "--effects",
+        "base_frame,tool_frame",
+        "--init-frames",
+        "--allow-data-deficiency",
+        "--sigma-pos-mm",
+        "0.33",
+        "--sigma-rot-deg",
+        "1",
+        "--out",
+        "model.json",
+    ];
+    let prior_of = |extra: &[&str]| -> Value {
+        let o = kincal(
+            &[&base[..], &["--prior", "5,1"], extra].concat(),
+            dir.path(),
+        );
+        assert!(o.status.success(), "{}", text(&o));
+        let model: Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.path().join("model.json")).unwrap())
+                .unwrap();
+        model["calibration"]["options"]["prior"].clone()
+    };
+    let links = prior_of(&[]);
+    assert!(links.get("frame_length_mm").is_none(), "{links}");
+    let frames = prior_of(&["--prior-frames", "2,0.5"]);
+    assert_eq!(num(&frames, &["frame_length_mm"]), 2.0);
+    assert!((num(&frames, &["frame_angle_deg"]) - 0.5).abs() < 1e-12);
+    let rows = |p: &Value| num(p, &["rows"]);
+    // One row per fitted frame parameter (TALOS measures positions only: 4 of the 12 are
+    // fitted after the structural redundancies are dropped).
+    let added = rows(&frames) - rows(&links);
+    assert!((1.0..=12.0).contains(&added), "{links} {frames}");
+    assert!(num(&frames, &["chi2"]) > num(&links, &["chi2"]));
+    // Without --prior, or with a bad size: usage errors.
+    let o = kincal(
+        &[&base[..], &["--prior-frames", "2,0.5"]].concat(),
+        dir.path(),
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    let o = kincal(
+        &[&base[..], &["--prior", "5,1", "--prior-frames", "2"]].concat(),
+        dir.path(),
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    let o = kincal(
+        &[&base[..], &["--prior", "5,1", "--prior-effects", "-1"]].concat(),
+        dir.path(),
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+}

@@ -595,6 +595,44 @@ pub unsafe extern "C" fn kincal_robot_set_length_param(
     })
 }
 
+/// Sets what joint `joint` (zero-based, < N) moves: `kind` is `KINCAL_JOINT_KIND_REVOLUTE`
+/// or `KINCAL_JOINT_KIND_PRISMATIC` (reading and limits then in metres). The same check as
+/// the core's: a prismatic joint's cyclic effect parameters must be zero. On failure
+/// `*robot` is unchanged. Returns OK, NULL_POINTER, MISALIGNED_POINTER, INDEX_OUT_OF_RANGE
+/// (`joint`), INVALID_ARGUMENT (`kind`, or nonzero cyclic parameters) or any status of
+/// `kincal_robot_validate`.
+///
+/// # Safety
+/// `robot` must be NULL or point to a readable and writable `kincal_robot`; `err` NULL or
+/// writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn kincal_robot_set_joint_kind(
+    robot: *mut kincal_robot,
+    joint: usize,
+    kind: u32,
+    err: *mut kincal_error,
+) -> kincal_status {
+    ffi_boundary!(err = err; {
+        // SAFETY: forwarded contract.
+        let n = unsafe { n_joints_of(robot) }?;
+        if joint >= n {
+            return Err(kincal_error::new(kincal_status::IndexOutOfRange).arg(c"joint").at(joint).counts(n, joint));
+        }
+        let k = match kind {
+            0 => JointKind::Revolute,
+            1 => JointKind::Prismatic,
+            v => return Err(kincal_error::new(kincal_status::InvalidArgument).arg(c"kind").value(f64::from(v))),
+        };
+        // SAFETY: forwarded contract.
+        unsafe {
+            edit(robot, |any| {
+                any.set_joint_kind(joint, k)?;
+                Ok(())
+            })
+        }
+    })
+}
+
 /// Makes the current geometry (links, base, tool of `params`) the nominal one, e.g. to use a
 /// calibrated model as the description of a new calibration. On failure `*robot` is unchanged;
 /// statuses as `kincal_robot_validate`.

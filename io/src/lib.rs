@@ -12,6 +12,7 @@
 #![allow(rustdoc::broken_intra_doc_links, rustdoc::private_intra_doc_links)]
 
 pub mod calibration;
+pub mod cdr;
 pub mod constraints;
 pub mod data;
 pub mod datasets;
@@ -24,6 +25,7 @@ pub mod model_read;
 pub mod plausibility;
 pub mod robot_arg;
 pub mod robot_file;
+pub mod rosbag;
 pub mod tool_file;
 pub mod units;
 pub mod urdf;

@@ -465,7 +465,10 @@ impl RobotJson {
                 Some(ParamJson {
                     label: id.to_string(),
                     value,
-                    unit: si_unit(id).to_string(),
+                    unit: crate::units::si_unit_for(id, |j| {
+                        robot.joint_kind(j) == JointKind::Prismatic
+                    })
+                    .to_string(),
                     nominal,
                     identified,
                     status: status.to_string(),

@@ -48,6 +48,8 @@ impl UrdfChainArgs {
 pub struct RobotSpec {
     /// Name recorded in model files.
     pub name: String,
+    /// Joint names in model order (`joint1`, … where the source names none).
+    pub joint_names: Vec<String>,
     pub robot: AnyRobot,
 }
 
@@ -81,6 +83,7 @@ fn built_in(name: &str) -> Option<RobotSpec> {
     match name {
         "aria" => Some(RobotSpec {
             name: "aria".to_string(),
+            joint_names: (1..=6).map(|k| format!("joint{k}")).collect(),
             robot: AnyRobot::from(aria::nominal()),
         }),
         _ => None,
@@ -101,6 +104,7 @@ fn load_robot_file(path: &Path, chain: &UrdfChainArgs) -> Result<RobotSpec, CliE
         }
         return Ok(RobotSpec {
             name: imported.robot_name,
+            joint_names: imported.joint_names,
             robot: imported.robot,
         });
     }
@@ -108,6 +112,7 @@ fn load_robot_file(path: &Path, chain: &UrdfChainArgs) -> Result<RobotSpec, CliE
         crate::robot_file::load_robot_file(path).map_err(|e| CliError::input(e.to_string()))?;
     Ok(RobotSpec {
         name: desc.name,
+        joint_names: desc.joint_names,
         robot: desc.robot,
     })
 }

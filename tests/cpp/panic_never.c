@@ -107,6 +107,8 @@ int main(void) {
     CHECK(kincal_robot_set_limits(&robot, bad_limits, 12, &err) == KINCAL_STATUS_INVALID_LIMITS);
     CHECK(kincal_robot_set_mass(&robot, masses, 6, 0.3, g, 3, &err) == KINCAL_STATUS_INVALID_PARAMETER);
     CHECK(kincal_robot_set_length_param(&robot, 1, KINCAL_LENGTH_PARAM_BETA, &err) == KINCAL_STATUS_OK);
+    CHECK(kincal_robot_set_joint_kind(&robot, 0, KINCAL_JOINT_KIND_REVOLUTE, &err) == KINCAL_STATUS_OK);
+    CHECK(kincal_robot_set_joint_kind(&robot, 99, KINCAL_JOINT_KIND_PRISMATIC, &err) == KINCAL_STATUS_INDEX_OUT_OF_RANGE);
     CHECK(kincal_robot_adopt_geometry_as_nominal(&robot, &err) == KINCAL_STATUS_OK);
     CHECK(kincal_robot_init(&robot, 1, link, 5, limits, 2, &err) == KINCAL_STATUS_OK);
     CHECK(!(kincal_num_params(6) != 85 || kincal_num_geometric_params(6) != 42));

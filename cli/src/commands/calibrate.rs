@@ -90,7 +90,11 @@ needs --sigma-pos-mm/--sigma-rot-deg. Weakly excited directions then stay near n
 data-deficient link parameters are fitted (held by the prior) instead of refused; the
 standard errors are posterior ones and σ² = data cost/(rows − n_eff), n_eff the number of
 parameters the data determine. The model file records the prior (calibration.options.prior).
-`kincal crossval --prior auto` chooses the size by held-out error.
+`kincal crossval --prior auto` chooses the size by held-out error. --prior-frames MM,DEG
+and --prior-effects SIGMA add priors on the base/tool frames and on the effect parameters
+(none by default: frames are registered, effects are what a diagnosis asks about); the
+same flags, parsed in one place, work on crossval and diagnose (`diagnose --prior` fits
+the written model with the prior).
 
 Instrument-free data (docs/constraints.md): rows with a `target` id hold the tool point (a
 ball centre, identified as the tool translation) at an unknown fixed point, rows with a
@@ -184,6 +188,8 @@ pub struct Args {
     /// [mm] and angles [deg] (`--prior` alone: 5,1); needs --sigma-pos-mm/--sigma-rot-deg
     #[arg(long, value_name = "MM,DEG", value_parser = crate::args::prior, num_args = 0..=1, default_missing_value = "5,1", requires = "sigma_pos_mm")]
     pub prior: Option<crate::args::PriorArg>,
+    #[command(flatten)]
+    pub prior_kinds: crate::args::PriorKinds,
 }
 
 impl Args {
@@ -216,7 +222,7 @@ impl Args {
             orientation: self.orientation_error.into(),
             allow_data_deficiency: self.allow_data_deficiency,
             max_iterations: self.max_iterations,
-            prior: self.prior.and_then(crate::args::PriorArg::sizes),
+            prior: self.prior_kinds.sizes(self.prior),
             robust: self.robust.map(|loss| {
                 let mut o = RobustOptions::new(loss.into());
                 if let Some(c) = self.robust_tuning {

@@ -149,6 +149,8 @@ pub struct Args {
     /// size of a fixed grid whose held-out error is within 2 % of the best
     #[arg(long, value_name = "MM,DEG|auto", value_parser = crate::args::prior, num_args = 0..=1, default_missing_value = "5,1", conflicts_with = "unit_weights")]
     pub prior: Option<crate::args::PriorArg>,
+    #[command(flatten)]
+    pub prior_kinds: crate::args::PriorKinds,
 }
 
 /// A fold's held-out errors (pose, nominal, calibrated), data-deficient parameter count and
@@ -243,6 +245,8 @@ struct How {
     max_iterations: u32,
     /// Priors around each fit's starting model (rows whitened: the weights are 1/σ²).
     prior: Option<PriorSizes>,
+    /// `--prior-frames`/`--prior-effects`, applied to every size `--prior auto` tries.
+    prior_kinds: crate::args::PriorKinds,
 }
 
 /// Fits `requested` on the poses of `data` with a positive weight.
@@ -536,7 +540,10 @@ fn choose_prior<const N: usize>(
     let grid = std::iter::once(None).chain(crate::args::PRIOR_AUTO_GRID.iter().map(|&g| Some(g)));
     let mut rows = Vec::new();
     for sizes in grid {
-        let prior = sizes.map(|(mm, deg)| PriorSizes::links(mm * 1e-3, f64::to_radians(deg)));
+        let prior = sizes.map(|(mm, deg)| {
+            how.prior_kinds
+                .apply(PriorSizes::links(mm * 1e-3, f64::to_radians(deg)))
+        });
         let (_, held, _) = run_folds(
             nominal,
             meas,
@@ -705,6 +712,7 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
         robust: args.robust.map(Loss::from),
         max_iterations: args.max_iterations,
         prior: None,
+        prior_kinds: args.prior_kinds,
     };
     let mut all =
         fit(nominal, &meas, req_cal, how(w)).map_err(|e| fail("calibration on all poses", e))?;
@@ -743,7 +751,7 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
     let (prior, auto_table) = match args.prior {
         None => (None, Vec::new()),
         Some(crate::args::PriorArg::Sizes { .. }) => {
-            (args.prior.and_then(|p| p.sizes()), Vec::new())
+            (args.prior_kinds.sizes(args.prior), Vec::new())
         }
         Some(crate::args::PriorArg::Auto) => choose_prior(
             nominal,

@@ -226,6 +226,8 @@ pub fn sim_to_real_diagnosis(ctx: &DemoContext<'_>) -> Result<String, CliError> 
         seed: kincal::diagnosis::Config::default().fold_seed,
         allow_out_of_limits: false,
         constraints: None,
+        prior: None,
+        prior_kinds: Default::default(),
     };
     let nominal = aria::nominal();
     let outcome = crate::commands::diagnose::execute::<N>(&nominal, "aria", &args)?;

@@ -117,6 +117,14 @@ pub struct Args {
     /// target/plane rows
     #[arg(long, value_name = "FILE")]
     pub constraints: Option<PathBuf>,
+    /// Fit the written MODEL (geometric + the verdict's effects) with Gaussian priors around
+    /// the initial model, as `calibrate --prior`: one σ for link lengths [mm] and angles
+    /// [deg] (`--prior` alone: 5,1), weighed against the noise floor. The candidates are
+    /// judged without it.
+    #[arg(long, value_name = "MM,DEG", value_parser = crate::args::prior, num_args = 0..=1, default_missing_value = "5,1")]
+    pub prior: Option<crate::args::PriorArg>,
+    #[command(flatten)]
+    pub prior_kinds: crate::args::PriorKinds,
 }
 
 /// Capacity of the diagnosis workspace: the union of every model's columns of the largest
@@ -286,6 +294,12 @@ pub fn execute<const N: usize>(
     args: &Args,
 ) -> Result<Outcome<N>, CliError> {
     let t0 = Instant::now();
+    if args.prior == Some(crate::args::PriorArg::Auto) {
+        return Err(CliError::usage(
+            "--prior auto chooses the size by held-out error: run `kincal crossval --prior auto`, \
+             then pass the size it reports (--prior MM,DEG)",
+        ));
+    }
     let cfg = config(args)?;
     let set = data::read(
         &args.data,
@@ -334,7 +348,10 @@ pub fn execute<const N: usize>(
         .iter()
         .map(|m| (0..6).filter(|&k| m.mask.has(k)).count())
         .sum();
-    let cal = calibration_of(robot, &d);
+    let cal = match args.prior_kinds.sizes(args.prior) {
+        None => calibration_of(robot, &d),
+        Some(sizes) => with_prior(robot, &d, &meas, sizes, &set.source)?,
+    };
     let model_text = ModelFile::from_calibration(
         name,
         &cal,
@@ -429,6 +446,31 @@ fn calibration_of<const N: usize>(start: &Robot<N>, d: &Diagnosis<N>) -> Calibra
         }],
         consensus: None,
     }
+}
+
+/// `--prior`: the verdict's model fitted again, as `calibrate --prior` would on the rows
+/// the diagnosis kept (suspects left out), with the noise floor as the data's weights.
+fn with_prior<const N: usize>(
+    start: &Robot<N>,
+    d: &Diagnosis<N>,
+    meas: &[Measurement<N>],
+    sizes: kincal::identify::PriorSizes,
+    source: &str,
+) -> Result<Calibration<N>, CliError> {
+    let mut settings = calibration_of(start, d).settings;
+    settings.prior = Some(sizes);
+    let suspects = d.suspects.get(..d.n_suspects).unwrap_or_default();
+    let kept: Vec<Measurement<N>> = meas
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !suspects.iter().any(|&s| s as usize == *i))
+        .map(|(_, m)| *m)
+        .collect();
+    kincal_io::calibration::calibrate(start, &kept, &settings).map_err(|f| {
+        CliError::numeric(format!(
+            "{source}: the verdict's model with the prior could not be fitted: {f:?}"
+        ))
+    })
 }
 
 // ---------------------------------------------------------------------------------------

@@ -42,8 +42,9 @@ model's in count or kind, or a URDF joint axis is not the nominal model's axis.
 --mdh-table OUT.csv | OUT.yaml: the identified mDH/Hayati table. The CSV has one row per
 frame: `base`, links 1..N, `tool`, then one row per effect parameter (its label). Columns
 (SI units in their names; empty where a column does not apply): theta0_rad, d_m, a_m,
-alpha_rad, beta_rad, length_param (d or beta: which of the two is identified), lower_rad,
-upper_rad (joint limits), px_m, py_m, pz_m, rx_rad, ry_rad, rz_rad (base and tool frames:
+alpha_rad, beta_rad, length_param (d or beta: which of the two is identified), joint_type
+(revolute: q adds to theta; prismatic: q adds to d), lower_rad, upper_rad (joint limits,
+in metres for a prismatic joint), px_m, py_m, pz_m, rx_rad, ry_rad, rz_rad (base and tool frames:
 Trans(p)·Rot(r), r a rotation vector), value, unit (effect parameters), then std_<column>
 for every value column: the standard error of an identified parameter (empty when the
 model file has none). The YAML holds the same numbers as lists and maps. Every number is
@@ -51,7 +52,12 @@ written in the shortest decimal form that reads back to the same double.
 
 --c-header OUT.h: a C header defining the model (effects included) as
 `static const kincal_robot IDENT = {…}` (C11 designated initializers over include/kincal.h;
-IDENT from --c-name), for firmware without a file system: pass &IDENT to kincal_fk.
+IDENT from --c-name), for firmware without a file system: pass &IDENT to kincal_fk, or
+to kincal_prepare once at start-up and the handle to kincal_prepared_fk/_ik in the loop.
+There is no --c-blob (an image of a prepared handle): a kincal_prepared holds the core's
+Robot<N> byte for byte, a layout that is not an ABI and changes between library builds, so
+a compiled-in image would be refused (KINCAL_STATUS_BAD_HANDLE) or, worse, tied to one
+build; kincal_prepare validates the header's plain C struct in microseconds instead.
 
 Outputs are written atomically and never overwrite MODEL.";
 
@@ -348,6 +354,15 @@ pub fn mdh_table_text(
     String::from_utf8(buf).map_err(|e| CliError::io(format!("mDH table: {e}")))
 }
 
+/// `revolute` or `prismatic`: what joint `i`'s reading moves (a model file without
+/// `joint_types` is all revolute).
+fn joint_type_name(file: &ModelFile, i: usize) -> &'static str {
+    match file.robot.joint_types.get(i) {
+        Some(kincal_io::model_file::JointTypeJson::Prismatic) => "prismatic",
+        _ => "revolute",
+    }
+}
+
 fn row_name(row: &Row) -> String {
     match row {
         Row::Base => "base".into(),
@@ -373,7 +388,7 @@ fn csv_text_field(s: &str) -> String {
 fn write_csv(w: &mut dyn Write, file: &ModelFile, rows: &BTreeMap<Row, Cells>) -> io::Result<()> {
     let mut header: Vec<String> = vec!["frame".into()];
     header.extend(VALUE_COLUMNS[..5].iter().map(|c| c.to_string()));
-    header.extend(["length_param", "lower_rad", "upper_rad"].map(String::from));
+    header.extend(["length_param", "joint_type", "lower_rad", "upper_rad"].map(String::from));
     header.extend(VALUE_COLUMNS[5..].iter().map(|c| c.to_string()));
     header.extend(["value", "unit"].map(String::from));
     header.extend(VALUE_COLUMNS.iter().map(|c| format!("std_{c}")));
@@ -392,11 +407,12 @@ fn write_csv(w: &mut dyn Write, file: &ModelFile, rows: &BTreeMap<Row, Cells>) -
                         .map(|c| length_param_name(*c).to_string())
                         .unwrap_or_default(),
                 );
+                line.push(joint_type_name(file, *i).to_string());
                 let lim = file.robot.joint_limits.get(*i);
                 line.push(csv_cell(lim.map(|l| l.lower)));
                 line.push(csv_cell(lim.map(|l| l.upper)));
             }
-            _ => line.extend([String::new(), String::new(), String::new()]),
+            _ => line.extend([String::new(), String::new(), String::new(), String::new()]),
         }
         line.extend(VALUE_COLUMNS[5..].iter().map(|c| value(c)));
         line.push(value("value"));
@@ -476,6 +492,7 @@ fn write_yaml(w: &mut dyn Write, file: &ModelFile, rows: &BTreeMap<Row, Cells>) 
         if let Some(c) = file.robot.length_params.get(i) {
             extra.push(("length_param", length_param_name(*c).to_string()));
         }
+        extra.push(("joint_type", joint_type_name(file, i).to_string()));
         if let Some(l) = file.robot.joint_limits.get(i) {
             extra.push(("lower_rad", yaml_number(l.lower)));
             extra.push(("upper_rad", yaml_number(l.upper)));

@@ -14,6 +14,7 @@ pub mod diagnose_contacts;
 pub mod evaluate;
 pub mod export;
 pub mod import;
+pub mod import_bag;
 pub mod markers;
 pub mod observed_point;
 pub mod predict;

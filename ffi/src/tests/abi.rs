@@ -638,6 +638,32 @@ fn base_tool_limits_and_length_param_setters() {
         (kincal_status::InvalidArgument, "choice")
     );
 
+    // Joint kinds: the setter equals editing the field, and is checked.
+    let mut direct = r;
+    direct.joint_kind[2] = kincal_joint_kind::Prismatic as u32;
+    assert_eq!(
+        unsafe {
+            kincal_robot_set_joint_kind(&mut r, 2, kincal_joint_kind::Prismatic as u32, &mut e)
+        },
+        kincal_status::Ok
+    );
+    assert_eq!(r.joint_kind, direct.joint_kind);
+    assert_eq!(
+        crate::robot::to_any(&r).unwrap().joint_kind(2),
+        kincal::JointKind::Prismatic
+    );
+    let s = unsafe { kincal_robot_set_joint_kind(&mut r, 6, 0, &mut e) };
+    assert_eq!((s, arg_name(&e)), (kincal_status::IndexOutOfRange, "joint"));
+    let s = unsafe { kincal_robot_set_joint_kind(&mut r, 0, 2, &mut e) };
+    assert_eq!((s, arg_name(&e)), (kincal_status::InvalidArgument, "kind"));
+    assert_eq!(
+        unsafe {
+            kincal_robot_set_joint_kind(&mut r, 2, kincal_joint_kind::Revolute as u32, &mut e)
+        },
+        kincal_status::Ok
+    );
+    assert_eq!(r.joint_kind[2], 0);
+
     // Adopting the current geometry as nominal.
     let mut t = aria_robot(kincal_aria_model::VirtualTruth);
     assert_eq!(
