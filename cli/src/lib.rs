@@ -38,5 +38,5 @@ pub mod study_plot;
 // commands (and code written against `kincal_cli::measurements` etc.) keep their imports.
 pub use kincal_io::{
     calibration, constraints, data, datasets, datasets_contact, files, measurements, model_file,
-    plausibility, robot_arg, robot_file, tool_file, units, urdf, urdf_update,
+    plausibility, pose_calibration, robot_arg, robot_file, tool_file, units, urdf, urdf_update,
 };
