@@ -1,7 +1,7 @@
 """Type stubs of the Rust extension (units: metres, radians unless ``_mm``/``_deg``)."""
 
 import os
-from typing import List, Optional, Sequence, Tuple, Union
+from typing import Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -59,6 +59,13 @@ class Robot:
         extra_seeds: int = 16,
     ) -> Tuple[npt.NDArray[np.float64], float, float, int]:
         """(q [rad], residual_pos_m, residual_rot_rad, iterations) reaching target (4, 4)."""
+    def pose_errors(
+        self, data: Union[_Path, "Measurements"], allow_out_of_limits: bool = False
+    ) -> Dict[str, npt.NDArray[np.float64]]:
+        """Measured minus model (as kincal validate): pos_m (M, 3) [m], rot_rad (M, 3)
+        [rad], pos_norm_m (M,), rot_norm_rad (M,)."""
+    def with_params(self, values: _Vec) -> "Robot":
+        """A copy with every parameter (order of param_labels) set to values."""
     def model_file(self) -> dict: ...
     def save(self, path: _Path) -> None: ...
 

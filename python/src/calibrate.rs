@@ -2,18 +2,15 @@
 //! `calibration`), with keyword arguments instead of flags. The result is a calibrated
 //! `Robot` whose model file (`Robot.model_file()`) is the one the CLI writes.
 
-use std::path::PathBuf;
-
 use kincal::identify::{Algorithm, Loss, PriorSizes, RobustOptions};
 use kincal::pose::OrientationError;
 use kincal::{Effect, EffectSet, Robot as CoreRobot};
 use kincal_io::calibration::{self, Failure, Settings, Weighting};
-use kincal_io::measurements::{MeasurementSet, read_measurements};
+use kincal_io::measurements::MeasurementSet;
 use kincal_io::pose_calibration;
 use pyo3::prelude::*;
 
 use crate::errors;
-use crate::measurements::{Measurements, read_options};
 use crate::robot::Robot;
 
 /// The keyword arguments of `calibrate`, as given.
@@ -156,22 +153,6 @@ impl Options {
     }
 }
 
-/// Where the data come from: a file (read here, for `robot`) or rows already read.
-fn data_set(
-    py: Python<'_>,
-    data: &Bound<'_, PyAny>,
-    robot: &Robot,
-    allow_out_of_limits: bool,
-) -> PyResult<MeasurementSet> {
-    if let Ok(m) = data.cast::<Measurements>() {
-        return Ok(m.get().set.clone());
-    }
-    let path: PathBuf = data.extract()?;
-    let opts = read_options(robot, true, allow_out_of_limits);
-    py.detach(|| read_measurements(&path, &opts))
-        .map_err(|e| errors::from_input(py, &e))
-}
-
 struct Flags {
     init_frames: bool,
     allow_out_of_limits: bool,
@@ -312,7 +293,7 @@ pub fn calibrate(
         prior,
     }
     .settings(py)?;
-    let set = data_set(py, data, robot, allow_out_of_limits)?;
+    let set = crate::measurements::measurement_set(py, data, robot, allow_out_of_limits)?;
     if set.n_joints != robot.n_joints() {
         return Err(errors::usage(
             py,

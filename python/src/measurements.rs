@@ -43,6 +43,23 @@ pub fn read_measurements_file(
     Ok(Measurements { set })
 }
 
+/// The rows a call names: a :class:`Measurements`, or a CSV path read for `robot` (poses
+/// required).
+pub(crate) fn measurement_set(
+    py: Python<'_>,
+    data: &Bound<'_, PyAny>,
+    robot: &Robot,
+    allow_out_of_limits: bool,
+) -> PyResult<MeasurementSet> {
+    if let Ok(m) = data.cast::<Measurements>() {
+        return Ok(m.get().set.clone());
+    }
+    let path: PathBuf = data.extract()?;
+    let opts = read_options(robot, true, allow_out_of_limits);
+    py.detach(|| read_measurements(&path, &opts))
+        .map_err(|e| errors::from_input(py, &e))
+}
+
 pub(crate) fn read_options(
     robot: &Robot,
     require_pose: bool,

@@ -345,6 +345,36 @@ impl Robot {
         ))
     }
 
+    /// Errors of this model on measured rows (``data``: a :class:`Measurements` or a CSV
+    /// path), measured minus model in the base frame, as ``kincal validate`` computes them:
+    /// a dict of ``pos_m`` (M, 3) [m], ``rot_rad`` (M, 3) [rad] (rotation vector; zero
+    /// where not measured), ``pos_norm_m`` (M,) and ``rot_norm_rad`` (M,).
+    #[pyo3(signature = (data, allow_out_of_limits=false))]
+    fn pose_errors<'py>(
+        &self,
+        py: Python<'py>,
+        data: &Bound<'py, PyAny>,
+        allow_out_of_limits: bool,
+    ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        let set = crate::measurements::measurement_set(py, data, self, allow_out_of_limits)?;
+        let errors = with_any_robot!(&self.robot, r => pose_errors_of(py, r, &set))?;
+        let m = errors.len();
+        let pos = Array2::from_shape_fn((m, 3), |(i, k)| errors[i].pos_m[k]);
+        let rot = Array2::from_shape_fn((m, 3), |(i, k)| errors[i].rot_rad[k]);
+        let out = pyo3::types::PyDict::new(py);
+        out.set_item("pos_m", pos.into_pyarray(py))?;
+        out.set_item("rot_rad", rot.into_pyarray(py))?;
+        out.set_item(
+            "pos_norm_m",
+            Array1::from_iter(errors.iter().map(|e| e.pos_norm_m)).into_pyarray(py),
+        )?;
+        out.set_item(
+            "rot_norm_rad",
+            Array1::from_iter(errors.iter().map(|e| e.rot_norm_rad)).into_pyarray(py),
+        )?;
+        Ok(out)
+    }
+
     /// The model file of this robot as a dict (the JSON kincal writes: ``schema_version``,
     /// ``robot``, and ``calibration`` for a calibrated model).
     fn model_file<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
@@ -361,6 +391,26 @@ impl Robot {
     fn __repr__(&self) -> String {
         format!("Robot({:?}, n_joints={})", self.name, self.n_joints())
     }
+}
+
+fn pose_errors_of<const N: usize>(
+    py: Python<'_>,
+    r: &CoreRobot<N>,
+    set: &kincal_io::measurements::MeasurementSet,
+) -> PyResult<Vec<kincal::validation::PoseErrors>> {
+    let meas = kincal_io::data::measurements::<N>(set)
+        .map_err(|e| errors::from_io(py, &e, &[&set.source]))?;
+    meas.iter()
+        .enumerate()
+        .map(|(i, m)| {
+            kincal::validation::PoseErrors::of_measurement(r, m).map_err(|e| {
+                let e = kincal_io::error::core_error(e, &set.source, |_| {
+                    kincal_io::data::line_of(set, i)
+                });
+                errors::from_io(py, &e, &[&set.source])
+            })
+        })
+        .collect()
 }
 
 fn labels_of<const N: usize>(_r: &CoreRobot<N>) -> Vec<String> {

@@ -86,3 +86,20 @@ def test_calibrate_arguments_and_data_errors(study, tmp_path):
     few.write_text("\n".join(lines[:4]) + "\n")
     with pytest.raises(kincal.NumericError):
         kincal.calibrate(few, kincal.aria())
+
+
+def test_pose_errors_are_the_cli_validate_figures(study, kincal_bin, tmp_path):
+    path, _ = study
+    model = tmp_path / "model.json"
+    kincal.calibrate(path, kincal.aria(), algorithm="ols").save(model)
+    report = tmp_path / "validate.json"
+    done = run_cli(kincal_bin, "validate", str(model), str(path), "--json", str(report), "--quiet")
+    assert done.returncode == 0, done.stderr
+    cli = json.loads(report.read_text())["poses"]
+    mine = kincal.load_robot(model).pose_errors(path)
+    assert len(cli) == len(mine["pos_norm_m"]) == 40
+    assert np.array_equal(mine["pos_m"], [p["e_pos_m"] for p in cli])
+    assert np.array_equal(mine["rot_rad"], [p["e_rot_rad"] for p in cli])
+    assert np.array_equal(mine["pos_norm_m"], [p["e_pos_norm_m"] for p in cli])
+    # Noise-level errors, 0.1 mm per axis: the norms are a few tenths of a millimetre.
+    assert 0.05e-3 < np.sqrt(np.mean(mine["pos_norm_m"] ** 2)) < 0.3e-3
