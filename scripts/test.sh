@@ -38,6 +38,16 @@ need_apt g++ g++
 need_apt octave-cli octave liboctave-dev
 need_apt mkoctfile liboctave-dev
 need_apt gnuplot gnuplot-nox   # Octave's headless figures
+need_apt python3 python3 python3-venv   # python/run.sh: the wheel's venv (pip brings the rest)
+if ! python3 -c 'import ensurepip' >/dev/null 2>&1; then
+    # Debian's python3 lacks `venv`'s pip without python3-venv.
+    if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+        step "installing python3-venv"
+        if [ -z "${APT_UPDATED:-}" ]; then apt-get update -qq; APT_UPDATED=1; fi
+        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq python3-venv >/dev/null
+    fi
+    python3 -c 'import ensurepip' >/dev/null 2>&1 || fail "python3 cannot create virtual environments (apt-get install python3-venv)"
+fi
 if ! rustup target list --installed 2>/dev/null | grep -q thumbv7em-none-eabihf; then
     rustup target add thumbv7em-none-eabihf || fail "cannot add the thumbv7em-none-eabihf target"
 fi
@@ -54,7 +64,7 @@ cargo build -p kincal --target thumbv7em-none-eabihf
 step "Rust unit, integration and doc tests"
 cargo test --workspace
 
-for extra in tests/cpp/run.sh matlab/tests/run.sh fuzz/smoke.sh; do
+for extra in tests/cpp/run.sh matlab/tests/run.sh python/run.sh fuzz/smoke.sh; do
     if [ -f "$extra" ]; then
         step "$extra"
         bash "$extra"

@@ -23,6 +23,7 @@ pub mod measurements;
 pub mod model_file;
 pub mod model_read;
 pub mod plausibility;
+pub mod pose_calibration;
 pub mod robot_arg;
 pub mod robot_file;
 pub mod rosbag;

@@ -259,8 +259,8 @@ fn calibrate<const N: usize>(start: &Robot<N>, name: &str, args: &Args) -> Resul
     if args.constraints.is_some() || kincal_io::constraints::has_contacts(&set) {
         return calibrate_contacts(start, name, args, &settings, &set);
     }
-    let meas = data::measurements::<N>(&set)?;
-    let findings = kincal_io::plausibility::check_data(start, &meas, &set.source, args.init_frames);
+    let pose_data = kincal_io::pose_calibration::pose_data::<N>(&set, start, args.init_frames)?;
+    let findings = &pose_data.findings;
     if let (Some(e), false) = (findings.errors.first(), args.allow_implausible) {
         return Err(CliError::input(format!(
             "{e}\nhint: pass --allow-implausible to fit these data anyway"
@@ -270,19 +270,16 @@ fn calibrate<const N: usize>(start: &Robot<N>, name: &str, args: &Args) -> Resul
     for w in findings.errors.iter().chain(&findings.warnings) {
         eprintln!("kincal: warning: {w}");
     }
+    let (meas, rows) = (&pose_data.meas, pose_data.rows);
     let initial;
     let start = if args.init_frames {
-        let (r, note) = calibration::init_frames(start, &meas, &set.source)?;
+        let (r, note) = calibration::init_frames(start, meas, &set.source)?;
         eprintln!("{note}");
         initial = r;
         &initial
     } else {
         start
     };
-    let rows: usize = meas
-        .iter()
-        .map(|m| (0..6).filter(|&k| m.mask.has(k)).count())
-        .sum();
     let names: Vec<&str> = settings.algorithms.iter().map(|a| a.name()).collect();
     let pb = crate::progress::spinner(format!(
         "identifying ({}){}",
@@ -291,7 +288,7 @@ fn calibrate<const N: usize>(start: &Robot<N>, name: &str, args: &Args) -> Resul
             .robust
             .map_or(String::new(), |r| format!(", robust {}", r.loss.name()))
     ));
-    let result = calibration::calibrate(start, &meas, &settings);
+    let result = calibration::calibrate(start, meas, &settings);
     pb.finish_and_clear();
     let cal = result.map_err(|f| {
         failure_error::<N>(f, &settings, &set.source, meas.len(), rows, |i| {
@@ -299,32 +296,18 @@ fn calibrate<const N: usize>(start: &Robot<N>, name: &str, args: &Args) -> Resul
         })
     })?;
 
-    let data_json = DataJson {
-        path: args.data.display().to_string(),
-        sha256: set.sha256.clone(),
-        poses: meas.len(),
-        rows,
-    };
-    let mut file = ModelFile::from_calibration(name, &cal, 0, data_json, args.allow_out_of_limits);
-    let labels: Vec<PoseLabel> = set
-        .rows
-        .iter()
-        .map(|r| PoseLabel {
-            line: r.line,
-            pose_id: r.pose_id.clone(),
-        })
-        .collect();
-    file.record_robust(&cal, 0, &labels);
-    let mut warnings = findings.errors;
-    warnings.extend(findings.warnings);
-    let result_warnings = kincal_io::plausibility::check_result(&file);
+    let (file, result_warnings) = kincal_io::pose_calibration::model_file(
+        name,
+        &cal,
+        &set,
+        &args.data.display().to_string(),
+        &pose_data,
+        args.allow_out_of_limits,
+    );
     for w in &result_warnings {
         eprintln!("kincal: warning: {w}");
     }
-    warnings.extend(result_warnings);
-    if let Some(c) = file.calibration.as_mut() {
-        c.warnings = warnings;
-    }
+    let labels = kincal_io::pose_calibration::pose_labels(&set);
     let text = file.to_json();
     let mut inputs: Vec<&Path> = vec![&args.data];
     let robot_path = Path::new(&args.robot);

@@ -1,0 +1,89 @@
+//! A calibration of measured poses as every front end runs it (`kincal calibrate`, Python's
+//! `kincal.calibrate`): the rows and the plausibility findings before the fit, and the model
+//! file after it. Front ends add only their wording, progress and report text.
+
+use kincal::Robot;
+use kincal::identify::Measurement;
+
+use crate::calibration::Calibration;
+use crate::data;
+use crate::error::Error;
+use crate::measurements::MeasurementSet;
+use crate::model_file::{DataJson, ModelFile, PoseLabel};
+use crate::plausibility::{self, DataFindings};
+
+/// Pose rows ready for the fit.
+#[derive(Debug, Clone)]
+pub struct PoseData<const N: usize> {
+    pub meas: Vec<Measurement<N>>,
+    /// Measured components over all rows (the least-squares rows).
+    pub rows: usize,
+    /// What cannot be right about the data (`errors`: refused unless the caller allows
+    /// implausible data) and what is suspicious (`warnings`).
+    pub findings: DataFindings,
+}
+
+/// The rows of `set` as core measurements, with the plausibility findings for `start`
+/// (`frames_unknown`: the base and tool frames will be estimated first).
+pub fn pose_data<const N: usize>(
+    set: &MeasurementSet,
+    start: &Robot<N>,
+    frames_unknown: bool,
+) -> Result<PoseData<N>, Error> {
+    let meas = data::measurements::<N>(set)?;
+    let findings = plausibility::check_data(start, &meas, &set.source, frames_unknown);
+    let rows = meas
+        .iter()
+        .map(|m| (0..6).filter(|&k| m.mask.has(k)).count())
+        .sum();
+    Ok(PoseData {
+        meas,
+        rows,
+        findings,
+    })
+}
+
+/// Each row's file line and `pose_id` (how reports and model files name a row).
+pub fn pose_labels(set: &MeasurementSet) -> Vec<PoseLabel> {
+    set.rows
+        .iter()
+        .map(|r| PoseLabel {
+            line: r.line,
+            pose_id: r.pose_id.clone(),
+        })
+        .collect()
+}
+
+/// The model file of calibration `cal` of `set` (read from `data_path`): the first run's
+/// model, every run, the robust fit's suspects, and the data's and result's warnings. Also
+/// returns the warnings about the result alone (the data's were known before the fit).
+pub fn model_file<const N: usize>(
+    name: &str,
+    cal: &Calibration<N>,
+    set: &MeasurementSet,
+    data_path: &str,
+    data: &PoseData<N>,
+    allow_out_of_limits: bool,
+) -> (ModelFile, Vec<String>) {
+    let data_json = DataJson {
+        path: data_path.to_string(),
+        sha256: set.sha256.clone(),
+        poses: data.meas.len(),
+        rows: data.rows,
+    };
+    let mut file = ModelFile::from_calibration(name, cal, 0, data_json, allow_out_of_limits);
+    file.record_robust(cal, 0, &pose_labels(set));
+    let result_warnings = plausibility::check_result(&file);
+    let warnings = data
+        .findings
+        .errors
+        .iter()
+        .chain(&data.findings.warnings)
+        .chain(&result_warnings)
+        .cloned()
+        .collect();
+    if let Some(c) = file.calibration.as_mut() {
+        c.warnings = warnings;
+    }
+    (file, result_warnings)
+}

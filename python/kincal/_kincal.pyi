@@ -1,0 +1,132 @@
+"""Type stubs of the Rust extension (units: metres, radians unless ``_mm``/``_deg``)."""
+
+import os
+from typing import Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+_Path = Union[str, "os.PathLike[str]"]
+_Vec = Union[Sequence[float], npt.NDArray[np.float64]]
+
+class Robot:
+    """A robot model: nominal (built-in, robot description, URDF chain) or calibrated."""
+
+    @property
+    def name(self) -> str: ...
+    @property
+    def n_joints(self) -> int: ...
+    @property
+    def joint_limits(self) -> npt.NDArray[np.float64]:
+        """(n_joints, 2): lower, upper [rad] ([m] for prismatic joints)."""
+    @property
+    def prismatic(self) -> List[bool]: ...
+    @property
+    def param_labels(self) -> List[str]:
+        """Every parameter's label in the core's order (theta0_1, d_1, …, tool_rz, effects)."""
+    @property
+    def params(self) -> npt.NDArray[np.float64]:
+        """Every parameter's value, in the order of param_labels [m, rad, effect units]."""
+    def fk(
+        self,
+        q: Union[_Vec, npt.NDArray[np.float64]],
+        approach: Optional[_Vec] = None,
+        temp_c: Optional[float] = None,
+    ) -> npt.NDArray[np.float64]:
+        """T_e^b, (4, 4) [m] for q (n_joints,) [rad]; (M, 4, 4) for q (M, n_joints)."""
+    def frames(
+        self, q: _Vec, approach: Optional[_Vec] = None, temp_c: Optional[float] = None
+    ) -> npt.NDArray[np.float64]:
+        """(n_joints + 2, 4, 4) [m]: frame 0, frames 1..n_joints, tool."""
+    def jacobian(
+        self,
+        q: _Vec,
+        effects: bool = False,
+        approach: Optional[_Vec] = None,
+        temp_c: Optional[float] = None,
+    ) -> Tuple[npt.NDArray[np.float64], List[str]]:
+        """(6, P) identification Jacobian, rows [Δp [m]; Δφ [rad]] in the base frame, and
+        the column labels."""
+    def ik(
+        self,
+        target: npt.NDArray[np.float64],
+        seed: Optional[_Vec] = None,
+        max_iterations: int = 200,
+        tol_pos_m: float = 1e-11,
+        tol_rot_rad: float = 1e-11,
+        extra_seeds: int = 16,
+    ) -> Tuple[npt.NDArray[np.float64], float, float, int]:
+        """(q [rad], residual_pos_m, residual_rot_rad, iterations) reaching target (4, 4)."""
+    def pose_errors(
+        self, data: Union[_Path, "Measurements"], allow_out_of_limits: bool = False
+    ) -> Dict[str, npt.NDArray[np.float64]]:
+        """Measured minus model (as kincal validate): pos_m (M, 3) [m], rot_rad (M, 3)
+        [rad], pos_norm_m (M,), rot_norm_rad (M,)."""
+    def with_params(self, values: _Vec) -> "Robot":
+        """A copy with every parameter (order of param_labels) set to values."""
+    def model_file(self) -> dict: ...
+    def save(self, path: _Path) -> None: ...
+
+class Measurements:
+    """Rows of a measurement CSV (spec/measurements.md), in SI units."""
+
+    @staticmethod
+    def from_arrays(
+        q: npt.NDArray[np.float64],
+        poses: Optional[npt.NDArray[np.float64]] = None,
+        pose_ids: Optional[Sequence[str]] = None,
+    ) -> "Measurements": ...
+    @property
+    def source(self) -> str: ...
+    @property
+    def n_joints(self) -> int: ...
+    @property
+    def sha256(self) -> str: ...
+    @property
+    def q(self) -> npt.NDArray[np.float64]:
+        """(M, n_joints) [rad]."""
+    @property
+    def position_m(self) -> npt.NDArray[np.float64]:
+        """(M, 3) [m], NaN where not measured."""
+    @property
+    def poses(self) -> npt.NDArray[np.float64]:
+        """(M, 4, 4) [m], NaN for rows without a measured orientation."""
+    @property
+    def lines(self) -> List[int]: ...
+    @property
+    def pose_ids(self) -> List[Optional[str]]: ...
+    def write(self, path: _Path) -> None: ...
+    def __len__(self) -> int: ...
+
+def aria(variant: str = "nominal") -> Robot:
+    """ARIA: "nominal" (Table 1), "virtual_truth" (Table 3) or "real_identified"."""
+def load_robot(
+    source: _Path, base_link: Optional[str] = None, tip_link: Optional[str] = None
+) -> Robot: ...
+def read_measurements(
+    path: _Path, robot: Robot, require_pose: bool = False, allow_out_of_limits: bool = False
+) -> Measurements: ...
+def calibrate(
+    data: Union[_Path, Measurements],
+    robot: Robot,
+    *,
+    algorithm: str = "ols",
+    effects: Sequence[str] = (),
+    bounds_mm: float = 5.0,
+    bounds_deg: float = 5.0,
+    weight_pos: Optional[float] = None,
+    weight_rot: Optional[float] = None,
+    sigma_pos_mm: Optional[float] = None,
+    sigma_rot_deg: Optional[float] = None,
+    orientation_error: str = "exact",
+    allow_data_deficiency: bool = False,
+    max_iterations: int = 200,
+    robust: Optional[str] = None,
+    robust_tuning: Optional[float] = None,
+    prior: Optional[Tuple[float, float]] = None,
+    init_frames: bool = False,
+    allow_out_of_limits: bool = False,
+    allow_implausible: bool = False,
+) -> Robot: ...
