@@ -1595,9 +1595,10 @@ typedef struct kincal_selection {
  The content is opaque and private to the library build that wrote it: do not edit it, do
  not persist it across library builds or versions (prepare again at start-up). A handle may
  be copied with `memcpy`. Storage that `kincal_prepare` did not fill (uninitialised,
- zeroed, overwritten, corrupted, or from another build) makes every `kincal_prepared_*`
- call return `KINCAL_STATUS_BAD_HANDLE` (a checksum over the whole stored model guards
- against corruption).
+ zeroed, overwritten, or from another build) makes every `kincal_prepared_*` call return
+ `KINCAL_STATUS_BAD_HANDLE` (cheap header and guard words, checked on every call); a
+ checksum over the whole stored model, checked by `kincal_prepared_validate` only, detects
+ corruption of the stored numbers themselves.
  */
 typedef struct kincal_prepared {
     /*
@@ -3378,11 +3379,14 @@ kincal_status kincal_prepare(const struct kincal_robot *robot,
                              struct kincal_error *err);
 
 /*
- Checks a prepared handle: OK when `kincal_prepare` filled it (with this library build) and
- it is intact, else BAD_HANDLE; NULL_POINTER or MISALIGNED_POINTER for a bad pointer. Every
- `kincal_prepared_*` call makes the same check first, so this is only needed to test a
- handle ahead of use (e.g. after a memory self-test). `n_joints_out`: the joint count, or
- NULL.
+ Checks a prepared handle in full: OK when `kincal_prepare` filled it (with this library
+ build) and every stored number is intact (a checksum over the whole model, about as costly
+ as one FK), else BAD_HANDLE; NULL_POINTER or MISALIGNED_POINTER for a bad pointer. The
+ other `kincal_prepared_*` calls check only the handle's header and guard words (a few
+ nanoseconds), which catch storage `kincal_prepare` never filled but not a corrupted number
+ inside a filled one: validate once after preparing or copying a handle, and again
+ whenever its memory may have been damaged (e.g. after a memory self-test); then call the
+ fast exports in the loop. `n_joints_out`: the joint count, or NULL.
 
  # Safety
  `prepared` must be NULL or point to `KINCAL_PREPARED_SIZE` readable bytes; `n_joints_out`
@@ -3473,6 +3477,48 @@ kincal_status kincal_prepared_ik(const struct kincal_prepared *prepared,
                                  size_t q_out_len,
                                  struct kincal_ik_info *info_out,
                                  struct kincal_error *err);
+
+/*
+ The joint (geometric) Jacobian of a prepared model at `q`, for a controller's resolved-rate
+ or operational-space loop: a 6 × N column-major matrix in `jac_out` (6N doubles), column
+ `j` = `[v; ω]`, the tool origin's velocity \[m/s\] and the tool's angular velocity
+ \[rad/s\], both in the base frame, per unit rate of reading `j` (rad/s; m/s for a prismatic
+ joint). Joint effects enter through dθ_j/dq_j (scale, cyclic); compliance's dependence on
+ q is neglected (as in the IK). `t_base_tool_out`: the pose at `q` (16 doubles,
+ column-major, bit-identical to `kincal_prepared_fk`), or NULL. Other arguments and
+ statuses as `kincal_prepared_fk`; NON_FINITE_RESULT when a column overflowed.
+
+ # Safety
+ As `kincal_prepared_fk`; `jac_out` must not overlap the other arguments.
+ */
+kincal_status kincal_prepared_joint_jacobian(const struct kincal_prepared *prepared,
+                                             const double *q,
+                                             size_t q_len,
+                                             const struct kincal_joint_aux *aux,
+                                             double *jac_out,
+                                             size_t jac_len,
+                                             double *t_base_tool_out,
+                                             size_t t_base_tool_len,
+                                             struct kincal_error *err);
+
+/*
+ `kincal_jacobian` on a prepared model: the identification Jacobian (6 × P column-major in
+ `jac_out`, P = `kincal_num_geometric_params(N)` or `kincal_num_params(N)` chosen by
+ `jac_len`) and optionally the pose, bit-identical to `kincal_jacobian` on the prepared
+ robot. Arguments and statuses as `kincal_jacobian` with `prepared` in place of `robot`.
+
+ # Safety
+ As `kincal_prepared_fk`; `jac_out` must not overlap the other arguments.
+ */
+kincal_status kincal_prepared_jacobian(const struct kincal_prepared *prepared,
+                                       const double *q,
+                                       size_t q_len,
+                                       const struct kincal_joint_aux *aux,
+                                       double *jac_out,
+                                       size_t jac_len,
+                                       double *t_base_tool_out,
+                                       size_t t_base_tool_len,
+                                       struct kincal_error *err);
 
 /*
  Default registration options for noise `sigma_m` [m]: k = 4, up to 2 outliers. Returns OK,

@@ -1,5 +1,6 @@
-//! Kinematics benchmarks on the nominal ARIA: FK, FK + identification Jacobian (geometric
-//! columns and all columns), IK of a Table 2 pose.
+//! Kinematics benchmarks on the nominal ARIA: six sines and cosines (libm against the core's
+//! bit-identical `kincal::sin_cos`), FK, FK + joint Jacobian, FK + identification Jacobian
+//! (geometric columns and all columns), IK of a Table 2 pose.
 //!
 //! FK and the Jacobians cycle through a precomputed table of random configurations within the
 //! joint limits (one per iteration): a single fixed configuration lets the branch predictor
@@ -57,8 +58,26 @@ fn kinematics<M: Measurement + 'static>(c: &mut Criterion<M>, prefix: &str) {
         k = (k + 1) & (TABLE - 1);
         k
     };
+    // Six sines and cosines (one FK's worth) of random angles over ±2π: libm against the
+    // core's bit-identical inlined version.
+    let mut rng = SplitMix64::new(0x5c05);
+    let angles: Vec<[f64; 6]> = (0..TABLE)
+        .map(|_| core::array::from_fn(|_| rng.range(-std::f64::consts::TAU, std::f64::consts::TAU)))
+        .collect();
+    c.bench_function(&format!("{prefix}sincos6_libm"), |b| {
+        b.iter(|| black_box(&angles[next()]).map(libm::sincos))
+    });
+    c.bench_function(&format!("{prefix}sincos6_kincal"), |b| {
+        b.iter(|| black_box(&angles[next()]).map(kincal::sin_cos))
+    });
     c.bench_function(&format!("{prefix}fk_aria"), |b| {
         b.iter(|| black_box(&robot).fk(black_box(&states[next()])))
+    });
+    let mut joint = [[0.0; 6]; 6];
+    c.bench_function(&format!("{prefix}fk_joint_jacobian_aria"), |b| {
+        b.iter(|| {
+            black_box(&robot).joint_jacobian(black_box(&states[next()]), black_box(&mut joint))
+        })
     });
     let mut geo = [[0.0; 6]; Robot::<6>::NUM_GEOMETRIC_PARAMS];
     c.bench_function(&format!("{prefix}fk_jacobian_geometric_aria"), |b| {

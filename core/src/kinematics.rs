@@ -190,6 +190,25 @@ impl<const N: usize> Robot<N> {
         self.fk(&JointState::new(*q))
     }
 
+    /// The joint (geometric) Jacobian at `state` for a controller: column `j` of `jac` is
+    /// `[v; ω]`, the tool origin's velocity \[m/s\] and the tool's angular velocity \[rad/s\],
+    /// both in the base frame, per unit rate of reading `j` (rad/s, or m/s for a prismatic
+    /// joint); returns the tool pose, equal to [`Robot::fk`]. Joint effects enter through
+    /// `dθ_j/dq_j` (scale, cyclic); compliance's dependence on q is neglected (as in the IK,
+    /// which uses the same columns), so with compliance the columns are exact only to that
+    /// small term. Checked against finite differences of [`Robot::fk`] in
+    /// `tests/jacobian_fd.rs`.
+    pub fn joint_jacobian(
+        &self,
+        state: &JointState<N>,
+        jac: &mut [JacobianColumn; N],
+    ) -> Result<Transform> {
+        let mut f = Frames::default();
+        self.fk_frames(state, &mut f)?;
+        *jac = crate::ik::joint_jacobian(self, state, &f).data.0;
+        Ok(f.t_base_ee)
+    }
+
     /// FK with every intermediate frame written into `frames`.
     pub fn fk_frames(&self, state: &JointState<N>, frames: &mut Frames<N>) -> Result<()> {
         let angles = self.joint_angles(state)?;

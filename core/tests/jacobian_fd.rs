@@ -225,3 +225,84 @@ fn compliance_column_uses_nominal_torques() {
         }
     }
 }
+
+/// Central differences of FK with respect to each reading: `[dp/dq_j; ω_j]` as above.
+fn fd_joint_column<const N: usize>(
+    robot: &Robot<N>,
+    state: &JointState<N>,
+    j: usize,
+) -> JacobianColumn {
+    let h = EFFECTIVE_STEP;
+    let eval = |dq: f64| {
+        let mut s = *state;
+        s.q[j] += dq;
+        robot.fk(&s).expect("fk")
+    };
+    let (tp, tm) = (eval(h), eval(-h));
+    let dp = (tp.translation.vector - tm.translation.vector) / (2.0 * h);
+    let w = small_rotation_log(&mul_abt(&rot_rows(&tp), &rot_rows(&tm)));
+    [
+        dp.x,
+        dp.y,
+        dp.z,
+        w[0] / (2.0 * h),
+        w[1] / (2.0 * h),
+        w[2] / (2.0 * h),
+    ]
+}
+
+/// Worst relative error of [`Robot::joint_jacobian`] against [`fd_joint_column`]; the pose
+/// it returns is FK's, bit for bit.
+fn check_joint_jacobian<const N: usize>(name: &str, robot: &Robot<N>, seed: u64) -> f64 {
+    let mut rng = SplitMix64::new(seed);
+    let mut worst: f64 = 0.0;
+    for c in 0..CONFIGS {
+        let state = full_state(&mut rng, robot.limits());
+        let mut jac = [[0.0; 6]; N];
+        let pose = robot
+            .joint_jacobian(&state, &mut jac)
+            .expect("joint_jacobian");
+        assert_eq!(
+            pose,
+            robot.fk(&state).expect("fk"),
+            "{name}: pose differs from fk"
+        );
+        for (j, col) in jac.iter().enumerate() {
+            let fd = fd_joint_column(robot, &state, j);
+            let (ep, er) = rel_error(col, &fd);
+            assert!(
+                ep < REL_TOL && er < REL_TOL,
+                "{name}, config {c}, joint {j}: relative error {ep:.3e} / {er:.3e}\n \
+                 analytic {col:?}\n fd       {fd:?}"
+            );
+            worst = worst.max(ep).max(er);
+        }
+    }
+    worst
+}
+
+/// The controller's joint Jacobian against finite differences of FK in the readings: the
+/// nominal ARIA, the perturbed 7-joint arm, and the perturbed ARIA with base, tool, β and the scale,
+/// cyclic, backlash and thermal effects (compliance cleared: its dependence on q is the one
+/// term the joint Jacobian neglects, documented there).
+#[test]
+fn joint_jacobian_matches_finite_differences() {
+    check_joint_jacobian("nominal ARIA", &aria::nominal(), 11);
+    let compliance = kincal::EffectSet::of(kincal::Effect::JointCompliance);
+    let mut arm = perturbed(&arm7(), 12);
+    arm.clear_effects(compliance);
+    check_joint_jacobian("perturbed 7-joint arm", &arm, 13);
+    let mut robot = perturbed(&aria::nominal(), 14);
+    robot.clear_effects(compliance);
+    assert_eq!(robot.active_effects().len(), 4);
+    let worst = check_joint_jacobian("perturbed ARIA", &robot, 15);
+    eprintln!("joint Jacobian, perturbed ARIA: worst relative error {worst:.2e}");
+    // The check can fail: a column of the wrong joint is far off.
+    let state = full_state(&mut SplitMix64::new(16), robot.limits());
+    let mut jac = [[0.0; 6]; 6];
+    robot
+        .joint_jacobian(&state, &mut jac)
+        .expect("joint_jacobian");
+    let (ep, er) = rel_error(&jac[1], &fd_joint_column(&robot, &state, 2));
+    assert!(ep.max(er) > 1e-2, "{ep} {er}");
+}

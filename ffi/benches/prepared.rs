@@ -55,7 +55,8 @@ use ik::{kincal_ik, kincal_ik_info};
 use kinematics::{kincal_fk, kincal_fk_pq, kincal_joint_aux};
 use prepared::{
     KINCAL_PREPARED_WORDS, kincal_prepare, kincal_prepared, kincal_prepared_fk,
-    kincal_prepared_fk_pq, kincal_prepared_ik, kincal_prepared_validate,
+    kincal_prepared_fk_pq, kincal_prepared_ik, kincal_prepared_jacobian,
+    kincal_prepared_joint_jacobian, kincal_prepared_validate,
 };
 use robot::kincal_robot;
 use status::kincal_status;
@@ -189,7 +190,8 @@ fn fk(c: &mut Criterion) {
             )
         })
     });
-    // The handle check alone (magic, shape, length params, checksum of the stored model).
+    // The full handle check (magic, shape, guard, length params, checksum of the stored
+    // model): no longer part of every call.
     g.bench_function("kincal_prepared_validate", |b| {
         b.iter(|| unsafe {
             kincal_prepared_validate(black_box(&*prepared), null_mut(), null_mut())
@@ -294,5 +296,109 @@ fn ik(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, fk, ik);
+/// The controller's path over 1,024 random configurations within the ARIA limits (one per
+/// iteration; a fixed configuration reads faster than a controller sees): FK and Jacobians
+/// through the handle against the core and against the plain-struct identification Jacobian a
+/// controller had to call before `kincal_prepared_joint_jacobian` existed.
+fn firmware_path(c: &mut Criterion) {
+    let aria = aria_truth();
+    let prepared = prepare(&aria);
+    let core = kincal::aria::virtual_truth();
+    let mut rng = kincal::rng::SplitMix64::new(0x6b69_6e63_616c);
+    let qs: Vec<[f64; 6]> = (0..1024)
+        .map(|_| {
+            core::array::from_fn(|j| {
+                let l = core.limits()[j];
+                rng.range(l.lower, l.upper)
+            })
+        })
+        .collect();
+    let mut k = 0usize;
+    let mut next = move || {
+        k = (k + 1) & 1023;
+        k
+    };
+    let mut t = [0.0; 16];
+    let mut jj = [0.0; 36];
+    let mut joint = [[0.0; 6]; 6];
+    let geo = kincal::params::num_geometric_params(6);
+    let mut jg = vec![0.0; 6 * geo];
+    let mut g = c.benchmark_group("firmware_random_q");
+    g.bench_function("core_fk", |b| {
+        b.iter(|| black_box(&core).fk(&kincal::JointState::new(qs[next()])))
+    });
+    g.bench_function("kincal_prepared_fk", |b| {
+        b.iter(|| unsafe {
+            let q = &qs[next()];
+            kincal_prepared_fk(
+                black_box(&*prepared),
+                q.as_ptr(),
+                6,
+                null(),
+                t.as_mut_ptr(),
+                16,
+                null_mut(),
+            )
+        })
+    });
+    g.bench_function("core_joint_jacobian", |b| {
+        b.iter(|| black_box(&core).joint_jacobian(&kincal::JointState::new(qs[next()]), &mut joint))
+    });
+    g.bench_function("kincal_prepared_joint_jacobian_and_fk", |b| {
+        b.iter(|| unsafe {
+            let q = &qs[next()];
+            kincal_prepared_joint_jacobian(
+                black_box(&*prepared),
+                q.as_ptr(),
+                6,
+                null(),
+                jj.as_mut_ptr(),
+                36,
+                t.as_mut_ptr(),
+                16,
+                null_mut(),
+            )
+        })
+    });
+    g.bench_function("kincal_prepared_jacobian_geometric", |b| {
+        b.iter(|| unsafe {
+            let q = &qs[next()];
+            kincal_prepared_jacobian(
+                black_box(&*prepared),
+                q.as_ptr(),
+                6,
+                null(),
+                jg.as_mut_ptr(),
+                jg.len(),
+                t.as_mut_ptr(),
+                16,
+                null_mut(),
+            )
+        })
+    });
+    g.bench_function("kincal_jacobian_geometric_plain_struct", |b| {
+        b.iter(|| unsafe {
+            let q = &qs[next()];
+            kinematics::kincal_jacobian(
+                black_box(&aria),
+                q.as_ptr(),
+                6,
+                null(),
+                jg.as_mut_ptr(),
+                jg.len(),
+                t.as_mut_ptr(),
+                16,
+                null_mut(),
+            )
+        })
+    });
+    g.bench_function("kincal_prepared_validate", |b| {
+        b.iter(|| unsafe {
+            kincal_prepared_validate(black_box(&*prepared), null_mut(), null_mut())
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, firmware_path, fk, ik);
 criterion_main!(benches);

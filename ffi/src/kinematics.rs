@@ -303,13 +303,29 @@ pub unsafe extern "C" fn kincal_jacobian(
     })
 }
 
-fn jacobian_of<const N: usize>(
+pub(crate) fn jacobian_of<const N: usize>(
     r: &Robot<N>,
     q: &[f64; KINCAL_MAX_JOINTS],
     aux: Option<&kincal_joint_aux>,
     columns: &mut [[f64; 6]],
 ) -> FfiResult<Transform> {
     Ok(r.jacobian(&joint_state::<N>(q_n(q, N)?, aux, CALL_AUX)?, columns)?)
+}
+
+/// The joint Jacobian's N columns into the first N of `columns` (the caller sized it), and
+/// the pose.
+pub(crate) fn joint_jacobian_of<const N: usize>(
+    r: &Robot<N>,
+    q: &[f64; KINCAL_MAX_JOINTS],
+    aux: Option<&kincal_joint_aux>,
+    columns: &mut [[f64; 6]],
+) -> FfiResult<Transform> {
+    let mut jac = [[0.0; 6]; N];
+    let t = r.joint_jacobian(&joint_state::<N>(q_n(q, N)?, aux, CALL_AUX)?, &mut jac)?;
+    for (d, s) in columns.iter_mut().zip(jac.iter()) {
+        *d = *s;
+    }
+    Ok(t)
 }
 
 fn per_joint<const N: usize>(v: &[f64; N]) -> [f64; KINCAL_MAX_JOINTS] {

@@ -14,20 +14,24 @@
 //! |------|--------------------------------------------------------------------------|
 //! | 0    | [`MAGIC`] (tag and layout version)                                       |
 //! | 1    | joint count N (low 32 bits), `size_of::<Robot<N>>()` (high 32 bits)      |
-//! | 2    | 0 (reserved)                                                             |
-//! | 3    | checksum of words 0–2 and of the stored model                            |
+//! | 2    | guard: the checksum's complement                                         |
+//! | 3    | checksum of words 0–1 and of the stored model                            |
 //! | 4..  | the core `Robot<N>`, byte for byte                                       |
 //!
-//! Misuse is a status, never undefined behaviour: before a stored model is read, the pointer is
-//! checked (NULL, alignment), then the magic word, the joint count and size, the bytes of the
-//! model's only field with invalid bit patterns (`[LengthParam; N]`, each 0 or 1 at
-//! [`Robot::LENGTH_PARAM_OFFSET`]) and the checksum; any failure is
-//! `KINCAL_STATUS_BAD_HANDLE`. Every other byte of a `Robot<N>` belongs to an `f64` (the layout
-//! contract documented on [`Robot`], guarded by [`payload_fits`]), so a model that passed these
-//! checks is a valid Rust value whatever the storage held; the checksum makes an accidentally
-//! corrupted or partly overwritten handle fail instead of computing with damaged numbers. The
-//! checksum never reads the padding bytes after `[LengthParam; N]` (they are uninitialised in
-//! Rust's sense).
+//! Misuse is a status, never undefined behaviour. On every call, before a stored model is
+//! read, the pointer is checked (NULL, alignment), then the magic word, the joint count and
+//! size, the guard word against the checksum word, and the bytes of the model's only field
+//! with invalid bit patterns (`[LengthParam; N]`, each 0 or 1 at
+//! [`Robot::LENGTH_PARAM_OFFSET`]); any failure is `KINCAL_STATUS_BAD_HANDLE`. Every other
+//! byte of a `Robot<N>` belongs to an `f64` (the layout contract documented on [`Robot`],
+//! guarded by [`payload_fits`]), so a model that passed these checks is a valid Rust value
+//! whatever the storage held. Uninitialised, zeroed, foreign or overwritten-from-the-start
+//! storage fails these cheap checks (a few words: about 2 ns). The checksum over the whole
+//! model (about 90 ns for six joints, most of an FK) is verified by `kincal_prepare`'s
+//! counterpart `kincal_prepared_validate` only, which a caller runs when it wants to know the
+//! stored numbers are intact (after start-up, a memory self-test, a copy between memories):
+//! validate once, then call the fast exports in the loop. The checksum never reads the
+//! padding bytes after `[LengthParam; N]` (they are uninitialised in Rust's sense).
 //!
 //! A handle is tied to the library build that prepared it (the layout of `Robot<N>` is not an
 //! ABI): never persist one across builds; prepare again at start-up.
@@ -38,7 +42,9 @@ use kincal::ik::IkOptions;
 use kincal::{LengthParam, Robot, with_any_robot};
 
 use crate::ik::{ik_of, kincal_ik_info, kincal_ik_options, options};
-use crate::kinematics::{angles_of, fk_of, kincal_joint_aux};
+use crate::kinematics::{angles_of, fk_of, jacobian_of, joint_jacobian_of, kincal_joint_aux};
+use kincal::params::{num_geometric_params, num_params};
+
 use crate::robot::{KINCAL_MAX_JOINTS, kincal_robot, to_any};
 use crate::status::{FfiResult, kincal_error, kincal_status};
 
@@ -57,9 +63,10 @@ pub const KINCAL_PREPARED_WORDS: usize = 512;
 /// The content is opaque and private to the library build that wrote it: do not edit it, do
 /// not persist it across library builds or versions (prepare again at start-up). A handle may
 /// be copied with `memcpy`. Storage that `kincal_prepare` did not fill (uninitialised,
-/// zeroed, overwritten, corrupted, or from another build) makes every `kincal_prepared_*`
-/// call return `KINCAL_STATUS_BAD_HANDLE` (a checksum over the whole stored model guards
-/// against corruption).
+/// zeroed, overwritten, or from another build) makes every `kincal_prepared_*` call return
+/// `KINCAL_STATUS_BAD_HANDLE` (cheap header and guard words, checked on every call); a
+/// checksum over the whole stored model, checked by `kincal_prepared_validate` only, detects
+/// corruption of the stored numbers themselves.
 #[repr(C)]
 #[derive(Debug, Clone, Copy)]
 #[allow(non_camel_case_types)]
@@ -159,7 +166,7 @@ unsafe fn length_param_word<const N: usize>(base: *const u64) -> Option<u64> {
     Some(word)
 }
 
-/// Checksum of header words 0–2 and of the stored `Robot<N>` (its length params given packed
+/// Checksum of header words 0–1 and of the stored `Robot<N>` (its length params given packed
 /// as `lp_word`, so the padding bytes after them are never read). Four independent
 /// lanes of xor-multiply steps keep the multiply chain short.
 ///
@@ -176,7 +183,7 @@ unsafe fn checksum<const N: usize>(base: *const u64, lp_word: u64) -> u64 {
     let (header, head, tail) = unsafe {
         let payload = base.add(HEADER_WORDS);
         (
-            [base.read(), base.add(1).read(), base.add(2).read(), lp_word],
+            [base.read(), base.add(1).read(), 0, lp_word],
             core::slice::from_raw_parts(payload, lp_index),
             core::slice::from_raw_parts(payload.add(lp_end), words - lp_end),
         )
@@ -216,15 +223,17 @@ unsafe fn store<const N: usize>(r: &Robot<N>, out: *mut u64) -> FfiResult {
         out.add(HEADER_WORDS).cast::<Robot<N>>().write(*r);
         out.write(MAGIC);
         out.add(1).write(shape::<N>());
-        out.add(2).write(0);
     }
     // SAFETY: the storage now holds a valid `Robot<N>`.
     let lp = unsafe { length_param_word::<N>(out.cast_const()) }
         .ok_or(kincal_error::new(kincal_status::Internal))?;
     // SAFETY: as above.
     let sum = unsafe { checksum::<N>(out.cast_const(), lp) };
-    // SAFETY: word 3 is within the storage.
-    unsafe { out.add(3).write(sum) };
+    // SAFETY: words 2 and 3 are within the storage.
+    unsafe {
+        out.add(2).write(!sum);
+        out.add(3).write(sum);
+    }
     Ok(())
 }
 
@@ -271,20 +280,29 @@ impl PreparedRobot<'_> {
     }
 }
 
-/// The stored model of a handle of N joints, after every check.
+/// Whether a handle's model is checked against its checksum ([`Check::Full`], in
+/// `kincal_prepared_validate`) or only its header, guard and length params ([`Check::Guard`],
+/// on every other call).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Check {
+    Guard,
+    Full,
+}
+
+/// The stored model of a handle of N joints, after the checks of `check`.
 ///
 /// # Safety
 /// `base` points to `KINCAL_PREPARED_WORDS` readable words, unmodified for `'a`.
-unsafe fn view<'a, const N: usize>(base: *const u64) -> FfiResult<&'a Robot<N>> {
-    // SAFETY: forwarded contract (words 1 and 2 are within the storage).
+unsafe fn view<'a, const N: usize>(base: *const u64, check: Check) -> FfiResult<&'a Robot<N>> {
+    // SAFETY: forwarded contract (words 1 to 3 are within the storage).
     let (w1, w2, w3) = unsafe { (base.add(1).read(), base.add(2).read(), base.add(3).read()) };
-    if w1 != shape::<N>() || w2 != 0 {
+    if w1 != shape::<N>() || w2 != !w3 {
         return Err(bad_handle());
     }
     // SAFETY: forwarded contract.
     let lp = unsafe { length_param_word::<N>(base) }.ok_or_else(bad_handle)?;
     // SAFETY: forwarded contract.
-    if unsafe { checksum::<N>(base, lp) } != w3 {
+    if check == Check::Full && unsafe { checksum::<N>(base, lp) } != w3 {
         return Err(bad_handle());
     }
     // SAFETY: in bounds and aligned (`payload_fits`); every byte of the `Robot<N>` but the
@@ -294,11 +312,14 @@ unsafe fn view<'a, const N: usize>(base: *const u64) -> FfiResult<&'a Robot<N>> 
     Ok(unsafe { &*base.add(HEADER_WORDS).cast::<Robot<N>>() })
 }
 
-/// The checked model of the handle argument `prepared`.
+/// The model of the handle argument `prepared`, after the checks of `check`.
 ///
 /// # Safety
 /// `p` is NULL or points to a readable `kincal_prepared`, unmodified for `'a`.
-pub(crate) unsafe fn prepared_robot<'a>(p: *const kincal_prepared) -> FfiResult<PreparedRobot<'a>> {
+pub(crate) unsafe fn prepared_robot<'a>(
+    p: *const kincal_prepared,
+    check: Check,
+) -> FfiResult<PreparedRobot<'a>> {
     if p.is_null() {
         return Err(crate::args::null(c"prepared"));
     }
@@ -313,18 +334,18 @@ pub(crate) unsafe fn prepared_robot<'a>(p: *const kincal_prepared) -> FfiResult<
     }
     // SAFETY (all arms): forwarded contract.
     Ok(match w1 & 0xFFFF_FFFF {
-        1 => PreparedRobot::J1(unsafe { view::<1>(base) }?),
-        2 => PreparedRobot::J2(unsafe { view::<2>(base) }?),
-        3 => PreparedRobot::J3(unsafe { view::<3>(base) }?),
-        4 => PreparedRobot::J4(unsafe { view::<4>(base) }?),
-        5 => PreparedRobot::J5(unsafe { view::<5>(base) }?),
-        6 => PreparedRobot::J6(unsafe { view::<6>(base) }?),
-        7 => PreparedRobot::J7(unsafe { view::<7>(base) }?),
-        8 => PreparedRobot::J8(unsafe { view::<8>(base) }?),
-        9 => PreparedRobot::J9(unsafe { view::<9>(base) }?),
-        10 => PreparedRobot::J10(unsafe { view::<10>(base) }?),
-        11 => PreparedRobot::J11(unsafe { view::<11>(base) }?),
-        12 => PreparedRobot::J12(unsafe { view::<12>(base) }?),
+        1 => PreparedRobot::J1(unsafe { view::<1>(base, check) }?),
+        2 => PreparedRobot::J2(unsafe { view::<2>(base, check) }?),
+        3 => PreparedRobot::J3(unsafe { view::<3>(base, check) }?),
+        4 => PreparedRobot::J4(unsafe { view::<4>(base, check) }?),
+        5 => PreparedRobot::J5(unsafe { view::<5>(base, check) }?),
+        6 => PreparedRobot::J6(unsafe { view::<6>(base, check) }?),
+        7 => PreparedRobot::J7(unsafe { view::<7>(base, check) }?),
+        8 => PreparedRobot::J8(unsafe { view::<8>(base, check) }?),
+        9 => PreparedRobot::J9(unsafe { view::<9>(base, check) }?),
+        10 => PreparedRobot::J10(unsafe { view::<10>(base, check) }?),
+        11 => PreparedRobot::J11(unsafe { view::<11>(base, check) }?),
+        12 => PreparedRobot::J12(unsafe { view::<12>(base, check) }?),
         _ => return Err(bad_handle()),
     })
 }
@@ -346,7 +367,7 @@ unsafe fn prepared_and_q<'a>(
     Option<kincal_joint_aux>,
 )> {
     // SAFETY: forwarded contract.
-    let model = unsafe { prepared_robot(prepared) }?;
+    let model = unsafe { prepared_robot(prepared, Check::Guard) }?;
     // SAFETY: forwarded contract.
     let (q, aux) =
         unsafe { crate::kinematics::joint_args(model.n_joints(), q, q_len, q_name, aux) }?;
@@ -393,11 +414,14 @@ pub unsafe extern "C" fn kincal_prepare(
     })
 }
 
-/// Checks a prepared handle: OK when `kincal_prepare` filled it (with this library build) and
-/// it is intact, else BAD_HANDLE; NULL_POINTER or MISALIGNED_POINTER for a bad pointer. Every
-/// `kincal_prepared_*` call makes the same check first, so this is only needed to test a
-/// handle ahead of use (e.g. after a memory self-test). `n_joints_out`: the joint count, or
-/// NULL.
+/// Checks a prepared handle in full: OK when `kincal_prepare` filled it (with this library
+/// build) and every stored number is intact (a checksum over the whole model, about as costly
+/// as one FK), else BAD_HANDLE; NULL_POINTER or MISALIGNED_POINTER for a bad pointer. The
+/// other `kincal_prepared_*` calls check only the handle's header and guard words (a few
+/// nanoseconds), which catch storage `kincal_prepare` never filled but not a corrupted number
+/// inside a filled one: validate once after preparing or copying a handle, and again
+/// whenever its memory may have been damaged (e.g. after a memory self-test); then call the
+/// fast exports in the loop. `n_joints_out`: the joint count, or NULL.
 ///
 /// # Safety
 /// `prepared` must be NULL or point to `KINCAL_PREPARED_SIZE` readable bytes; `n_joints_out`
@@ -410,7 +434,7 @@ pub unsafe extern "C" fn kincal_prepared_validate(
 ) -> kincal_status {
     ffi_boundary!(err = err; {
         // SAFETY: forwarded contract.
-        let model = unsafe { prepared_robot(prepared) }?;
+        let model = unsafe { prepared_robot(prepared, Check::Full) }?;
         if !n_joints_out.is_null() {
             let out = arg_out1!(n_joints_out);
             // SAFETY: checked by `arg_out1!`; writable by contract.
@@ -555,6 +579,90 @@ pub unsafe extern "C" fn kincal_prepared_ik(
             if let Some(i) = info {
                 i.put(info_v);
             }
+        }
+        Ok(())
+    })
+}
+
+/// The joint (geometric) Jacobian of a prepared model at `q`, for a controller's resolved-rate
+/// or operational-space loop: a 6 × N column-major matrix in `jac_out` (6N doubles), column
+/// `j` = `[v; ω]`, the tool origin's velocity \[m/s\] and the tool's angular velocity
+/// \[rad/s\], both in the base frame, per unit rate of reading `j` (rad/s; m/s for a prismatic
+/// joint). Joint effects enter through dθ_j/dq_j (scale, cyclic); compliance's dependence on
+/// q is neglected (as in the IK). `t_base_tool_out`: the pose at `q` (16 doubles,
+/// column-major, bit-identical to `kincal_prepared_fk`), or NULL. Other arguments and
+/// statuses as `kincal_prepared_fk`; NON_FINITE_RESULT when a column overflowed.
+///
+/// # Safety
+/// As `kincal_prepared_fk`; `jac_out` must not overlap the other arguments.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn kincal_prepared_joint_jacobian(
+    prepared: *const kincal_prepared,
+    q: *const f64,
+    q_len: usize,
+    aux: *const kincal_joint_aux,
+    jac_out: *mut f64,
+    jac_len: usize,
+    t_base_tool_out: *mut f64,
+    t_base_tool_len: usize,
+    err: *mut kincal_error,
+) -> kincal_status {
+    ffi_boundary!(err = err; {
+        // SAFETY: forwarded contract.
+        let (model, q, aux) = unsafe { prepared_and_q(prepared, q, q_len, c"q", aux) }?;
+        let mut jac = arg_out!(jac_out, jac_len, 6 * model.n_joints());
+        let t_out = arg_out_opt!(t_base_tool_out, t_base_tool_len, 16);
+        // SAFETY: checked by `arg_out!`; writable by contract, no other reference into it.
+        let flat = unsafe { jac.as_mut_slice() };
+        let (columns, _) = flat.as_chunks_mut::<6>();
+        let t = with_prepared_robot!(model, r => joint_jacobian_of(r, &q, aux.as_ref(), columns))?;
+        crate::args::finite_result(flat, c"jac_out")?;
+        if let Some(o) = t_out {
+            // SAFETY: checked by `arg_out_opt!`; writable by contract.
+            unsafe { o.write_finite(&crate::pose::to_matrix(&t)) }?;
+        }
+        Ok(())
+    })
+}
+
+/// `kincal_jacobian` on a prepared model: the identification Jacobian (6 × P column-major in
+/// `jac_out`, P = `kincal_num_geometric_params(N)` or `kincal_num_params(N)` chosen by
+/// `jac_len`) and optionally the pose, bit-identical to `kincal_jacobian` on the prepared
+/// robot. Arguments and statuses as `kincal_jacobian` with `prepared` in place of `robot`.
+///
+/// # Safety
+/// As `kincal_prepared_fk`; `jac_out` must not overlap the other arguments.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn kincal_prepared_jacobian(
+    prepared: *const kincal_prepared,
+    q: *const f64,
+    q_len: usize,
+    aux: *const kincal_joint_aux,
+    jac_out: *mut f64,
+    jac_len: usize,
+    t_base_tool_out: *mut f64,
+    t_base_tool_len: usize,
+    err: *mut kincal_error,
+) -> kincal_status {
+    ffi_boundary!(err = err; {
+        // SAFETY: forwarded contract.
+        let (model, q, aux) = unsafe { prepared_and_q(prepared, q, q_len, c"q", aux) }?;
+        let n = model.n_joints();
+        let cols = if jac_len == 6 * num_geometric_params(n) {
+            num_geometric_params(n)
+        } else {
+            num_params(n)
+        };
+        let mut jac = arg_out!(jac_out, jac_len, 6 * cols);
+        let t_out = arg_out_opt!(t_base_tool_out, t_base_tool_len, 16);
+        // SAFETY: checked by `arg_out!`; writable by contract, no other reference into it.
+        let flat = unsafe { jac.as_mut_slice() };
+        let (columns, _) = flat.as_chunks_mut::<6>();
+        let t = with_prepared_robot!(model, r => jacobian_of(r, &q, aux.as_ref(), columns))?;
+        crate::args::finite_result(flat, c"jac_out")?;
+        if let Some(o) = t_out {
+            // SAFETY: checked by `arg_out_opt!`; writable by contract.
+            unsafe { o.write_finite(&crate::pose::to_matrix(&t)) }?;
         }
         Ok(())
     })

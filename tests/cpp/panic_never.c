@@ -75,7 +75,12 @@ int main(void) {
         CHECK(kincal_prepared_ik(&prepared, t2, 16, seed, 6, NULL, &opts, q2, 6, &info, &err) ==
               KINCAL_STATUS_OK);
         CHECK(memcmp(q2, q_ik, sizeof q2) == 0);
+        /* A damaged stored number: found by the full check (validate), not per call. */
         prepared.opaque[20] ^= 1u;
+        CHECK(kincal_prepared_validate(&prepared, NULL, &err) == KINCAL_STATUS_BAD_HANDLE);
+        /* A damaged guard word: refused by every call. */
+        prepared.opaque[20] ^= 1u;
+        prepared.opaque[2] ^= 1u;
         CHECK(kincal_prepared_fk(&prepared, q, 6, NULL, t2, 16, &err) == KINCAL_STATUS_BAD_HANDLE);
     }
     CHECK(kincal_fk_frames(&robot, q, 6, NULL, frames, 16 * 8, &err) == KINCAL_STATUS_OK);

@@ -196,6 +196,104 @@ fn assert_fk_identical(
         );
     }
     assert_eq!(bits(&a1), bits(&a2));
+    assert_jacobians_identical(r, p, q, aux, &t1);
+}
+
+/// The core's joint Jacobian at the C ABI's joint state, columns flattened.
+fn core_joint_jacobian<const N: usize>(
+    m: &kincal::Robot<N>,
+    q: &[f64],
+    aux: Option<&kincal_joint_aux>,
+) -> Vec<f64> {
+    let state = joint_state::<N>(q, aux, CALL_AUX).expect("joint state");
+    let mut cols = [[0.0; 6]; N];
+    m.joint_jacobian(&state, &mut cols)
+        .expect("core joint Jacobian");
+    cols.iter().flatten().copied().collect()
+}
+
+/// The identification Jacobian through the handle bit-identical to `kincal_jacobian` (both
+/// sizes), and the joint Jacobian to the core's `Robot::joint_jacobian`; both poses equal FK's
+/// `t_fk`.
+fn assert_jacobians_identical(
+    r: &kincal_robot,
+    p: &kincal_prepared,
+    q: &[f64],
+    aux: *const kincal_joint_aux,
+    t_fk: &[f64; 16],
+) {
+    let n = q.len();
+    for cols in [
+        kincal::params::num_geometric_params(n),
+        kincal::params::num_params(n),
+    ] {
+        let (mut j1, mut j2) = (vec![0.0; 6 * cols], vec![1.0; 6 * cols]);
+        let (mut t1, mut t2) = ([0.0; 16], [1.0; 16]);
+        let mut e = kincal_error::CLEAR;
+        unsafe {
+            assert_eq!(
+                kincal_jacobian(
+                    r,
+                    q.as_ptr(),
+                    n,
+                    aux,
+                    j1.as_mut_ptr(),
+                    j1.len(),
+                    t1.as_mut_ptr(),
+                    16,
+                    &mut e
+                ),
+                kincal_status::Ok,
+                "{e:?}"
+            );
+            assert_eq!(
+                kincal_prepared_jacobian(
+                    p,
+                    q.as_ptr(),
+                    n,
+                    aux,
+                    j2.as_mut_ptr(),
+                    j2.len(),
+                    t2.as_mut_ptr(),
+                    16,
+                    &mut e
+                ),
+                kincal_status::Ok,
+                "{e:?}"
+            );
+        }
+        assert_eq!(bits(&j1), bits(&j2));
+        assert_eq!((bits(&t1), bits(&t2)), (bits(t_fk), bits(t_fk)));
+    }
+    let mut jj = vec![1.0; 6 * n];
+    let mut t = [1.0; 16];
+    let mut e = kincal_error::CLEAR;
+    assert_eq!(
+        unsafe {
+            kincal_prepared_joint_jacobian(
+                p,
+                q.as_ptr(),
+                n,
+                aux,
+                jj.as_mut_ptr(),
+                6 * n,
+                t.as_mut_ptr(),
+                16,
+                &mut e,
+            )
+        },
+        kincal_status::Ok,
+        "{e:?}"
+    );
+    assert_eq!(bits(&t), bits(t_fk));
+    let any = to_any(r).expect("valid robot");
+    let aux = if aux.is_null() {
+        None
+    } else {
+        Some(unsafe { &*aux })
+    };
+    let want = kincal::with_any_robot!(&any, m => core_joint_jacobian(m, q, aux));
+    assert_eq!(bits(&jj), bits(&want));
 }
 
 /// IK through both routes: same status, same readings and info bit for bit.
@@ -749,4 +847,117 @@ fn twelve_joint_chain_with_prismatic_joints() {
     let mut e = kincal_error::CLEAR;
     let s = unsafe { kincal_fk(&r, q.as_ptr(), n, null(), t1.as_mut_ptr(), 16, &mut e) };
     assert_eq!(s, kincal_status::InvalidArgument);
+}
+
+/// The split of checks: damage to the header or guard words (0–3) fails every call; a
+/// damaged number of the stored model passes the cheap per-call guard (documented) and is
+/// found by `kincal_prepared_validate`'s checksum; the joint Jacobian export refuses a bad
+/// handle like FK does.
+#[test]
+fn per_call_guard_and_full_validation() {
+    let r = aria_robot(kincal_aria_model::VirtualTruth);
+    let good = prepare(&r);
+    let validate =
+        |p: &kincal_prepared| unsafe { kincal_prepared_validate(p, null_mut(), null_mut()) };
+    for word in 0..4 {
+        for bit in [0, 17, 63] {
+            let mut p = Box::new(*good);
+            p.opaque[word] ^= 1 << bit;
+            assert_eq!(
+                fk_status(&*p).0,
+                kincal_status::BadHandle,
+                "word {word} bit {bit}"
+            );
+            assert_eq!(validate(&p), kincal_status::BadHandle);
+            let q = [0.1; 6];
+            let mut jac = [0.0; 36];
+            let s = unsafe {
+                kincal_prepared_joint_jacobian(
+                    &*p,
+                    q.as_ptr(),
+                    6,
+                    null(),
+                    jac.as_mut_ptr(),
+                    36,
+                    null_mut(),
+                    0,
+                    null_mut(),
+                )
+            };
+            assert_eq!(s, kincal_status::BadHandle);
+        }
+    }
+    // A model number (the first word of the stored Robot, an f64) changed in place.
+    let mut p = Box::new(*good);
+    p.opaque[4] ^= 1 << 40;
+    assert_eq!(fk_status(&*p).0, kincal_status::Ok);
+    assert_eq!(validate(&p), kincal_status::BadHandle);
+    assert_eq!(validate(&good), kincal_status::Ok);
+}
+
+/// The joint Jacobian through the C ABI against central differences of `kincal_prepared_fk`
+/// (position rows; the nominal ARIA has no joint effects), and its length checks.
+#[test]
+fn prepared_joint_jacobian_matches_finite_differences() {
+    let r = aria_robot(kincal_aria_model::Nominal);
+    let p = prepare(&r);
+    let q = [0.3, 0.7, -0.4, 1.1, -0.6, 0.9];
+    let mut jac = [0.0; 36];
+    assert_eq!(
+        unsafe {
+            kincal_prepared_joint_jacobian(
+                &*p,
+                q.as_ptr(),
+                6,
+                null(),
+                jac.as_mut_ptr(),
+                36,
+                null_mut(),
+                0,
+                null_mut(),
+            )
+        },
+        kincal_status::Ok
+    );
+    let fk = |q: &[f64; 6]| {
+        let mut t = [0.0; 16];
+        let s = unsafe {
+            kincal_prepared_fk(&*p, q.as_ptr(), 6, null(), t.as_mut_ptr(), 16, null_mut())
+        };
+        assert_eq!(s, kincal_status::Ok);
+        [t[12], t[13], t[14]]
+    };
+    let h = 1e-6;
+    for j in 0..6 {
+        let (mut qp, mut qm) = (q, q);
+        qp[j] += h;
+        qm[j] -= h;
+        let (a, b) = (fk(&qp), fk(&qm));
+        for k in 0..3 {
+            let fd = (a[k] - b[k]) / (2.0 * h);
+            assert!(
+                (jac[6 * j + k] - fd).abs() < 1e-8,
+                "joint {j} row {k}: {} vs {fd}",
+                jac[6 * j + k]
+            );
+        }
+        // The angular rows of a revolute joint are its unit axis.
+        let w = &jac[6 * j + 3..6 * j + 6];
+        assert!(((w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt() - 1.0).abs() < 1e-12);
+    }
+    let mut e = kincal_error::CLEAR;
+    let s = unsafe {
+        kincal_prepared_joint_jacobian(
+            &*p,
+            q.as_ptr(),
+            6,
+            null(),
+            jac.as_mut_ptr(),
+            35,
+            null_mut(),
+            0,
+            &mut e,
+        )
+    };
+    assert_eq!((s, e.expected, e.found), (kincal_status::BadLength, 36, 35));
 }
