@@ -579,13 +579,14 @@ fn c_header_generic<const N: usize>(
         .collect();
     // Written only for a model with a prismatic joint (a zeroed entry is revolute), so the
     // headers of revolute models are unchanged.
-    let kinds = if r.has_prismatic() {
+    let kinds = if r.has_prismatic() || r.has_sensor_joints() {
         let k: Vec<&str> = r
             .joint_kinds()
             .iter()
             .map(|k| match k {
                 kincal::JointKind::Revolute => "KINCAL_JOINT_KIND_REVOLUTE",
                 kincal::JointKind::Prismatic => "KINCAL_JOINT_KIND_PRISMATIC",
+                kincal::JointKind::Sensor => "KINCAL_JOINT_KIND_SENSOR",
             })
             .collect();
         format!("\n    .joint_kind = {{{}}},", k.join(", "))
