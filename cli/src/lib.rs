@@ -37,6 +37,7 @@ pub mod study_plot;
 // The file formats moved to kincal-io; re-exported under their old paths so that the
 // commands (and code written against `kincal_cli::measurements` etc.) keep their imports.
 pub use kincal_io::{
-    calibration, constraints, data, datasets, datasets_contact, files, measurements, model_file,
-    plausibility, robot_arg, robot_file, tool_file, units, urdf, urdf_update,
+    calibration, constraints, data, datasets, datasets_contact, datasets_hilti, files,
+    measurements, model_file, plausibility, robot_arg, robot_file, tool_file, units, urdf,
+    urdf_update,
 };
