@@ -708,6 +708,63 @@ mod tests {
         d.is_dir().then_some(d)
     }
 
+    const TWO: &str =
+        "joint_names: [column_prismatic_joint, dsr_joint1, dsr_joint2, dsr_joint3, dsr_joint4,
+  dsr_joint5, dsr_joint6]
+column_heights:
+  1.98:
+    solution_spaces:
+      0:
+        stationing_measurements:
+        - id: 0
+          time: 1.5
+          upside_down: false
+          doosan_cmd: [0.4, 0.0, 0.48]
+          joint_states: [1.98, 0.1, 0.2,
+            0.3, 0.4, 0.5, 0.6]
+          prism_position: [7.0, 5.0, 1.0]
+          tilt_sensor_base_accel: [0.0, 0.0981, 9.81]
+          tilt_sensor_column_accel: [-0.0981, 0.0981, 9.81]
+        evaluation_measurements:
+        - id: 1
+          time: 2.5
+          upside_down: true
+          doosan_cmd: [0.4, 0.0, 0.48]
+          joint_states: [1.98, 0.1, 0.2, 0.3, 0.4, 0.5, 0.7]
+          prism_position: [7.0, 5.0, 1.1]
+          tilt_sensor_base_accel: [0.0, 0.0, 9.81]
+          tilt_sensor_column_accel: [0.0, 0.0, 9.81]
+";
+
+    #[test]
+    fn parses_the_layout_and_the_tilts() {
+        let rows = parse_session(TWO, "t.yaml").unwrap();
+        assert_eq!(rows.len(), 2);
+        let (a, b) = (&rows[0], &rows[1]);
+        assert!(!a.evaluation && b.evaluation && b.upside_down && !a.upside_down);
+        assert_eq!((a.height_m, a.solution_space, a.line), (1.98, 0, 8));
+        assert_eq!(a.joints, [1.98, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6]);
+        // Base tilted about +x by atan(0.01); column additionally about +y by atan(0.01).
+        let t = 0.01f64.atan();
+        let q = a.q();
+        assert!((q[0] - t).abs() < 1e-15 && q[1].abs() < 1e-15, "{q:?}");
+        assert!(q[3].abs() < 1e-15 && (q[4] - t).abs() < 1e-15, "{q:?}");
+        assert_eq!(q[2], 1.98);
+    }
+
+    #[test]
+    fn bad_input_names_the_line() {
+        let bad = TWO.replace("[7.0, 5.0, 1.1]", "[7.0, x, 1.1]");
+        let e = parse_session(&bad, "t.yaml").unwrap_err().to_string();
+        assert!(
+            e.contains("t.yaml:18") && e.contains("prism_position"),
+            "{e}"
+        );
+        let bad = TWO.replace("0.5, 0.7]", "0.5]");
+        let e = parse_session(&bad, "t.yaml").unwrap_err().to_string();
+        assert!(e.contains("expected 7 numbers"), "{e}");
+    }
+
     #[test]
     #[ignore = "prints the study (minutes in debug)"]
     fn print_study() {
