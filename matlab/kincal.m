@@ -29,6 +29,10 @@ function kincal()
 %   Calibration
 %     kincal_identify         OLS / OPT1 / OPT2 identification with report
 %     kincal_identifiability  rank, conditioning, redundant and undetermined parameters
+%     kincal_observability    observability indices O, O1..O5, A- and D-optimality of a
+%                             set of configurations (Section 3.3)
+%     kincal_select_poses     calibration poses that maximise an observability index
+%                             (greedy start, DETMAX exchange, joint-space refinement)
 %     kincal_validate         per-pose errors and summary against the 1 mm / 0.66 deg targets
 %     kincal_biopsy_rotation  eq. (3): the orientation error a biopsy allows
 %     kincal_identify_constraints  calibration without an instrument: contacts held at

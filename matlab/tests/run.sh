@@ -64,6 +64,8 @@ export KINCAL_PANIC_MEX=$out/panic_mex/kincal_mex_panic.mex
 
 printf '\n=== octave-cli: make_kincal, run_tests (outputs in %s)\n' "$out"
 cd "$root/matlab"
+# tempname() in the tests then lands in the temporary folder this script removes.
+export TMPDIR=$out
 # The test-panic test panics on purpose: its message is expected, a backtrace of it is noise.
 export RUST_BACKTRACE=0
 # The filter is passed through the environment, never spliced into the Octave code.

@@ -11,7 +11,7 @@ tests = {
 end
 
 function d = work_dir()
-d = tempname();
+d = tempname(tempdir());
 mkdir(d);
 end
 

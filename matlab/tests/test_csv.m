@@ -11,7 +11,7 @@ tests = {
 end
 
 function f = write_file(text)
-f = [tempname() '.csv'];
+f = [tempname(tempdir()) '.csv'];
 fid = fopen(f, 'w');
 fwrite(fid, text);
 fclose(fid);
@@ -76,7 +76,7 @@ function round_trip()
 r = kincal_robot('aria');
 [Tt, seed] = kincal_aria_tool();
 q = kincal_ik(r, Tt, seed);
-f = [tempname() '.csv'];
+f = [tempname(tempdir()) '.csv'];
 kincal_write_measurements(f, q, Tt, 'pose_id', 1:10, 'comments', {'robot: aria'});
 d = kincal_read_measurements(f, 'robot', r);
 expect_true(isequal(d.q, q), 'joint readings bit for bit');

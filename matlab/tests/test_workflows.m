@@ -18,7 +18,7 @@ end
 function base = out_base()
 base = getenv('KINCAL_OUT');
 if isempty(base)
-    base = tempname();
+    base = tempname(tempdir());
     setenv('KINCAL_OUT', base);
 end
 end
@@ -74,7 +74,7 @@ function example_data_current()
 % columns, labels and roles, and the same numbers up to rounding (1e-12: the library's FK
 % may change in the last bits between versions).
 committed = fullfile(repo_root(), 'matlab', 'workflows', 'data', 'aria_example.csv');
-fresh = [tempname() '.csv'];
+fresh = [tempname(tempdir()) '.csv'];
 addpath(fullfile(repo_root(), 'matlab', 'workflows'));
 evalc('make_example_data(fresh)');
 a = kincal_read_measurements(committed);
