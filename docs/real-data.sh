@@ -109,11 +109,20 @@ for NAME in figaroh-talos-arm figaroh-ur10e robotkinecal-fr3; do
 done
 
 # Sets that are not usable as they are: the refusal and its reason.
-for NAME in figaroh-tiago-mocap hilti-jaibot-stationing; do
+for NAME in figaroh-tiago-mocap; do
     "$K" import-dataset "$NAME" "$DATA/$NAME" --out "$OUT/unused.csv" 2>> "$OUT/refused.txt" \
         && echo "unexpected: $NAME imported" >&2 || true
 done
 echo "== refused sets: $OUT/refused.txt"
+
+# Hilti (CC BY-NC-SA: read from the data folder, nothing copied): every floor a session,
+# accelerometer tilts as sensor joints; the held-out study of docs/real-data.md.
+D=$OUT/hilti
+mkdir -p "$D"
+"$K" import-dataset hilti "$DATA/hilti-jaibot-stationing" --out "$D/data.csv" \
+    --robot-out "$D/robot.toml" --study > "$D/study.txt"
+echo "== hilti -> $D/study.txt"
+sed -n '/^Hilti study/,$p' "$D/study.txt" | sed 's/^/     /'
 
 # MUKCa (no instrument): every robot held out by location. For each location L: calibrate
 # on the other locations (their targets, sessions and 50 mm distances), validate on L

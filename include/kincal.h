@@ -444,6 +444,12 @@ enum kincal_joint_kind
      its cyclic effect parameters must be zero.
      */
     KINCAL_JOINT_KIND_PRISMATIC = 1,
+    /*
+     A passive revolute joint read by a sensor (inclinometer or accelerometer tilt),
+     reading in radians: not commanded (IK holds it at the seed's reading); its gain is
+     the joint_scale parameter; its cyclic and backlash parameters must be zero.
+     */
+    KINCAL_JOINT_KIND_SENSOR = 2,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
@@ -1037,8 +1043,8 @@ typedef struct kincal_robot {
      */
     uint32_t length_param[KINCAL_MAX_JOINTS];
     /*
-     Per joint: `KINCAL_JOINT_KIND_REVOLUTE` (0, what a zeroed struct holds) or
-     `KINCAL_JOINT_KIND_PRISMATIC` (1).
+     Per joint: `KINCAL_JOINT_KIND_REVOLUTE` (0, what a zeroed struct holds),
+     `KINCAL_JOINT_KIND_PRISMATIC` (1) or `KINCAL_JOINT_KIND_SENSOR` (2).
      */
     uint32_t joint_kind[KINCAL_MAX_JOINTS];
     /*

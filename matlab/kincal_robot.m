@@ -27,7 +27,9 @@ function robot = kincal_robot(spec)
 %       name            label (informative)
 %       n_joints        N (1..12)
 %       length_param    1 x N: 0 = link identifies d, 1 = link identifies beta
-%       joint_kind      1 x N: 0 = revolute, 1 = prismatic (reading and limits in metres;
+%       joint_kind      1 x N: 0 = revolute, 2 = sensor (a passive revolute joint read
+%                       by an inclinometer/accelerometer; IK holds it at its reading),
+%                       1 = prismatic (reading and limits in metres;
 %                       optional on input, all revolute when absent)
 %       params          P x 1 current parameters, P = 12N+13, flat layout: link i in
 %                       5(i-1)+(1:5) as [theta0 d a alpha beta]; base (6), tool (6);

@@ -456,6 +456,7 @@ fn model_units_and_mdh_table_name_the_prismatic_joints() {
         let want = match kind {
             JointKind::Prismatic => "prismatic",
             JointKind::Revolute => "revolute",
+            JointKind::Sensor => "sensor",
         };
         assert_eq!(row.split(',').nth(col), Some(want), "link {}: {row}", j + 1);
     }

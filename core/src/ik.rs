@@ -149,6 +149,9 @@ fn halton(index: u32, base: NonZeroU32) -> f64 {
 
 /// Solves `fk(q) = target` for readings `q` within the joint limits.
 ///
+/// Sensor joints ([`crate::JointKind::Sensor`]) are not commanded: they stay at the seed's
+/// reading (the tilt the sensor reports now), and the commanded joints compensate for it.
+///
 /// `seed` supplies the start configuration and, for models with backlash or thermal
 /// effects, the approach directions and temperature to compensate. Returns the converged
 /// configuration nearest to `seed.q` (joints whose range spans more than 2π are shifted by
@@ -183,7 +186,12 @@ pub fn solve_ik<const N: usize>(
         let mut start = seed.q;
         if s > 0 {
             let bases = PRIMES.iter().cycle();
-            for ((v, lim), &base) in start.iter_mut().zip(limits.iter()).zip(bases) {
+            let kinds = robot.joint_kinds();
+            let commanded = start.iter_mut().zip(limits.iter()).zip(kinds);
+            for (((v, lim), kind), &base) in commanded.zip(bases) {
+                if kind == crate::JointKind::Sensor {
+                    continue;
+                }
                 let lo = lim.lower.max(-PI);
                 let hi = lim.upper.min(PI);
                 // (s <= MAX_EXTRA_SEEDS, validated: the cast is exact)
@@ -227,15 +235,16 @@ pub fn solve_ik<const N: usize>(
 
 /// Moves joints by ±2π towards `seed` where the limits allow (same pose, nearer readings).
 /// Joints with a scale error are left alone: Δθ_j = k_j·q_j is not 2π-periodic, so the
-/// shifted reading would reach a different pose; so are prismatic joints (a slide).
+/// shifted reading would reach a different pose; so are prismatic joints (a slide) and
+/// sensor joints (held at their reading).
 fn shift_towards<const N: usize>(q: &mut [f64; N], seed: &[f64; N], robot: &Robot<N>) {
     let joints = seed
         .iter()
         .zip(robot.limits().iter())
         .zip(robot.effect_params().scale.iter())
-        .zip(robot.turn_mask());
-    for (qj, (((&seed_j, lim), &scale), turn)) in q.iter_mut().zip(joints) {
-        if scale != 0.0 || turn == 0.0 {
+        .zip(robot.joint_kinds());
+    for (qj, (((&seed_j, lim), &scale), kind)) in q.iter_mut().zip(joints) {
+        if scale != 0.0 || kind != crate::JointKind::Revolute {
             continue;
         }
         for k in [-2.0 * PI, 2.0 * PI] {
@@ -296,7 +305,13 @@ fn descend<const N: usize>(
                 (ep, er),
             ));
         }
-        let j = joint_jacobian(robot, &state, &frames);
+        let mut j = joint_jacobian(robot, &state, &frames);
+        // Sensor joints are read, not commanded: the step leaves them at the seed's reading.
+        for (mut col, kind) in j.column_iter_mut().zip(robot.joint_kinds()) {
+            if kind == crate::JointKind::Sensor {
+                col.fill(0.0);
+            }
+        }
         let jjt = j * j.transpose();
         let mut accepted = false;
         while lambda < 1e9 {

@@ -283,7 +283,8 @@ impl<const N: usize> Robot<N> {
     /// Jacobian of their rotation vectors, so they are exact away from zero too. The link
     /// columns are the same for a prismatic joint (its slide only moves the frames). Effect
     /// columns are the joint's column (θ0's for a revolute joint, `[z_{j−1}; 0]` for a
-    /// prismatic one) times ∂Δ_j/∂param (cyclic columns of a prismatic joint are zero); the
+    /// prismatic one) times ∂Δ_j/∂param (cyclic columns of prismatic and sensor joints and
+    /// backlash columns of sensor joints are zero: those terms do not apply); the
     /// thermal column is
     /// `(T − 20)·Σ_i (d_i·col(d_i) + a_i·col(a_i))`. Columns of effects whose input is
     /// missing (approach directions, temperature) are zero.
@@ -410,14 +411,30 @@ impl<const N: usize> Robot<N> {
                 )
             };
             let (s1, c1) = crate::math::sin_cos(q);
-            // No cyclic error on a slide (the terms are periodic in an angle).
-            let terms = [s1, c1, 2.0 * s1 * c1, c1 * c1 - s1 * s1].map(|t| t * turn_j);
+            // No cyclic error on a slide (the terms are periodic in an angle) nor on a sensor
+            // joint (no gearing); no backlash on a sensor joint (no transmission).
+            let kind = self.joint_kind(j);
+            let geared = if kind == crate::JointKind::Revolute {
+                1.0
+            } else {
+                0.0
+            };
+            let transmits = if kind == crate::JointKind::Sensor {
+                0.0
+            } else {
+                1.0
+            };
+            let terms = [s1, c1, 2.0 * s1 * c1, c1 * c1 - s1 * s1].map(|t| t * geared);
             put(jac, ParamId::Compliance(j).index(N).0, scaled(th, tau_j));
             put(jac, ParamId::Scale(j).index(N).0, scaled(th, q));
             for (t, term) in CyclicTerm::ALL.into_iter().zip(terms) {
                 put(jac, ParamId::Cyclic(j, t).index(N).0, scaled(th, term));
             }
-            put(jac, ParamId::Backlash(j).index(N).0, scaled(th, approach_j));
+            put(
+                jac,
+                ParamId::Backlash(j).index(N).0,
+                scaled(th, approach_j * transmits),
+            );
             // The d and a columns carry the factor `scale`; ∂/∂(scaled length) = col/scale.
             let Some(l) = self.geom.links.get(j) else {
                 continue;

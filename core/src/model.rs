@@ -79,12 +79,21 @@ pub enum LengthParam {
     Beta = 1,
 }
 
-/// What a joint's reading moves: a rotation about its axis (revolute) or a translation along
-/// it (prismatic).
+/// What a joint's reading moves: a rotation about its axis (revolute, sensor) or a
+/// translation along it (prismatic).
 ///
 /// Revolute joint i: `A_i(q) = Rz(q + θ0_i)·Tz(d_i)·…`, q in radians, the joint offset is
 /// θ0_i. Prismatic joint i: `A_i(q) = Rz(θ0_i)·Tz(d_i + q)·…`, q in metres, the joint offset
 /// is d_i and θ0_i is a fixed (still identifiable) rotation about the axis.
+///
+/// A sensor joint is a passive revolute joint: nothing commands it, a sensor reads it (an
+/// inclinometer or an accelerometer's tilt, e.g. a column bending under the arm's weight),
+/// so a measured deflection enters the chain as data. Its kinematics are a revolute
+/// joint's; its reading is a column of the measurement rows like any other joint's. What
+/// differs: inverse kinematics holds it at the seed's reading, and it has no transmission
+/// (its cyclic and backlash terms do not apply). The sensor's gain is the `joint_scale`
+/// effect on that joint (`θ = (1 + k_j)·q + θ0_j`: a bending gain or a sensor scale), its
+/// zero offset is θ0_j.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[repr(u8)]
 pub enum JointKind {
@@ -93,16 +102,27 @@ pub enum JointKind {
     Revolute = 0,
     /// Translation along the joint axis, reading in metres.
     Prismatic = 1,
+    /// A passive revolute joint read by a sensor (inclinometer, accelerometer tilt), reading
+    /// in radians; not commanded.
+    Sensor = 2,
 }
 
 impl JointKind {
-    /// `"revolute"` or `"prismatic"` (the robot file's `type` and the URDF joint type).
+    /// `"revolute"`, `"prismatic"` or `"sensor"` (the robot file's `type`; URDF has no
+    /// sensor joints: they are exported as `revolute`).
     #[must_use]
     pub const fn name(self) -> &'static str {
         match self {
             JointKind::Revolute => "revolute",
             JointKind::Prismatic => "prismatic",
+            JointKind::Sensor => "sensor",
         }
+    }
+
+    /// Whether the reading is an angle (revolute and sensor joints).
+    #[must_use]
+    pub const fn turns(self) -> bool {
+        !matches!(self, JointKind::Prismatic)
     }
 }
 
@@ -225,6 +245,9 @@ impl<const N: usize> Default for EffectParams<N> {
     }
 }
 
+/// Where the sensor-joint bits start in [`Robot`]'s kind word (bit `SENSOR_BIT + j`).
+const SENSOR_BIT: usize = 32;
+
 /// Reference temperature of the thermal effect [°C].
 pub const THERMAL_REFERENCE_C: f64 = 20.0;
 
@@ -281,7 +304,7 @@ impl<const N: usize> Geometry<N> {
 ///
 /// Layout contract with the C ABI (ffi/src/prepared.rs keeps a built model byte for byte in
 /// caller-owned storage and validates it before use): every field except `length_param` is
-/// made of `f64` (or, for `prismatic`, one `u64`) only, so any bit pattern of them is a valid
+/// made of `f64` (or, for `kind_bits`, one `u64`) only, so any bit pattern of them is a valid
 /// value; `length_param` is the only field with invalid bit patterns and sits at
 /// [`Robot::LENGTH_PARAM_OFFSET`]. A field of
 /// another type breaks that contract: update ffi/src/prepared.rs with it (its size assertion
@@ -293,10 +316,11 @@ pub struct Robot<const N: usize> {
     /// (spec/effects.md), so calibrating the geometry does not move the mass model.
     pub(crate) nominal: Geometry<N>,
     pub(crate) length_param: [LengthParam; N],
-    /// Bit j set: joint j is prismatic ([`JointKind`]); bits at and above N are zero. A
-    /// `u64` rather than `[JointKind; N]` so that every bit pattern is a valid value (the
-    /// C ABI's prepared handle; it limits N to 64).
-    pub(crate) prismatic: u64,
+    /// Bit j set: joint j is prismatic; bit `SENSOR_BIT + j` set: joint j is a sensor joint
+    /// ([`JointKind`]; both set reads as prismatic); other bits are zero. A `u64` rather than
+    /// `[JointKind; N]` so that every bit pattern is a valid value (the C ABI's prepared
+    /// handle; it limits the joints that may have a kind other than revolute to 32).
+    pub(crate) kind_bits: u64,
     pub(crate) limits: [JointLimits; N],
     pub(crate) mass: MassModel<N>,
     pub(crate) effects: EffectParams<N>,
@@ -356,7 +380,7 @@ impl<const N: usize> Robot<N> {
             geom,
             nominal: geom,
             length_param: [LengthParam::D; N],
-            prismatic: 0,
+            kind_bits: 0,
             limits,
             mass,
             effects: EffectParams::default(),
@@ -444,8 +468,12 @@ impl<const N: usize> Robot<N> {
     /// The kind of joint `j` (zero-based; revolute out of range).
     #[must_use]
     pub fn joint_kind(&self, j: usize) -> JointKind {
-        if j < N && j < 64 && (self.prismatic >> j) & 1 == 1 {
+        if j >= N || j >= SENSOR_BIT {
+            JointKind::Revolute
+        } else if (self.kind_bits >> j) & 1 == 1 {
             JointKind::Prismatic
+        } else if (self.kind_bits >> (SENSOR_BIT + j)) & 1 == 1 {
+            JointKind::Sensor
         } else {
             JointKind::Revolute
         }
@@ -464,20 +492,28 @@ impl<const N: usize> Robot<N> {
     /// Whether any joint is prismatic.
     #[must_use]
     pub fn has_prismatic(&self) -> bool {
-        self.prismatic != 0
+        self.kind_bits & ((1u64 << SENSOR_BIT) - 1) != 0
     }
 
-    /// Sets the kind of joint `j` (zero-based). Making a joint prismatic is refused
-    /// ([`Error::InvalidParameter`] naming the parameter) while it has a non-zero cyclic
-    /// term, which has no meaning on a slide. Limits are not converted: give them in metres.
+    /// Whether any joint is a sensor joint.
+    #[must_use]
+    pub fn has_sensor_joints(&self) -> bool {
+        self.kind_bits >> SENSOR_BIT != 0
+    }
+
+    /// Sets the kind of joint `j` (zero-based). Making a joint prismatic or a sensor joint is
+    /// refused ([`Error::InvalidParameter`] naming the parameter) while it has a non-zero
+    /// cyclic term, which has no meaning on a slide or without a transmission (nor has a
+    /// sensor joint's backlash: refused likewise). Limits are not converted: give a
+    /// prismatic joint's in metres. Only the first 32 joints may be other than revolute.
     pub fn set_joint_kind(&mut self, j: usize, kind: JointKind) -> Result<()> {
-        if j >= N || j >= 64 {
+        if j >= N || j >= SENSOR_BIT {
             return Err(Error::DimensionMismatch {
                 expected: N,
                 found: j + 1,
             });
         }
-        if kind == JointKind::Prismatic {
+        if kind != JointKind::Revolute {
             for t in CyclicTerm::ALL {
                 let v = self.effects.cyclic[j][t as usize];
                 if v != 0.0 {
@@ -487,9 +523,19 @@ impl<const N: usize> Robot<N> {
                     });
                 }
             }
-            self.prismatic |= 1 << j;
-        } else {
-            self.prismatic &= !(1u64 << j);
+        }
+        let backlash = self.effects.backlash.get(j).copied().unwrap_or(0.0);
+        if kind == JointKind::Sensor && backlash != 0.0 {
+            return Err(Error::InvalidParameter {
+                index: ParamId::Backlash(j).index(N).0,
+                value: backlash,
+            });
+        }
+        self.kind_bits &= !((1u64 << j) | (1u64 << (SENSOR_BIT + j)));
+        match kind {
+            JointKind::Revolute => {}
+            JointKind::Prismatic => self.kind_bits |= 1 << j,
+            JointKind::Sensor => self.kind_bits |= 1 << (SENSOR_BIT + j),
         }
         Ok(())
     }
@@ -508,7 +554,7 @@ impl<const N: usize> Robot<N> {
     pub(crate) fn turn_mask(&self) -> [f64; N] {
         let mut m = [1.0; N];
         for (j, v) in m.iter_mut().enumerate() {
-            if self.joint_kind(j) == JointKind::Prismatic {
+            if !self.joint_kind(j).turns() {
                 *v = 0.0;
             }
         }
@@ -641,14 +687,19 @@ impl<const N: usize> Robot<N> {
             ParamId::Compliance(j) => set_at(&mut self.effects.compliance, j, value),
             ParamId::Scale(j) => set_at(&mut self.effects.scale, j, value),
             ParamId::Cyclic(j, t) => {
-                if value != 0.0 && self.joint_kind(j) == JointKind::Prismatic {
+                if value != 0.0 && self.joint_kind(j) != JointKind::Revolute {
                     return Err(Error::InvalidParameter { index: i.0, value });
                 }
                 if let Some(c) = self.effects.cyclic.get_mut(j) {
                     set_at(c, t as usize, value);
                 }
             }
-            ParamId::Backlash(j) => set_at(&mut self.effects.backlash, j, value),
+            ParamId::Backlash(j) => {
+                if value != 0.0 && self.joint_kind(j) == JointKind::Sensor {
+                    return Err(Error::InvalidParameter { index: i.0, value });
+                }
+                set_at(&mut self.effects.backlash, j, value);
+            }
             ParamId::Thermal => self.effects.thermal_kappa = value,
         }
         Ok(())
@@ -708,7 +759,7 @@ impl<const N: usize> Robot<N> {
     }
 
     /// Geometric parameters plus every parameter of `effects` that applies (the cyclic
-    /// terms of prismatic joints do not).
+    /// terms of prismatic and sensor joints and the backlash of sensor joints do not).
     #[must_use]
     pub fn param_set(&self, effects: EffectSet) -> ParamSet {
         let mut set = self.geometric_param_set().union(&effects.params(N));
@@ -717,13 +768,17 @@ impl<const N: usize> Robot<N> {
     }
 
     /// Removes from `set` the parameters that do not apply to this robot: the cyclic terms
-    /// of its prismatic joints.
+    /// of its prismatic and sensor joints, the backlash of its sensor joints.
     pub fn remove_inapplicable(&self, set: &mut ParamSet) {
         for j in 0..N {
-            if self.joint_kind(j) == JointKind::Prismatic {
+            let kind = self.joint_kind(j);
+            if kind != JointKind::Revolute {
                 for t in CyclicTerm::ALL {
                     set.remove(ParamId::Cyclic(j, t).index(N).0);
                 }
+            }
+            if kind == JointKind::Sensor {
+                set.remove(ParamId::Backlash(j).index(N).0);
             }
         }
     }

@@ -1,4 +1,4 @@
-//! Prismatic joints and long chains: a lifting column under a 6R arm (P+6R), 2R+P+R, a 7R
+//! Prismatic and sensor joints, long chains: a lifting column under a 6R arm (P+6R), 2R+P+R, a 7R
 //! arm on a rail (P+7R) and a 12-joint mobile manipulator (P+P+R base, P column, 7R arm, R
 //! tool roll).
 //!
@@ -24,6 +24,7 @@ use kincal::{
 
 const P: JointKind = JointKind::Prismatic;
 const R: JointKind = JointKind::Revolute;
+const S: JointKind = JointKind::Sensor;
 
 /// Largest accepted relative error of an analytic Jacobian column (see `jacobian_fd.rs`).
 const REL_TOL: f64 = 1e-6;
@@ -182,12 +183,44 @@ fn mobile_12() -> Robot<12> {
     r.with_base([0.0, 0.0, 0.1, 0.0, h, 0.0]).expect("base")
 }
 
+/// A lifting column whose top tilts (two sensor joints about horizontal axes, as read by an
+/// accelerometer: readings within ±0.03 rad) under a 6R arm: P+2S+6R.
+fn column_tilt_6r() -> Robot<9> {
+    let h = core::f64::consts::FRAC_PI_2;
+    build(
+        [
+            Link::dh(0.1, 0.3, 0.05, h),
+            Link::dh(0.0, 0.0, 0.0, -h),
+            Link::dh(0.0, 0.2, 0.0, 0.0),
+            Link::dh(0.0, 0.2, 0.0, h),
+            Link::dh(-h, 0.0, 0.4, 0.0),
+            Link::dh(0.0, 0.02, 0.03, h),
+            Link::dh(0.0, 0.35, 0.0, -h),
+            Link::dh(0.0, 0.0, 0.0, h),
+            Link::dh(0.0, 0.1, 0.0, 0.0),
+        ],
+        [
+            rev(0.0, 0.6),
+            rev(-0.03, 0.03),
+            rev(-0.03, 0.03),
+            rev(-3.0, 3.0),
+            rev(-2.0, 2.0),
+            rev(-2.5, 2.5),
+            rev(-3.0, 3.0),
+            rev(-2.0, 2.0),
+            rev(-3.0, 3.0),
+        ],
+        [P, S, S, R, R, R, R, R, R],
+        [8.0, 0.0, 0.0, 3.0, 2.5, 1.5, 1.2, 0.6, 0.3],
+    )
+}
+
 /// The test's own FK: 4×4 matrices, a prismatic reading added to d (not scaled).
 fn own_fk<const N: usize>(robot: &Robot<N>, disp: &[f64; N], scale: f64) -> Mat4 {
     let mut t = mat_from_vector6(&robot.base());
     for (j, (l, &q)) in robot.links().iter().zip(disp).enumerate() {
         let a = match robot.joint_kind(j) {
-            JointKind::Revolute => mat_link(l, q, scale),
+            JointKind::Revolute | JointKind::Sensor => mat_link(l, q, scale),
             JointKind::Prismatic => {
                 let m = mat_mul(&mat_rot_z(l.theta0), &mat_trans(0.0, 0.0, l.d * scale + q));
                 let m = mat_mul(&m, &mat_trans(l.a * scale, 0.0, 0.0));
@@ -440,6 +473,7 @@ fn jacobian_matches_finite_differences_for_every_column() {
     check_jacobian(&rrpr(), 12);
     check_jacobian(&rail_7r(), 13);
     check_jacobian(&mobile_12(), 14);
+    check_jacobian(&column_tilt_6r(), 15);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -474,6 +508,7 @@ fn ik_reaches_fk_targets() {
     check_ik(&rrpr(), 22);
     check_ik(&rail_7r(), 23);
     check_ik(&mobile_12(), 24);
+    check_ik(&column_tilt_6r(), 25);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -627,4 +662,136 @@ fn twelve_joint_chain_timing() {
     println!(
         "12-joint chain: FK {fk_ns:.0} ns; analysis + perturbation + OLS calibration of {rank} parameters from 60 poses {cal_ms:.1} ms"
     );
+}
+
+// ---------------------------------------------------------------------------------------
+// Sensor joints
+
+#[test]
+fn sensor_joints_are_revolute_in_fk_and_have_no_transmission_terms() {
+    let r = column_tilt_6r();
+    check_fk(&r, 41);
+    assert_eq!(r.joint_kinds(), [P, S, S, R, R, R, R, R, R]);
+    assert!(r.has_sensor_joints() && r.has_prismatic());
+    // Cyclic terms and backlash of a sensor joint do not apply; its scale (the gain) does.
+    let set = r.param_set(Effect::ALL.iter().fold(EffectSet::NONE, |s, &e| s.with(e)));
+    assert!(!set.contains(ParamId::Backlash(1).index(9).0));
+    assert!(!set.contains(ParamId::Cyclic(2, CyclicTerm::Sin1).index(9).0));
+    assert!(set.contains(ParamId::Scale(1).index(9).0));
+    assert!(set.contains(ParamId::Backlash(3).index(9).0));
+    let mut m = r;
+    let b = ParamId::Backlash(1).index(9);
+    assert!(matches!(
+        m.set_param(b, 1e-3),
+        Err(Error::InvalidParameter { index, .. }) if index == b.0
+    ));
+    // A revolute joint with backlash cannot become a sensor joint.
+    let b3 = ParamId::Backlash(3).index(9);
+    m.set_param(b3, 1e-3).unwrap();
+    assert!(matches!(
+        m.set_joint_kind(3, S),
+        Err(Error::InvalidParameter { index, .. }) if index == b3.0
+    ));
+    // Kinds are exclusive: a sensor joint made prismatic is no longer a sensor joint.
+    m.set_joint_kind(2, P).unwrap();
+    assert_eq!(m.joint_kind(2), P);
+    m.set_joint_kind(2, S).unwrap();
+    assert_eq!(m.joint_kind(2), S);
+}
+
+/// IK does not command a sensor joint: it stays at the seed's reading, and the arm makes up
+/// for a tilt that differs from the one the target was computed with.
+#[test]
+fn ik_holds_sensor_joints_at_their_reading() {
+    let robot = column_tilt_6r();
+    let mut rng = SplitMix64::new(51);
+    for t in 0..6 {
+        let q_true = rng.q_within(robot.limits());
+        let target = robot.fk_q(&q_true).unwrap();
+        let mut seed_q = q_true;
+        seed_q[1] = (q_true[1] + 0.01).min(0.03);
+        seed_q[2] = (q_true[2] - 0.01).max(-0.03);
+        for v in seed_q.iter_mut().skip(3) {
+            *v += rng.uniform(-0.1, 0.1);
+        }
+        let sol = solve_ik(
+            &robot,
+            &target,
+            &JointState::new(seed_q),
+            &IkOptions::default(),
+        )
+        .unwrap_or_else(|e| panic!("target {t}: {e}"));
+        assert_eq!((sol.q[1], sol.q[2]), (seed_q[1], seed_q[2]), "target {t}");
+        let (dp, dr) = pose_distance(&robot.fk_q(&sol.q).unwrap(), &target);
+        assert!(dp < 1e-9 && dr < 1e-9, "target {t}: {dp:e} m {dr:e} rad");
+    }
+}
+
+/// The gain of a sensor joint (its joint_scale parameter) and the geometry are recovered from
+/// noise-free positions, for a bending gain of 1.6 and for a sensor mounted the wrong way
+/// round (gain −1: k = −2).
+#[test]
+fn noise_free_identification_recovers_sensor_gains() {
+    let nominal = column_tilt_6r();
+    for (seed, k) in [(61, 0.6), (62, -2.0)] {
+        let mut ws = Box::<Ws>::default();
+        let mut set = nominal.geometric_param_set();
+        set.insert(ParamId::Scale(1).index(9).0).unwrap();
+        set.insert(ParamId::Scale(2).index(9).0).unwrap();
+        let probe = data(&nominal, 80, seed);
+        let a = analyze(
+            &nominal,
+            &probe,
+            &IdentifyOptions::new(Algorithm::Ols, set),
+            &mut ws,
+        )
+        .expect("analysis");
+        assert!(a.identifiable.contains(ParamId::Scale(1).index(9).0));
+        assert!(a.identifiable.contains(ParamId::Scale(2).index(9).0));
+        let mut rng = SplitMix64::new(seed + 1);
+        let mut truth = nominal;
+        for i in a.identifiable.iter() {
+            let id = ParamId::from_index(ParamIndex(i), 9).unwrap();
+            let v = truth.param(ParamIndex(i)).unwrap();
+            let new = match id {
+                ParamId::Scale(_) => k,
+                _ if id.is_length() => v + rng.nonzero(0.005),
+                _ => v + rng.nonzero(0.02),
+            };
+            truth.set_param(ParamIndex(i), new).unwrap();
+        }
+        let meas = data(&truth, 80, seed + 2);
+        let r = identify(
+            &nominal,
+            &meas,
+            &IdentifyOptions::new(Algorithm::Ols, a.identifiable),
+            &mut ws,
+        )
+        .expect("identify");
+        for j in [1, 2] {
+            let got = r.robot.effect_params().scale[j];
+            assert!(
+                (got - k).abs() < RECOVERY_TOL,
+                "gain of joint {j}: {got} vs {k}"
+            );
+        }
+        let worst = a
+            .identifiable
+            .iter()
+            .map(|i| {
+                (r.robot.param(ParamIndex(i)).unwrap() - truth.param(ParamIndex(i)).unwrap()).abs()
+            })
+            .fold(0.0, f64::max);
+        assert!(worst < RECOVERY_TOL, "worst parameter off by {worst:e}");
+        // The nominal model (gain 1) is off by the gain's share of the tilt: the data do
+        // tell the gains apart.
+        let before = meas
+            .iter()
+            .map(|m| {
+                (nominal.fk_q(&m.state.q).unwrap().translation.vector - m.pose.translation.vector)
+                    .norm()
+            })
+            .fold(0.0, f64::max);
+        assert!(before > 1e-3, "nominal off by only {before:e} m");
+    }
 }

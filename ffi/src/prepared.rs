@@ -99,7 +99,7 @@ const fn lp_words<const N: usize>() -> usize {
 }
 
 /// Whether a `Robot<N>` fits the storage with the layout this module relies on: 8-byte words
-/// (all `f64` and the one `u64` of the prismatic-joint bits: `32N + 78` of them) plus the N bytes of `[LengthParam; N]` at an 8-aligned
+/// (all `f64` and the one `u64` of the joint-kind bits: `32N + 78` of them) plus the N bytes of `[LengthParam; N]` at an 8-aligned
 /// offset padded to whole words ([`lp_words`]). A core change of `Robot`'s fields fails this
 /// at compile time.
 const fn payload_fits<const N: usize>() -> bool {

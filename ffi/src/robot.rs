@@ -51,6 +51,10 @@ pub enum kincal_joint_kind {
     /// Translation along the joint axis: `Rz(θ0)·Tz(d + q)·…`, reading and limits in metres;
     /// its cyclic effect parameters must be zero.
     Prismatic = 1,
+    /// A passive revolute joint read by a sensor (inclinometer or accelerometer tilt),
+    /// reading in radians: not commanded (IK holds it at the seed's reading); its gain is
+    /// the joint_scale parameter; its cyclic and backlash parameters must be zero.
+    Sensor = 2,
 }
 
 /// A robot model with 1..=`KINCAL_MAX_JOINTS` revolute or prismatic joints: Hayati/mDH geometry, base and
@@ -72,8 +76,8 @@ pub struct kincal_robot {
     pub n_joints: u32,
     /// Per link: `KINCAL_LENGTH_PARAM_D` (0) or `KINCAL_LENGTH_PARAM_BETA` (1).
     pub length_param: [u32; KINCAL_MAX_JOINTS],
-    /// Per joint: `KINCAL_JOINT_KIND_REVOLUTE` (0, what a zeroed struct holds) or
-    /// `KINCAL_JOINT_KIND_PRISMATIC` (1).
+    /// Per joint: `KINCAL_JOINT_KIND_REVOLUTE` (0, what a zeroed struct holds),
+    /// `KINCAL_JOINT_KIND_PRISMATIC` (1) or `KINCAL_JOINT_KIND_SENSOR` (2).
     pub joint_kind: [u32; KINCAL_MAX_JOINTS],
     /// Current parameters, first `kincal_num_params(N)` = 12N + 13 entries, in the flat layout
     /// of the core: `5i..5i+5` link i+1 [θ0, d, a, α, β]; `5N..5N+6` base [px, py, pz, rx, ry,
@@ -198,6 +202,7 @@ fn to_robot<const N: usize>(r: &kincal_robot) -> FfiResult<Robot<N>> {
         let k = match kind {
             0 => JointKind::Revolute,
             1 => JointKind::Prismatic,
+            2 => JointKind::Sensor,
             v => {
                 return Err(kincal_error::new(kincal_status::InvalidArgument)
                     .arg(c"robot->joint_kind")
@@ -205,7 +210,7 @@ fn to_robot<const N: usize>(r: &kincal_robot) -> FfiResult<Robot<N>> {
                     .value(f64::from(v)));
             }
         };
-        if k == JointKind::Prismatic {
+        if k != JointKind::Revolute {
             robot
                 .set_joint_kind(i, k)
                 .map_err(|e| field_error(e, c"robot->params"))?;
@@ -247,6 +252,7 @@ pub(crate) fn from_robot<const N: usize>(r: &Robot<N>) -> FfiResult<kincal_robot
         *dst = match r.joint_kind(j) {
             JointKind::Revolute => kincal_joint_kind::Revolute as u32,
             JointKind::Prismatic => kincal_joint_kind::Prismatic as u32,
+            JointKind::Sensor => kincal_joint_kind::Sensor as u32,
         };
     }
     for (dst, lp) in out.length_param.iter_mut().zip(r.length_params()) {
@@ -595,9 +601,11 @@ pub unsafe extern "C" fn kincal_robot_set_length_param(
     })
 }
 
-/// Sets what joint `joint` (zero-based, < N) moves: `kind` is `KINCAL_JOINT_KIND_REVOLUTE`
-/// or `KINCAL_JOINT_KIND_PRISMATIC` (reading and limits then in metres). The same check as
-/// the core's: a prismatic joint's cyclic effect parameters must be zero. On failure
+/// Sets what joint `joint` (zero-based, < N) moves: `kind` is `KINCAL_JOINT_KIND_REVOLUTE`,
+/// `KINCAL_JOINT_KIND_PRISMATIC` (reading and limits then in metres) or
+/// `KINCAL_JOINT_KIND_SENSOR` (a passive revolute joint read by a tilt sensor). The same
+/// check as the core's: a prismatic or sensor joint's cyclic (and a sensor's backlash)
+/// effect parameters must be zero. On failure
 /// `*robot` is unchanged. Returns OK, NULL_POINTER, MISALIGNED_POINTER, INDEX_OUT_OF_RANGE
 /// (`joint`), INVALID_ARGUMENT (`kind`, or nonzero cyclic parameters) or any status of
 /// `kincal_robot_validate`.
@@ -621,6 +629,7 @@ pub unsafe extern "C" fn kincal_robot_set_joint_kind(
         let k = match kind {
             0 => JointKind::Revolute,
             1 => JointKind::Prismatic,
+            2 => JointKind::Sensor,
             v => return Err(kincal_error::new(kincal_status::InvalidArgument).arg(c"kind").value(f64::from(v))),
         };
         // SAFETY: forwarded contract.

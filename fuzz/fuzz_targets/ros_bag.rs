@@ -3,8 +3,8 @@
 //! the body of each CDR message type, so the CDR decoder sees hostile lengths directly.
 #![no_main]
 
-use kincal_cli::cdr;
-use kincal_cli::rosbag::{BagOptions, MeasurementTopic, import_bag_bytes};
+use kincal_io::cdr;
+use kincal_io::rosbag::{BagOptions, MeasurementTopic, import_bag_bytes};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|bytes: &[u8]| {

@@ -60,27 +60,25 @@ pub const USABLE: &[(&str, &str)] = &[
          (--robot-id ID; sessions, targets and a constraints file)",
     ),
     (
+        "hilti-jaibot-stationing",
+        "Hilti lifting column + 6R arm, total-station prism, accelerometer tilts as sensor \
+         joints, 7 floors as sessions (3090 positions; CC BY-NC-SA: non-commercial; alias hilti)",
+    ),
+    (
         "figaroh-mate-planes",
         "3-joint arm touching 3 known planes: one coordinate per row (30), plus 10 full poses",
     ),
 ];
 
 /// The sets in the shared folder that are not used, and why.
-pub const UNUSABLE: &[(&str, &str)] = &[
-    (
-        "figaroh-tiago-mocap",
-        "TIAGo's torso_lift_joint is prismatic (it moves 0.015-0.350 m in this recording): kincal \
+pub const UNUSABLE: &[(&str, &str)] = &[(
+    "figaroh-tiago-mocap",
+    "TIAGo's torso_lift_joint is prismatic (it moves 0.015-0.350 m in this recording): kincal \
          models it, but the set ships no URDF and import-dataset does not read it yet; the file's \
          4 hand points are moreover computed from \
          one tracked rigid body (points 3 and 4 are identical, distances constant to 1e-7 m), \
          not independent marker measurements",
-    ),
-    (
-        "hilti-jaibot-stationing",
-        "licensed CC BY-NC-SA 3.0 (non-commercial); its URDF (a prismatic lifting column with \
-         mimic stages) imports, but import-dataset does not read this set yet",
-    ),
-];
+)];
 
 /// One imported set.
 #[derive(Debug, Clone)]
@@ -109,6 +107,7 @@ pub fn import(name: &str, dir: &Path) -> Result<Imported, CliError> {
         )));
     }
     match name {
+        "hilti" | "hilti-jaibot-stationing" => crate::datasets_hilti::import(dir),
         "figaroh-ur10e" => ur10e(dir),
         "robotkinecal-fr3" => fr3(dir),
         "figaroh-talos-arm" => talos(dir),
@@ -186,7 +185,7 @@ impl Table {
     }
 }
 
-fn sha256_of(path: &Path) -> Result<String, CliError> {
+pub(crate) fn sha256_of(path: &Path) -> Result<String, CliError> {
     crate::files::sha256_file(path)
         .map_err(|e| CliError::input(format!("{}: cannot read: {e}", path.display())))
 }

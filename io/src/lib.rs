@@ -17,6 +17,7 @@ pub mod constraints;
 pub mod data;
 pub mod datasets;
 pub mod datasets_contact;
+pub mod datasets_hilti;
 pub mod error;
 pub mod files;
 pub mod measurements;

@@ -91,6 +91,7 @@ pub enum LengthChoice {
 pub enum JointTypeJson {
     Revolute,
     Prismatic,
+    Sensor,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -495,13 +496,14 @@ impl RobotJson {
                     LengthParam::Beta => LengthChoice::Beta,
                 })
                 .collect(),
-            joint_types: if robot.has_prismatic() {
+            joint_types: if robot.has_prismatic() || robot.has_sensor_joints() {
                 robot
                     .joint_kinds()
                     .iter()
                     .map(|k| match k {
                         JointKind::Revolute => JointTypeJson::Revolute,
                         JointKind::Prismatic => JointTypeJson::Prismatic,
+                        JointKind::Sensor => JointTypeJson::Sensor,
                     })
                     .collect()
             } else {
@@ -904,6 +906,7 @@ impl RobotJson {
                 let kind = match k {
                     JointTypeJson::Revolute => JointKind::Revolute,
                     JointTypeJson::Prismatic => JointKind::Prismatic,
+                    JointTypeJson::Sensor => JointKind::Sensor,
                 };
                 r.set_joint_kind(j, kind).map_err(e("joint_types"))?;
             }

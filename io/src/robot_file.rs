@@ -413,13 +413,14 @@ pub fn parse_robot_description(
             Some(t) => match t.get_ref().as_str() {
                 "revolute" => JointKind::Revolute,
                 "prismatic" => JointKind::Prismatic,
+                "sensor" => JointKind::Sensor,
                 other => {
                     return Err(DescriptionError::at(
                         &src,
                         Some(t.span()),
                         Some(k("type")),
                         format!(
-                            "`{other}` is not a joint type; expected \"revolute\" or \"prismatic\""
+                            "`{other}` is not a joint type; expected \"revolute\", \"prismatic\" or \"sensor\""
                         ),
                     ));
                 }
@@ -434,7 +435,7 @@ pub fn parse_robot_description(
                 .or(j.upper_mm.as_ref())
                 .map(Spanned::span);
             let unit = match kind {
-                JointKind::Revolute => "rad",
+                JointKind::Revolute | JointKind::Sensor => "rad",
                 JointKind::Prismatic => "m",
             };
             return Err(DescriptionError::at(
@@ -563,7 +564,7 @@ fn limits_of(
         None => Ok(()),
     };
     match kind {
-        JointKind::Revolute => {
+        JointKind::Revolute | JointKind::Sensor => {
             for (key, v) in [("lower_mm", &j.lower_mm), ("upper_mm", &j.upper_mm)] {
                 wrong_unit(
                     key,
@@ -674,8 +675,8 @@ pub fn write_generic<const N: usize>(name: &str, joint_names: &[String], r: &Rob
         if let Some(n) = joint_names.get(i) {
             s.push_str(&format!("name = {}\n", toml_str(n)));
         }
-        if r.joint_kind(i) == JointKind::Prismatic {
-            s.push_str("type = \"prismatic\"\n");
+        if r.joint_kind(i) != JointKind::Revolute {
+            s.push_str(&format!("type = \"{}\"\n", r.joint_kind(i).name()));
         }
         s.push_str(&format!(
             "theta0 = {}\nd = {}\na = {}\nalpha = {}\nbeta = {}\nlower = {}\nupper = {}\nmass_kg = {}\n",

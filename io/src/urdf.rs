@@ -468,7 +468,7 @@ pub fn import_urdf(
                 }
                 // The geometry at q = 0 of the model joint: the mimic at its offset.
                 t *= match kind {
-                    JointKind::Revolute => Transform::from_parts(
+                    JointKind::Revolute | JointKind::Sensor => Transform::from_parts(
                         nalgebra::Translation3::identity(),
                         nalgebra::Rotation3::from_scaled_axis(a / n * offset),
                     ),
@@ -906,7 +906,8 @@ fn export_generic<const N: usize>(
         joints.push(urdf_joint(
             &joint_names[i],
             match r.joint_kind(i) {
-                JointKind::Revolute => JointType::Revolute,
+                // URDF has no sensor joints: a sensor joint is a revolute joint there.
+                JointKind::Revolute | JointKind::Sensor => JointType::Revolute,
                 JointKind::Prismatic => JointType::Prismatic,
             },
             &parent,

@@ -585,10 +585,10 @@ static int get_robot(kc_ctx *c, const mxArray *s, kincal_robot *r)
             return -1;
         }
         for (i = 0; i < n; ++i) {
-            if (p[i] != 0.0 && p[i] != 1.0) {
+            if (p[i] != 0.0 && p[i] != 1.0 && p[i] != 2.0) {
                 return fail(c, "badValue",
-                            "argument 'robot.joint_kind': joint %.0f must be 0 (revolute) or 1 "
-                            "(prismatic), got %.17g",
+                            "argument 'robot.joint_kind': joint %.0f must be 0 (revolute), 1 "
+                            "(prismatic) or 2 (sensor), got %.17g",
                             one_based(i), p[i]);
             }
             r->joint_kind[i] = (uint32_t)p[i];

@@ -42,7 +42,7 @@ model's in count or kind, or a URDF joint axis is not the nominal model's axis.
 --mdh-table OUT.csv | OUT.yaml: the identified mDH/Hayati table. The CSV has one row per
 frame: `base`, links 1..N, `tool`, then one row per effect parameter (its label). Columns
 (SI units in their names; empty where a column does not apply): theta0_rad, d_m, a_m,
-alpha_rad, beta_rad, length_param (d or beta: which of the two is identified), joint_type
+alpha_rad, beta_rad, length_param (d or beta: which of the two is identified), joint_type (revolute, prismatic or sensor)
 (revolute: q adds to theta; prismatic: q adds to d), lower_rad, upper_rad (joint limits,
 in metres for a prismatic joint), px_m, py_m, pz_m, rx_rad, ry_rad, rz_rad (base and tool frames:
 Trans(p)·Rot(r), r a rotation vector), value, unit (effect parameters), then std_<column>
@@ -354,11 +354,12 @@ pub fn mdh_table_text(
     String::from_utf8(buf).map_err(|e| CliError::io(format!("mDH table: {e}")))
 }
 
-/// `revolute` or `prismatic`: what joint `i`'s reading moves (a model file without
-/// `joint_types` is all revolute).
+/// `revolute`, `prismatic` or `sensor` (a passive revolute joint read by a tilt sensor):
+/// what joint `i`'s reading is (a model file without `joint_types` is all revolute).
 fn joint_type_name(file: &ModelFile, i: usize) -> &'static str {
     match file.robot.joint_types.get(i) {
         Some(kincal_io::model_file::JointTypeJson::Prismatic) => "prismatic",
+        Some(kincal_io::model_file::JointTypeJson::Sensor) => "sensor",
         _ => "revolute",
     }
 }
@@ -596,13 +597,14 @@ fn c_header_generic<const N: usize>(
         .collect();
     // Written only for a model with a prismatic joint (a zeroed entry is revolute), so the
     // headers of revolute models are unchanged.
-    let kinds = if r.has_prismatic() {
+    let kinds = if r.has_prismatic() || r.has_sensor_joints() {
         let k: Vec<&str> = r
             .joint_kinds()
             .iter()
             .map(|k| match k {
                 kincal::JointKind::Revolute => "KINCAL_JOINT_KIND_REVOLUTE",
                 kincal::JointKind::Prismatic => "KINCAL_JOINT_KIND_PRISMATIC",
+                kincal::JointKind::Sensor => "KINCAL_JOINT_KIND_SENSOR",
             })
             .collect();
         format!("\n    .joint_kind = {{{}}},", k.join(", "))

@@ -30,8 +30,13 @@ Sets (--list prints them with what they measure):
                           with their 50 mm distances; robot = the set's URDF up to ball_link
   figaroh-mate-planes     3-joint arm touching three known planes: one coordinate per row,
                           plus the set's 10 full poses
-figaroh-tiago-mocap and hilti-jaibot-stationing are refused with the reason (prismatic
-joints, licence). --base-link/--tip-link override the chain of mukca's and MATE's URDF.
+  hilti (hilti-jaibot-stationing)  lifting column + 6R arm, total-station prism positions,
+                          each floor a session, accelerometer tilts as sensor joints, temp_c;
+                          robot = the set's URDF (base_link -> prism) + 4 sensor joints.
+                          CC BY-NC-SA 3.0 (non-commercial). --study prints the held-out
+                          study of docs/real-data.md
+figaroh-tiago-mocap is refused with the reason. --base-link/--tip-link override the chain
+of mukca's and MATE's URDF.
 
 In every set the frame of the measurements and the measured frame on the robot are unknown:
 calibrate with --effects base_frame,tool_frame --init-frames (see `kincal help calibrate`),
@@ -69,6 +74,9 @@ pub struct Args {
     /// List the data sets and exit
     #[arg(long)]
     pub list: bool,
+    /// hilti: also run the held-out study (docs/real-data.md) and print its table
+    #[arg(long)]
+    pub study: bool,
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
@@ -141,8 +149,45 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     for n in &imported.notes {
         s.push_str(&format!("  note: {n}\n"));
     }
+    if args.study {
+        if !matches!(name.as_str(), "hilti" | "hilti-jaibot-stationing") {
+            return Err(CliError::usage("--study applies to the hilti set only"));
+        }
+        s.push_str(&study_text(&kincal_io::datasets_hilti::study(dir)?));
+    }
     crate::report::emit(&s);
     Ok(())
+}
+
+/// The Hilti study as the table docs/real-data.md shows (RMS of |Δp| in mm).
+fn study_text(st: &kincal_io::datasets_hilti::Study) -> String {
+    let floor = 3f64.sqrt() * kincal_io::datasets_hilti::SIGMA_POS_M * 1e3;
+    let mut s = format!(
+        "Hilti study (RMS |dp| in mm; noise floor sqrt(3)*0.75 = {floor:.2} mm)\n\
+         flat in-sample: geometry {:.2}, geometry + sensor joints {:.2}\n\
+         flat held-out (5 folds): geometry + sensor joints {:.2} ({:.2}x the floor)\n\
+         gains 1+k: base tilt x {:.3}, y {:.3}; column bending x {:.3}, y {:.3}\n\
+         session            CAD+rigid base   geometry (flat)   geometry+sensors (flat)\n",
+        st.flat_in_sample_mm.0,
+        st.flat_in_sample_mm.1,
+        st.flat_held_out_mm,
+        st.flat_held_out_mm / floor,
+        st.gains[0],
+        st.gains[1],
+        st.gains[2],
+        st.gains[3],
+    );
+    for (name, cad) in &st.cad_mm {
+        let t = st.transfer_mm.iter().find(|t| &t.0 == name);
+        match t {
+            Some((_, g, b)) => s.push_str(&format!("{name:<18} {cad:>14.2} {g:>17.2} {b:>24.2}\n")),
+            None => s.push_str(&format!(
+                "{name:<18} {cad:>14.2} {:>17} {:>24}\n",
+                "(training)", "(training)"
+            )),
+        }
+    }
+    s
 }
 
 /// Files that must differ from each other (and from the inputs, checked by `write_atomic`).
