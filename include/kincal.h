@@ -3724,9 +3724,11 @@ kincal_status kincal_robot_set_length_param(struct kincal_robot *robot,
                                             struct kincal_error *err);
 
 /*
- Sets what joint `joint` (zero-based, < N) moves: `kind` is `KINCAL_JOINT_KIND_REVOLUTE`
- or `KINCAL_JOINT_KIND_PRISMATIC` (reading and limits then in metres). The same check as
- the core's: a prismatic joint's cyclic effect parameters must be zero. On failure
+ Sets what joint `joint` (zero-based, < N) moves: `kind` is `KINCAL_JOINT_KIND_REVOLUTE`,
+ `KINCAL_JOINT_KIND_PRISMATIC` (reading and limits then in metres) or
+ `KINCAL_JOINT_KIND_SENSOR` (a passive revolute joint read by a tilt sensor). The same
+ check as the core's: a prismatic or sensor joint's cyclic (and a sensor's backlash)
+ effect parameters must be zero. On failure
  `*robot` is unchanged. Returns OK, NULL_POINTER, MISALIGNED_POINTER, INDEX_OUT_OF_RANGE
  (`joint`), INVALID_ARGUMENT (`kind`, or nonzero cyclic parameters) or any status of
  `kincal_robot_validate`.
