@@ -61,8 +61,19 @@ RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --workspace
 step "no_std core for a bare-metal target"
 cargo build -p kincal --target thumbv7em-none-eabihf
 
+step "Python tools the Rust tests use (mcap: the independent ROS 2 bag writer)"
+# The same venv python/run.sh uses later (target/python-venv).
+VENV=${KINCAL_VENV:-${CARGO_TARGET_DIR:-$ROOT/target}/python-venv}
+[ -x "$VENV/bin/python" ] || python3 -m venv "$VENV" || fail "cannot create $VENV (apt-get install python3-venv)"
+"$VENV/bin/python" -m pip install -q --disable-pip-version-check mcap \
+    || fail "pip could not install mcap"
+export KINCAL_PYTHON=$VENV/bin/python
+
 step "Rust unit, integration and doc tests"
 cargo test --workspace
+
+step "real-data studies too slow unoptimised (release)"
+cargo test --release -p kincal-cli --test real_data_hilti -- --ignored
 
 for extra in tests/cpp/run.sh matlab/tests/run.sh python/run.sh fuzz/smoke.sh; do
     if [ -f "$extra" ]; then

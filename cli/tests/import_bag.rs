@@ -559,7 +559,9 @@ fn python_written_bag_reads_back_the_script_poses() {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scripts/write_test_bag.py");
     let dir = tempfile::tempdir().unwrap();
     let bag = dir.path().join("py.mcap");
-    let py = Command::new("python3").arg(&script).arg(&bag).output();
+    // The project's test command points KINCAL_PYTHON at a venv with `mcap` installed.
+    let python = std::env::var_os("KINCAL_PYTHON").unwrap_or_else(|| "python3".into());
+    let py = Command::new(python).arg(&script).arg(&bag).output();
     let ok = py.as_ref().is_ok_and(|o| o.status.success());
     if !ok {
         let why = py.map_or_else(|e| e.to_string(), |o| stderr(&o));
