@@ -654,8 +654,21 @@ fn base_tool_limits_and_length_param_setters() {
     );
     let s = unsafe { kincal_robot_set_joint_kind(&mut r, 6, 0, &mut e) };
     assert_eq!((s, arg_name(&e)), (kincal_status::IndexOutOfRange, "joint"));
-    let s = unsafe { kincal_robot_set_joint_kind(&mut r, 0, 2, &mut e) };
+    let s = unsafe { kincal_robot_set_joint_kind(&mut r, 0, 3, &mut e) };
     assert_eq!((s, arg_name(&e)), (kincal_status::InvalidArgument, "kind"));
+    // A sensor joint (KINCAL_JOINT_KIND_SENSOR) is a kind the setter takes.
+    let s =
+        unsafe { kincal_robot_set_joint_kind(&mut r, 0, kincal_joint_kind::Sensor as u32, &mut e) };
+    assert_eq!(s, kincal_status::Ok);
+    assert_eq!(r.joint_kind[0], kincal_joint_kind::Sensor as u32);
+    assert_eq!(
+        crate::robot::to_any(&r).unwrap().joint_kind(0),
+        kincal::JointKind::Sensor
+    );
+    let s = unsafe {
+        kincal_robot_set_joint_kind(&mut r, 0, kincal_joint_kind::Revolute as u32, &mut e)
+    };
+    assert_eq!(s, kincal_status::Ok);
     assert_eq!(
         unsafe {
             kincal_robot_set_joint_kind(&mut r, 2, kincal_joint_kind::Revolute as u32, &mut e)
