@@ -87,6 +87,19 @@ fn import_hilti(src: &Path, dir: &Path, study: bool) -> String {
     out
 }
 
+/// The numbers of the study table's row for `session` (its first word is the session's
+/// name and its second a number: "flat in-sample: ..." is not the `flat` row).
+fn session_row(out: &str, session: &str) -> Vec<f64> {
+    let line = out
+        .lines()
+        .find(|l| {
+            let mut words = l.split_whitespace();
+            words.next() == Some(session) && words.next().is_some_and(|w| w.parse::<f64>().is_ok())
+        })
+        .unwrap_or_else(|| panic!("no study row for '{session}' in\n{out}"));
+    numbers_after(line, session)
+}
+
 #[test]
 fn hilti_imports_sessions_with_sensor_joints() {
     let Some(src) = realdata() else { return };
@@ -160,7 +173,7 @@ fn study_matches_the_docs(out: &str) {
     let held = numbers_after(out, "flat held-out (5 folds): geometry + sensor joints");
     close(held[0], DOC_FLAT_HELD_OUT_MM, "flat held out");
     for (name, cad, geo, sensors) in DOC_SESSIONS {
-        let v = numbers_after(out, name);
+        let v = session_row(out, name);
         close(v[0], cad, &format!("{name}: CAD + rigid base"));
         if name != "flat" {
             close(v[1], geo, &format!("{name}: geometry"));
