@@ -4,7 +4,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use kincal::Robot;
-use kincal::identify::Measurement;
+use kincal::identify::{ComponentMask, Measurement};
 use kincal::validation::{ErrorSummary, PoseErrors, Verdict, biopsy_allowed_rotation_rad};
 use serde::Serialize;
 
@@ -185,29 +185,40 @@ pub fn summary_table(evals: &[Evaluation], targets: Targets, has_rot: bool) -> S
     t.render("  ")
 }
 
-/// Per-pose table of one evaluation; `rot_measured[i]` false prints a dash for the
-/// orientation errors of row `i` (a position-only row has none, not a zero one).
-pub fn pose_table(e: &Evaluation, ids: &[String], has_rot: bool, rot_measured: &[bool]) -> String {
+/// Per-pose table of one evaluation; a component `masks[i]` does not measure prints a dash
+/// (a row giving only `x` has no e_y, e_z; a position-only row no orientation error), not
+/// a zero one; |e_p| and |e_φ| run over the measured components.
+pub fn pose_table(
+    e: &Evaluation,
+    ids: &[String],
+    has_rot: bool,
+    masks: &[ComponentMask],
+) -> String {
     let mut header = vec!["pose", "e_x [mm]", "e_y [mm]", "e_z [mm]", "|e_p| [mm]"];
     if has_rot {
         header.extend(["e_φx [deg]", "e_φy [deg]", "e_φz [deg]", "|e_φ| [deg]"]);
     }
     let mut t = Table::new(&header);
     for (i, p) in e.errors.iter().enumerate() {
+        let mask = masks.get(i).copied().unwrap_or(ComponentMask::ALL);
+        let cell = |k: usize, v: String| if mask.has(k) { v } else { "-".to_string() };
+        let any = |mut ks: core::ops::Range<usize>| ks.any(|k| mask.has(k));
         let mut row = vec![ids.get(i).cloned().unwrap_or_else(|| (i + 1).to_string())];
-        row.extend(p.pos_m.iter().map(|v| crate::report::fmt_signed6(v * 1e3)));
-        row.push(format!("{:.6}", p.pos_norm_m * 1e3));
+        row.extend((0..3).map(|k| cell(k, crate::report::fmt_signed6(p.pos_m[k] * 1e3))));
+        row.push(if any(0..3) {
+            format!("{:.6}", p.pos_norm_m * 1e3)
+        } else {
+            "-".to_string()
+        });
         if has_rot {
-            if rot_measured.get(i).copied().unwrap_or(true) {
-                row.extend(
-                    p.rot_rad
-                        .iter()
-                        .map(|v| crate::report::fmt_signed6(v.to_degrees())),
-                );
-                row.push(format!("{:.6}", p.rot_norm_rad.to_degrees()));
+            row.extend(
+                (0..3).map(|k| cell(3 + k, crate::report::fmt_signed6(p.rot_rad[k].to_degrees()))),
+            );
+            row.push(if any(3..6) {
+                format!("{:.6}", p.rot_norm_rad.to_degrees())
             } else {
-                row.extend(["-"; 4].map(String::from));
-            }
+                "-".to_string()
+            });
         }
         t.row(row);
     }
@@ -472,9 +483,9 @@ fn validate<const N: usize>(
         let _ = writeln!(out, "Warning: {w}");
     }
     if !args.quiet {
-        let rot_measured: Vec<bool> = meas.iter().map(|m| m.mask.has_orientation()).collect();
+        let masks: Vec<ComponentMask> = meas.iter().map(|m| m.mask).collect();
         let _ = writeln!(out, "\nPer-pose errors ({name}, measured − model):");
-        out.push_str(&pose_table(&main, &ids, has_rot, &rot_measured));
+        out.push_str(&pose_table(&main, &ids, has_rot, &masks));
     }
     let default_targets = args.target_pos_mm == 1.0 && args.target_rot_deg == 0.66;
     let whose = if is_aria(file) {
