@@ -70,7 +70,7 @@ fn panel(
         require_finite(vals.iter().chain([&m, &target]))?;
         // The norm row shows the target when the data stay readable next to it (errors
         // reaching at least TARGET_SHOWN_FRACTION of it); smaller errors are autoscaled and
-        // the axis label states the target instead of a line that would squash them.
+        // the cell's x-axis label states the target instead of a line that would squash them.
         let show_target = row == 3 && m >= TARGET_SHOWN_FRACTION * target;
         let (lo, hi) = match (row, show_target) {
             (3, true) => (0.0, m.max(1.15 * target)),
@@ -104,17 +104,19 @@ fn panel(
             .max_light_lines(1)
             .light_line_style(RGBColor(240, 240, 240))
             .bold_line_style(RGBColor(210, 210, 210));
-        if col == 0 && row == 3 && !show_target {
-            mesh.y_desc(format!(
-                "{} [{unit}] (target {} above)",
-                row_names[row],
-                tick(target, target)
-            ));
-        } else if col == 0 {
+        if col == 0 {
             mesh.y_desc(format!("{} [{unit}]", row_names[row]));
         }
+        let x_desc = if show_target {
+            "pose".to_string()
+        } else {
+            format!(
+                "pose (target {} {unit}, above this scale)",
+                tick(target, target)
+            )
+        };
         if row == 3 {
-            mesh.x_desc("pose");
+            mesh.x_desc(x_desc);
         }
         mesh.axis_desc_style(("sans-serif", 14)).draw()?;
         if row != 3 {
