@@ -835,7 +835,7 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "Cross-validation of '{name}' on {}: {} poses in {n_groups} pose groups, {} folds (seed {}), {}",
+        "Cross-validation of '{name}' on {}:\n  {n_groups} poses (pose_id groups, {} rows), {} folds (seed {}), {}",
         set.source,
         meas.len(),
         args.folds,

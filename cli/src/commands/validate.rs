@@ -508,6 +508,7 @@ fn validate<const N: usize>(
     if evals.len() > 1 || evals.first().is_some_and(|e| e.name != name) {
         let _ = writeln!(out, "\nAll models in {}:", args.model);
         out.push_str(&summary_table(&evals, targets, has_rot));
+        out.push_str(&bounded_runs_note(file));
     }
     // Eq. (3) is the ARIA biopsy's budget: printed for ARIA or when asked for (--biopsy-d-mm).
     let show_eq3 = is_aria(file) || args.biopsy_d_mm.is_some();
@@ -515,7 +516,7 @@ fn validate<const N: usize>(
         Some(a) => {
             let _ = writeln!(
                 out,
-                "\nEq. (3): with d = {:.4} mm at the puncture point (r_t = {} mm, l_max = {} mm) a biopsy allows e_φ up to {:.4}°{}",
+                "\nEq. (3): with d = {:.4} mm at the puncture point (r_t = {} mm, l_max = {} mm)\n  a biopsy allows e_φ up to {:.4}°{}",
                 d_m * 1e3,
                 args.tumour_radius_mm,
                 args.insertion_mm,
@@ -553,6 +554,35 @@ fn validate<const N: usize>(
     }
     crate::report::emit(&out);
     Ok(())
+}
+
+/// Says which recorded runs ended on their OPT1 interval bounds (at least
+/// `report::BOUND_DOMINATED_FRACTION` of their identified parameters): such a run's errors
+/// measure its intervals, not the data, so a "NOT met" in its column has that reason.
+fn bounded_runs_note(file: &kincal_io::model_file::ModelFile) -> String {
+    let Some(cal) = &file.calibration else {
+        return String::new();
+    };
+    let mut out = String::new();
+    for run in &cal.results {
+        let identified = run.parameters.len();
+        let nb = run.parameters.iter().filter(|p| p.at_bound).count();
+        if nb == 0
+            || (nb as f64) < crate::report::BOUND_DOMINATED_FRACTION * identified.max(1) as f64
+        {
+            continue;
+        }
+        let _ = writeln!(
+            out,
+            "  {} ended on its bounds ({nb} of {identified} identified parameters at ±{} mm / ±{}°):\n    \
+             its intervals exclude the data's optimum, so its errors measure the intervals, not the data\n    \
+             (calibrate again with wider --bounds-mm/--bounds-deg to judge it)",
+            run.algorithm.to_uppercase(),
+            cal.options.bounds_length_mm,
+            cal.options.bounds_angle_deg,
+        );
+    }
+    out
 }
 
 /// Validation of contact data: the consistency of the predicted tool points per target and
