@@ -64,7 +64,8 @@ pub(crate) fn from_matrix(m: &[f64], name: &'static CStr) -> FfiResult<Transform
     }
     let r = Matrix3::new(r00, r01, r02, r10, r11, r12, r20, r21, r22);
     // Input validation only (no kinematics): orthonormal within tolerance, right-handed.
-    let gram = r.transpose() * r - Matrix3::identity();
+    // (kincal::fixed3: nalgebra's product and identity, without their opt-level z panic paths)
+    let gram = kincal::fixed3::mat_mul(&r.transpose(), &r) - kincal::fixed3::IDENTITY;
     if gram.iter().any(|v| v.abs() > KINCAL_ROTATION_TOLERANCE) || r.determinant() <= 0.0 {
         return Err(invalid_transform(name));
     }
@@ -73,12 +74,13 @@ pub(crate) fn from_matrix(m: &[f64], name: &'static CStr) -> FfiResult<Transform
 
 /// The 16 column-major values of a transform.
 pub(crate) fn to_matrix(t: &Transform) -> [f64; 16] {
-    let h = t.to_homogeneous();
-    let mut out = [0.0; 16];
-    for (d, s) in out.iter_mut().zip(h.as_slice()) {
-        *d = *s;
-    }
-    out
+    // Not `to_homogeneous()`: its fixed views assert their ranges, a panic path at opt-level z.
+    let [c0, c1, c2] = t.rotation.matrix().data.0;
+    let [[px, py, pz]] = t.translation.vector.data.0;
+    [
+        c0[0], c0[1], c0[2], 0.0, c1[0], c1[1], c1[2], 0.0, c2[0], c2[1], c2[2], 0.0, px, py, pz,
+        1.0,
+    ]
 }
 
 /// `[px, py, pz, qw, qx, qy, qz]` of a transform.
