@@ -320,7 +320,7 @@ fn talos_position_only_calibrates_with_its_identifiability_report() {
 }
 
 #[test]
-fn positioner_imports_and_unusable_sets_are_refused_with_reasons() {
+fn positioner_imports_and_tiago_without_its_urdf_is_a_usage_error() {
     let Some(root) = realdata() else { return };
     let dir = tempfile::tempdir().unwrap();
     let out = import(&root, "ical-2axis-positioner", dir.path());
