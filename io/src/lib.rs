@@ -18,6 +18,8 @@ pub mod data;
 pub mod datasets;
 pub mod datasets_contact;
 pub mod datasets_hilti;
+pub mod datasets_tiago;
+pub mod effects_arg;
 pub mod error;
 pub mod files;
 pub mod measurements;

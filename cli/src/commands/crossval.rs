@@ -19,7 +19,6 @@ use kincal::{Effect, EffectSet, ParamSet, Robot};
 use rayon::prelude::*;
 use serde_json::{Value, json};
 
-use crate::args::parse_effect;
 use crate::error::CliError;
 use kincal_io::calibration::new_workspace;
 use kincal_io::data::{self, DataOptions};
@@ -95,9 +94,10 @@ pub struct Args {
     pub robot: String,
     #[command(flatten)]
     pub chain: kincal_io::robot_arg::UrdfChainArgs,
-    /// Effects to identify with the geometry (comma-separated names of spec/effects.md)
-    #[arg(long, value_name = "E1,E2", value_delimiter = ',', value_parser = parse_effect)]
-    pub effects: Vec<Effect>,
+    /// Effects to identify with the geometry (comma-separated names of spec/effects.md;
+    /// joint_scale@JOINT for one joint's scale: a joint name, qK or sensor, repeatable)
+    #[arg(long, value_name = "E1,E2", value_delimiter = ',', value_parser = kincal_io::effects_arg::parse_effect_item)]
+    pub effects: Vec<kincal_io::effects_arg::EffectItem>,
     /// Estimate the base and tool frames from each fold's training poses first
     #[arg(long)]
     pub init_frames: bool,
@@ -183,7 +183,9 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         }
     }
     let spec = robot_arg::resolve_robot(&args.robot, &args.chain)?;
-    kincal::with_any_robot!(&spec.robot, r => crossval(r, &spec.name, args))
+    let kinds = kincal::with_any_robot!(&spec.robot, r => r.joint_kinds().to_vec());
+    let choice = kincal_io::effects_arg::resolve(&args.effects, &spec.joint_names, &kinds)?;
+    kincal::with_any_robot!(&spec.robot, r => crossval(r, &spec.name, &choice, args))
 }
 
 /// How the rows are weighted.
@@ -665,8 +667,13 @@ fn largest_changes<const N: usize>(
     (len, ang)
 }
 
-fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Result<(), CliError> {
-    let effects = args.effects.iter().fold(EffectSet::NONE, |a, &e| a.with(e));
+fn crossval<const N: usize>(
+    nominal: &Robot<N>,
+    name: &str,
+    choice: &kincal_io::effects_arg::EffectChoice,
+    args: &Args,
+) -> Result<(), CliError> {
+    let effects = choice.effects;
     let set = data::read(
         &args.data,
         nominal,
@@ -677,7 +684,7 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
         },
     )?;
     if args.constraints.is_some() || kincal_io::constraints::has_contacts(&set) {
-        return crossval_contacts(nominal, args, &set, effects);
+        return crossval_contacts(nominal, args, &set, choice);
     }
     if args.group_by.is_some() {
         return Err(CliError::usage(
@@ -688,7 +695,7 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
     let orientation = meas.iter().any(|m| m.mask.has_orientation());
     let (fold_of, n_groups) = assign_folds(&set, args.folds, args.seed)?;
     let req_nom = frames_only(effects, N);
-    let req_cal = geometry_subset(nominal, &args.geometry).union(&effects.params(N));
+    let req_cal = geometry_subset(nominal, &args.geometry).union(&choice.effect_params(N));
     let fail = |what: &str, e: String| CliError::numeric(format!("{}: {what}: {e}", set.source));
 
     // Weights.
@@ -1186,7 +1193,7 @@ fn crossval_contacts<const N: usize>(
     nominal: &Robot<N>,
     args: &Args,
     set: &MeasurementSet,
-    effects: EffectSet,
+    choice: &kincal_io::effects_arg::EffectChoice,
 ) -> Result<(), CliError> {
     if args.init_frames || args.plot.is_some() || args.robot_out.is_some() {
         return Err(CliError::usage(
@@ -1204,7 +1211,7 @@ fn crossval_contacts<const N: usize>(
     } else {
         crate::commands::crossval_contacts::GroupBy::Target
     });
-    let mut requested = geometry_subset(nominal, &args.geometry).union(&effects.params(N));
+    let mut requested = geometry_subset(nominal, &args.geometry).union(&choice.effect_params(N));
     for k in 0..3 {
         // The contacted point (ball centre) as the tool translation.
         let _ = requested.insert(5 * N + 6 + k);
