@@ -56,6 +56,13 @@ model is extended by that effect?
    Gross outliers are screened first (suspect rows, named by CSV line, are left out); the
    stated σ is checked against the repeats and the residuals. With fewer than 5 pose
    groups per fold, in-sample nested tests replace cross-validation (method in the report).
+6. Sessions: with a `session` column naming several set-ups, each session's rows are
+   registered into the robot's base frame (rigid fit, alternating with the geometric
+   calibration); a candidate whose columns lie in the span of the per-session frames, or
+   whose input (temp_c, s1..sN) is constant within every session, is confounded with the
+   sessions (confounded_with: session_frame) and never chosen; the report says what data
+   would separate them, and where the gap lies by session, extra_ column and prismatic
+   reading.
 
 Writes REPORT.json (spec/cli.md fields plus details), a readable report (--report, default
 REPORT.txt next to it, also printed), three SVG plots next to REPORT.json (residual vectors
