@@ -157,7 +157,10 @@ pub(crate) fn test<const N: usize, const P: usize>(
 ) -> Result<SessionConfounding> {
     let mut out = SessionConfounding::default();
     let n_s = count(sessions);
-    if n_s < 2 || n_s > MAX_SESSIONS || sessions.len() != data.len() || effect_params.is_empty() {
+    if !(2..=MAX_SESSIONS).contains(&n_s)
+        || sessions.len() != data.len()
+        || effect_params.is_empty()
+    {
         return Ok(out);
     }
     // Columns: geometric, then 6 per session, then the effect's. `col[c]` is the flat
@@ -228,8 +231,8 @@ pub(crate) fn test<const N: usize, const P: usize>(
     for j in 0..n_a {
         let (piv2, dj) = pivot(ws, &kept[..n], &scale[..n], j, &mut y);
         if piv2 > rank_tol * rank_tol && dj > 0.0 {
-            for c in 0..n {
-                ws.chol[n][c] = y[c];
+            for (dst, &v) in ws.chol[n].iter_mut().zip(y.iter()).take(n) {
+                *dst = v;
             }
             ws.chol[n][n] = sqrt(piv2);
             scale[n] = dj;
