@@ -128,6 +128,14 @@ mkdir -p "$D"
     --robot-out "$D/robot.toml" --study > "$D/study.txt"
 echo "== hilti -> $D/study.txt"
 sed -n '/^Hilti study/,$p' "$D/study.txt" | sed 's/^/     /'
+# The diagnosis with the total station's stated noise (each floor a session, registered in
+# its own base frame): where the gap lies by session, height and arm solution space, which
+# effect, and thermal confounded with the sessions.
+"$K" diagnose "$D/data.csv" --robot "$D/robot.toml" --sigma-pos-mm 0.75 \
+    --json "$D/diagnose.json" --report "$D/diagnose.txt" --out "$D/diagnose-model.json" \
+    > /dev/null
+grep -E "^VERDICT|^  why:|^  confounded with:|^HOW FAR|^  thermal:|^  what would separate" \
+    "$D/diagnose.txt" | sed 's/^/   /'
 
 # MUKCa (no instrument): every robot held out by location. For each location L: calibrate
 # on the other locations (their targets, sessions and 50 mm distances), validate on L

@@ -848,6 +848,11 @@ enum kincal_diagnosis_reason
      the equivalence threshold: the library's form is not singled out by the data).
      */
     KINCAL_DIAGNOSIS_REASON_FORM_NOT_DETERMINED = 8,
+    /*
+     `confounded_with_sessions`: the candidates that improve significantly are all
+     confounded with the sessions (the C ABI diagnoses one session: not produced there).
+     */
+    KINCAL_DIAGNOSIS_REASON_CONFOUNDED_WITH_SESSIONS = 9,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L

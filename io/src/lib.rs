@@ -30,6 +30,7 @@ pub mod pose_calibration;
 pub mod robot_arg;
 pub mod robot_file;
 pub mod rosbag;
+pub mod session_frames;
 pub mod tool_file;
 pub mod units;
 pub mod urdf;

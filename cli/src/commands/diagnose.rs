@@ -56,6 +56,13 @@ model is extended by that effect?
    Gross outliers are screened first (suspect rows, named by CSV line, are left out); the
    stated σ is checked against the repeats and the residuals. With fewer than 5 pose
    groups per fold, in-sample nested tests replace cross-validation (method in the report).
+6. Sessions: with a `session` column naming several set-ups, each session's rows are
+   registered into the robot's base frame (rigid fit, alternating with the geometric
+   calibration); a candidate whose columns lie in the span of the per-session frames, or
+   whose input (temp_c, s1..sN) is constant within every session, is confounded with the
+   sessions (confounded_with: session_frame) and never chosen; the report says what data
+   would separate them, and where the gap lies by session, extra_ column and prismatic
+   reading.
 
 Writes REPORT.json (spec/cli.md fields plus details), a readable report (--report, default
 REPORT.txt next to it, also printed), three SVG plots next to REPORT.json (residual vectors
@@ -128,8 +135,9 @@ pub struct Args {
 }
 
 /// Capacity of the diagnosis workspace: the union of every model's columns of the largest
-/// supported robot (15N + 7 ≤ 142 for 9 joints).
-pub const DIAG_PARAMS: usize = 144;
+/// supported robot (15N + 7 ≤ 187 for 12 joints), and the session test's geometric, frame
+/// (6 per session) and effect columns.
+pub const DIAG_PARAMS: usize = 192;
 
 /// A zeroed diagnosis workspace on the heap (about a megabyte).
 pub fn new_workspace() -> Box<DiagWorkspace<DIAG_PARAMS>> {
@@ -310,14 +318,22 @@ pub fn execute<const N: usize>(
             allow_out_of_limits: args.allow_out_of_limits,
         },
     )?;
-    let meas = data::measurements::<N>(&set)?;
+    let sessions = session_frames(robot, &set, &cfg)?;
+    let meas = match &sessions {
+        Some(s) => s.data.clone(),
+        None => data::measurements::<N>(&set)?,
+    };
     let groups = group_ids(&set);
     let mut poses = vec![PoseDiagnosis::default(); meas.len()];
     let mut ws = new_workspace();
     let pb = crate::progress::spinner("diagnosing (cross-validating every candidate)");
-    let result = diagnosis::diagnose(robot, &meas, &groups, &cfg, &mut poses, &mut ws);
+    let mut d = Box::new(Diagnosis::new(robot));
+    let index: &[u16] = sessions.as_ref().map_or(&[], |s| &s.index);
+    let result = diagnosis::diagnose_sessions_into(
+        robot, &meas, &groups, index, &cfg, &mut poses, &mut ws, &mut d,
+    );
     pb.finish_and_clear();
-    let d = Box::new(result.map_err(|e| match e {
+    result.map_err(|e| match e {
         kincal::Error::MissingInput {
             what: kincal::Quantity::NoiseFloor,
         } => CliError::usage(format!(
@@ -333,7 +349,7 @@ pub fn execute<const N: usize>(
             set.source
         )),
         other => core_error(other, &set.source, |i| data::line_of(&set, i)),
-    })?);
+    })?;
     let seconds = t0.elapsed().as_secs_f64();
     let outputs = Outputs::new(&args.json, args.report.as_deref(), &args.out);
     let mut inputs: Vec<&Path> = vec![&args.data];
@@ -366,9 +382,21 @@ pub fn execute<const N: usize>(
     )
     .to_json();
     let plots = crate::plots::diagnosis::render_all::<N>(&d, &meas, &poses, &outputs)?;
-    let json = report_json::<N>(&d, &meas, &set, &poses, &args.data, &outputs);
+    let breakdown = super::diagnose_where::breakdown(robot, &set, &poses, sessions.as_ref());
+    let mut json = report_json::<N>(&d, &meas, &set, &poses, &args.data, &outputs);
+    json.where_.by = breakdown
+        .iter()
+        .map(super::diagnose_where::Breakdown::json)
+        .collect();
+    json.sessions = sessions.as_ref().map(|s| s.json(&d));
+    json.verdict.confounded_with_sessions = names(session_confounded(&d));
+    json.verdict.separate_by = separate_by(&d);
     let json_text = serde_json::to_string_pretty(&json).unwrap_or_default() + "\n";
     let mut text = readable::<N>(name, &set, &d, &meas);
+    if let Some(s) = &sessions {
+        text.push_str(&s.text(&d));
+    }
+    text.push_str(&super::diagnose_where::text(&breakdown));
     let _ = writeln!(
         text,
         "\nFiles: {} (report), {} (readable), {} (model: geometric{}), plots {}",
@@ -517,6 +545,8 @@ struct Report {
     form: FormJson,
     #[serde(rename = "where")]
     where_: WhereJson,
+    /// Several sessions: each registered in its own base frame (null for one session).
+    sessions: Option<SessionsJson>,
     data: DataInfoJson,
     settings: SettingsJson,
     files: FilesJson,
@@ -606,6 +636,41 @@ struct CandidateJson {
     least_distinct: Option<String>,
     structurally_redundant: Vec<String>,
     data_deficient: Vec<DroppedJson>,
+    /// `["session_frame"]` when the candidate is confounded with the sessions (never
+    /// chosen), else empty.
+    confounded_with: Vec<String>,
+    /// The session test (null for one session).
+    session: Option<SessionTestJson>,
+}
+
+/// The confounding test of a candidate with the sessions (kincal::diagnosis::sessions).
+#[derive(Serialize)]
+struct SessionTestJson {
+    /// Largest sin of the principal angle between an effect column and the span of the
+    /// geometric and per-session base-frame columns.
+    column_sin: f64,
+    columns_in_span: bool,
+    /// √(within-session share of the effect input's variance) (temp_c, s1..sN); null for
+    /// effects of the joint readings alone.
+    input_sin: Option<f64>,
+    input_constant_within_sessions: bool,
+    threshold: f64,
+}
+
+#[derive(Serialize)]
+struct SessionsJson {
+    count: usize,
+    /// Per session: name, rows, the registered frame (robot base → session frame).
+    frames: Vec<SessionFrameJson>,
+    method: &'static str,
+}
+
+#[derive(Serialize)]
+struct SessionFrameJson {
+    session: String,
+    rows: usize,
+    translation_mm: [f64; 3],
+    rotation_deg: f64,
 }
 
 #[derive(Serialize)]
@@ -638,6 +703,11 @@ struct VerdictJson {
     remaining_gap_significant: bool,
     /// Held-out RMS of what remains per axis.
     remaining_rms_axis: AxisJson,
+    /// Effects whose single candidate is confounded with the sessions (never chosen, nor
+    /// any pair containing them).
+    confounded_with_sessions: Vec<String>,
+    /// What data would separate them from the sessions (null when none).
+    separate_by: Option<String>,
     /// Identified effect parameters of the model (SI units) with standard errors.
     parameters: Vec<ParamValueJson>,
 }
@@ -750,6 +820,9 @@ struct WhereJson {
     regions: Vec<RegionJson>,
     correlations: Vec<CorrelationJson>,
     most_correlated: Option<String>,
+    /// Held-out RMS |Δp| of the geometric model and of the verdict's by session, by each
+    /// `extra_` column and by each prismatic joint's reading.
+    by: Vec<super::diagnose_where::BreakdownJson>,
     per_pose: Vec<PoseJson>,
 }
 
@@ -831,6 +904,18 @@ fn candidate_json<const N: usize>(c: &ModelScore) -> CandidateJson {
         distinctness: c.distinctness,
         least_distinct: c.least_distinct.map(|p| label::<N>(p.0)),
         structurally_redundant: labels::<N>(&c.structural),
+        confounded_with: if c.session.confounded() {
+            vec!["session_frame".into()]
+        } else {
+            Vec::new()
+        },
+        session: c.session.evaluated.then(|| SessionTestJson {
+            column_sin: c.session.column_sin,
+            columns_in_span: c.session.columns_in_span,
+            input_sin: c.session.input_sin,
+            input_constant_within_sessions: c.session.input_constant,
+            threshold: Config::default().session_sin_max,
+        }),
         data_deficient: c
             .data_deficient
             .iter()
@@ -932,6 +1017,8 @@ fn report_json<const N: usize>(
             remaining_gap_z_rot: finite(d.remaining.z_rot),
             remaining_gap_significant: d.remaining.z > Config::default().z_gap,
             remaining_rms_axis: axis(&d.final_rms_axis),
+            confounded_with_sessions: Vec::new(),
+            separate_by: None,
             parameters,
         },
         explainable: explainable_json(&d.explainable),
@@ -984,6 +1071,7 @@ fn report_json<const N: usize>(
             most_correlated: loc
                 .most_correlated
                 .map(|k| quantity_label(loc.correlates()[k].quantity)),
+            by: Vec::new(),
             per_pose: poses
                 .iter()
                 .zip(&set.rows)
@@ -1005,6 +1093,7 @@ fn report_json<const N: usize>(
                 })
                 .collect(),
         },
+        sessions: None,
         data: DataInfoJson {
             path: data_path.display().to_string(),
             sha256: set.sha256.clone(),
@@ -1153,6 +1242,7 @@ fn reason_code(r: &Reason) -> &'static str {
         Reason::Worsens { .. } => "worsens",
         Reason::SmallShare => "small_share",
         Reason::NoSignificantCandidate => "no_significant_candidate",
+        Reason::ConfoundedWithSessions => "confounded_with_sessions",
     }
 }
 
@@ -1229,6 +1319,10 @@ fn status_reason_text<const N: usize>(d: &Diagnosis<N>) -> String {
         Reason::NoSignificantCandidate => {
             "no candidate improves significantly on the geometric model".into()
         }
+        Reason::ConfoundedWithSessions => format!(
+            "the candidates that improve significantly are confounded with the sessions ({}): the data cannot attribute the gap to them rather than to what differs between the sessions",
+            effects_text(session_confounded(d))
+        ),
     }
 }
 
@@ -1485,6 +1579,8 @@ pub fn readable<const N: usize>(
             )
         } else if c.effects == d.verdict.effects {
             "VERDICT".into()
+        } else if c.session.confounded() {
+            long_note(session_note(c), &mut footnotes)
         } else if d.verdict.confounded().contains(&c.effects) {
             "confounded with the verdict".into()
         } else if c.distinctness < 0.05 {
@@ -1561,6 +1657,9 @@ pub fn readable<const N: usize>(
         v.status.name(),
         match v.status {
             Status::NoGap => "the geometric model is already at the noise floor".to_string(),
+            Status::Unexplained if v.reason == Reason::ConfoundedWithSessions =>
+                "a gap; the candidates that close part of it are confounded with the sessions"
+                    .to_string(),
             Status::Unexplained =>
                 "a gap, but no candidate closes a significant share of it".to_string(),
             _ => effects_text(v.effects),
@@ -1659,4 +1758,192 @@ pub fn readable<const N: usize>(
         }
     }
     s
+}
+
+// ---------------------------------------------------------------------------------------
+// Several sessions
+
+/// Rows of several sessions, each registered into the robot's base frame.
+#[derive(Debug)]
+pub struct Sessions<const N: usize> {
+    names: Vec<String>,
+    index: Vec<u16>,
+    data: Vec<Measurement<N>>,
+    frames: Vec<kincal::Transform>,
+}
+
+/// With a `session` column naming two sessions or more: every session's rows registered
+/// into the robot's base frame (kincal_io::session_frames); `None` for one session.
+fn session_frames<const N: usize>(
+    robot: &Robot<N>,
+    set: &MeasurementSet,
+    cfg: &Config,
+) -> Result<Option<Sessions<N>>, CliError> {
+    let Some((names, index)) = kincal_io::session_frames::sessions(set) else {
+        return Ok(None);
+    };
+    if names.len() > diagnosis::MAX_SESSIONS {
+        return Err(CliError::input(format!(
+            "{}: column 'session': {} sessions, the diagnosis handles at most {}",
+            set.source,
+            names.len(),
+            diagnosis::MAX_SESSIONS
+        )));
+    }
+    for (k, name) in names.iter().enumerate() {
+        let rows: Vec<usize> = (0..index.len())
+            .filter(|&l| usize::from(index[l]) == k)
+            .collect();
+        if rows.len() < 3 {
+            return Err(CliError::input(format!(
+                "{}:{}: column 'session': session {name:?} has {} row(s): each session's base frame is fitted to its rows, which needs at least 3 positions",
+                set.source,
+                rows.first()
+                    .and_then(|&l| data::line_of(set, l))
+                    .unwrap_or(0),
+                rows.len()
+            )));
+        }
+    }
+    let raw = data::measurements_of_sessions::<N>(set, true)?;
+    // The noise only sets the rigid fit's collinearity test.
+    let sigma = cfg.sigma_pos_m.unwrap_or(1e-3);
+    let r = kincal_io::session_frames::register(robot, &raw, &index, names.len(), sigma)
+        .map_err(|e| core_error(e, &set.source, |i| data::line_of(set, i)))?;
+    Ok(Some(Sessions {
+        names,
+        index,
+        data: r.data,
+        frames: r.frames,
+    }))
+}
+
+impl<const N: usize> Sessions<N> {
+    /// Rows of session `k`.
+    fn rows(&self, k: usize) -> usize {
+        self.index.iter().filter(|&&s| usize::from(s) == k).count()
+    }
+
+    /// Session names and each row's index into them.
+    pub fn names(&self) -> (&[String], &[u16]) {
+        (&self.names, &self.index)
+    }
+
+    fn json(&self, _d: &Diagnosis<N>) -> SessionsJson {
+        SessionsJson {
+            count: self.names.len(),
+            frames: self
+                .names
+                .iter()
+                .zip(&self.frames)
+                .enumerate()
+                .map(|(k, (name, f))| SessionFrameJson {
+                    session: name.clone(),
+                    rows: self.rows(k),
+                    translation_mm: mm3(f.translation.vector.as_slice()),
+                    rotation_deg: f.rotation.angle().to_degrees(),
+                })
+                .collect(),
+            method: SESSIONS_METHOD,
+        }
+    }
+
+    fn text(&self, d: &Diagnosis<N>) -> String {
+        let mut s = format!(
+            "\nSESSIONS — {} sessions ({}): {SESSIONS_METHOD}.\n",
+            self.names.len(),
+            self.names
+                .iter()
+                .enumerate()
+                .map(|(k, n)| format!("{n}: {} rows", self.rows(k)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        let mut any = false;
+        for c in d.candidates().iter().filter(|c| c.effects.len() == 1) {
+            if c.session.confounded() {
+                any = true;
+                let _ = writeln!(s, "  {}: {}", effects_text(c.effects), session_note(c));
+            }
+        }
+        if !any {
+            let _ = writeln!(
+                s,
+                "  no candidate is confounded with the sessions (sin θ of every effect column and √w of every input above {})",
+                Config::default().session_sin_max
+            );
+        }
+        if let Some(sep) = separate_by(d) {
+            let _ = writeln!(s, "  what would separate them: {sep}");
+        }
+        s
+    }
+}
+
+const SESSIONS_METHOD: &str = "each session's rows registered into the robot's base frame by the rigid fit of the model's points to the measured ones, alternating 3 rounds with the geometric calibration; the frames are fitted on all rows (not refitted per fold); a candidate is confounded with the sessions when every effect column lies in the span of the geometric and per-session base-frame columns, or its input (temp_c, s1..sN) is constant within every session, both at sin θ ≤ 0.1";
+
+/// Why a candidate is confounded with the sessions, in words.
+fn session_note(c: &ModelScore) -> String {
+    let t = &c.session;
+    let mut parts = Vec::new();
+    if t.input_constant {
+        parts.push(format!(
+            "its input is constant within every session (√(within-session share of its variance) = {:.3}): it is estimated only from differences between sessions, so it is confounded with the session (its base frame and whatever else differs between the set-ups); not chosen",
+            t.input_sin.unwrap_or(0.0)
+        ));
+    }
+    if t.columns_in_span {
+        parts.push(format!(
+            "its columns lie in the span of the per-session base frames and the geometry (largest sin θ = {:.3}): a rigid frame per session does the same; not chosen",
+            t.column_sin
+        ));
+    }
+    if parts.is_empty() {
+        parts.push("not confounded with the sessions".into());
+    } else if !t.columns_in_span {
+        parts.push(format!(
+            "its columns themselves are not in the session frames' span (sin θ = {:.3}): the data see its pattern, but cannot attribute it to its input",
+            t.column_sin
+        ));
+    }
+    format!("confounded with the session frame: {}", parts.join("; "))
+}
+
+/// The single effects confounded with the sessions (pairs inherit it from them).
+fn session_confounded<const N: usize>(d: &Diagnosis<N>) -> EffectSet {
+    d.candidates()
+        .iter()
+        .filter(|c| c.effects.len() == 1 && c.evaluated && c.session.confounded())
+        .fold(EffectSet::NONE, |acc, c| {
+            c.effects.iter().fold(acc, EffectSet::with)
+        })
+}
+
+/// What data would separate the session-confounded candidates from the sessions.
+fn separate_by<const N: usize>(d: &Diagnosis<N>) -> Option<String> {
+    let single = |e: Effect| {
+        d.candidates()
+            .iter()
+            .find(|c| c.effects == EffectSet::of(e) && c.session.confounded())
+    };
+    let mut out = Vec::new();
+    if single(Effect::Thermal).is_some_and(|c| c.session.input_constant) {
+        out.push("for thermal: two temperatures within one session (the robot warming up or cooling down during one set-up), or two sessions at different temperatures in the same set-up (same floor, same instrument stationing)".to_string());
+    }
+    if single(Effect::Backlash).is_some_and(|c| c.session.input_constant) {
+        out.push("for backlash: both approach directions within one session".to_string());
+    }
+    let spanned: Vec<&str> = d
+        .candidates()
+        .iter()
+        .filter(|c| c.effects.len() == 1 && c.session.columns_in_span)
+        .flat_map(|c| c.effects.iter().map(|e| e.name()))
+        .collect();
+    if !spanned.is_empty() {
+        out.push(format!(
+            "for {}: one session (one base frame) over the poses that excite it",
+            spanned.join(", ")
+        ));
+    }
+    (!out.is_empty()).then(|| out.join("; "))
 }
