@@ -75,7 +75,10 @@ else target): training on one placement and testing on it overfits. A held-out r
 scored by the distance of its predicted tool point from its target (plane) re-estimated
 from the held-out rows only; known distances whose targets are held out are scored too.
 Printed and in --json: mean |e|, RMS and max [mm] and the mean distance error, nominal vs
-calibrated (geometry kinds of --geometry, --effects, and the tool translation).";
+calibrated (geometry kinds of --geometry, --effects, and the tool translation). With
+--robust LOSS every fold's fit is the robust constrained fit of `calibrate --robust` (core
+identify_constrained_robust, IRLS on the training rows); the held-out scores are not
+reweighted.";
 
 pub const EXAMPLE: &str = "\
 Example:
@@ -832,7 +835,7 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "Cross-validation of '{name}' on {}: {} poses in {n_groups} pose groups, {} folds (seed {}), {}",
+        "Cross-validation of '{name}' on {}:\n  {n_groups} poses (pose_id groups, {} rows), {} folds (seed {}), {}",
         set.source,
         meas.len(),
         args.folds,
@@ -1185,10 +1188,9 @@ fn crossval_contacts<const N: usize>(
     set: &MeasurementSet,
     effects: EffectSet,
 ) -> Result<(), CliError> {
-    if args.robust.is_some() || args.init_frames || args.plot.is_some() || args.robot_out.is_some()
-    {
+    if args.init_frames || args.plot.is_some() || args.robot_out.is_some() {
         return Err(CliError::usage(
-            "--robust, --init-frames, --plot and --robot-out are not implemented for data with \
+            "--init-frames, --plot and --robot-out are not implemented for data with \
              target/plane rows",
         ));
     }
@@ -1216,6 +1218,7 @@ fn crossval_contacts<const N: usize>(
         weight_pos,
         max_iterations: args.max_iterations,
         constraints: cons.as_ref(),
+        robust: args.robust.map(Loss::from),
     };
     let (text, json) = crate::commands::crossval_contacts::run(nominal, set, &plan)?;
     if let Some(path) = &args.json {
