@@ -120,7 +120,7 @@ cases = {
     sprintf('%s\n0,0,NaN,0,0,0,0.5,0,0.3,0,0,0\n', h), ':2: column ''q3'': expected a finite'
     sprintf('%s\n0,0,0,0,0,0,Inf,0,0.3,0,0,0\n', h), 'column ''x'': expected a finite'
     sprintf('%s\n0,0,0,0,0,0,,0,0.3,0,0,0\n', h), 'empty cell'
-    sprintf('%s\n0,0,0\n', h), ':2: expected 12 fields as in the header'
+    sprintf('%s\n0,0,0\n', h), ':2: column ''q4'': expected 12 fields as in the header'
     sprintf('%s\n%s\n# late\n', h, row), ':3: comment line after the header'
     sprintf('%s\n0,4,0,0,0,0,0.5,0,0.3,0,0,0\n', h), ':2: column ''q2'': joint 2 reading 4 rad'
     sprintf('%s,q7\n%s,0\n', h, row), 'the robot has 6 joints'
