@@ -2,8 +2,8 @@
 %   (paper, Sections 4.2-4.4). Compares the poses a calibration tool could hold:
 %     - "Table 2": the paper's arbitrary-choice tool, ten poses on a circle;
 %     - "clustering": the paper's workspace-clustering design (Section 4.2), by
-%       KINCAL_CLUSTER_SELECT: ten candidate poses in ten different cubes of side 0.1 m of
-%       the biopsy working region whose per-pose observability is equal within 10 %
+%       KINCAL_CLUSTER_SELECT: ten candidate poses in ten different cubes of side 0.1 m
+%       (halved while fewer than ten cubes hold a candidate) of the biopsy working region whose per-pose observability is equal within 10 %
 %       (the CLI's `select-poses --design clustering`, one core function);
 %     - "optimal": ten poses maximising the observability index O, eq. (18), selected
 %       by KINCAL_SELECT_POSES from candidates with the tool in the working region.
@@ -46,11 +46,25 @@ inside = all(p >= repmat(region(:, 1), 1, k) & p <= repmat(region(:, 2), 1, k), 
 [q_opt, sel] = kincal_select_poses(nominal, 10, pool(:, inside), 'seed', 1, 'region', region);
 % Workspace clustering (Section 4.2) on the same candidates: cubes of 0.1 m of the region
 % (5 x 5 x 1), one pose per cube, per-pose singular values within 10 % of a target pose's.
-[q_cl, cl] = kincal_cluster_select(nominal, 10, pool(:, inside), 'region', region, ...
-    'cube_m', 0.1, 'max_spread', 0.1);
-fprintf(['workspace clustering: %d poses in different 0.1 m cubes (%d occupied), per-pose ' ...
+% When fewer than ten cubes hold a candidate, the side is halved (said on screen).
+cube_m = 0.1;
+while true
+    try
+        [q_cl, cl] = kincal_cluster_select(nominal, 10, pool(:, inside), 'region', region, ...
+            'cube_m', cube_m, 'max_spread', 0.1);
+        break;
+    catch err
+        if ~strcmp(err.identifier, 'kincal:tooFewData') || cube_m < 0.01
+            rethrow(err);
+        end
+        fprintf('workspace clustering: fewer than 10 of the %.3g m cubes hold a candidate; halving\n', ...
+            cube_m);
+        cube_m = cube_m / 2;
+    end
+end
+fprintf(['workspace clustering: %d poses in different %.3g m cubes (%d occupied), per-pose ' ...
     'singular values within %.1f %% of the target''s (ln-ratio %.3f)%s\n'], size(q_cl, 2), ...
-    cl.occupied_cubes, (exp(cl.spread) - 1) * 100, cl.spread, ...
+    cube_m, cl.occupied_cubes, (exp(cl.spread) - 1) * 100, cl.spread, ...
     repmat(', above the tolerance: the smallest spread found', 1, ~cl.within_tolerance));
 designs(end + 1) = struct('name', 'clustering', 'targets', kincal_fk(nominal, q_cl));
 I_t2 = kincal_observability(nominal, kincal_ik(nominal, T_tool, seed));
