@@ -437,6 +437,25 @@ fn checked(f: FileRead) -> Result<FileRead, Refused> {
     poses_of(&f.set).map(|_| f)
 }
 
+/// [`finish`] for the two sizes queries: writes the read file's sizes to `sizes_out`.
+///
+/// # Safety
+/// As [`finish`]; `sizes_out` NULL or writable.
+unsafe fn finish_sizes(
+    outcome: ReadOutcome<FileRead>,
+    read_err: *mut kincal_read_error,
+    sizes_out: *mut kincal_measurement_sizes,
+) -> FfiResult {
+    // SAFETY: forwarded contract.
+    unsafe {
+        finish(outcome, read_err, |f| {
+            let out = arg_out1!(sizes_out);
+            out.put(sizes_of(&f));
+            Ok(())
+        })
+    }
+}
+
 /// Reads and checks the measurement CSV at `path` (spec/measurements.md) with the CLI's
 /// reader and writes its sizes to `sizes_out`, for the buffers of `kincal_measurements_read`.
 ///
@@ -473,13 +492,7 @@ pub unsafe extern "C" fn kincal_measurements_read_sizes(
             Ok(unsafe { read_path(path, r, flags) }?.and_then(checked))
         })();
         // SAFETY: forwarded contract.
-        unsafe {
-            finish(outcome, read_err, |f| {
-                let out = arg_out1!(sizes_out);
-                out.put(sizes_of(&f));
-                Ok(())
-            })
-        }
+        unsafe { finish_sizes(outcome, read_err, sizes_out) }
     })
 }
 
@@ -541,13 +554,7 @@ pub unsafe extern "C" fn kincal_measurements_read_buffer_sizes(
             Ok(read_bytes(bytes, "buffer", r, flags)?.and_then(checked))
         })();
         // SAFETY: forwarded contract.
-        unsafe {
-            finish(outcome, read_err, |f| {
-                let out = arg_out1!(sizes_out);
-                out.put(sizes_of(&f));
-                Ok(())
-            })
-        }
+        unsafe { finish_sizes(outcome, read_err, sizes_out) }
     })
 }
 

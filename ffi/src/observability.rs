@@ -697,20 +697,9 @@ pub unsafe extern "C" fn kincal_select_poses(
         let reg = arg_opt!(region);
         let any = to_any(r)?;
         let n = any.n_joints();
-        let expected = pool_len
-            .checked_mul(n)
-            .ok_or_else(|| crate::args::bad_length(c"pool_q", usize::MAX, pool_q_len))?;
+        let expected = pool_elements(pool_len, n, pool_q_len)?;
         let pool = arg_f64s!(pool_q, pool_q_len, expected);
-        if m == 0 || m > pool_len {
-            return Err(kincal_error::new(kincal_status::TooFewData)
-                .arg(c"m")
-                .counts(m.max(1), pool_len));
-        }
-        if m > KINCAL_MAX_SELECT {
-            return Err(kincal_error::new(kincal_status::CapacityExceeded)
-                .arg(c"m")
-                .counts(KINCAL_MAX_SELECT, m));
-        }
+        check_selection_size(m, pool_len)?;
         let out = arg_out!(q_out, q_out_len, m * n);
         let sel_out = arg_out_opt!(selection_out, 1, 1);
         let objective = index_of(objective)?;
@@ -1019,20 +1008,9 @@ pub unsafe extern "C" fn kincal_cluster_select(
         let g = arg_ref!(region);
         let any = to_any(r)?;
         let n = any.n_joints();
-        let expected = pool_len
-            .checked_mul(n)
-            .ok_or_else(|| crate::args::bad_length(c"pool_q", usize::MAX, pool_q_len))?;
+        let expected = pool_elements(pool_len, n, pool_q_len)?;
         let pool = arg_f64s!(pool_q, pool_q_len, expected);
-        if m == 0 || m > pool_len {
-            return Err(kincal_error::new(kincal_status::TooFewData)
-                .arg(c"m")
-                .counts(m.max(1), pool_len));
-        }
-        if m > KINCAL_MAX_SELECT {
-            return Err(kincal_error::new(kincal_status::CapacityExceeded)
-                .arg(c"m")
-                .counts(KINCAL_MAX_SELECT, m));
-        }
+        check_selection_size(m, pool_len)?;
         let out = arg_out!(chosen_out, chosen_len, m);
         let sel_out = arg_out_opt!(selection_out, 1, 1);
         let objective = index_of(objective)?;
@@ -1065,4 +1043,28 @@ pub unsafe extern "C" fn kincal_cluster_select(
         }
         Ok(())
     })
+}
+
+/// The number of doubles a pool of `pool_len` configurations of `n` joints holds (an
+/// overflow is a wrong `pool_q_len`).
+fn pool_elements(pool_len: usize, n: usize, pool_q_len: usize) -> Result<usize, kincal_error> {
+    pool_len
+        .checked_mul(n)
+        .ok_or_else(|| crate::args::bad_length(c"pool_q", usize::MAX, pool_q_len))
+}
+
+/// `m` poses chosen from a pool of `pool_len`: at least one, at most the pool, and within
+/// the fixed capacity of a selection.
+fn check_selection_size(m: usize, pool_len: usize) -> Result<(), kincal_error> {
+    if m == 0 || m > pool_len {
+        return Err(kincal_error::new(kincal_status::TooFewData)
+            .arg(c"m")
+            .counts(m.max(1), pool_len));
+    }
+    if m > KINCAL_MAX_SELECT {
+        return Err(kincal_error::new(kincal_status::CapacityExceeded)
+            .arg(c"m")
+            .counts(KINCAL_MAX_SELECT, m));
+    }
+    Ok(())
 }
