@@ -4,26 +4,20 @@
 
 use std::fs;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use kincal::ik::{IkOptions, solve_ik};
 use kincal::pose::matrix_to_quaternion;
 use kincal::{JointState, ParamId, Robot, aria};
 use serde_json::Value;
 
-const BIN: &str = env!("CARGO_BIN_EXE_kincal");
+mod common;
+use common::kincal;
+
 /// Identified parameters must match the truth this closely on noise-free data (SI units).
 const RECOVERY_TOL: f64 = 1e-8;
 /// Validation errors on noise-free data [m], [rad].
 const VALIDATION_TOL: f64 = 1e-9;
-
-fn kincal(args: &[&str], dir: &Path) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run kincal")
-}
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()

@@ -5,29 +5,13 @@
 
 use std::fs;
 use std::path::Path;
-use std::process::{Command, Output};
 
 use kincal::ik::{IkOptions, solve_ik};
 use kincal::{JointState, Robot, Transform, aria};
 use serde_json::Value;
 
-const BIN: &str = env!("CARGO_BIN_EXE_kincal");
-
-fn kincal(args: &[&str], dir: &Path) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run kincal")
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
+mod common;
+use common::{kincal, text};
 
 /// Deterministic uniform numbers (SplitMix64).
 struct Rng(u64);

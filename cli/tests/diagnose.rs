@@ -3,8 +3,6 @@
 //! by predict and validate, exit codes and input protection.
 
 use std::fs;
-use std::path::Path;
-use std::process::{Command, Output};
 
 use kincal::identify::Measurement;
 use kincal::pose::matrix_to_quaternion;
@@ -13,15 +11,8 @@ use kincal::sim::{SessionConfig, add_effect, perturb_geometry, simulate_session}
 use kincal::{Effect, Transform, aria};
 use serde_json::Value;
 
-const BIN: &str = env!("CARGO_BIN_EXE_kincal");
-
-fn kincal(args: &[&str], dir: &Path) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run kincal")
-}
+mod common;
+use common::kincal;
 
 fn text(b: &[u8]) -> String {
     String::from_utf8_lossy(b).into_owned()

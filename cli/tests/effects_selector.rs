@@ -5,31 +5,13 @@
 //! identified (exactly 0 in the model file). A joint the robot does not have exits 2 naming
 //! it.
 
-use std::path::Path;
-use std::process::{Command, Output};
-
 use kincal::any::AnyRobot;
 use kincal::params::ParamId;
 use kincal::rng::SplitMix64;
 use kincal_io::urdf::{ChainSelection, import_urdf_str};
 
-const BIN: &str = env!("CARGO_BIN_EXE_kincal");
-
-fn kincal(args: &[&str], dir: &Path) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run kincal")
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
+mod common;
+use common::{kincal, text};
 
 const NAMES: [&str; 4] = ["shoulder_yaw", "shoulder_pitch", "elbow", "wrist"];
 

@@ -14,19 +14,13 @@ use kincal::pose::matrix_to_quaternion;
 use kincal::{ParamId, Robot, aria};
 use kincal_io::model_file::{self, ModelFile};
 
-const BIN: &str = env!("CARGO_BIN_EXE_kincal");
+mod common;
+use common::kincal;
+
 /// FK agreement of the exported URDF with the model [m] and rotation-matrix entries.
 const FK_TOL: f64 = 1e-12;
 
 type M4 = [[f64; 4]; 4];
-
-fn kincal(args: &[&str], dir: &Path) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run kincal")
-}
 
 fn code(o: &Output) -> i32 {
     o.status.code().expect("exit code")

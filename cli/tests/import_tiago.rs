@@ -2,26 +2,8 @@
 //! set's layout (the rows' numbers and the model's FK are checked in kincal-io's
 //! `datasets_tiago` tests): the rows and robot written, the refusals and their exit codes.
 
-use std::path::Path;
-use std::process::{Command, Output};
-
-const BIN: &str = env!("CARGO_BIN_EXE_kincal");
-
-fn kincal(args: &[&str], dir: &Path) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run kincal")
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
+mod common;
+use common::{kincal, text};
 
 const JOINTS: [&str; 8] = [
     "torso_lift_joint",

@@ -6,30 +6,15 @@
 
 use std::fs;
 use std::path::Path;
-use std::process::{Command, Output};
 
 use kincal::aria;
 use kincal::pose::{Transform, pose_from_xyz_rpy, quaternion_to_matrix};
 use kincal::rng::SplitMix64;
 
-const BIN: &str = env!("CARGO_BIN_EXE_kincal");
+mod common;
+use common::{kincal, text};
+
 const SIGMA_M: f64 = 5e-5;
-
-fn kincal(args: &[&str], dir: &Path) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run kincal")
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
 
 /// Base markers [mm] in the robot base frame and an asymmetric probe [mm] in the tool frame.
 const BASE: [(&str, [f64; 3]); 4] = [

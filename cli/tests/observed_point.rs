@@ -6,22 +6,13 @@
 //! bad arguments) with the right exit status and a message naming the problem.
 
 use std::fs;
-use std::path::Path;
-use std::process::{Command, Output};
 
 use kincal::pose::{matrix_to_quaternion, quaternion_to_matrix, rotation_exp};
 use kincal::rng::SplitMix64;
 use nalgebra::{Matrix3, Vector3};
 
-const BIN: &str = env!("CARGO_BIN_EXE_kincal");
-
-fn kincal(args: &[&str], dir: &Path) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run kincal")
-}
+mod common;
+use common::kincal;
 
 fn text(b: &[u8]) -> String {
     String::from_utf8_lossy(b).into_owned()

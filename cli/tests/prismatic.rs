@@ -5,8 +5,6 @@
 //! with the line.
 
 use std::fs;
-use std::path::Path;
-use std::process::{Command, Output};
 
 use kincal::any::AnyRobot;
 use kincal::{JointKind, Robot, with_any_robot};
@@ -14,7 +12,9 @@ use kincal_io::model_file::{self, ModelFile};
 use kincal_io::robot_file::{parse_robot_description, write_robot_description};
 use kincal_io::urdf::{ChainSelection, UrdfExport, export_urdf, import_urdf_str};
 
-const BIN: &str = env!("CARGO_BIN_EXE_kincal");
+mod common;
+use common::kincal;
+
 const FK_TOL: f64 = 1e-12;
 
 type M4 = [[f64; 4]; 4];
@@ -250,14 +250,6 @@ fn urdf_export_and_reimport_keep_the_fk_and_the_joint_types() {
     assert_eq!(text.matches("type=\"prismatic\"").count(), 2, "{text}");
     let back = import(&text);
     assert_fk_matches(&back, "export + import");
-}
-
-fn kincal(args: &[&str], dir: &Path) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run kincal")
 }
 
 /// `kincal export MODEL --urdf` of a model with slides, read back.

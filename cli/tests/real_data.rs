@@ -14,11 +14,11 @@
 //! MATE's single-coordinate rows, and `--base-link/--tip-link` on a URDF ROBOT.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use serde_json::Value;
 
-const BIN: &str = env!("CARGO_BIN_EXE_kincal");
+mod common;
+use common::{kincal, text};
 
 fn realdata() -> Option<PathBuf> {
     let dir = std::env::var_os("KINCAL_REALDATA").map_or_else(
@@ -37,22 +37,6 @@ fn realdata() -> Option<PathBuf> {
     }
     eprintln!("skipping: {msg}");
     None
-}
-
-fn kincal(args: &[&str], dir: &Path) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run kincal")
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
 }
 
 /// Imports `name` into `dir` as data.csv / robot.toml; returns the import's output.

@@ -10,9 +10,9 @@
 //! the figures of docs/real-data.md's diagnosis table to 2 %.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-const BIN: &str = env!("CARGO_BIN_EXE_kincal");
+mod common;
+use common::{kincal, text};
 
 fn realdata() -> Option<PathBuf> {
     let dir = std::env::var_os("KINCAL_REALDATA").map_or_else(
@@ -31,22 +31,6 @@ fn realdata() -> Option<PathBuf> {
     }
     eprintln!("skipping: {msg}");
     None
-}
-
-fn kincal(args: &[&str], dir: &Path) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run kincal")
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
 }
 
 fn close(got: f64, want: f64, what: &str) {

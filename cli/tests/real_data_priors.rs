@@ -7,11 +7,11 @@
 //! `$KINCAL_REALDATA`; skipped without it, except under `CI=true`.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use serde_json::Value;
 
-const BIN: &str = env!("CARGO_BIN_EXE_kincal");
+mod common;
+use common::{kincal, text};
 
 /// The physical bounds the docs state: |Δ length| < 20 mm, |Δ angle| < 3° from nominal.
 const MAX_LENGTH_CHANGE_MM: f64 = 20.0;
@@ -34,22 +34,6 @@ fn realdata() -> Option<PathBuf> {
     }
     eprintln!("skipping: {msg}");
     None
-}
-
-fn kincal(args: &[&str], dir: &Path) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run kincal")
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
 }
 
 /// Imports `name` into `dir` (data.csv, robot.toml) and, for the camera sets, re-expresses

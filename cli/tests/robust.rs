@@ -6,7 +6,7 @@
 
 use std::fs;
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
 use kincal::identify::Measurement;
 use kincal::pose::matrix_to_quaternion;
@@ -15,7 +15,8 @@ use kincal::sim::{SessionConfig, perturb_geometry, simulate_session};
 use kincal::{ParamId, Robot, Transform, aria};
 use serde_json::Value;
 
-const BIN: &str = env!("CARGO_BIN_EXE_kincal");
+mod common;
+use common::kincal;
 
 /// Size of the glitch added to one row's x [m].
 const GLITCH_M: f64 = 5e-3;
@@ -24,14 +25,6 @@ const BAD_ROW: usize = 23;
 /// Instrument noise of the session, 1σ per axis: 0.05 mm and 0.01°.
 const SIGMA_POS_MM: f64 = 0.05;
 const SIGMA_ROT_DEG: f64 = 0.01;
-
-fn kincal(args: &[&str], dir: &Path) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run kincal")
-}
 
 fn text(b: &[u8]) -> String {
     String::from_utf8_lossy(b).into_owned()

@@ -11,15 +11,8 @@ use std::time::{Duration, Instant};
 
 use kincal_io::files::{OutputErrorKind, write_atomic};
 
-const BIN: &str = env!("CARGO_BIN_EXE_kincal");
-
-fn kincal(args: &[&str], dir: &Path) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run kincal")
-}
+mod common;
+use common::{BIN, kincal};
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
