@@ -22,6 +22,7 @@ pub mod datasets_tiago;
 pub mod effects_arg;
 pub mod error;
 pub mod files;
+pub mod mcap_reader;
 pub mod measurements;
 pub mod model_file;
 pub mod model_read;

@@ -20,6 +20,7 @@ use std::path::Path;
 
 use crate::cdr;
 use crate::error::Error;
+pub use crate::mcap_reader::MAX_RECORD_BYTES;
 use crate::measurements::{MeasurementRow, MeasurementSet, Orientation, OrientationForm};
 
 /// What a measurement topic carries.
@@ -265,7 +266,7 @@ fn import_bag_readers<R: std::io::Read>(
         .join(", ");
     for (name, reader) in parts {
         let name = name.as_str();
-        for msg in message_reader(reader) {
+        for msg in crate::mcap_reader::Messages::new(reader) {
             let msg = msg.map_err(|e| not_mcap(name, &e))?;
             let topic = msg.channel.topic.as_str();
             let schema = msg
@@ -391,22 +392,7 @@ fn import_bag_readers<R: std::io::Read>(
     Ok(BagImport { set, summary })
 }
 
-/// The largest MCAP record (a message, or a chunk's compressed or uncompressed body) read:
-/// 256 MiB. Bags for calibration hold joint states and poses (rosbag2 writes 768 KiB chunks);
-/// without a bound, a damaged length field would make the reader allocate whatever it
-/// declares (the fuzz target found a multi-GB allocation), so a larger record is refused as
-/// damaged.
-pub const MAX_RECORD_BYTES: usize = 256 << 20;
-
-/// The bag's messages in file order, every record's length checked against
-/// [`MAX_RECORD_BYTES`] before anything is allocated for it.
-fn message_reader<R: std::io::Read>(reader: R) -> mcap::io::MessageReader<R> {
-    let options =
-        mcap::sans_io::LinearReaderOptions::default().with_record_length_limit(MAX_RECORD_BYTES);
-    mcap::io::MessageReader::new_with_options(reader, options)
-}
-
-fn not_mcap(name: &str, e: &mcap::McapError) -> Error {
+fn not_mcap(name: &str, e: &dyn std::fmt::Display) -> Error {
     Error::input(format!(
         "{name}: not a readable MCAP file (truncated or damaged?): {e}"
     ))
@@ -905,6 +891,32 @@ mod tests {
         bag.extend(record(0x01, &header));
         bag.extend(record(0x06, &chunk));
         bag
+    }
+
+    /// A channel record whose topic declares ≈ 4 GiB: binrw would reserve that before
+    /// reading (the fuzz target's second finding); the prefix check refuses it first.
+    #[test]
+    fn a_string_longer_than_its_record_is_refused_before_parsing() {
+        let opts = BagOptions::new("/joint_states", MeasurementTopic::Pose("/tool".into()));
+        let mut channel = Vec::new();
+        channel.extend_from_slice(&1u16.to_le_bytes()); // id
+        channel.extend_from_slice(&0u16.to_le_bytes()); // schema id
+        channel.extend_from_slice(&0xFFFF_0000u32.to_le_bytes()); // topic length
+        channel.extend_from_slice(b"/joint_states");
+        let mut header = mcap_str("ros2");
+        header.extend_from_slice(&mcap_str("kincal-test"));
+        let mut bag = MAGIC.to_vec();
+        bag.extend(record(0x01, &header));
+        bag.extend(record(0x04, &channel));
+        let Err(err) = import_bag_bytes(&[("damaged.mcap", &bag)], &opts) else {
+            panic!("a channel whose topic overruns its record is refused");
+        };
+        let text = err.to_string();
+        assert!(
+            text.contains("damaged.mcap: not a readable MCAP file")
+                && text.contains("channel topic declares 4294901760 bytes"),
+            "{text}"
+        );
     }
 
     /// A damaged length field must be refused, not allocated: the fuzz target's crash was a
