@@ -14,10 +14,12 @@
 pub mod calibration;
 pub mod cdr;
 pub mod constraints;
+pub mod crossval;
 pub mod data;
 pub mod datasets;
 pub mod datasets_contact;
 pub mod datasets_hilti;
+pub mod diagnose;
 pub mod error;
 pub mod files;
 pub mod measurements;
