@@ -7,8 +7,8 @@ use std::path::Path;
 
 use kincal::identify::{Loss, PriorSizes};
 use kincal::{Effect, EffectSet, Robot as CoreRobot};
-use kincal_io::crossval::{self, PriorChoice, Weighting};
-use kincal_io::diagnose::{self, SigmaNames};
+use kincal_io::crossval::{self as cv, PriorChoice, Weighting};
+use kincal_io::diagnose::{self as diag, SigmaNames};
 use kincal_io::measurements::MeasurementSet;
 use pyo3::prelude::*;
 
@@ -105,7 +105,7 @@ fn crossval_options(
     robust: Option<String>,
     max_iterations: u32,
     prior: Option<&Bound<'_, PyAny>>,
-) -> PyResult<crossval::Options> {
+) -> PyResult<cv::Options> {
     check_folds(py, folds)?;
     if let Some(k) = geometry
         .iter()
@@ -164,7 +164,7 @@ fn crossval_options(
             "prior needs weights from the noise (not unit_weights)",
         ));
     }
-    Ok(crossval::Options {
+    Ok(cv::Options {
         effects: effect_set(py, effects)?
             .into_iter()
             .fold(EffectSet::NONE, EffectSet::with),
@@ -184,12 +184,12 @@ fn crossval_run<'py, const N: usize>(
     nominal: &CoreRobot<N>,
     name: &str,
     set: &MeasurementSet,
-    options: &crossval::Options,
+    options: &cv::Options,
 ) -> PyResult<Bound<'py, PyAny>> {
     let study = py
-        .detach(|| crossval::run(nominal, set, options))
+        .detach(|| cv::run(nominal, set, options))
         .map_err(|e| errors::from_io(py, &e, &[&set.source]))?;
-    let doc = crossval::json(&study, set, nominal, name, options);
+    let doc = cv::json(&study, set, nominal, name, options);
     crate::json::loads(py, &doc.to_string())
 }
 
@@ -254,17 +254,17 @@ fn diagnose_run<'py, const N: usize>(
     py: Python<'py>,
     robot: &CoreRobot<N>,
     set: &MeasurementSet,
-    options: &diagnose::Options,
+    options: &diag::Options,
 ) -> PyResult<Bound<'py, PyAny>> {
     const NAMES: SigmaNames<'static> = SigmaNames {
         pos: "sigma_pos_mm",
         rot: "sigma_rot_deg",
     };
     let study = py
-        .detach(|| diagnose::run(robot, set, options, NAMES))
+        .detach(|| diag::run(robot, set, options, NAMES))
         .map_err(|e| errors::from_io(py, &e, &[&set.source]))?;
-    let report = diagnose::report(&study, set, Path::new(&set.source), None);
-    crate::json::loads(py, &diagnose::report_text(&report))
+    let report = diag::report(&study, set, Path::new(&set.source), None);
+    crate::json::loads(py, &diag::report_text(&report))
 }
 
 /// The sim-to-real diagnosis of ``kincal diagnose`` (spec/effects.md): the noise floor
@@ -298,8 +298,8 @@ pub fn diagnose<'py>(
     let sigma_rot_deg = sigma_rot_deg
         .map(|s| positive(py, "sigma_rot_deg", s))
         .transpose()?;
-    let defaults = diagnose::Options::default();
-    let options = diagnose::Options {
+    let defaults = diag::Options::default();
+    let options = diag::Options {
         sigma_pos_mm,
         sigma_rot_deg,
         candidates: effect_set(py, &candidates)?,
