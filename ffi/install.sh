@@ -25,11 +25,13 @@ export CARGO_TARGET_DIR=$target
 cd "$root"
 # One release build of both crate types; rustc also reports the system libraries the static
 # library needs (replayed from cargo's cache when the build is fresh).
+# cargo's lines ("Compiling ...") go to stderr as they come, so a first build is not silent.
 echo "install.sh: building the release library (about 3-4 minutes on a first build)..." >&2
-build_log=$(cargo rustc --release -p kincal-ffi -- --print native-static-libs 2>&1) || {
-    printf '%s\n' "$build_log" >&2
-    exit 1
-}
+build_log=$(cargo rustc --release -p kincal-ffi -- --print native-static-libs 2>&1 |
+    while IFS= read -r line; do
+        printf '%s\n' "$line" >&2
+        printf '%s\n' "$line"
+    done) || exit 1
 native=$(printf '%s\n' "$build_log" | sed -n 's/^note: native-static-libs: //p' | tail -n 1)
 if [[ -z $native ]]; then
     printf '%s\n' "$build_log" >&2

@@ -347,13 +347,22 @@ pub fn fmt_err(v: f64) -> String {
 
 pub use kincal_io::units::{quantity_label, quantity_unit};
 
+/// One row of the residual table: each kind over the poses measuring it (a row giving only
+/// `x` contributes |e_x|), a dash for a kind no pose measures (not a residual of zero).
 fn stats_row(name: &str, s: &ResidualStats) -> Vec<String> {
+    let or_dash = |measured: usize, v: f64| {
+        if measured == 0 {
+            "-".to_string()
+        } else {
+            fmt_err(v)
+        }
+    };
     vec![
         name.to_string(),
-        fmt_err(s.rms_pos_m * 1e3),
-        fmt_err(s.max_pos_m * 1e3),
-        fmt_err(s.rms_rot_rad.to_degrees()),
-        fmt_err(s.max_rot_rad.to_degrees()),
+        or_dash(s.pos_poses, s.rms_pos_m * 1e3),
+        or_dash(s.pos_poses, s.max_pos_m * 1e3),
+        or_dash(s.rot_poses, s.rms_rot_rad.to_degrees()),
+        or_dash(s.rot_poses, s.max_rot_rad.to_degrees()),
         fmt_small(s.cost),
     ]
 }

@@ -583,6 +583,14 @@ fn demo_runs_and_writes_its_files() {
         let p = d.join(name);
         assert!(p.is_file() && fs::metadata(&p).unwrap().len() > 0, "{name}");
     }
+    // Every table fits 100 columns (its rule line is as wide as the table).
+    for l in out.lines().filter(|l| l.trim_start().starts_with("---")) {
+        assert!(
+            l.chars().count() <= 100,
+            "{} columns: {l}",
+            l.chars().count()
+        );
+    }
     // Run times are on the screen only: report.txt is byte-for-byte reproducible.
     assert!(out.contains("Done in"), "{out}");
     for name in ["report.txt", "real_aria_REPORT.txt"] {

@@ -345,6 +345,44 @@ fn stated_noise_too_large_still_reports_the_effect_and_the_smooth_check_in_rms()
         stdout.contains("EXPLAINABLE AT ALL (library-free): the geometric model is not above the stated noise floor, yet a smooth function of the joint angles lowers the held-out RMS from"),
         "{stdout}"
     );
+    // The candidate table's gap columns: no share of a gap below the stated floor (the
+    // denominator B − √3σ is negative there), a dash and the reason under the table.
+    let report = fs::read_to_string(dir.path().join("r.txt")).unwrap();
+    let which = report
+        .split("WHICH")
+        .nth(1)
+        .and_then(|w| w.split("\n\n").next())
+        .unwrap_or_default();
+    assert!(!which.contains(" %"), "{which}");
+    assert!(
+        which.contains("gap -: geometric only (")
+            && which.contains("is not above the noise floor √3σ = 5.196 mm"),
+        "{which}"
+    );
+    assert!(which.contains("rot. gap -: geometric only ("), "{which}");
+
+    // The candidate chart says what its bar colours mean, in a legend below the x axis's
+    // label, off the bars and the reference lines.
+    let svg = fs::read_to_string(dir.path().join("r_candidates.svg")).unwrap();
+    let text_y = |label: &str| -> f64 {
+        let at = svg
+            .find(&format!(">\n{label}"))
+            .unwrap_or_else(|| panic!("{label}: {svg}"));
+        let open = svg[..at].rfind("<text").unwrap();
+        let y = svg[open..at].split(" y=\"").nth(1).unwrap();
+        y[..y.find('"').unwrap()].parse().unwrap()
+    };
+    let axis = text_y("held-out RMS |Δp| [mm]");
+    for label in [
+        "the verdict",
+        "confounded with the verdict",
+        "significant",
+        "not significant",
+        "geometric only (",
+        "noise floor √3σ (5.196 mm)",
+    ] {
+        assert!(text_y(label) > axis, "{label} over the chart: {svg}");
+    }
 }
 
 /// `diagnose --prior` (as `calibrate --prior`): the written model is fitted with the prior

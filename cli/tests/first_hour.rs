@@ -109,17 +109,44 @@ fn validate_warns_in_sample_counts_poses_and_dashes_missing_orientation() {
     assert_eq!(p1[0].len(), 9, "{out}");
     assert!(p1[0][5..].iter().all(|c| *c != "-"), "{out}");
     assert_eq!(&p1[1][5..], ["-"; 4], "{out}");
+
+    // crossval counts poses by pose_id too, and the rows beside them.
+    let out = ok(&kincal(
+        &["crossval", "twins.csv", "--robot", "aria"],
+        dir.path(),
+        &[],
+    ));
+    assert!(
+        out.contains("\n  10 poses (pose_id groups, 20 rows), 5 folds"),
+        "{out}"
+    );
 }
 
 #[test]
 fn aria_targets_and_eq3_only_for_aria() {
     let dir = calibrated();
     let out = ok(&kincal(
-        &["validate", "model.json", "data.csv"],
+        &["validate", "model.json", "data.csv", "--plot", "e.svg"],
         dir.path(),
         &[],
     ));
     assert!(out.contains("the paper's ARIA targets"), "{out}");
+    // In-sample errors far below the targets: the norm rows are scaled to the errors and
+    // the x-axis label states the target (a line at the target would flatten them).
+    let svg = fs::read_to_string(dir.path().join("e.svg")).unwrap();
+    // NOM's errors reach the targets (line drawn); OLS's in-sample errors do not.
+    assert_eq!(
+        svg.matches("pose (target 0.660 deg, above this scale)")
+            .count(),
+        1,
+        "{svg}"
+    );
+    assert_eq!(
+        svg.matches("pose (target 1.00 mm, above this scale)")
+            .count(),
+        1,
+        "{svg}"
+    );
     assert!(out.contains("Eq. (3)"), "{out}");
 
     // The same model under another robot's name: the targets are labelled as ARIA's and
@@ -249,6 +276,21 @@ fn opt1_on_its_bounds_is_said_once_and_output_stays_readable() {
     for l in out.lines() {
         assert!(l.chars().count() <= 104, "{} chars: {l}", l.chars().count());
     }
+    // validate names the bound case under its table of every recorded model.
+    let v = ok(&kincal(
+        &["validate", "m.json", "data.csv"],
+        dir.path(),
+        &[],
+    ));
+    assert!(v.contains("\n  OPT1 ended on its bounds ("), "{v}");
+    assert!(
+        v.contains("its errors measure the intervals, not the data"),
+        "{v}"
+    );
+    assert!(
+        !v.contains("OLS ended on") && !v.contains("OPT2 ended on"),
+        "{v}"
+    );
     // The model file still records every disagreement.
     let m: serde_json::Value =
         serde_json::from_str(&fs::read_to_string(dir.path().join("m.json")).unwrap()).unwrap();

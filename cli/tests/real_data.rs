@@ -637,6 +637,64 @@ fn mate_plane_contacts_calibrate_held_out() {
         .sum::<f64>()
         / pred.len() as f64;
     assert!((mean_x - 0.3029).abs() < 5e-4, "mean x {mean_x}");
+    // calibrate on the single-coordinate rows: the residual table gives |e| over the given
+    // coordinate of each row (it printed 0.000000 before, the rows having no full position)
+    // and a dash for the orientation, which no row measures.
+    let o = kincal(
+        &[
+            "calibrate",
+            "planes.csv",
+            "--robot",
+            "robot.toml",
+            "--allow-out-of-limits",
+            "--out",
+            "model.json",
+        ],
+        dir.path(),
+    );
+    let out = text(&o);
+    assert!(o.status.success(), "{out}");
+    let cells = |prefix: &str| -> Vec<String> {
+        let line = out
+            .lines()
+            .find(|l| l.trim_start().starts_with(prefix))
+            .unwrap_or_else(|| panic!("no {prefix:?} row in {out}"));
+        line.split("  ")
+            .map(str::trim)
+            .filter(|c| !c.is_empty())
+            .map(str::to_string)
+            .collect()
+    };
+    let before = cells("before (initial)");
+    let after = cells("after OLS");
+    let rms = |c: &[String]| c[1].parse::<f64>().unwrap();
+    // The nominal in-sample RMS is crossval's nominal figure (the same rows, no fit).
+    close(rms(&before), 14.670, "MATE nominal in-sample RMS [mm]");
+    assert!(rms(&after) > 0.5 && rms(&after) < 2.0, "{out}");
+    assert_eq!((before[3].as_str(), after[4].as_str()), ("-", "-"), "{out}");
+    // validate's per-pose table: a y-plane contact has e_y only (dashes for x and z), and
+    // |e_p| is |e_y|.
+    let o = kincal(
+        &[
+            "validate",
+            "model.json",
+            "planes.csv",
+            "--allow-out-of-limits",
+        ],
+        dir.path(),
+    );
+    let out = text(&o);
+    assert!(o.status.success(), "{out}");
+    let row: Vec<&str> = out
+        .lines()
+        .find(|l| l.trim_start().starts_with("y/"))
+        .unwrap_or_else(|| panic!("no y/ row in {out}"))
+        .split_whitespace()
+        .collect();
+    assert_eq!((row[1], row[3]), ("-", "-"), "{out}");
+    let e_y: f64 = row[2].parse().unwrap();
+    let norm: f64 = row[4].parse().unwrap();
+    assert!(e_y != 0.0 && (e_y.abs() - norm).abs() < 2e-6, "{out}");
 }
 
 #[test]

@@ -370,6 +370,20 @@ pub fn has_contacts(set: &MeasurementSet) -> bool {
     set.rows.iter().any(MeasurementRow::is_constraint)
 }
 
+/// Why instrument rows in a second session are refused (the one wording for the contact
+/// reader and the instrument-only reader): session `first` began at line `first_line`, the
+/// refused row is in `other`.
+pub(crate) fn instrument_sessions_refused(first: &str, first_line: u64, other: &str) -> String {
+    format!(
+        "instrument rows (x, y, z) in two sessions, {first:?} (from line {first_line}) and \
+         {other:?} (this row): all instrument rows share the robot's one base frame, and a \
+         base frame per session for instrument rows is not implemented \
+         (docs/constraints.md); expected instrument rows in one session (target/plane rows \
+         may span sessions): give rows from one instrument set-up one session id, or \
+         calibrate each set-up's rows separately"
+    )
+}
+
 fn input(set: &MeasurementSet, line: u64, column: &str, why: String) -> CliError {
     CliError::input(format!("{}:{line}: column '{column}': {why}", set.source))
 }
@@ -435,14 +449,7 @@ fn check_layout(
             set,
             row(r).line,
             "session",
-            format!(
-                "instrument rows (x, y, z) in session {:?} and, from line {}, in session {:?}: \
-                 one base frame per session is not implemented yet; expected instrument rows \
-                 in one session only (contact rows may span sessions)",
-                session_name(r),
-                row(first).line,
-                session_name(first)
-            ),
+            instrument_sessions_refused(&session_name(first), row(first).line, &session_name(r)),
         ),
         SessionFault::SessionTooSmall { session, rows, .. } => input(
             set,

@@ -142,20 +142,21 @@ pub fn measured_pose(
 /// Every row as a core measurement (the set must have positions); `point_x/y/z` become
 /// [`Measurement::point`].
 pub fn measurements<const N: usize>(set: &MeasurementSet) -> Result<Vec<Measurement<N>>, CliError> {
-    let first_session = set.rows.first().and_then(|r| r.session.as_deref());
+    let first = set.rows.first();
+    let first_session = first.and_then(|r| r.session.as_deref());
     set.rows
         .iter()
         .map(|row| {
             if row.session.as_deref() != first_session {
                 return Err(CliError::input(format!(
-                    "{}:{}: column 'session': session {:?} after session {:?}: rows of \
-                     different sessions need a base frame each, which is implemented for \
-                     target/plane rows only (calibrate, validate, crossval); expected one \
-                     session",
+                    "{}:{}: column 'session': {}",
                     set.source,
                     row.line,
-                    row.session.as_deref().unwrap_or(""),
-                    first_session.unwrap_or("")
+                    crate::constraints::instrument_sessions_refused(
+                        first_session.unwrap_or(""),
+                        first.map_or(0, |r| r.line),
+                        row.session.as_deref().unwrap_or("")
+                    )
                 )));
             }
             if let Some(id) = row.target.as_ref().or(row.plane.as_ref()) {

@@ -166,19 +166,17 @@ pub struct BagImport {
 }
 
 /// Reads a bag: an `.mcap` file, or a rosbag2 folder (its `.mcap` files in name order).
+/// The files are streamed: memory grows with the largest record and the rows kept, not with
+/// the bag (a bag that also holds camera images can be many GB).
 pub fn import_bag_path(path: &Path, opts: &BagOptions) -> Result<BagImport, Error> {
     let files = bag_files(path)?;
-    let mut contents = Vec::with_capacity(files.len());
+    let mut parts = Vec::with_capacity(files.len());
     for f in &files {
-        let bytes = std::fs::read(f)
+        let file = std::fs::File::open(f)
             .map_err(|e| Error::input(format!("{}: cannot read: {e}", f.display())))?;
-        contents.push((f.display().to_string(), bytes));
+        parts.push((f.display().to_string(), std::io::BufReader::new(file)));
     }
-    let parts: Vec<(&str, &[u8])> = contents
-        .iter()
-        .map(|(n, b)| (n.as_str(), b.as_slice()))
-        .collect();
-    let mut imported = import_bag_bytes(&parts, opts)?;
+    let mut imported = import_bag_readers(parts, opts)?;
     for f in &files {
         let sha = crate::files::sha256_file(f)
             .map_err(|e| Error::input(format!("{}: cannot read: {e}", f.display())))?;
@@ -244,17 +242,30 @@ const POINT_STAMPED: &[&str] = &[
 
 /// Reads the bytes of one or more MCAP files (`(name, bytes)`, in order) into rows.
 pub fn import_bag_bytes(parts: &[(&str, &[u8])], opts: &BagOptions) -> Result<BagImport, Error> {
+    import_bag_readers(parts.iter().map(|(n, b)| (n.to_string(), *b)), opts)
+}
+
+/// Reads one or more MCAP streams (`(name, reader)`, in order) into rows.
+fn import_bag_readers<R: std::io::Read>(
+    parts: impl IntoIterator<Item = (String, R)>,
+    opts: &BagOptions,
+) -> Result<BagImport, Error> {
     opts.check()?;
+    let parts: Vec<(String, R)> = parts.into_iter().collect();
     let mut summary = BagSummary::default();
     let mut topics_seen: BTreeMap<String, String> = BTreeMap::new();
     let mut joints: Vec<Timed<Vec<f64>>> = Vec::new();
     let mut measured: Vec<Timed<Measured>> = Vec::new();
     let mut frames = FrameNames::default();
     let mut first_names: Option<Vec<String>> = None;
-    let source = parts.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ");
-    for (name, bytes) in parts {
-        let stream = mcap::MessageStream::new(bytes).map_err(|e| not_mcap(name, &e))?;
-        for msg in stream {
+    let source = parts
+        .iter()
+        .map(|(n, _)| n.as_str())
+        .collect::<Vec<_>>()
+        .join(", ");
+    for (name, reader) in parts {
+        let name = name.as_str();
+        for msg in message_reader(reader) {
             let msg = msg.map_err(|e| not_mcap(name, &e))?;
             let topic = msg.channel.topic.as_str();
             let schema = msg
@@ -378,6 +389,21 @@ pub fn import_bag_bytes(parts: &[(&str, &[u8])], opts: &BagOptions) -> Result<Ba
     summary.rows = rows.len();
     let set = measurement_set(&source, n_joints, rows, opts, &frames);
     Ok(BagImport { set, summary })
+}
+
+/// The largest MCAP record (a message, or a chunk's compressed or uncompressed body) read:
+/// 256 MiB. Bags for calibration hold joint states and poses (rosbag2 writes 768 KiB chunks);
+/// without a bound, a damaged length field would make the reader allocate whatever it
+/// declares (the fuzz target found a multi-GB allocation), so a larger record is refused as
+/// damaged.
+pub const MAX_RECORD_BYTES: usize = 256 << 20;
+
+/// The bag's messages in file order, every record's length checked against
+/// [`MAX_RECORD_BYTES`] before anything is allocated for it.
+fn message_reader<R: std::io::Read>(reader: R) -> mcap::io::MessageReader<R> {
+    let options =
+        mcap::sans_io::LinearReaderOptions::default().with_record_length_limit(MAX_RECORD_BYTES);
+    mcap::io::MessageReader::new_with_options(reader, options)
 }
 
 fn not_mcap(name: &str, e: &mcap::McapError) -> Error {
@@ -838,5 +864,64 @@ fn measurement_set(
         has_temperature: false,
         sha256: String::new(),
         header_line: 0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MAGIC: &[u8] = b"\x89MCAP0\r\n";
+
+    fn record(opcode: u8, body: &[u8]) -> Vec<u8> {
+        let mut out = vec![opcode];
+        out.extend_from_slice(&(body.len() as u64).to_le_bytes());
+        out.extend_from_slice(body);
+        out
+    }
+
+    fn mcap_str(s: &str) -> Vec<u8> {
+        let mut out = (s.len() as u32).to_le_bytes().to_vec();
+        out.extend_from_slice(s.as_bytes());
+        out
+    }
+
+    /// An uncompressed chunk whose only record declares `declared` bytes of body.
+    fn bag_with_chunk_record_of(declared: u64) -> Vec<u8> {
+        let mut inner = vec![0x05u8]; // a message record header...
+        inner.extend_from_slice(&declared.to_le_bytes()); // ...declaring this much body
+        inner.extend_from_slice(&[0; 16]);
+        let mut chunk = Vec::new();
+        chunk.extend_from_slice(&0u64.to_le_bytes()); // message_start_time
+        chunk.extend_from_slice(&0u64.to_le_bytes()); // message_end_time
+        chunk.extend_from_slice(&declared.to_le_bytes()); // uncompressed_size
+        chunk.extend_from_slice(&0u32.to_le_bytes()); // uncompressed_crc (0: not checked)
+        chunk.extend_from_slice(&mcap_str("")); // no compression
+        chunk.extend_from_slice(&(inner.len() as u64).to_le_bytes());
+        chunk.extend_from_slice(&inner);
+        let mut header = mcap_str("ros2");
+        header.extend_from_slice(&mcap_str("kincal-test"));
+        let mut bag = MAGIC.to_vec();
+        bag.extend(record(0x01, &header));
+        bag.extend(record(0x06, &chunk));
+        bag
+    }
+
+    /// A damaged length field must be refused, not allocated: the fuzz target's crash was a
+    /// multi-GB allocation for a record that a chunk declared.
+    #[test]
+    fn a_record_longer_than_the_limit_is_refused_before_allocation() {
+        let opts = BagOptions::new("/joint_states", MeasurementTopic::Pose("/tool".into()));
+        for declared in [1u64 << 40, (MAX_RECORD_BYTES as u64) + 1, u64::MAX] {
+            let bag = bag_with_chunk_record_of(declared);
+            let Err(err) = import_bag_bytes(&[("damaged.mcap", &bag)], &opts) else {
+                panic!("a bag declaring a {declared}-byte record is refused");
+            };
+            let text = err.to_string();
+            assert!(
+                text.contains("damaged.mcap: not a readable MCAP file"),
+                "{text}"
+            );
+        }
     }
 }

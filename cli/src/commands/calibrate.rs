@@ -26,7 +26,9 @@ are an error (exit 4, report on stderr) unless --allow-data-deficiency.
 
 Prints the identifiability report (rank, condition number), the parameter table (nominal,
 identified, change and standard error; lengths in mm, angles in degrees), residuals before
-and after, and estimate correlations above 0.95. With --algorithm all the three algorithms
+and after (each kind over the rows measuring it, |e_p| over the given coordinates: a row
+giving only x contributes |e_x|; a dash where no row measures the kind), and estimate
+correlations above 0.95. With --algorithm all the three algorithms
 run in parallel and are shown side by side with a consensus check: two algorithms disagree
 on a parameter when they differ by more than 3 combined standard errors
 (sqrt(se_a² + se_b²), each run's errors rescaled to the smallest residual variance of the

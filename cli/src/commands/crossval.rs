@@ -69,7 +69,10 @@ else target): training on one placement and testing on it overfits. A held-out r
 scored by the distance of its predicted tool point from its target (plane) re-estimated
 from the held-out rows only; known distances whose targets are held out are scored too.
 Printed and in --json: mean |e|, RMS and max [mm] and the mean distance error, nominal vs
-calibrated (geometry kinds of --geometry, --effects, and the tool translation).";
+calibrated (geometry kinds of --geometry, --effects, and the tool translation). With
+--robust LOSS every fold's fit is the robust constrained fit of `calibrate --robust` (core
+identify_constrained_robust, IRLS on the training rows); the held-out scores are not
+reweighted.";
 
 pub const EXAMPLE: &str = "\
 Example:
@@ -303,10 +306,10 @@ fn setup_text<const N: usize>(
     let (orientation, w) = (study.orientation, study.weights);
     let _ = writeln!(
         s,
-        "Cross-validation of '{name}' on {}: {} poses in {} pose groups, {} folds (seed {}), {}",
+        "Cross-validation of '{name}' on {}:\n  {} poses (pose_id groups, {} rows), {} folds (seed {}), {}",
         set.source,
-        study.meas.len(),
         study.n_groups,
+        study.meas.len(),
         args.folds,
         args.seed,
         if orientation {
@@ -619,10 +622,9 @@ fn crossval_contacts<const N: usize>(
     set: &MeasurementSet,
     effects: EffectSet,
 ) -> Result<(), CliError> {
-    if args.robust.is_some() || args.init_frames || args.plot.is_some() || args.robot_out.is_some()
-    {
+    if args.init_frames || args.plot.is_some() || args.robot_out.is_some() {
         return Err(CliError::usage(
-            "--robust, --init-frames, --plot and --robot-out are not implemented for data with \
+            "--init-frames, --plot and --robot-out are not implemented for data with \
              target/plane rows",
         ));
     }
@@ -650,6 +652,7 @@ fn crossval_contacts<const N: usize>(
         weight_pos,
         max_iterations: args.max_iterations,
         constraints: cons.as_ref(),
+        robust: args.robust.map(Loss::from),
     };
     let (text, json) = crate::commands::crossval_contacts::run(nominal, set, &plan)?;
     if let Some(path) = &args.json {

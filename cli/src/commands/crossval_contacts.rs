@@ -14,7 +14,8 @@
 use std::fmt::Write as _;
 
 use kincal::identify::{
-    Algorithm, IdentifyOptions, distance_estimate, group_estimate, identify_constrained,
+    Algorithm, IdentifyOptions, Loss, PoseResidual, RobustOptions, distance_estimate,
+    group_estimate, identify_constrained, identify_constrained_robust,
 };
 use kincal::{ParamSet, Robot};
 use serde_json::{Value, json};
@@ -129,13 +130,16 @@ pub(crate) fn groups_of(
 }
 
 /// Fits the requested parameters on the rows of `cd` with a positive weight (OLS, then
-/// OPT2 if OLS does not converge; identifiable subset).
+/// OPT2 if OLS does not converge; identifiable subset); with `robust`, by IRLS with that
+/// loss (core `identify_constrained_robust`, as `calibrate --robust`: held-out rows keep
+/// their zero weight).
 pub(crate) fn fit<const N: usize>(
     start: &Robot<N>,
     cd: &ContactData<N>,
     requested: ParamSet,
     weight_pos: f64,
     max_iterations: u32,
+    robust: Option<Loss>,
 ) -> Result<(Robot<N>, &'static str), String> {
     let mut ws = new_workspace();
     let mut last = String::new();
@@ -145,7 +149,26 @@ pub(crate) fn fit<const N: usize>(
         o.allow_data_deficiency = true;
         o.max_iterations = max_iterations;
         o.covariance = false;
-        match identify_constrained(start, &cd.view(), &o, &mut ws) {
+        let result = match robust {
+            None => identify_constrained(start, &cd.view(), &o, &mut ws),
+            Some(loss) => {
+                let (mut inst, mut contacts) = (cd.instrument.clone(), cd.contacts.clone());
+                let mut rows = vec![PoseResidual::default(); inst.len() + contacts.len()];
+                identify_constrained_robust(
+                    start,
+                    &mut inst,
+                    &mut contacts,
+                    &cd.groups,
+                    &cd.distances,
+                    &o,
+                    &RobustOptions::new(loss),
+                    &mut rows,
+                    &mut ws,
+                )
+                .map(|r| r.fit)
+            }
+        };
+        match result {
             Ok(id) => return Ok((id.robot, algorithm.name())),
             Err(e @ kincal::Error::NotConverged { .. }) => last = e.to_string(),
             Err(e) => return Err(e.to_string()),
@@ -164,6 +187,8 @@ pub struct Plan<'a> {
     pub weight_pos: f64,
     pub max_iterations: u32,
     pub constraints: Option<&'a kincal_io::constraints::ConstraintsFile>,
+    /// IRLS loss of every fold's fit (`--robust`), or least squares.
+    pub robust: Option<Loss>,
 }
 
 /// Runs the cross-validation; returns the report text and its JSON.
@@ -206,10 +231,14 @@ pub fn run<const N: usize>(
     let _ = writeln!(
         text,
         "Cross-validation of {} by {:?}: {} groups in {k} folds (held-out rows scored about their \
-         target/plane re-estimated from the held-out rows only)",
+         target/plane re-estimated from the held-out rows only); fits: {}",
         set.source,
         plan.group_by,
-        labels.len()
+        labels.len(),
+        plan.robust.map_or("least squares".to_string(), |l| format!(
+            "robust ({} IRLS on the training rows)",
+            l.name()
+        ))
     );
     let _ = writeln!(
         text,
@@ -226,6 +255,7 @@ pub fn run<const N: usize>(
             plan.requested,
             plan.weight_pos,
             plan.max_iterations,
+            plan.robust,
         )
         .map_err(|e| CliError::numeric(format!("{}: fold {}: {e}", set.source, f + 1)))?;
         let fail =
@@ -279,6 +309,7 @@ pub fn run<const N: usize>(
     );
     let json = json!({
         "group_by": format!("{:?}", plan.group_by).to_lowercase(),
+        "robust_loss": plan.robust.map(Loss::name),
         "folds": folds_json,
         "held_out": {
             "scored_groups": total_cal.groups.len(),

@@ -199,11 +199,13 @@ pub fn sim_to_real_diagnosis(ctx: &DemoContext<'_>) -> Result<String, CliError> 
     let _ = writeln!(
         text,
         "=== Sim-to-real: a simulated 'real ARIA' ===\n\
-         The paper's real arm improved only ~5x with the geometric calibration (to e_p ≈ 0.5 mm, e_φ ≈ 0.43°),\n\
-         far less than in simulation; the authors suspected the arm's compliance. Here: an arm with small\n\
-         manufacturing errors and joint compliance {} rad/(N·m) (harmonic drives; gravity torques up to ~24 N·m),\n\
-         its encoder zeros set at the centre of the working region, measured at {} poses ({} repeated) with\n\
-         0.1 mm / 0.02° noise ({}); {} validation poses ({}).\n",
+         The paper's real arm improved only ~5x with the geometric calibration\n\
+         (to e_p ≈ 0.5 mm, e_φ ≈ 0.43°), far less than in simulation; the authors suspected the\n\
+         arm's compliance. Here: an arm with small manufacturing errors and joint compliance\n\
+         {} rad/(N·m) (harmonic drives; gravity torques up to ~24 N·m), its encoder zeros set at\n\
+         the centre of the working region, measured at {} poses ({} repeated) with 0.1 mm / 0.02°\n\
+         noise ({});\n\
+         {} validation poses ({}).\n",
         sim::REAL_ARIA_COMPLIANCE,
         cfg.poses,
         cfg.repeated,
@@ -276,8 +278,9 @@ pub fn sim_to_real_diagnosis(ctx: &DemoContext<'_>) -> Result<String, CliError> 
     let floor = d.noise.rms_pos_m();
     let _ = writeln!(
         text,
-        "  => the geometric calibration improves the errors {:.1}x (the paper: ~5x); the diagnosis finds {} ({}) and
-     closes {:.0} % of the remaining gap above the noise floor ({:.3} mm) on the validation poses.
+        "  => the geometric calibration improves the errors {:.1}x (the paper: ~5x);
+     the diagnosis finds {} ({}) and closes {:.0} %
+     of the remaining gap above the noise floor ({:.3} mm) on the validation poses.
 ",
         before[0] / geo[0],
         if d.verdict.effects.is_empty() {
@@ -375,7 +378,7 @@ fn parameter_table(cal: &Calibration<N>, truth: &Robot<N>) -> String {
             .iter()
             .map(|r| r.ident.algorithm.name().to_uppercase()),
     );
-    header.push("max |est − truth|".into());
+    header.push("max |err|".into());
     header.push("se OLS".into());
     let mut t = Table {
         header,
@@ -542,7 +545,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     )?;
     let _ = writeln!(
         text,
-        "Truth: Table 3 robot. Calibration data: the 10 Table 2 tool poses by IK on the truth,\n  noise-free ({}) and with Gaussian noise {} mm / {}° per axis, seed {} ({}).",
+        "Truth: Table 3 robot. Calibration data: the 10 Table 2 tool poses by IK on the truth,\n  noise-free ({})\n  and with Gaussian noise {} mm / {}° per axis, seed {} ({}).",
         path_free.display(),
         args.noise_pos_mm,
         args.noise_rot_deg,
@@ -551,7 +554,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     );
     let _ = writeln!(
         text,
-        "Validation: {n_val} of {} grid poses in the assumed biopsy working region reachable ({}):\n  box {} m to {} m, roll −150° and −160°.",
+        "Validation: {n_val} of {} grid poses in the assumed biopsy working region reachable\n  ({}):\n  box {} m to {} m, roll −150° and −160°.",
         grid.len(),
         path_val.display(),
         region_text(aria::WORKING_REGION_MIN_M),
@@ -559,7 +562,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     );
     let _ = writeln!(
         text,
-        "OPT1 intervals: ±{} mm, ±{}° around Table 1 (widened from the paper's 5°: the truth's θ0_4 = −45.8° and α_2 = 5.7° lie outside ±5°).\n",
+        "OPT1 intervals: ±{} mm, ±{}° around Table 1 (widened from the paper's 5°:\n  the truth's θ0_4 = −45.8° and α_2 = 5.7° lie outside ±5°; calibrate keeps the paper's 5°).\n",
         args.bounds_mm, args.bounds_deg
     );
 
@@ -621,7 +624,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         ));
         let _ = writeln!(
             text,
-            "\nParameters (like the paper's Table 3; lengths in mm, angles in degrees):"
+            "\nParameters (like the paper's Table 3; lengths in mm, angles in degrees;\n  max |err|: the largest |estimate − truth| of the algorithms):"
         );
         text.push_str(&parameter_table(&cal, &truth));
         if cal.runs.iter().any(|r| !r.ident.at_bound.is_empty()) {
@@ -631,7 +634,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             let (l, a) = recovery(&cal, &truth, k);
             let _ = writeln!(
                 text,
-                "  {}: max |estimate − truth| {} mm (lengths), {}° (angles); residual RMS {} mm / {}° after {} iterations",
+                "  {}: max |estimate − truth| {} mm (lengths), {}° (angles);\n        residual RMS {} mm / {}° after {} iterations",
                 run.ident.algorithm.name().to_uppercase(),
                 report::fmt_small(l * 1e3),
                 report::fmt_small(a.to_degrees()),

@@ -519,7 +519,7 @@ fn where_text<const N: usize>(s: &mut String, d: &Diagnosis<N>) {
     cs.sort_by(|a, b| b.explained.total_cmp(&a.explained));
     let mut t = Table::new(&[
         "quantity",
-        "explains (whitened)",
+        "whitened",
         "explains Δp var.",
         "explains Δφ var.",
         "corr x",
@@ -541,7 +541,7 @@ fn where_text<const N: usize>(s: &mut String, d: &Diagnosis<N>) {
     }
     let _ = writeln!(
         s,
-        "  correlation with the quantities the effects depend on, ranked by the share of the residual variance\n  (components weighted by 1/σ²) a linear function of the quantity explains:"
+        "  correlation with the quantities the effects depend on, ranked by the share of the residual\n  variance a linear function of the quantity explains (whitened: every component weighted\n  by 1/σ²; then the position and the orientation components alone):"
     );
     s.push_str(&t.render("  "));
 }
@@ -583,6 +583,17 @@ fn which_text<const N: usize>(s: &mut String, d: &Diagnosis<N>) {
     });
     // Long notes go under the table as numbered footnotes, keeping it within ~100 columns.
     let mut footnotes: Vec<String> = Vec::new();
+    // A share of the gap needs a gap: where geometric only is not above the floor (√3σ) the
+    // share's denominator is zero or negative and the column shows a dash.
+    let pos_gap = d.baseline.heldout_rms_pos_m > d.noise.rms_pos_m();
+    let rot_gap = d.baseline.heldout_rms_rot_rad > d.noise.rms_rot_rad();
+    let share = |open: bool, evaluated: bool, f: f64| {
+        if open && evaluated {
+            format!("{:.0} %", 100.0 * f)
+        } else {
+            "-".to_string()
+        }
+    };
     for c in order {
         let long_note = |text: String, footnotes: &mut Vec<String>| {
             footnotes.push(format!(
@@ -642,20 +653,35 @@ fn which_text<const N: usize>(s: &mut String, d: &Diagnosis<N>) {
                 "-".into()
             },
             if c.significant { "yes" } else { "no" }.into(),
-            if c.evaluated {
-                format!("{:.0} %", 100.0 * c.gap_closed_fraction)
-            } else {
-                "-".into()
-            },
-            if c.evaluated {
-                format!("{:.0} %", 100.0 * c.gap_closed_rot_fraction)
-            } else {
-                "-".into()
-            },
+            share(pos_gap, c.evaluated, c.gap_closed_fraction),
+            share(rot_gap, c.evaluated, c.gap_closed_rot_fraction),
             note,
         ]);
     }
     s.push_str(&t.render("  "));
+    // Position-only data have no orientation errors and no orientation floor: nothing to say.
+    let rot_measured = d.baseline.heldout_rms_rot_rad > 0.0 || d.noise.rms_rot_rad() > 0.0;
+    for (open, name, base, floor) in [
+        (
+            pos_gap,
+            "gap",
+            mm(d.baseline.heldout_rms_pos_m) + " mm",
+            mm(d.noise.rms_pos_m()) + " mm",
+        ),
+        (
+            rot_gap,
+            "rot. gap",
+            deg(d.baseline.heldout_rms_rot_rad) + "°",
+            deg(d.noise.rms_rot_rad()) + "°",
+        ),
+    ] {
+        if !open && (name == "gap" || rot_measured) {
+            let _ = writeln!(
+                s,
+                "  {name} -: geometric only ({base} held out) is not above the noise floor √3σ = {floor}:\n    no gap to take a share of"
+            );
+        }
+    }
     for f in &footnotes {
         let _ = writeln!(s, "  {f}");
     }

@@ -270,7 +270,7 @@ pub fn run<const N: usize>(
                     effects_name(effects)
                 ))
             };
-            let s = fit(nominal, &train, requested, weight_pos, 100)
+            let s = fit(nominal, &train, requested, weight_pos, 100, None)
                 .and_then(|(cal, _)| score(&cal, &test).map_err(|e| e.to_string()));
             match s {
                 Ok(s) => {

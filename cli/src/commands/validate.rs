@@ -4,7 +4,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use kincal::Robot;
-use kincal::identify::Measurement;
+use kincal::identify::{ComponentMask, Measurement};
 use kincal::validation::{ErrorSummary, PoseErrors, Verdict, biopsy_allowed_rotation_rad};
 use serde::Serialize;
 
@@ -185,29 +185,40 @@ pub fn summary_table(evals: &[Evaluation], targets: Targets, has_rot: bool) -> S
     t.render("  ")
 }
 
-/// Per-pose table of one evaluation; `rot_measured[i]` false prints a dash for the
-/// orientation errors of row `i` (a position-only row has none, not a zero one).
-pub fn pose_table(e: &Evaluation, ids: &[String], has_rot: bool, rot_measured: &[bool]) -> String {
+/// Per-pose table of one evaluation; a component `masks[i]` does not measure prints a dash
+/// (a row giving only `x` has no e_y, e_z; a position-only row no orientation error), not
+/// a zero one; |e_p| and |e_φ| run over the measured components.
+pub fn pose_table(
+    e: &Evaluation,
+    ids: &[String],
+    has_rot: bool,
+    masks: &[ComponentMask],
+) -> String {
     let mut header = vec!["pose", "e_x [mm]", "e_y [mm]", "e_z [mm]", "|e_p| [mm]"];
     if has_rot {
         header.extend(["e_φx [deg]", "e_φy [deg]", "e_φz [deg]", "|e_φ| [deg]"]);
     }
     let mut t = Table::new(&header);
     for (i, p) in e.errors.iter().enumerate() {
+        let mask = masks.get(i).copied().unwrap_or(ComponentMask::ALL);
+        let cell = |k: usize, v: String| if mask.has(k) { v } else { "-".to_string() };
+        let any = |mut ks: core::ops::Range<usize>| ks.any(|k| mask.has(k));
         let mut row = vec![ids.get(i).cloned().unwrap_or_else(|| (i + 1).to_string())];
-        row.extend(p.pos_m.iter().map(|v| crate::report::fmt_signed6(v * 1e3)));
-        row.push(format!("{:.6}", p.pos_norm_m * 1e3));
+        row.extend((0..3).map(|k| cell(k, crate::report::fmt_signed6(p.pos_m[k] * 1e3))));
+        row.push(if any(0..3) {
+            format!("{:.6}", p.pos_norm_m * 1e3)
+        } else {
+            "-".to_string()
+        });
         if has_rot {
-            if rot_measured.get(i).copied().unwrap_or(true) {
-                row.extend(
-                    p.rot_rad
-                        .iter()
-                        .map(|v| crate::report::fmt_signed6(v.to_degrees())),
-                );
-                row.push(format!("{:.6}", p.rot_norm_rad.to_degrees()));
+            row.extend(
+                (0..3).map(|k| cell(3 + k, crate::report::fmt_signed6(p.rot_rad[k].to_degrees()))),
+            );
+            row.push(if any(3..6) {
+                format!("{:.6}", p.rot_norm_rad.to_degrees())
             } else {
-                row.extend(["-"; 4].map(String::from));
-            }
+                "-".to_string()
+            });
         }
         t.row(row);
     }
@@ -472,9 +483,9 @@ fn validate<const N: usize>(
         let _ = writeln!(out, "Warning: {w}");
     }
     if !args.quiet {
-        let rot_measured: Vec<bool> = meas.iter().map(|m| m.mask.has_orientation()).collect();
+        let masks: Vec<ComponentMask> = meas.iter().map(|m| m.mask).collect();
         let _ = writeln!(out, "\nPer-pose errors ({name}, measured − model):");
-        out.push_str(&pose_table(&main, &ids, has_rot, &rot_measured));
+        out.push_str(&pose_table(&main, &ids, has_rot, &masks));
     }
     let default_targets = args.target_pos_mm == 1.0 && args.target_rot_deg == 0.66;
     let whose = if is_aria(file) {
@@ -497,6 +508,7 @@ fn validate<const N: usize>(
     if evals.len() > 1 || evals.first().is_some_and(|e| e.name != name) {
         let _ = writeln!(out, "\nAll models in {}:", args.model);
         out.push_str(&summary_table(&evals, targets, has_rot));
+        out.push_str(&bounded_runs_note(file));
     }
     // Eq. (3) is the ARIA biopsy's budget: printed for ARIA or when asked for (--biopsy-d-mm).
     let show_eq3 = is_aria(file) || args.biopsy_d_mm.is_some();
@@ -504,7 +516,7 @@ fn validate<const N: usize>(
         Some(a) => {
             let _ = writeln!(
                 out,
-                "\nEq. (3): with d = {:.4} mm at the puncture point (r_t = {} mm, l_max = {} mm) a biopsy allows e_φ up to {:.4}°{}",
+                "\nEq. (3): with d = {:.4} mm at the puncture point (r_t = {} mm, l_max = {} mm)\n  a biopsy allows e_φ up to {:.4}°{}",
                 d_m * 1e3,
                 args.tumour_radius_mm,
                 args.insertion_mm,
@@ -542,6 +554,35 @@ fn validate<const N: usize>(
     }
     crate::report::emit(&out);
     Ok(())
+}
+
+/// Says which recorded runs ended on their OPT1 interval bounds (at least
+/// `report::BOUND_DOMINATED_FRACTION` of their identified parameters): such a run's errors
+/// measure its intervals, not the data, so a "NOT met" in its column has that reason.
+fn bounded_runs_note(file: &kincal_io::model_file::ModelFile) -> String {
+    let Some(cal) = &file.calibration else {
+        return String::new();
+    };
+    let mut out = String::new();
+    for run in &cal.results {
+        let identified = run.parameters.len();
+        let nb = run.parameters.iter().filter(|p| p.at_bound).count();
+        if nb == 0
+            || (nb as f64) < crate::report::BOUND_DOMINATED_FRACTION * identified.max(1) as f64
+        {
+            continue;
+        }
+        let _ = writeln!(
+            out,
+            "  {} ended on its bounds ({nb} of {identified} identified parameters at ±{} mm / ±{}°):\n    \
+             its intervals exclude the data's optimum, so its errors measure the intervals, not the data\n    \
+             (calibrate again with wider --bounds-mm/--bounds-deg to judge it)",
+            run.algorithm.to_uppercase(),
+            cal.options.bounds_length_mm,
+            cal.options.bounds_angle_deg,
+        );
+    }
+    out
 }
 
 /// Validation of contact data: the consistency of the predicted tool points per target and

@@ -9,6 +9,7 @@ use kincal::identify::Measurement;
 use plotters::prelude::*;
 
 use crate::error::CliError;
+use crate::plots::{LEGEND_ROW_H, LegendEntry, Mark, legend_band, legend_rows};
 use crate::report::{quantity_label, quantity_unit};
 
 type Res<T> = Result<T, Box<dyn std::error::Error>>;
@@ -43,6 +44,7 @@ impl Outputs {
     }
 }
 
+const POSITION_DOT: RGBColor = RGBColor(120, 120, 120);
 const GEOMETRIC: RGBColor = RGBColor(230, 120, 20);
 const FINAL: RGBColor = RGBColor(31, 119, 180);
 const AXES: [RGBColor; 3] = [
@@ -100,6 +102,27 @@ pub fn residual_vectors_svg<const N: usize>(
             "Position residuals over the working region (arrows ×{factor:.0}: 1 mm drawn as {factor:.0} mm)"
         );
         let body = root.titled(&title, ("sans-serif", 22))?;
+        let mut legend = vec![
+            LegendEntry {
+                colour: POSITION_DOT,
+                mark: Mark::Dot,
+                label: "measured position".to_string(),
+            },
+            LegendEntry {
+                colour: GEOMETRIC,
+                mark: Mark::Line,
+                label: "geometric calibration (in-sample)".to_string(),
+            },
+        ];
+        if with_final {
+            legend.push(LegendEntry {
+                colour: FINAL,
+                mark: Mark::Line,
+                label: format!("{} (held-out)", effects_text(d.verdict.effects)),
+            });
+        }
+        let (band, body) = body.split_vertically(LEGEND_ROW_H * legend_rows(1300, &legend));
+        legend_band(&band, &legend)?;
         let panels = body.split_evenly((1, 2));
         for (panel, (a, b, name)) in panels.iter().zip([(0, 1, "top view"), (0, 2, "side view")]) {
             let pad = 0.12 * span;
@@ -120,9 +143,8 @@ pub fn residual_vectors_svg<const N: usize>(
                 .label_style(("sans-serif", 12))
                 .light_line_style(RGBColor(240, 240, 240))
                 .draw()?;
-            let mut series: Vec<(RGBColor, String, Vec<[f64; 3]>)> = vec![(
+            let mut series: Vec<(RGBColor, Vec<[f64; 3]>)> = vec![(
                 GEOMETRIC,
-                "geometric calibration (in-sample)".to_string(),
                 poses
                     .iter()
                     .map(|p| [p.residual[0], p.residual[1], p.residual[2]])
@@ -131,7 +153,6 @@ pub fn residual_vectors_svg<const N: usize>(
             if with_final {
                 series.push((
                     FINAL,
-                    format!("{} (held-out)", effects_text(d.verdict.effects)),
                     poses
                         .iter()
                         .map(|p| [p.heldout_final[0], p.heldout_final[1], p.heldout_final[2]])
@@ -140,25 +161,14 @@ pub fn residual_vectors_svg<const N: usize>(
             }
             chart.draw_series(
                 pts.iter()
-                    .map(|p| Circle::new((p[a], p[b]), 2, RGBColor(120, 120, 120).filled())),
+                    .map(|p| Circle::new((p[a], p[b]), 2, POSITION_DOT.filled())),
             )?;
-            for (colour, label, vecs) in series {
-                chart
-                    .draw_series(pts.iter().zip(&vecs).map(|(p, v)| {
-                        let end = (p[a] + factor * v[a] * 1e3, p[b] + factor * v[b] * 1e3);
-                        PathElement::new(vec![(p[a], p[b]), end], colour.stroke_width(2))
-                    }))?
-                    .label(label)
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
-                    });
+            for (colour, vecs) in series {
+                chart.draw_series(pts.iter().zip(&vecs).map(|(p, v)| {
+                    let end = (p[a] + factor * v[a] * 1e3, p[b] + factor * v[b] * 1e3);
+                    PathElement::new(vec![(p[a], p[b]), end], colour.stroke_width(2))
+                }))?;
             }
-            chart
-                .configure_series_labels()
-                .border_style(BLACK)
-                .background_style(WHITE.mix(0.85))
-                .label_font(("sans-serif", 13))
-                .draw()?;
         }
         root.present()?;
     }
@@ -237,7 +247,21 @@ pub fn residual_vs_quantity_svg<const N: usize>(
                 .fold(0.0f64, |a, v| a.max(v.abs()))
                 .max(1e-9)
                 * 1.1;
-            let mut chart = ChartBuilder::on(panel)
+            let legend: Vec<LegendEntry> = names
+                .iter()
+                .enumerate()
+                .map(|(k, name)| LegendEntry {
+                    colour: AXES[k],
+                    mark: Mark::Dot,
+                    label: format!(
+                        "{name}{}",
+                        best.map_or(String::new(), |c| format!(" (r = {:+.2})", c.corr[off + k]))
+                    ),
+                })
+                .collect();
+            let (band, panel) = panel.split_vertically(LEGEND_ROW_H);
+            legend_band(&band, &legend)?;
+            let mut chart = ChartBuilder::on(&panel)
                 .margin(14)
                 .x_label_area_size(44)
                 .y_label_area_size(70)
@@ -256,25 +280,13 @@ pub fn residual_vs_quantity_svg<const N: usize>(
                 .label_style(("sans-serif", 12))
                 .light_line_style(RGBColor(240, 240, 240))
                 .draw()?;
-            for (k, name) in names.iter().enumerate() {
-                let colour = AXES[k];
-                let corr =
-                    best.map_or(String::new(), |c| format!(" (r = {:+.2})", c.corr[off + k]));
-                chart
-                    .draw_series(
-                        xs.iter()
-                            .zip(&ys)
-                            .map(|(x, y)| Circle::new((*x, y[k]), 3, colour.filled())),
-                    )?
-                    .label(format!("{name}{corr}"))
-                    .legend(move |(x, y)| Circle::new((x + 8, y), 4, colour.filled()));
+            for (k, colour) in AXES.iter().enumerate() {
+                chart.draw_series(
+                    xs.iter()
+                        .zip(&ys)
+                        .map(|(x, y)| Circle::new((*x, y[k]), 3, colour.filled())),
+                )?;
             }
-            chart
-                .configure_series_labels()
-                .border_style(BLACK)
-                .background_style(WHITE.mix(0.85))
-                .label_font(("sans-serif", 13))
-                .draw()?;
         }
         root.present()?;
     }
@@ -295,12 +307,16 @@ pub fn candidates_svg<const N: usize>(d: &Diagnosis<N>) -> Res<String> {
         .fold(base.max(floor), f64::max)
         * 1.1;
     let labels: Vec<String> = cands.iter().map(|c| effects_text(c.effects)).collect();
+    let legend = candidate_legend(base, floor);
+    let legend_h = LEGEND_ROW_H * legend_rows(1000, &legend) + 8;
     let mut svg = String::new();
     {
-        let h = 120 + 24 * n as u32;
+        let h = 120 + 24 * n as u32 + legend_h;
         let root = SVGBackend::with_string(&mut svg, (1000, h)).into_drawing_area();
         root.fill(&WHITE)?;
-        let mut chart = ChartBuilder::on(&root)
+        let (plot, band) = root.split_vertically(h - legend_h);
+        legend_band(&band, &legend)?;
+        let mut chart = ChartBuilder::on(&plot)
             .caption(
                 "Held-out RMS position error per candidate (k-fold by pose_id)",
                 ("sans-serif", 18),
@@ -328,13 +344,13 @@ pub fn candidates_svg<const N: usize>(d: &Diagnosis<N>) -> Res<String> {
             .draw()?;
         chart.draw_series(cands.iter().enumerate().map(|(i, c)| {
             let colour = if c.effects == d.verdict.effects {
-                RGBColor(44, 160, 44)
+                BAR_VERDICT
             } else if d.verdict.confounded().contains(&c.effects) {
-                RGBColor(230, 190, 30)
+                BAR_CONFOUNDED
             } else if c.significant {
-                RGBColor(120, 160, 210)
+                BAR_SIGNIFICANT
             } else {
-                RGBColor(190, 190, 190)
+                BAR_OTHER
             };
             let y = i as f64;
             Rectangle::new(
@@ -342,32 +358,53 @@ pub fn candidates_svg<const N: usize>(d: &Diagnosis<N>) -> Res<String> {
                 colour.filled(),
             )
         }))?;
-        for (x, colour, name) in [
-            (base, RGBColor(90, 90, 90), "geometric only"),
-            (floor, RGBColor(214, 39, 40), "noise floor √3σ"),
-        ] {
-            chart
-                .draw_series(DashedLineSeries::new(
-                    [(x, -0.5), (x, n as f64 - 0.5)],
-                    6,
-                    4,
-                    colour.stroke_width(2),
-                ))?
-                .label(format!("{name} ({x:.3} mm)"))
-                .legend(move |(a, b)| {
-                    PathElement::new(vec![(a, b), (a + 20, b)], colour.stroke_width(2))
-                });
+        for (x, colour) in [(base, LINE_GEOMETRIC), (floor, LINE_FLOOR)] {
+            chart.draw_series(DashedLineSeries::new(
+                [(x, -0.5), (x, n as f64 - 0.5)],
+                6,
+                4,
+                colour.stroke_width(2),
+            ))?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .border_style(BLACK)
-            .background_style(WHITE.mix(0.85))
-            .label_font(("sans-serif", 13))
-            .draw()?;
         root.present()?;
     }
     Ok(svg)
+}
+
+const BAR_VERDICT: RGBColor = RGBColor(44, 160, 44);
+const BAR_CONFOUNDED: RGBColor = RGBColor(230, 190, 30);
+const BAR_SIGNIFICANT: RGBColor = RGBColor(120, 160, 210);
+const BAR_OTHER: RGBColor = RGBColor(190, 190, 190);
+const LINE_GEOMETRIC: RGBColor = RGBColor(90, 90, 90);
+const LINE_FLOOR: RGBColor = RGBColor(214, 39, 40);
+
+/// The candidate chart's legend: what each bar colour means and the two reference lines.
+fn candidate_legend(base_mm: f64, floor_mm: f64) -> Vec<LegendEntry> {
+    let e = |colour, mark, label: String| LegendEntry {
+        colour,
+        mark,
+        label,
+    };
+    vec![
+        e(BAR_VERDICT, Mark::Bar, "the verdict".into()),
+        e(
+            BAR_CONFOUNDED,
+            Mark::Bar,
+            "confounded with the verdict".into(),
+        ),
+        e(BAR_SIGNIFICANT, Mark::Bar, "significant".into()),
+        e(BAR_OTHER, Mark::Bar, "not significant".into()),
+        e(
+            LINE_GEOMETRIC,
+            Mark::Dashed,
+            format!("geometric only ({base_mm:.3} mm)"),
+        ),
+        e(
+            LINE_FLOOR,
+            Mark::Dashed,
+            format!("noise floor √3σ ({floor_mm:.3} mm)"),
+        ),
+    ]
 }
 
 fn drawn(path: &Path, svg: Res<String>) -> Result<(PathBuf, String), CliError> {

@@ -9,7 +9,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::error::CliError;
-use crate::plots::require_finite;
+use crate::plots::{LEGEND_ROW_H, LegendEntry, Mark, legend_band, require_finite};
 use crate::report::Targets;
 
 /// One model's per-pose errors.
@@ -25,6 +25,9 @@ const COLOURS: [RGBColor; 4] = [
     RGBColor(44, 160, 44),
     RGBColor(148, 103, 189),
 ];
+/// The norm rows draw the target line only when the largest error reaches this fraction
+/// of the target: below it the line would press the errors into the bottom fifth.
+pub const TARGET_SHOWN_FRACTION: f64 = 0.2;
 const CELL_W: u32 = 380;
 const CELL_H: u32 = 200;
 const TITLE_H: u32 = 50;
@@ -66,8 +69,9 @@ fn panel(
         let m = if m > 0.0 { m * 1.15 } else { 1e-9 };
         require_finite(vals.iter().chain([&m, &target]))?;
         // The norm row shows the target when the data stay readable next to it (errors
-        // at least 5% of the target); far smaller errors are autoscaled without it.
-        let show_target = row == 3 && m >= 0.05 * target;
+        // reaching at least TARGET_SHOWN_FRACTION of it); smaller errors are autoscaled and
+        // the cell's x-axis label states the target instead of a line that would squash them.
+        let show_target = row == 3 && m >= TARGET_SHOWN_FRACTION * target;
         let (lo, hi) = match (row, show_target) {
             (3, true) => (0.0, m.max(1.15 * target)),
             (3, false) => (0.0, m),
@@ -103,8 +107,16 @@ fn panel(
         if col == 0 {
             mesh.y_desc(format!("{} [{unit}]", row_names[row]));
         }
+        let x_desc = if show_target {
+            "pose".to_string()
+        } else {
+            format!(
+                "pose (target {} {unit}, above this scale)",
+                tick(target, target)
+            )
+        };
         if row == 3 {
-            mesh.x_desc("pose");
+            mesh.x_desc(x_desc);
         }
         mesh.axis_desc_style(("sans-serif", 14)).draw()?;
         if row != 3 {
@@ -219,12 +231,23 @@ pub fn heldout_svg(
 ) -> Res<String> {
     let n = nominal.len();
     let panels = if with_orientation { 2 } else { 1 };
-    let (w, h) = (900u32, TITLE_H + panels * 320);
+    let (w, h) = (900u32, TITLE_H + LEGEND_ROW_H + panels * 320);
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
         root.fill(&WHITE)?;
         let body = root.titled(title, ("sans-serif", 22))?;
+        let legend: Vec<LegendEntry> = ["nominal", "calibrated"]
+            .iter()
+            .zip(COLOURS)
+            .map(|(name, colour)| LegendEntry {
+                colour,
+                mark: Mark::Dot,
+                label: (*name).to_string(),
+            })
+            .collect();
+        let (band, body) = body.split_vertically(LEGEND_ROW_H);
+        legend_band(&band, &legend)?;
         let parts = body.split_evenly((panels as usize, 1));
         type Row<'a> = (&'a str, &'a dyn Fn(&PoseErrors) -> f64);
         let rows: [Row<'_>; 2] = [
@@ -257,33 +280,21 @@ pub fn heldout_svg(
                 .label_style(("sans-serif", 12))
                 .light_line_style(RGBColor(240, 240, 240))
                 .draw()?;
-            for (k, (name, data)) in [("nominal", nominal), ("calibrated", calibrated)]
-                .iter()
-                .enumerate()
-            {
+            for (k, data) in [nominal, calibrated].iter().enumerate() {
                 let colour = COLOURS[k];
                 let pts: Vec<(f64, f64)> = data
                     .iter()
                     .enumerate()
                     .map(|(i, e)| ((i + 1) as f64, value(e)))
                     .collect();
-                chart
-                    .draw_series(PointSeries::of_element(
-                        pts.clone(),
-                        3,
-                        colour.filled(),
-                        &|c, s, st| EmptyElement::at(c) + Circle::new((0, 0), s, st),
-                    ))?
-                    .label(*name)
-                    .legend(move |(x, y)| Circle::new((x + 8, y), 4, colour.filled()));
+                chart.draw_series(PointSeries::of_element(
+                    pts.clone(),
+                    3,
+                    colour.filled(),
+                    &|c, s, st| EmptyElement::at(c) + Circle::new((0, 0), s, st),
+                ))?;
                 chart.draw_series(LineSeries::new(pts, colour.stroke_width(1)))?;
             }
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.8))
-                .border_style(RGBColor(200, 200, 200))
-                .label_font(("sans-serif", 14))
-                .draw()?;
         }
         root.present()?;
     }

@@ -931,15 +931,12 @@ impl<const N: usize> RowSource<N> for ConstraintData<'_, N> {
 
     fn stats(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<ResidualStats> {
         let mut s = residual_stats(robot, self.instrument, opts)?;
-        let n_inst = self
-            .instrument
-            .iter()
-            .filter(|m| m.weight > 0.0 && m.mask.has_position())
-            .count();
+        let n_inst = s.pos_poses;
         let (cost, sum2, max, n) = self.cost_and_sums(robot, opts)?;
         let sp = s.rms_pos_m * s.rms_pos_m * n_inst as f64 + sum2;
         let np = n_inst + n;
         s.poses += n;
+        s.pos_poses = np;
         s.rows = self.row_count(opts);
         s.cost = cost;
         s.max_pos_m = s.max_pos_m.max(max);

@@ -412,11 +412,18 @@ pub struct ResidualStats {
     pub rows: usize,
     /// Weighted sum of squares (the identification cost).
     pub cost: f64,
-    /// RMS of |e_p| over poses with a measured position \[m\].
+    /// Poses measuring at least one position component (contacts included): the RMS and
+    /// max of |e_p| run over them; 0 means no position is measured.
+    pub pos_poses: usize,
+    /// Poses measuring at least one orientation component; 0 means none.
+    pub rot_poses: usize,
+    /// RMS of |e_p| over the poses measuring a position component, |e_p| taken over the
+    /// measured components only (a row giving only `x` contributes |e_x|) \[m\].
     pub rms_pos_m: f64,
     /// Largest |e_p| \[m\].
     pub max_pos_m: f64,
-    /// RMS of the rotation angle over poses with a measured orientation \[rad\].
+    /// RMS of the rotation angle over poses measuring an orientation component (over the
+    /// measured components when only some are) \[rad\].
     pub rms_rot_rad: f64,
     /// Largest rotation angle \[rad\].
     pub max_rot_rad: f64,
@@ -450,19 +457,28 @@ pub fn residual_stats<const N: usize>(
                 s.cost += m.weight * weight(opts, k) * e[k] * e[k];
             }
         }
-        if m.mask.has_position() {
-            let p2 = ex[0] * ex[0] + ex[1] * ex[1] + ex[2] * ex[2];
+        // Over the measured components only (a partly measured kind counts too): the
+        // unmeasured ones are not residuals, and a full kind gives the usual norm.
+        let sq = |ks: core::ops::Range<usize>| {
+            ks.filter(|&k| m.mask.has(k))
+                .map(|k| ex[k] * ex[k])
+                .sum::<f64>()
+        };
+        if (0..3).any(|k| m.mask.has(k)) {
+            let p2 = sq(0..3);
             sp += p2;
             np += 1;
             s.max_pos_m = s.max_pos_m.max(crate::math::sqrt(p2));
         }
-        if m.mask.has_orientation() {
-            let r2 = ex[3] * ex[3] + ex[4] * ex[4] + ex[5] * ex[5];
+        if (3..6).any(|k| m.mask.has(k)) {
+            let r2 = sq(3..6);
             sr += r2;
             nr += 1;
             s.max_rot_rad = s.max_rot_rad.max(crate::math::sqrt(r2));
         }
     }
+    s.pos_poses = np;
+    s.rot_poses = nr;
     if np > 0 {
         s.rms_pos_m = crate::math::sqrt(sp / np as f64);
     }
@@ -470,4 +486,40 @@ pub fn residual_stats<const N: usize>(
         s.rms_rot_rad = crate::math::sqrt(sr / nr as f64);
     }
     Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::identify::Algorithm;
+    use crate::params::ParamSet;
+
+    /// A row giving only `x`, 2 mm off in x and far off in the unmeasured y and z, and a
+    /// full position row 3, 4, 0 mm off: |e_p| is 2 mm and 5 mm, the RMS √((4 + 25)/2) mm,
+    /// no orientation is measured (`rot_poses` 0), and the cost counts x, x, y, z.
+    #[test]
+    fn partly_measured_positions_count_their_measured_components() {
+        let robot = crate::aria::nominal();
+        let q = crate::aria::TOOL_SEED_Q;
+        let t = robot.fk(&crate::JointState::new(q)).unwrap();
+        let moved = |d: [f64; 3]| {
+            let mut m = Measurement::new(q, t);
+            m.pose.translation.vector += nalgebra::Vector3::new(d[0], d[1], d[2]);
+            m
+        };
+        let mut x_only = moved([2e-3, 0.5, -0.7]);
+        x_only.mask = ComponentMask(0x01);
+        let mut full = moved([3e-3, 4e-3, 0.0]);
+        full.mask = ComponentMask::POSITION;
+        let opts = IdentifyOptions::new(Algorithm::Ols, ParamSet::default());
+        let s = residual_stats(&robot, &[x_only, full], &opts).unwrap();
+        assert_eq!((s.poses, s.rows, s.pos_poses, s.rot_poses), (2, 4, 2, 0));
+        assert!(
+            (s.rms_pos_m - (29e-6f64 / 2.0).sqrt()).abs() < 1e-12,
+            "{s:?}"
+        );
+        assert!((s.max_pos_m - 5e-3).abs() < 1e-12, "{s:?}");
+        assert!((s.cost - 29e-6 * opts.weight_pos).abs() < 1e-15, "{s:?}");
+        assert_eq!((s.rms_rot_rad, s.max_rot_rad), (0.0, 0.0));
+    }
 }
