@@ -108,12 +108,17 @@ for NAME in figaroh-talos-arm figaroh-ur10e robotkinecal-fr3; do
         --prior --out "$D/model-prior.json" > "$D/calibrate-prior.txt" 2>&1
 done
 
-# Sets that are not usable as they are: the refusal and its reason.
-for NAME in figaroh-tiago-mocap; do
-    "$K" import-dataset "$NAME" "$DATA/$NAME" --out "$OUT/unused.csv" 2>> "$OUT/refused.txt" \
-        && echo "unexpected: $NAME imported" >&2 || true
-done
-echo "== refused sets: $OUT/refused.txt"
+# TIAGo needs the user's URDF (CC BY-NC-ND, not shipped): with $TIAGO_URDF set, import it;
+# otherwise record the refusal, which says where to get it.
+if [ -n "${TIAGO_URDF:-}" ]; then
+    "$K" import-dataset tiago "$DATA/figaroh-tiago-mocap" --urdf "$TIAGO_URDF" \
+        --out "$OUT/tiago.csv" --robot-out "$OUT/tiago.toml" > "$OUT/tiago.txt"
+    echo "== tiago -> $OUT/tiago.txt"
+else
+    "$K" import-dataset tiago "$DATA/figaroh-tiago-mocap" --out "$OUT/unused.csv" \
+        2>> "$OUT/refused.txt" && echo "unexpected: tiago imported without a URDF" >&2 || true
+    echo "== tiago needs TIAGO_URDF=tiago.urdf: $OUT/refused.txt"
+fi
 
 # Hilti (CC BY-NC-SA: read from the data folder, nothing copied): every floor a session,
 # accelerometer tilts as sensor joints; the held-out study of docs/real-data.md.
@@ -123,6 +128,14 @@ mkdir -p "$D"
     --robot-out "$D/robot.toml" --study > "$D/study.txt"
 echo "== hilti -> $D/study.txt"
 sed -n '/^Hilti study/,$p' "$D/study.txt" | sed 's/^/     /'
+# The diagnosis with the total station's stated noise (each floor a session, registered in
+# its own base frame): where the gap lies by session, height and arm solution space, which
+# effect, and thermal confounded with the sessions.
+"$K" diagnose "$D/data.csv" --robot "$D/robot.toml" --sigma-pos-mm 0.75 \
+    --json "$D/diagnose.json" --report "$D/diagnose.txt" --out "$D/diagnose-model.json" \
+    > /dev/null
+grep -E "^VERDICT|^  why:|^  confounded with:|^HOW FAR|^  thermal:|^  what would separate" \
+    "$D/diagnose.txt" | sed 's/^/   /'
 
 # MUKCa (no instrument): every robot held out by location. For each location L: calibrate
 # on the other locations (their targets, sessions and 50 mm distances), validate on L

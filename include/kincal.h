@@ -197,6 +197,20 @@
  */
 #define KINCAL_DIAG_MAX_WARNINGS 8
 
+#if defined(KINCAL_STD)
+/*
+ `flags` bit of the measurement readers: accept joint readings outside the robot's limits.
+ */
+#define KINCAL_READ_ALLOW_OUT_OF_LIMITS 1
+#endif
+
+#if defined(KINCAL_STD)
+/*
+ `flags` bit of the measurement readers: refuse a file without the position columns x, y, z.
+ */
+#define KINCAL_READ_REQUIRE_POSE 2
+#endif
+
 /*
  Result of every fallible export. `KINCAL_STATUS_OK` (0) is success.
 
@@ -848,6 +862,11 @@ enum kincal_diagnosis_reason
      the equivalence threshold: the library's form is not singled out by the data).
      */
     KINCAL_DIAGNOSIS_REASON_FORM_NOT_DETERMINED = 8,
+    /*
+     `confounded_with_sessions`: the candidates that improve significantly are all
+     confounded with the sessions (the C ABI diagnoses one session: not produced there).
+     */
+    KINCAL_DIAGNOSIS_REASON_CONFOUNDED_WITH_SESSIONS = 9,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
@@ -1457,7 +1476,8 @@ typedef struct kincal_read_error {
      */
     size_t line;
     /*
-     1-based column (bytes) of the fault, 0 when the message names none.
+     1-based column of the fault, 0 when the message names none: bytes in a model file,
+     the cell (field) number in a measurement CSV.
      */
     size_t column;
     /*
@@ -1591,6 +1611,33 @@ typedef struct kincal_selection {
      */
     struct kincal_observability_indices indices;
 } kincal_selection;
+
+/*
+ The outcome of `kincal_cluster_select`.
+ */
+typedef struct kincal_cluster_selection {
+    /*
+     Spread of the per-pose indices of the chosen poses: `max_k |ln σ_k(q) − ln σ_k(q*)|`
+     over the chosen `q` and the target `q*` (0.1 ≈ 10 %).
+     */
+    double spread;
+    /*
+     Objective (the chosen index) of the chosen set.
+     */
+    double value;
+    /*
+     Zero-based pool index of the target pose whose per-pose index the others match.
+     */
+    size_t target;
+    /*
+     Non-zero when the spread is within the tolerance (else the smallest spread found).
+     */
+    uint32_t within_tolerance;
+    /*
+     Cubes of the region that hold at least one pool member.
+     */
+    size_t occupied_cubes;
+} kincal_cluster_selection;
 
 /*
  A prepared robot model: the core model built and validated once by `kincal_prepare`, for
@@ -2533,6 +2580,134 @@ typedef struct kincal_pose_diagnosis {
     double heldout_final[6];
 } kincal_pose_diagnosis;
 
+#if defined(KINCAL_STD)
+/*
+ What a measurement file holds: the sizes of the buffers `kincal_measurements_read` fills,
+ and which optional columns the file has. Plain data, written by
+ `kincal_measurements_read_sizes`.
+ */
+typedef struct kincal_measurement_sizes {
+    /*
+     Data rows L (≥ 1).
+     */
+    size_t n_rows;
+    /*
+     Joints N: the robot's, or without a robot the highest `qK` of the header.
+     */
+    size_t n_joints;
+    /*
+     Header columns (names in `text`).
+     */
+    size_t n_columns;
+    /*
+     Comment lines before the header (in `text`).
+     */
+    size_t n_comments;
+    /*
+     `extra_*` columns (values per row in `text`).
+     */
+    size_t n_extra;
+    /*
+     Bytes of `text`, every string's NUL included.
+     Length of `text` (ignored when NULL).
+     */
+    size_t text_len;
+    /*
+     1-based line of the header row.
+     */
+    size_t header_line;
+    /*
+     Orientation columns: 0 none, 1 roll/pitch/yaw, 2 qw/qx/qy/qz.
+     */
+    uint32_t orientation;
+    /*
+     Non-zero: the file has x, y, z.
+     */
+    uint32_t has_position;
+    /*
+     Non-zero: the file has `pose_id` (one label per row in `text`).
+     */
+    uint32_t has_pose_id;
+    /*
+     Non-zero: the file has the approach directions s1..sN.
+     */
+    uint32_t has_approach;
+    /*
+     Non-zero: the file has `temp_c`.
+     */
+    uint32_t has_temperature;
+    /*
+     Non-zero: the file has contact columns (`point_x/y/z`, `target`, `plane`, `session`),
+     which these outputs do not carry: read such files with the CLI (`kincal calibrate`).
+     Target and plane rows come out with mask 0.
+     */
+    uint32_t has_contacts;
+} kincal_measurement_sizes;
+#endif
+
+#if defined(KINCAL_STD)
+/*
+ Where `kincal_measurements_read` writes: caller-owned buffers, each NULL when not wanted
+ or exactly the length `kincal_measurement_sizes` gives (L rows, N joints).
+ */
+typedef struct kincal_measurement_buffers {
+    /*
+     Joint readings [rad, or m for a prismatic joint], L × N row-major; `q_len` = L·N.
+     */
+    double *q;
+    /*
+     Length of `q` (ignored when NULL).
+     */
+    size_t q_len;
+    /*
+     Measured poses, L 4×4 column-major transforms [m]; `poses_len` = 16·L. Rows without
+     an orientation have the identity rotation, rows without a position the identity pose.
+     */
+    double *poses;
+    /*
+     Length of `poses` (ignored when NULL).
+     */
+    size_t poses_len;
+    /*
+     Measured components per row, as `kincal_measurements.masks`: 0x3f a full pose, 0x07
+     a position, the bits of the coordinates given for a partial position, 0 none;
+     `masks_len` = L.
+     */
+    uint8_t *masks;
+    /*
+     Length of `masks` (ignored when NULL).
+     */
+    size_t masks_len;
+    /*
+     Approach directions and temperature per row (flags set when the file has them);
+     `aux_len` = L.
+     */
+    struct kincal_joint_aux *aux;
+    /*
+     Length of `aux` (ignored when NULL).
+     */
+    size_t aux_len;
+    /*
+     1-based file line of each row; `lines_len` = L.
+     */
+    size_t *lines;
+    /*
+     Length of `lines` (ignored when NULL).
+     */
+    size_t lines_len;
+    /*
+     The file's text, NUL-terminated UTF-8 strings one after another: the comments
+     (without the `#`, as written), the column names, then per row its `pose_id` (when
+     the file has one) and its `n_extra` extra cells; `text_len` = the sizes' `text_len`.
+     */
+    char *text;
+    /*
+     Length of `text` (ignored when NULL).
+     */
+    size_t text_len;
+} kincal_measurement_buffers;
+#endif
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -3123,6 +3298,69 @@ kincal_status kincal_select_poses(const struct kincal_robot *robot,
                                   size_t q_out_len,
                                   struct kincal_selection *selection_out,
                                   struct kincal_error *err);
+
+/*
+ Bytes of caller memory `kincal_cluster_select` needs for `n_params` parameters, a pool of
+ `pool_len` configurations and the cubes of side `cube_m` [m] of `region` (the selection
+ workspace of `kincal_select_workspace_size`, then six values per candidate and 16 bytes
+ per cube). Returns 0 for 0 or more than `KINCAL_MAX_PARAMS` parameters, a NULL or invalid
+ region, a cube side that is not finite and positive, or an overflowing size.
+
+ # Safety
+ `region` NULL or readable.
+ */
+size_t kincal_cluster_workspace_size(size_t n_params,
+                                     size_t pool_len,
+                                     const struct kincal_region *region,
+                                     double cube_m);
+
+/*
+ The workspace-clustering design of the paper (Section 4.2, what `kincal select-poses
+ --design clustering` and `design-tool` use): `m` members of the caller's pool whose
+ end-effector positions lie in mutually different cubes of side `cube_m` of `region`, and
+ whose per-pose indices (`kincal_pose_singular_values`) match a target pose's within
+ `tolerance` (`max_k |ln σ_k − ln σ_k*|`); among targets whose design is within the
+ tolerance the index `objective` decides, otherwise the smallest spread. Deterministic.
+
+ - `pool_q`, `pool_q_len`: candidate joint values [rad], `pool_len` × N row-major;
+   `pool_q_len` = `pool_len`·N. Members outside `region` are never chosen.
+ - `m`: poses to choose, 1 ≤ `m` ≤ `KINCAL_MAX_SELECT` and ≤ the occupied cubes.
+ - `params`, `params_len`, `scaling`: as `kincal_observability`.
+ - `objective`: a `kincal_obs_index`.
+ - `region`: the box split into cubes [m] (required). `cube_m`: cube side [m] (> 0).
+   `tolerance`: accepted spread (finite, ≥ 0; the CLI's default is 0.1).
+ - `workspace`, `workspace_len`: caller memory of at least `kincal_cluster_workspace_size(p,
+   pool_len, region, cube_m)` bytes aligned to `KINCAL_WORKSPACE_ALIGN`; scratch.
+ - `chosen_out`, `chosen_len`: the zero-based pool indices of the chosen poses; `chosen_len`
+   = m.
+ - `selection_out`: spread, objective, target, occupied cubes (NULL if not wanted).
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE, INVALID_ARGUMENT
+ (`objective`, `scaling`, `region`, `cube_m`, `tolerance`), TOO_FEW_DATA (`m` = 0, or more
+ than the occupied cubes), CAPACITY_EXCEEDED (`m` > `KINCAL_MAX_SELECT`, too many cubes),
+ NOT_CONVERGED, any status of `kincal_robot_validate`. Outputs are written on success only.
+
+ # Safety
+ As `kincal_select_poses`; `chosen_out` writable for `chosen_len` elements.
+ */
+kincal_status kincal_cluster_select(const struct kincal_robot *robot,
+                                    const double *pool_q,
+                                    size_t pool_len,
+                                    size_t pool_q_len,
+                                    size_t m,
+                                    const uint8_t *params,
+                                    size_t params_len,
+                                    const struct kincal_scaling *scaling,
+                                    uint32_t objective,
+                                    const struct kincal_region *region,
+                                    double cube_m,
+                                    double tolerance,
+                                    void *workspace,
+                                    size_t workspace_len,
+                                    size_t *chosen_out,
+                                    size_t chosen_len,
+                                    struct kincal_cluster_selection *selection_out,
+                                    struct kincal_error *err);
 
 /*
  The value of parameter `index` (flat layout, see `kincal_robot.params`).
@@ -4011,6 +4249,94 @@ kincal_status kincal_diagnose(const struct kincal_robot *robot,
                               struct kincal_pose_diagnosis *poses_out,
                               size_t poses_out_len,
                               struct kincal_error *err);
+
+#if defined(KINCAL_STD)
+/*
+ Reads and checks the measurement CSV at `path` (spec/measurements.md) with the CLI's
+ reader and writes its sizes to `sizes_out`, for the buffers of `kincal_measurements_read`.
+
+ - `path`: NUL-terminated file name (any bytes on Unix).
+ - `robot`: the robot the data are for (its joint count: exactly q1..qN; its limits,
+   inclusive), or NULL to take the joint count from the header (the highest `qK`) and
+   check no limits.
+ - `flags`: `KINCAL_READ_ALLOW_OUT_OF_LIMITS`, `KINCAL_READ_REQUIRE_POSE`, or 0.
+ - `sizes_out`: written on success.
+ - `read_err`: why the file was refused and where (line; column = the cell number), or
+   NULL.
+
+ Returns OK, NULL_POINTER, MISALIGNED_POINTER, INVALID_ARGUMENT (`flags`), BAD_FILE
+ (unreadable or refused: see `read_err`), any status of `kincal_robot_validate`.
+ Available in std builds only.
+
+ # Safety
+ `path` NUL-terminated; `robot` NULL or readable; `sizes_out`, `read_err`, `err` NULL or
+ writable.
+ */
+kincal_status kincal_measurements_read_sizes(const char *path,
+                                             const struct kincal_robot *robot,
+                                             uint32_t flags,
+                                             struct kincal_measurement_sizes *sizes_out,
+                                             struct kincal_read_error *read_err,
+                                             struct kincal_error *err);
+#endif
+
+#if defined(KINCAL_STD)
+/*
+ Reads the measurement CSV at `path` into the caller's buffers, whose lengths
+ `kincal_measurements_read_sizes` gave for the same `path`, `robot` and `flags`.
+
+ - `buffers`: where to write (each pointer NULL or of exactly its stated length).
+ - the other arguments as `kincal_measurements_read_sizes`.
+
+ Returns the statuses of `kincal_measurements_read_sizes`, and BAD_LENGTH when a buffer's
+ length does not fit the file (`argument` names it). Outputs are written on success only.
+
+ # Safety
+ As `kincal_measurements_read_sizes`; `buffers` readable, each of its non-NULL pointers
+ writable for its length.
+ */
+kincal_status kincal_measurements_read(const char *path,
+                                       const struct kincal_robot *robot,
+                                       uint32_t flags,
+                                       const struct kincal_measurement_buffers *buffers,
+                                       struct kincal_read_error *read_err,
+                                       struct kincal_error *err);
+#endif
+
+#if defined(KINCAL_STD)
+/*
+ As `kincal_measurements_read_sizes`, from the file's bytes in memory (`bytes`,
+ `bytes_len` bytes; no NUL needed). Messages name the source `"buffer"`.
+
+ # Safety
+ `bytes` readable for `bytes_len` bytes; the other pointers as in
+ `kincal_measurements_read_sizes`.
+ */
+kincal_status kincal_measurements_read_buffer_sizes(const char *bytes,
+                                                    size_t bytes_len,
+                                                    const struct kincal_robot *robot,
+                                                    uint32_t flags,
+                                                    struct kincal_measurement_sizes *sizes_out,
+                                                    struct kincal_read_error *read_err,
+                                                    struct kincal_error *err);
+#endif
+
+#if defined(KINCAL_STD)
+/*
+ As `kincal_measurements_read`, from the file's bytes in memory (see
+ `kincal_measurements_read_buffer_sizes`).
+
+ # Safety
+ As `kincal_measurements_read_buffer_sizes` and `kincal_measurements_read`.
+ */
+kincal_status kincal_measurements_read_buffer(const char *bytes,
+                                              size_t bytes_len,
+                                              const struct kincal_robot *robot,
+                                              uint32_t flags,
+                                              const struct kincal_measurement_buffers *buffers,
+                                              struct kincal_read_error *read_err,
+                                              struct kincal_error *err);
+#endif
 
 #ifdef __cplusplus
 }  // extern "C"

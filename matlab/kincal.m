@@ -33,6 +33,8 @@ function kincal()
 %                             set of configurations (Section 3.3)
 %     kincal_select_poses     calibration poses that maximise an observability index
 %                             (greedy start, DETMAX exchange, joint-space refinement)
+%     kincal_cluster_select   the paper's workspace-clustering design (Section 4.2): poses
+%                             in different cubes with equal per-pose observability
 %     kincal_validate         per-pose errors and summary against the 1 mm / 0.66 deg targets
 %     kincal_biopsy_rotation  eq. (3): the orientation error a biopsy allows
 %     kincal_identify_constraints  calibration without an instrument: contacts held at
@@ -43,12 +45,13 @@ function kincal()
 %     kincal_register         pose of a marker body from motion-capture data, outliers named
 %     kincal_t_base_ee        end-effector pose in the base frame from two registrations
 %   Data and results
-%     kincal_read_measurements, kincal_write_measurements   the measurement CSV
+%     kincal_read_measurements, kincal_write_measurements   the measurement CSV (read by
+%                             the CLI's reader through the C ABI)
 %     kincal_print_params     parameter table of several models side by side
 %     kincal_plot_errors      the paper's 4x4 error figures (PNG/SVG, headless)
 %   Workflows (matlab/workflows, Section 4.1.4 of the paper)
 %     workflow_a_virtual      calibration on virtual data (Table 3 truth)
-%     workflow_b_tool_design  calibration-tool design: Table 2 vs workspace cubes
+%     workflow_b_tool_design  calibration-tool design: Table 2, optimal, clustering
 %     workflow_c_real_data    calibration from a measurement CSV
 %   Build and test
 %     make_kincal             make_kincal / make_kincal('clean') / make_kincal('test')

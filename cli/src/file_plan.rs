@@ -270,6 +270,9 @@ pub fn import_dataset(a: &crate::commands::import::Args) -> FilePlan {
     if let Some(d) = &a.dir {
         p = p.input_folder("DIR", d);
     }
+    if let Some(u) = &a.urdf {
+        p = p.input("--urdf", u);
+    }
     p.output_opt("--out", a.out.as_deref())
         .output_opt("--robot-out", a.robot_out.as_deref())
         .output_opt("--constraints-out", a.constraints_out.as_deref())

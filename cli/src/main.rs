@@ -20,6 +20,11 @@ millimetres and degrees on screen.
 ROBOT is a built-in robot name (aria) or a robot description file. MODEL is a model file
 written by `calibrate`, or a ROBOT (its nominal model). DATA is a measurement CSV.
 
+--robot: commands that read measured data (calibrate, crossval, diagnose, markers) require
+it, since the data belong to one arm and a default would read them against another; the design
+commands, which simulate (select-poses, design-tool, evaluate-designs), default to the paper's
+arm, aria; demo always runs aria; predict and validate take a MODEL instead.
+
 Exit status: 0 success, 1 an output could not be written, 2 usage error, 3 bad input (file,
 line, column and reason on stderr), 4 numerical failure (no convergence, rank too low).";
 

@@ -8,7 +8,7 @@
 //! Checked: the FR3 and UR10e held-out residuals against the nominal model's (the numbers
 //! docs/real-data.md states, to 2 %), the FR3 description's FK against the robot's own
 //! TCP poses, TALOS calibrating from position-only rows with its identifiability report,
-//! the positioner's import, and the refusal of the sets that cannot be used as they are;
+//! the positioner's import, and TIAGo's refusal without the user's URDF;
 //! MUKCa imported for every robot (rows against the raw files, refusals), its nominal and
 //! leave-one-location-out consistency (the test's own computation from `kincal predict`),
 //! MATE's single-coordinate rows, and `--base-link/--tip-link` on a URDF ROBOT.
@@ -320,26 +320,31 @@ fn talos_position_only_calibrates_with_its_identifiability_report() {
 }
 
 #[test]
-fn positioner_imports_and_unusable_sets_are_refused_with_reasons() {
+fn positioner_imports_and_tiago_without_its_urdf_is_a_usage_error() {
     let Some(root) = realdata() else { return };
     let dir = tempfile::tempdir().unwrap();
     let out = import(&root, "ical-2axis-positioner", dir.path());
     assert!(out.contains("205 poses, 2 joints, full poses"), "{out}");
     {
-        let (name, why) = ("figaroh-tiago-mocap", "prismatic");
+        // TIAGo needs the user's URDF (not shipped): a usage error saying where to get it.
+        let name = "figaroh-tiago-mocap";
         let src = root.join(name);
         let o = kincal(
             &[
                 "import-dataset",
-                name,
+                "tiago",
                 src.to_str().unwrap(),
                 "--out",
                 "x.csv",
             ],
             dir.path(),
         );
-        assert_eq!(o.status.code(), Some(3), "{name}: {}", text(&o));
-        assert!(text(&o).contains(why), "{name}: {}", text(&o));
+        assert_eq!(o.status.code(), Some(2), "{name}: {}", text(&o));
+        assert!(
+            text(&o).contains("tiago_description"),
+            "{name}: {}",
+            text(&o)
+        );
         assert!(!dir.path().join("x.csv").exists());
     }
 }

@@ -53,7 +53,11 @@
 use nalgebra::{Matrix3, Vector3};
 
 use crate::error::{Error, JointIndex, Quantity, Result, check_finite};
-use crate::math::{atan2, hypot, sin_cos, sqrt};
+use crate::fixed3::{
+    IDENTITY, IDENTITY_TRANSFORM, ZERO, compose, dot, inverse, mat_mul, mat_vec, norm,
+    transform_point,
+};
+use crate::math::{atan2, column3, hypot, sin_cos, sqrt};
 use crate::model::{JointLimits, LengthParam, Link, PARALLEL_AXES_TOL_RAD, Robot};
 use crate::pose::{
     Transform, pose_from_vector6, pose_to_vector6, rot_x, rot_y, rotation_exp, transform,
@@ -120,8 +124,8 @@ type InBase<const N: usize> = ([Vector3<f64>; N], [Vector3<f64>; N], Transform);
 pub fn link_transform_at_zero(l: &Link) -> Transform {
     let (s, c) = sin_cos(l.theta0);
     let rz = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
-    let p = rz.column(0) * l.a + rz.column(2) * l.d;
-    transform(rz * (rot_x(l.alpha) * rot_y(l.beta)), p)
+    let p = column3(&rz, 0) * l.a + column3(&rz, 2) * l.d;
+    transform(mat_mul(&rz, &mat_mul(&rot_x(l.alpha), &rot_y(l.beta))), p)
 }
 
 /// The rotation by `angle` \[rad\] about the line through `point` along the unit vector
@@ -129,7 +133,7 @@ pub fn link_transform_at_zero(l: &Link) -> Transform {
 #[must_use]
 pub fn rotation_about_line(point: &Vector3<f64>, unit_dir: &Vector3<f64>, angle: f64) -> Transform {
     let r = rotation_exp(&(unit_dir * angle));
-    transform(r, point - r * point)
+    transform(r, point - mat_vec(&r, point))
 }
 
 /// The smallest rotation taking `e_z` onto the unit vector `u` (Rodrigues with the
@@ -139,13 +143,13 @@ fn rotation_z_onto(u: &Vector3<f64>) -> Matrix3<f64> {
     let minimal = |v: &Vector3<f64>| {
         let k = Vector3::new(-v.y, v.x, 0.0);
         let kx = crate::pose::skew(&k);
-        Matrix3::identity() + kx + kx * kx * (1.0 / (1.0 + v.z))
+        IDENTITY + kx + mat_mul(&kx, &kx) * (1.0 / (1.0 + v.z))
     };
     if u.z >= 0.0 {
         minimal(u)
     } else {
         let flip = rot_x(core::f64::consts::PI);
-        flip * minimal(&(flip.transpose() * u))
+        mat_mul(&flip, &minimal(&mat_vec(&flip.transpose(), u)))
     }
 }
 
@@ -153,10 +157,13 @@ impl<const N: usize> AxisChain<N> {
     /// Checks finiteness and returns the unit directions, in the base frame, with the
     /// points in the base frame and the tool in the base frame.
     fn in_base(&self) -> Result<InBase<N>> {
-        let t_base_ref = self.t_ref_base.inverse();
-        let mut pts = [Vector3::zeros(); N];
-        let mut dirs = [Vector3::zeros(); N];
-        for (j, ax) in self.axes.iter().enumerate() {
+        // fixed3 rather than nalgebra's operators (same bits): theirs keep panic paths at
+        // opt-level z.
+        let t_base_ref = inverse(&self.t_ref_base);
+        let mut pts = [ZERO; N];
+        let mut dirs = [ZERO; N];
+        let slots = pts.iter_mut().zip(dirs.iter_mut());
+        for ((j, ax), (pt, dir)) in self.axes.iter().enumerate().zip(slots) {
             check_finite(ax.point.as_slice(), Quantity::Position).map_err(|_| {
                 Error::NonFinite {
                     what: Quantity::Position,
@@ -169,16 +176,14 @@ impl<const N: usize> AxisChain<N> {
                     index: j,
                 }
             })?;
-            let n = ax.direction.norm();
+            let n = norm(&ax.direction);
             if n <= MIN_DIRECTION_NORM {
                 return Err(Error::DegenerateAxis {
                     joint: JointIndex(j),
                 });
             }
-            pts[j] = t_base_ref
-                .transform_point(&nalgebra::Point3::from(ax.point))
-                .coords;
-            dirs[j] = t_base_ref.rotation * (ax.direction / n);
+            *pt = transform_point(&t_base_ref, &nalgebra::Point3::from(ax.point)).coords;
+            *dir = mat_vec(t_base_ref.rotation.matrix(), &(ax.direction / n));
         }
         for (k, t) in [&self.t_ref_base, &self.t_ref_tool].into_iter().enumerate() {
             if !t.translation.vector.iter().all(|v| v.is_finite())
@@ -190,7 +195,7 @@ impl<const N: usize> AxisChain<N> {
                 });
             }
         }
-        Ok((pts, dirs, t_base_ref * self.t_ref_tool))
+        Ok((pts, dirs, compose(&t_base_ref, &self.t_ref_tool)))
     }
 
     /// The chain's own forward kinematics `T_base_tool(q)` by the product of exponentials
@@ -198,11 +203,11 @@ impl<const N: usize> AxisChain<N> {
     pub fn fk(&self, q: &[f64; N]) -> Result<Transform> {
         check_finite(q, Quantity::JointReading)?;
         let (pts, dirs, t_base_tool0) = self.in_base()?;
-        let mut t = Transform::identity();
+        let mut t = IDENTITY_TRANSFORM;
         for ((p, u), &qi) in pts.iter().zip(dirs.iter()).zip(q.iter()) {
-            t *= rotation_about_line(p, u, qi);
+            t = compose(&t, &rotation_about_line(p, u, qi));
         }
-        Ok(t * t_base_tool0)
+        Ok(compose(&t, &t_base_tool0))
     }
 
     /// The Hayati/mDH links, d/β choices, base and tool frames of this chain (the
@@ -225,27 +230,30 @@ impl<const N: usize> AxisChain<N> {
                 found: 0,
             });
         };
-        let o0 = p1 - u1 * p1.dot(u1);
+        let o0 = p1 - u1 * dot(p1, u1);
         out.base = pose_to_vector6(&transform(rotation_z_onto(u1), o0));
         // Continue from the frame the robot will actually compute.
         let mut frame = pose_from_vector6(&out.base);
         for i in 0..N {
             let link_and_lp = match (pts.get(i + 1), dirs.get(i + 1)) {
                 (Some(p_next), Some(u_next)) => {
-                    let inv = frame.inverse();
-                    let p = inv.transform_point(&nalgebra::Point3::from(*p_next)).coords;
-                    let u = inv.rotation * u_next;
+                    let inv = inverse(&frame);
+                    let p = transform_point(&inv, &nalgebra::Point3::from(*p_next)).coords;
+                    let u = mat_vec(inv.rotation.matrix(), u_next);
                     middle_link(&p, &u)
                 }
-                _ => (last_link(&(frame.inverse() * t_base_tool0)), LengthParam::D),
+                _ => (
+                    last_link(&compose(&inverse(&frame), &t_base_tool0)),
+                    LengthParam::D,
+                ),
             };
             if let (Some(l), Some(lp)) = (out.links.get_mut(i), out.length_params.get_mut(i)) {
                 *l = link_and_lp.0;
                 *lp = link_and_lp.1;
             }
-            frame *= link_transform_at_zero(&link_and_lp.0);
+            frame = compose(&frame, &link_transform_at_zero(&link_and_lp.0));
         }
-        out.tool = pose_to_vector6(&(frame.inverse() * t_base_tool0));
+        out.tool = pose_to_vector6(&compose(&inverse(&frame), &t_base_tool0));
         Ok(out)
     }
 
@@ -292,9 +300,9 @@ fn middle_link(p: &Vector3<f64>, u: &Vector3<f64>) -> (Link, LengthParam) {
         // Common normal of the z axis and the line (p, u).
         let b = u.z;
         let denom = 1.0 - b * b;
-        let d = (p.z - b * u.dot(p)) / denom;
+        let d = (p.z - b * dot(u, p)) / denom;
         let mut n = Vector3::new(-u.y, u.x, 0.0) / sin_angle;
-        let a_signed = p.dot(&n);
+        let a_signed = dot(p, &n);
         let a = if a_signed.abs() <= SNAP_LENGTH_M {
             if n.x < 0.0 || (n.x == 0.0 && n.y < 0.0) {
                 n = -n;
@@ -334,8 +342,8 @@ fn tilt_onto(u: &Vector3<f64>, theta: f64) -> (f64, f64) {
 /// Link N from the tool frame in frame N−1 coordinates.
 fn last_link(t_prev_tool: &Transform) -> Link {
     let r = t_prev_tool.rotation.matrix();
-    let x = r.column(0);
-    let y = r.column(1);
+    let x = column3(r, 0);
+    let y = column3(r, 1);
     let (vx, vy) = if hypot(x.x, x.y) > 1e-9 {
         (x.x, x.y)
     } else {

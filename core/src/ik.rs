@@ -6,7 +6,7 @@
 use core::f64::consts::PI;
 use core::num::NonZeroU32;
 
-use nalgebra::{Cholesky, SMatrix, SVector, Vector6};
+use nalgebra::{ArrayStorage, SMatrix, Vector3, Vector6};
 
 use crate::error::{Error, Quantity, Result, check_finite};
 use crate::kinematics::Frames;
@@ -264,8 +264,10 @@ fn residual<const N: usize>(
 ) -> Result<Vector6<f64>> {
     robot.fk_frames(state, frames)?;
     let dp = target.translation.vector - frames.t_base_ee.translation.vector;
-    let dr =
-        rotation_log(&(target.rotation.matrix() * frames.t_base_ee.rotation.matrix().transpose()));
+    let dr = rotation_log(&crate::fixed3::mat_mul(
+        target.rotation.matrix(),
+        &frames.t_base_ee.rotation.matrix().transpose(),
+    ));
     Ok(Vector6::new(dp.x, dp.y, dp.z, dr.x, dr.y, dr.z))
 }
 
@@ -290,7 +292,13 @@ fn descend<const N: usize>(
     let mut frames = Frames::default();
     let mut e = residual(robot, target, &state, &mut frames)?;
     let mut lambda = 1e-6;
-    let norms = |e: &Vector6<f64>| (e.fixed_rows::<3>(0).norm(), e.fixed_rows::<3>(3).norm());
+    let norms = |e: &Vector6<f64>| {
+        let [[px, py, pz, rx, ry, rz]] = e.data.0;
+        (
+            crate::fixed3::norm(&Vector3::new(px, py, pz)),
+            crate::fixed3::norm(&Vector3::new(rx, ry, rz)),
+        )
+    };
     for it in 0..opts.max_iterations {
         let (ep, er) = norms(&e);
         if ep < opts.tol_pos_m && er < opts.tol_rot_rad {
@@ -307,20 +315,28 @@ fn descend<const N: usize>(
         }
         let mut j = joint_jacobian(robot, &state, &frames);
         // Sensor joints are read, not commanded: the step leaves them at the seed's reading.
-        for (mut col, kind) in j.column_iter_mut().zip(robot.joint_kinds()) {
+        for (col, kind) in j.data.0.iter_mut().zip(robot.joint_kinds()) {
             if kind == crate::JointKind::Sensor {
-                col.fill(0.0);
+                *col = [0.0; 6];
             }
         }
-        let jjt = j * j.transpose();
+        // fixed3's products and solve: nalgebra's (bit for bit) without its asserting
+        // accessors, which stay panic paths at opt-level z.
+        let jjt = crate::fixed3::gram_rows(&j);
         let mut accepted = false;
         while lambda < 1e9 {
-            let damped = jjt + SMatrix::<f64, 6, 6>::identity() * lambda;
-            let Some(chol) = Cholesky::new(damped) else {
+            // JJᵀ + λ·I, entry by entry as nalgebra adds `identity() * λ` (+0 off the diagonal).
+            let mut damped = jjt;
+            for (c, column) in damped.data.0.iter_mut().enumerate() {
+                for (r, v) in column.iter_mut().enumerate() {
+                    *v += if r == c { lambda } else { 0.0 };
+                }
+            }
+            let Some(step) = crate::fixed3::cholesky_solve6(&damped, &e) else {
                 lambda *= 10.0;
                 continue;
             };
-            let dq: SVector<f64, N> = j.transpose() * chol.solve(&e);
+            let dq = crate::fixed3::transpose_mul(&j, &step);
             let mut trial = state;
             for (v, d) in trial.q.iter_mut().zip(dq.iter()) {
                 *v += d;
@@ -328,7 +344,7 @@ fn descend<const N: usize>(
             clamp(&mut trial.q);
             let mut f2 = Frames::default();
             let e2 = residual(robot, target, &trial, &mut f2)?;
-            if e2.norm_squared() < e.norm_squared() {
+            if crate::fixed3::norm_squared6(&e2) < crate::fixed3::norm_squared6(&e) {
                 state = trial;
                 e = e2;
                 frames = f2;
@@ -356,7 +372,7 @@ pub(crate) fn joint_jacobian<const N: usize>(
 ) -> SMatrix<f64, 6, N> {
     let pe = f.t_base_ee.translation.vector;
     let e = robot.effect_params();
-    let mut j = SMatrix::<f64, 6, N>::zeros();
+    let mut j = SMatrix::<f64, 6, N>::from_array_storage(ArrayStorage([[0.0; 6]; N]));
     // Iterators over the joints and the Jacobian's column arrays (`data.0`, column-major)
     // rather than `t_base_link[i - 1]`, `q[i]` and `fixed_view_mut(0, i)`: their bounds
     // checks stay (as panic paths) where the optimiser does not inline (opt-level s/z).

@@ -4,6 +4,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 use crate::error::{Error, Result};
+use crate::fixed3::{IDENTITY, IDENTITY_TRANSFORM, ZERO, compose, dot, from_columns, mat_vec};
 use crate::math::column3;
 use crate::model::{Geometry, JointState, Robot};
 use crate::params::{CyclicTerm, FrameParam, LinkParam, ParamId};
@@ -32,10 +33,10 @@ pub struct Frames<const N: usize> {
 impl<const N: usize> Default for Frames<N> {
     fn default() -> Self {
         Frames {
-            t_base_0: Transform::identity(),
-            t_base_link: [Transform::identity(); N],
-            x_mid: [Vector3::zeros(); N],
-            t_base_ee: Transform::identity(),
+            t_base_0: IDENTITY_TRANSFORM,
+            t_base_link: [IDENTITY_TRANSFORM; N],
+            x_mid: [ZERO; N],
+            t_base_ee: IDENTITY_TRANSFORM,
             length_scale: 1.0,
         }
     }
@@ -94,9 +95,9 @@ fn chain_sc<const N: usize>(
     mut on_link: impl FnMut(usize, &Vector3<f64>, &Matrix3<f64>, &Vector3<f64>),
 ) -> Transform {
     let r0 = g.t_base.rotation.matrix();
-    let mut x: Vector3<f64> = r0.column(0).into_owned();
-    let mut y: Vector3<f64> = r0.column(1).into_owned();
-    let mut z: Vector3<f64> = r0.column(2).into_owned();
+    let mut x: Vector3<f64> = column3(r0, 0);
+    let mut y: Vector3<f64> = column3(r0, 1);
+    let mut z: Vector3<f64> = column3(r0, 2);
     let mut p = g.t_base.translation.vector;
     for i in 0..N {
         let l = &g.links[i];
@@ -118,9 +119,9 @@ fn chain_sc<const N: usize>(
             x = xm * cb - za * sb;
             z = xm * sb + za * cb;
         }
-        on_link(i, &xm, &Matrix3::from_columns(&[x, y, z]), &p);
+        on_link(i, &xm, &from_columns(&x, &y, &z), &p);
     }
-    transform(Matrix3::from_columns(&[x, y, z]), p) * g.t_tool
+    compose(&transform(from_columns(&x, &y, &z), p), &g.t_tool)
 }
 
 impl<const N: usize> Robot<N> {
@@ -240,16 +241,16 @@ impl<const N: usize> Robot<N> {
     /// way gravity pulls.
     #[must_use]
     pub fn gravity_torques(&self, q: &[f64; N]) -> [f64; N] {
-        let mut p = [Vector3::zeros(); N];
-        let mut z = [Vector3::zeros(); N];
+        let mut p = [ZERO; N];
+        let mut z = [ZERO; N];
         let turn = self.turn_mask();
         let ee = chain(&self.nominal, &turn, q, 1.0, |i, _, r, pi| {
             p[i] = *pi;
-            z[i] = r.column(2).into_owned();
+            z[i] = column3(r, 2);
         });
         let g = self.gravity();
         let base_p = self.nominal.t_base.translation.vector;
-        let base_z = self.nominal.t_base.rotation.matrix().column(2).into_owned();
+        let base_z = column3(self.nominal.t_base.rotation.matrix(), 2);
         // Accumulate from the tip: first moment Σ m_k c_k and mass Σ m_k of links k ≥ j.
         let mut moment = ee.translation.vector * self.mass.tool_mass_kg;
         let mut mass = self.mass.tool_mass_kg;
@@ -264,9 +265,9 @@ impl<const N: usize> Robot<N> {
             moment += (p_prev + p[j]) * (0.5 * m);
             mass += m;
             tau[j] = if turn[j] == 0.0 {
-                z_prev.dot(&(g * mass))
+                dot(&z_prev, &(g * mass))
             } else {
-                z_prev.dot(&(moment - p_prev * mass).cross(&g))
+                dot(&z_prev, &(moment - p_prev * mass).cross(&g))
             };
         }
         tau
@@ -306,7 +307,7 @@ impl<const N: usize> Robot<N> {
         self.frames_at(&angles, scale, &mut f);
         let pe = f.t_base_ee.translation.vector;
         let col = |lin: Vector3<f64>, ang: Vector3<f64>| [lin.x, lin.y, lin.z, ang.x, ang.y, ang.z];
-        let zero = Vector3::zeros();
+        let zero = ZERO;
         // Frame i (before joint i+1) walks along with link i: iterators and `column3` rather
         // than `t_base_link[i - 1]` and `column(k)`, whose bounds checks stay (as panic paths)
         // where the optimiser does not inline (opt-level s/z).
@@ -357,12 +358,12 @@ impl<const N: usize> Robot<N> {
             let ax = k as usize % 3;
             let (b, t) = if (k as usize) < 3 {
                 (
-                    col(column3(&Matrix3::identity(), ax), zero),
+                    col(column3(&IDENTITY, ax), zero),
                     col(column3(&r_n, ax), zero),
                 )
             } else {
                 let w = column3(&jl_base, ax);
-                let wt = r_e * column3(&jr_tool, ax);
+                let wt = mat_vec(&r_e, &column3(&jr_tool, ax));
                 (col(w.cross(&(pe - base_p)), w), col(zero, wt))
             };
             put(jac, ParamId::Base(k).index(N).0, b);

@@ -18,6 +18,8 @@ pub mod axis_chain;
 pub mod diagnosis;
 pub mod effects;
 pub mod error;
+#[doc(hidden)]
+pub mod fixed3;
 pub mod frames;
 pub mod identify;
 pub mod ik;

@@ -170,10 +170,10 @@ pub(crate) fn cbrt(x: f64) -> f64 {
 /// Column `k` (0, 1 or 2) of a 3×3 matrix, read from its column-major array; zeros for any
 /// other `k`. nalgebra's `column(k)` asserts `k < 3` at run time, and where the optimiser does
 /// not inline it (opt-level s/z, the firmware target) that assertion is a panic path.
-#[inline]
+#[inline(always)]
 pub(crate) fn column3(m: &nalgebra::Matrix3<f64>, k: usize) -> nalgebra::Vector3<f64> {
-    m.data.0.get(k).map_or_else(nalgebra::Vector3::zeros, |c| {
-        nalgebra::Vector3::new(c[0], c[1], c[2])
+    m.data.0.get(k).map_or(crate::fixed3::ZERO, |&[x, y, z]| {
+        nalgebra::Vector3::new(x, y, z)
     })
 }
 

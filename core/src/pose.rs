@@ -8,6 +8,7 @@
 use nalgebra::{IsometryMatrix3, Matrix3, Rotation3, Translation3, Vector3};
 
 use crate::error::{Error, Quantity, Result};
+use crate::fixed3::{IDENTITY, at, dot, mat_mul, norm, norm_squared};
 use crate::math::{atan2, cos, hypot, sin, sin_cos, sqrt};
 
 /// A rigid transform (rotation matrix + translation in metres).
@@ -61,7 +62,8 @@ pub fn checked_transform(rotation: Matrix3<f64>, translation: Vector3<f64>) -> O
         .iter()
         .chain(translation.iter())
         .all(|v| v.is_finite());
-    let gram = rotation.transpose() * rotation - Matrix3::identity();
+    // (kincal::fixed3: nalgebra's product and identity, without their opt-level z panic paths)
+    let gram = mat_mul(&rotation.transpose(), &rotation) - IDENTITY;
     let orthonormal = gram.iter().all(|v| v.abs() <= ROTATION_TOLERANCE);
     (finite && orthonormal && rotation.determinant() > 0.0)
         .then(|| transform(rotation, translation))
@@ -86,7 +88,7 @@ pub fn transform(rotation: Matrix3<f64>, translation: Vector3<f64>) -> Transform
 /// `R = Rz(yaw)·Ry(pitch)·Rx(roll)` (angles in radians).
 #[must_use]
 pub fn rpy_to_matrix(roll: f64, pitch: f64, yaw: f64) -> Matrix3<f64> {
-    rot_z(yaw) * rot_y(pitch) * rot_x(roll)
+    mat_mul(&mat_mul(&rot_z(yaw), &rot_y(pitch)), &rot_x(roll))
 }
 
 /// Inverse of [`rpy_to_matrix`]: `[roll, pitch, yaw]` with pitch in [−π/2, π/2].
@@ -100,20 +102,20 @@ pub fn rpy_to_matrix(roll: f64, pitch: f64, yaw: f64) -> Matrix3<f64> {
 /// where reading roll from `r21, r22` (both ~cos(pitch)) would lose digits.
 #[must_use]
 pub fn matrix_to_rpy(r: &Matrix3<f64>) -> [f64; 3] {
-    let cp = hypot(r[(0, 0)], r[(1, 0)]);
+    let cp = hypot(at(r, 0, 0), at(r, 1, 0));
     let lock = cp < 1e-15;
     let yaw = if lock {
-        atan2(-r[(0, 1)], r[(1, 1)])
+        atan2(-at(r, 0, 1), at(r, 1, 1))
     } else {
-        atan2(r[(1, 0)], r[(0, 0)])
+        atan2(at(r, 1, 0), at(r, 0, 0))
     };
     let (sy, cy) = sin_cos(yaw);
     // Rz(−yaw)·R: its rows 0 and 1 are cy·r0 + sy·r1 and −sy·r0 + cy·r1.
-    let r00 = cy * r[(0, 0)] + sy * r[(1, 0)];
-    let r11 = -sy * r[(0, 1)] + cy * r[(1, 1)];
-    let r12 = -sy * r[(0, 2)] + cy * r[(1, 2)];
+    let r00 = cy * at(r, 0, 0) + sy * at(r, 1, 0);
+    let r11 = -sy * at(r, 0, 1) + cy * at(r, 1, 1);
+    let r12 = -sy * at(r, 0, 2) + cy * at(r, 1, 2);
     let roll = atan2(-r12, r11);
-    let pitch = atan2(-r[(2, 0)], if lock { cp } else { r00 });
+    let pitch = atan2(-at(r, 2, 0), if lock { cp } else { r00 });
     [roll, pitch, yaw]
 }
 
@@ -154,38 +156,38 @@ pub fn quaternion_to_matrix(q: &[f64; 4]) -> Result<Matrix3<f64>> {
 /// accurate for every rotation).
 #[must_use]
 pub fn matrix_to_quaternion(r: &Matrix3<f64>) -> [f64; 4] {
-    let (m00, m11, m22) = (r[(0, 0)], r[(1, 1)], r[(2, 2)]);
+    let (m00, m11, m22) = (at(r, 0, 0), at(r, 1, 1), at(r, 2, 2));
     let tr = m00 + m11 + m22;
     let q = if tr >= m00 && tr >= m11 && tr >= m22 {
         let s = 2.0 * sqrt(1.0 + tr);
         [
             0.25 * s,
-            (r[(2, 1)] - r[(1, 2)]) / s,
-            (r[(0, 2)] - r[(2, 0)]) / s,
-            (r[(1, 0)] - r[(0, 1)]) / s,
+            (at(r, 2, 1) - at(r, 1, 2)) / s,
+            (at(r, 0, 2) - at(r, 2, 0)) / s,
+            (at(r, 1, 0) - at(r, 0, 1)) / s,
         ]
     } else if m00 >= m11 && m00 >= m22 {
         let s = 2.0 * sqrt(1.0 + m00 - m11 - m22);
         [
-            (r[(2, 1)] - r[(1, 2)]) / s,
+            (at(r, 2, 1) - at(r, 1, 2)) / s,
             0.25 * s,
-            (r[(0, 1)] + r[(1, 0)]) / s,
-            (r[(0, 2)] + r[(2, 0)]) / s,
+            (at(r, 0, 1) + at(r, 1, 0)) / s,
+            (at(r, 0, 2) + at(r, 2, 0)) / s,
         ]
     } else if m11 >= m22 {
         let s = 2.0 * sqrt(1.0 - m00 + m11 - m22);
         [
-            (r[(0, 2)] - r[(2, 0)]) / s,
-            (r[(0, 1)] + r[(1, 0)]) / s,
+            (at(r, 0, 2) - at(r, 2, 0)) / s,
+            (at(r, 0, 1) + at(r, 1, 0)) / s,
             0.25 * s,
-            (r[(1, 2)] + r[(2, 1)]) / s,
+            (at(r, 1, 2) + at(r, 2, 1)) / s,
         ]
     } else {
         let s = 2.0 * sqrt(1.0 - m00 - m11 + m22);
         [
-            (r[(1, 0)] - r[(0, 1)]) / s,
-            (r[(0, 2)] + r[(2, 0)]) / s,
-            (r[(1, 2)] + r[(2, 1)]) / s,
+            (at(r, 1, 0) - at(r, 0, 1)) / s,
+            (at(r, 0, 2) + at(r, 2, 0)) / s,
+            (at(r, 1, 2) + at(r, 2, 1)) / s,
             0.25 * s,
         ]
     };
@@ -203,7 +205,7 @@ pub fn matrix_to_quaternion(r: &Matrix3<f64>) -> [f64; 4] {
 /// with series expansions near zero.
 #[must_use]
 pub fn rotation_exp(v: &Vector3<f64>) -> Matrix3<f64> {
-    let t2 = v.norm_squared();
+    let t2 = norm_squared(v);
     let t = sqrt(t2);
     let (a, b) = if t < 1e-4 {
         (
@@ -214,7 +216,7 @@ pub fn rotation_exp(v: &Vector3<f64>) -> Matrix3<f64> {
         (sin(t) / t, (1.0 - cos(t)) / t2)
     };
     let k = skew(v);
-    Matrix3::identity() + k * a + k * k * b
+    IDENTITY + k * a + mat_mul(&k, &k) * b
 }
 
 /// The exact rotation vector of `r` (its matrix logarithm), angle in [0, π].
@@ -224,15 +226,24 @@ pub fn rotation_exp(v: &Vector3<f64>) -> Matrix3<f64> {
 #[must_use]
 pub fn rotation_log(r: &Matrix3<f64>) -> Vector3<f64> {
     let s = Vector3::new(
-        r[(2, 1)] - r[(1, 2)],
-        r[(0, 2)] - r[(2, 0)],
-        r[(1, 0)] - r[(0, 1)],
+        at(r, 2, 1) - at(r, 1, 2),
+        at(r, 0, 2) - at(r, 2, 0),
+        at(r, 1, 0) - at(r, 0, 1),
     ) * 0.5;
-    let sin_t = s.norm();
-    let cos_t = ((r[(0, 0)] + r[(1, 1)] + r[(2, 2)] - 1.0) * 0.5).clamp(-1.0, 1.0);
+    let sin_t = norm(&s);
+    // (`f64::clamp` asserts its bounds: a panic path where it is not inlined; this is its body.)
+    let c = (at(r, 0, 0) + at(r, 1, 1) + at(r, 2, 2) - 1.0) * 0.5;
+    #[allow(clippy::manual_clamp)]
+    let cos_t = if c < -1.0 {
+        -1.0
+    } else if c > 1.0 {
+        1.0
+    } else {
+        c
+    };
     let angle = atan2(sin_t, cos_t);
     if sin_t < 1e-300 && cos_t > 0.0 {
-        return Vector3::zeros();
+        return crate::fixed3::ZERO;
     }
     if cos_t > -0.7 {
         // angle < ~134°: sin is a good measure, θ/sinθ well conditioned.
@@ -245,7 +256,8 @@ pub fn rotation_log(r: &Matrix3<f64>) -> Vector3<f64> {
     }
     // Near π: R + Rᵀ = 2cosθ·I + 2(1 − cosθ)·a·aᵀ; take the largest diagonal entry.
     let omc = 1.0 - cos_t;
-    let b = |i: usize, j: usize| 0.5 * (r[(i, j)] + r[(j, i)]) - if i == j { cos_t } else { 0.0 };
+    let b =
+        |i: usize, j: usize| 0.5 * (at(r, i, j) + at(r, j, i)) - if i == j { cos_t } else { 0.0 };
     let k = if b(0, 0) >= b(1, 1) && b(0, 0) >= b(2, 2) {
         0
     } else if b(1, 1) >= b(2, 2) {
@@ -254,12 +266,10 @@ pub fn rotation_log(r: &Matrix3<f64>) -> Vector3<f64> {
         2
     };
     let ak = sqrt((b(k, k) / omc).max(0.0));
-    let mut axis = Vector3::zeros();
-    for j in 0..3 {
-        axis[j] = if j == k { ak } else { b(j, k) / (omc * ak) };
-    }
-    let axis = axis / axis.norm();
-    let axis = if axis.dot(&s) < 0.0 { -axis } else { axis };
+    let entry = |j: usize| if j == k { ak } else { b(j, k) / (omc * ak) };
+    let axis = Vector3::new(entry(0), entry(1), entry(2));
+    let axis = axis / norm(&axis);
+    let axis = if dot(&axis, &s) < 0.0 { -axis } else { axis };
     axis * angle
 }
 
@@ -267,7 +277,7 @@ pub fn rotation_log(r: &Matrix3<f64>) -> Vector3<f64> {
 /// rotation-vector parameter rotates the frame by `J_l(v)·δ` in the outer (space) frame.
 #[must_use]
 pub fn so3_left_jacobian(v: &Vector3<f64>) -> Matrix3<f64> {
-    let t2 = v.norm_squared();
+    let t2 = norm_squared(v);
     let t = sqrt(t2);
     let (a, b) = if t < 1e-4 {
         (0.5 - t2 / 24.0, 1.0 / 6.0 - t2 / 120.0)
@@ -275,7 +285,7 @@ pub fn so3_left_jacobian(v: &Vector3<f64>) -> Matrix3<f64> {
         ((1.0 - cos(t)) / t2, (t - sin(t)) / (t2 * t))
     };
     let k = skew(v);
-    Matrix3::identity() + k * a + k * k * b
+    IDENTITY + k * a + mat_mul(&k, &k) * b
 }
 
 /// Kinematic error `[Δp; Δφ]` of `measured` relative to `model` (measured minus model),
@@ -286,13 +296,13 @@ pub fn pose_error(measured: &Transform, model: &Transform, form: OrientationErro
     let rm = measured.rotation.matrix();
     let r0 = model.rotation.matrix();
     let dphi = match form {
-        OrientationError::Exact => rotation_log(&(rm * r0.transpose())),
+        OrientationError::Exact => rotation_log(&mat_mul(rm, &r0.transpose())),
         OrientationError::SmallAngle => {
-            let s = (rm - r0) * r0.transpose();
+            let s = mat_mul(&(rm - r0), &r0.transpose());
             Vector3::new(
-                s[(2, 1)] - s[(1, 2)],
-                s[(0, 2)] - s[(2, 0)],
-                s[(1, 0)] - s[(0, 1)],
+                at(&s, 2, 1) - at(&s, 1, 2),
+                at(&s, 0, 2) - at(&s, 2, 0),
+                at(&s, 1, 0) - at(&s, 0, 1),
             ) * 0.5
         }
     };

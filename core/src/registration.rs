@@ -226,10 +226,15 @@ pub(crate) fn symmetric_eigen<const D: usize>(
             *x = 1.0;
         }
     }
+    // `get` rather than `a[p][q]`, `row[p]`: the bounds checks of indices the optimiser must
+    // prove stay panic paths at opt-level z (kincal_view_point on the firmware target).
+    let at = |a: &[[f64; D]; D], i: usize, j: usize| {
+        a.get(i).and_then(|r| r.get(j)).copied().unwrap_or(0.0)
+    };
     let diag = |a: &[[f64; D]; D]| {
         let mut e = [0.0; D];
         for (i, x) in e.iter_mut().enumerate() {
-            *x = a[i][i];
+            *x = at(a, i, i);
         }
         e
     };
@@ -252,11 +257,11 @@ pub(crate) fn symmetric_eigen<const D: usize>(
         }
         for p in 0..D {
             for q in (p + 1)..D {
-                let apq = a[p][q];
+                let apq = at(&a, p, q);
                 if apq == 0.0 {
                     continue;
                 }
-                let theta = (a[q][q] - a[p][p]) / (2.0 * apq);
+                let theta = (at(&a, q, q) - at(&a, p, p)) / (2.0 * apq);
                 let t = if theta.abs() > 1e150 {
                     0.5 / theta
                 } else {
@@ -267,21 +272,25 @@ pub(crate) fn symmetric_eigen<const D: usize>(
                 let s = t * c;
                 // A ← Jᵀ·A·J with J the rotation in the (p, q) plane.
                 for row in a.iter_mut() {
-                    let akp = row[p];
-                    let akq = row[q];
-                    row[p] = c * akp - s * akq;
-                    row[q] = s * akp + c * akq;
+                    rotate_entries(row, p, q, c, s);
                 }
-                let (rp, rq) = (a[p], a[q]);
-                for (k, (&apk, &aqk)) in rp.iter().zip(rq.iter()).enumerate() {
-                    a[p][k] = c * apk - s * aqk;
-                    a[q][k] = s * apk + c * aqk;
+                let (rp, rq) = (a.get(p).copied(), a.get(q).copied());
+                if let (Some(rp), Some(rq)) = (rp, rq) {
+                    let (mut np, mut nq) = (rp, rq);
+                    let new = np.iter_mut().zip(nq.iter_mut());
+                    for ((x, y), (&apk, &aqk)) in new.zip(rp.iter().zip(rq.iter())) {
+                        *x = c * apk - s * aqk;
+                        *y = s * apk + c * aqk;
+                    }
+                    if let Some(r) = a.get_mut(p) {
+                        *r = np;
+                    }
+                    if let Some(r) = a.get_mut(q) {
+                        *r = nq;
+                    }
                 }
                 for row in v.iter_mut() {
-                    let vp = row[p];
-                    let vq = row[q];
-                    row[p] = c * vp - s * vq;
-                    row[q] = s * vp + c * vq;
+                    rotate_entries(row, p, q, c, s);
                 }
             }
         }
@@ -289,6 +298,19 @@ pub(crate) fn symmetric_eigen<const D: usize>(
     Err(Error::NotConverged {
         iterations: MAX_SWEEPS,
     })
+}
+
+/// `(row_p, row_q) ← (c·row_p − s·row_q, s·row_p + c·row_q)` (a Jacobi rotation of two
+/// entries; nothing for indices out of range).
+fn rotate_entries<const D: usize>(row: &mut [f64; D], p: usize, q: usize, c: f64, s: f64) {
+    if let (Some(&x), Some(&y)) = (row.get(p), row.get(q)) {
+        if let Some(r) = row.get_mut(p) {
+            *r = c * x - s * y;
+        }
+        if let Some(r) = row.get_mut(q) {
+            *r = s * x + c * y;
+        }
+    }
 }
 
 fn v3(p: &[f64; 3]) -> Vector3<f64> {
@@ -792,7 +814,8 @@ pub fn design_symmetry(design: &[[f64; 3]]) -> Option<DesignSymmetry> {
 /// `t_base_ee = t_mocap_base⁻¹ · t_mocap_ee`.
 #[must_use]
 pub fn t_base_ee(t_mocap_base: &Transform, t_mocap_ee: &Transform) -> Transform {
-    t_mocap_base.inverse() * t_mocap_ee
+    // fixed3: nalgebra's `inverse() *` bit for bit, panic-free at opt-level z.
+    crate::fixed3::compose(&crate::fixed3::inverse(t_mocap_base), t_mocap_ee)
 }
 
 /// Which body a registration error belongs to.

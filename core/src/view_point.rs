@@ -18,9 +18,12 @@
 //! viewing axes, with how closely the axes pass it, so that a set whose camera did not
 //! look at one place is recognised and not re-expressed blindly.
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 
 use crate::error::{Error, Quantity, Result};
+use crate::fixed3::{
+    IDENTITY, IDENTITY_TRANSFORM, ZERO, ZERO33, at, cholesky_solve, dot, mat_vec, norm, outer,
+};
 use crate::pose::Transform;
 use crate::registration::symmetric_eigen;
 
@@ -96,7 +99,7 @@ pub struct ViewPoint {
 pub fn view_point(poses: &[Transform], axis: Axis) -> Result<ViewPoint> {
     view_point_from(
         poses.len(),
-        |i| poses.get(i).copied().unwrap_or_else(Transform::identity),
+        |i| poses.get(i).copied().unwrap_or(IDENTITY_TRANSFORM),
         axis,
     )
 }
@@ -120,8 +123,10 @@ pub fn view_point_from(
             needed: 2,
         });
     }
-    let mut a = Matrix3::<f64>::zeros();
-    let mut b = Vector3::<f64>::zeros();
+    // fixed3 rather than nalgebra's products, `Index` and Cholesky (same bits): theirs keep
+    // panic paths at opt-level z.
+    let mut a = ZERO33;
+    let mut b = ZERO;
     for i in 0..n {
         let (p, d) = origin_and_axis(&pose(i), axis);
         if !(p.iter().all(|v| v.is_finite()) && d.iter().all(|v| v.is_finite())) {
@@ -130,11 +135,11 @@ pub fn view_point_from(
                 index: i,
             });
         }
-        let m = Matrix3::identity() - d * d.transpose();
+        let m = IDENTITY - outer(&d);
         a += m;
-        b += m * p;
+        b += mat_vec(&m, &p);
     }
-    let rows: [[f64; 3]; 3] = core::array::from_fn(|i| core::array::from_fn(|j| a[(i, j)]));
+    let rows: [[f64; 3]; 3] = core::array::from_fn(|i| core::array::from_fn(|j| at(&a, i, j)));
     let (values, _) = symmetric_eigen(rows)?;
     let (lo, hi) = values.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &v| {
         (lo.min(v), hi.max(v))
@@ -146,13 +151,12 @@ pub fn view_point_from(
             .count();
         return Err(Error::RankDeficient { rank, required: 3 });
     }
-    let c = a
-        .cholesky()
-        .ok_or(Error::RankDeficient {
-            rank: 2,
-            required: 3,
-        })?
-        .solve(&b);
+    let [b] = &b.data.0;
+    let [cx, cy, cz] = cholesky_solve(&a.data.0, b).ok_or(Error::RankDeficient {
+        rank: 2,
+        required: 3,
+    })?;
+    let c = Vector3::new(cx, cy, cz);
 
     let mut sum_s = 0.0;
     let (mut min_s, mut max_s) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -160,8 +164,8 @@ pub fn view_point_from(
     for i in 0..n {
         let (p, d) = origin_and_axis(&pose(i), axis);
         let v = c - p;
-        let s = v.dot(&d);
-        let miss = (v - d * s).norm();
+        let s = dot(&v, &d);
+        let miss = norm(&(v - d * s));
         sum_s += s;
         min_s = min_s.min(s);
         max_s = max_s.max(s);
@@ -189,7 +193,7 @@ pub fn view_point_from(
 pub fn moved_to_point(pose: &Transform, point_m: &[f64; 3]) -> Transform {
     let p = Vector3::new(point_m[0], point_m[1], point_m[2]);
     Transform::from_parts(
-        (pose.translation.vector + pose.rotation * p).into(),
+        (pose.translation.vector + mat_vec(pose.rotation.matrix(), &p)).into(),
         pose.rotation,
     )
 }
@@ -203,6 +207,7 @@ fn origin_and_axis(t: &Transform, axis: Axis) -> (Vector3<f64>, Vector3<f64>) {
 mod tests {
     use super::*;
     use crate::pose::{rotation_exp, transform};
+    use nalgebra::Matrix3;
 
     /// A camera at `eye` looking (z) at `target`, rolled by `roll` about its axis.
     fn look_at(eye: [f64; 3], target: [f64; 3], roll: f64) -> Transform {

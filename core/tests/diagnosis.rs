@@ -473,6 +473,7 @@ fn score(effects: EffectSet, params: usize, chi2: f64, z: f64, closed: f64) -> M
         gap_closed_total_fraction: closed,
         z_pos: z,
         z_rot: 0.0,
+        session: Default::default(),
     }
 }
 

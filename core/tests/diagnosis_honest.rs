@@ -519,6 +519,7 @@ fn equally_good_alternatives_are_listed_whatever_their_class() {
         gap_closed_total_fraction: 0.0,
         z_pos: 0.0,
         z_rot: 0.0,
+        session: Default::default(),
     };
     let mut a = score(EffectSet::of(Effect::JointScale), 30);
     let mut b = score(EffectSet::of(Effect::JointCyclic), 48);

@@ -18,18 +18,14 @@ fn build<const N: usize>(
     let mut axes = [JointAxis::new([0.0; 3], [0.0, 0.0, 1.0]); N];
     for ((a, p), u) in axes
         .iter_mut()
-        .zip(points.chunks_exact(3))
-        .zip(directions.chunks_exact(3))
+        .zip(points.as_chunks::<3>().0)
+        .zip(directions.as_chunks::<3>().0)
     {
-        if let ([px, py, pz], [ux, uy, uz]) = (p, u) {
-            *a = JointAxis::new([*px, *py, *pz], [*ux, *uy, *uz]);
-        }
+        *a = JointAxis::new(*p, *u);
     }
     let mut lims = [JointLimits::new(0.0, 0.0); N];
-    for (l, c) in lims.iter_mut().zip(limits.chunks_exact(2)) {
-        if let [lo, hi] = *c {
-            *l = JointLimits::new(lo, hi);
-        }
+    for (l, &[lo, hi]) in lims.iter_mut().zip(limits.as_chunks::<2>().0) {
+        *l = JointLimits::new(lo, hi);
     }
     let chain = AxisChain {
         t_ref_base,

@@ -85,6 +85,9 @@ pub enum kincal_diagnosis_reason {
     /// `form_not_determined` (`reason_z`: the out-of-library alternative's paired z, below
     /// the equivalence threshold: the library's form is not singled out by the data).
     FormNotDetermined = 8,
+    /// `confounded_with_sessions`: the candidates that improve significantly are all
+    /// confounded with the sessions (the C ABI diagnoses one session: not produced there).
+    ConfoundedWithSessions = 9,
 }
 
 /// Position, rotation or both (`reason_part`, warning `part`); 0 = not applicable.
@@ -514,6 +517,7 @@ fn config(o: &kincal_diagnose_options) -> FfiResult<Config> {
         rank_tol: o.rank_tol,
         min_groups_per_fold: o.min_groups_per_fold as usize,
         screen_outliers: o.screen_outliers != 0,
+        session_sin_max: Config::default().session_sin_max,
     })
 }
 
@@ -680,6 +684,9 @@ fn report_of<const N: usize>(d: &Diagnosis<N>, cfg: &Config) -> kincal_diagnosis
         }
         Reason::DoesNotExtrapolate { z, .. } => (kincal_diagnosis_reason::DoesNotExtrapolate, 0, z),
         Reason::FormNotDetermined { z } => (kincal_diagnosis_reason::FormNotDetermined, 0, z),
+        Reason::ConfoundedWithSessions => {
+            (kincal_diagnosis_reason::ConfoundedWithSessions, 0, f64::NAN)
+        }
     };
     let (beyond, beyond_share) = match d.beyond_library() {
         BeyondLibrary::NotApplicable => (kincal_beyond_library::NotApplicable, f64::NAN),

@@ -223,8 +223,14 @@ pub(crate) fn capacity_for(n: usize) -> Option<usize> {
     CAPACITIES.iter().copied().find(|&c| c >= n)
 }
 
+/// `x` rounded up to a multiple of `align`; `usize::MAX` on overflow (or `align == 0`), so
+/// the callers' checked additions fail. No division that can trap: `div_ceil` by a run-time
+/// `align` is a panic path where this is not inlined (opt-level z).
 pub(crate) const fn round_up(x: usize, align: usize) -> usize {
-    x.div_ceil(align) * align
+    match x.checked_next_multiple_of(align) {
+        Some(v) => v,
+        None => usize::MAX,
+    }
 }
 
 /// Bytes of the workspace of capacity `P` for `L` poses of an `N`-joint robot:

@@ -215,8 +215,10 @@ fn frames_of<const N: usize>(
     let all = core::iter::once(&f.t_base_0)
         .chain(f.t_base_link.iter())
         .chain(core::iter::once(&f.t_base_ee));
-    for (dst, t) in out.chunks_exact_mut(16).zip(all) {
-        dst.copy_from_slice(&crate::pose::to_matrix(t));
+    // `as_chunks_mut` rather than `chunks_exact_mut(16)`: the latter's length division by a
+    // run-time chunk size stays a panic path at opt-level z.
+    for (dst, t) in out.as_chunks_mut::<16>().0.iter_mut().zip(all) {
+        *dst = crate::pose::to_matrix(t);
     }
     Ok(())
 }

@@ -52,6 +52,8 @@ pub mod view_point;
 // Last, so that cbindgen keeps the header's earlier declarations in place.
 pub mod constraints;
 pub mod diagnosis;
+#[cfg(feature = "std")]
+pub mod measurement_read;
 
 #[cfg(test)]
 mod tests;

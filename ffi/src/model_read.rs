@@ -26,7 +26,8 @@ pub const KINCAL_READ_MESSAGE_LEN: usize = 512;
 pub struct kincal_read_error {
     /// 1-based line of the fault, 0 when the message names no line.
     pub line: usize,
-    /// 1-based column (bytes) of the fault, 0 when the message names none.
+    /// 1-based column of the fault, 0 when the message names none: bytes in a model file,
+    /// the cell (field) number in a measurement CSV.
     pub column: usize,
     /// NUL-terminated UTF-8 message, cut at a character boundary if longer than the buffer.
     pub message: [c_char; KINCAL_READ_MESSAGE_LEN],
@@ -55,7 +56,7 @@ fn refusal(e: kincal_io::Error, source: &str) -> Refusal {
 }
 
 impl kincal_read_error {
-    fn from_message(message: &str, line: usize, column: usize) -> Self {
+    pub(crate) fn from_message(message: &str, line: usize, column: usize) -> Self {
         let mut out = kincal_read_error {
             line,
             column,
@@ -77,7 +78,7 @@ impl kincal_read_error {
 }
 
 /// The path of a C string (any bytes on Unix).
-fn path_of(p: &CStr) -> std::path::PathBuf {
+pub(crate) fn path_of(p: &CStr) -> std::path::PathBuf {
     #[cfg(unix)]
     {
         use std::os::unix::ffi::OsStrExt;
@@ -151,7 +152,7 @@ unsafe fn finish_read(
     outcome
 }
 
-fn status_text(s: kincal_status) -> String {
+pub(crate) fn status_text(s: kincal_status) -> String {
     s.text().to_string_lossy().into_owned()
 }
 

@@ -757,3 +757,312 @@ pub unsafe extern "C" fn kincal_select_poses(
         Ok(())
     })
 }
+
+/// The outcome of `kincal_cluster_select`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[allow(non_camel_case_types)]
+pub struct kincal_cluster_selection {
+    /// Spread of the per-pose indices of the chosen poses: `max_k |ln σ_k(q) − ln σ_k(q*)|`
+    /// over the chosen `q` and the target `q*` (0.1 ≈ 10 %).
+    pub spread: f64,
+    /// Objective (the chosen index) of the chosen set.
+    pub value: f64,
+    /// Zero-based pool index of the target pose whose per-pose index the others match.
+    pub target: usize,
+    /// Non-zero when the spread is within the tolerance (else the smallest spread found).
+    pub within_tolerance: u32,
+    /// Cubes of the region that hold at least one pool member.
+    pub occupied_cubes: usize,
+}
+
+/// Cubes of side `cube_m` in `region`, `None` when the count overflows.
+fn cube_count(region: &Region, cube_m: f64) -> Option<usize> {
+    let [a, b, c] = region.cube_counts(cube_m);
+    a.checked_mul(b)?.checked_mul(c)
+}
+
+/// Bytes of the clustering workspace: the selection workspace, then `k` per-pose indices
+/// and `cubes` cube slots.
+fn cluster_bytes<const P: usize>(k: usize, cubes: usize) -> Option<usize> {
+    let per = k.checked_mul(core::mem::size_of::<[f64; 6]>())?;
+    let cube = cubes.checked_mul(core::mem::size_of::<(f64, usize)>())?;
+    select_bytes::<P>(k)?
+        .checked_add(KINCAL_WORKSPACE_ALIGN)?
+        .checked_add(per)?
+        .checked_add(KINCAL_WORKSPACE_ALIGN)?
+        .checked_add(cube)
+}
+
+/// The region of a `kincal_region` and a cube side, checked.
+fn cluster_geometry(g: &kincal_region, cube_m: f64) -> FfiResult<(Region, usize)> {
+    crate::args::finite(&g.min_m, c"region->min_m")?;
+    crate::args::finite(&g.max_m, c"region->max_m")?;
+    let region = Region::new(g.min_m, g.max_m)
+        .map_err(|_| kincal_error::new(kincal_status::InvalidArgument).arg(c"region"))?;
+    crate::args::finite(&[cube_m], c"cube_m")?;
+    if cube_m <= 0.0 {
+        return Err(kincal_error::new(kincal_status::InvalidArgument)
+            .arg(c"cube_m")
+            .value(cube_m));
+    }
+    let cubes = cube_count(&region, cube_m).ok_or(
+        kincal_error::new(kincal_status::CapacityExceeded)
+            .arg(c"cube_m")
+            .value(cube_m),
+    )?;
+    Ok((region, cubes))
+}
+
+/// Bytes of caller memory `kincal_cluster_select` needs for `n_params` parameters, a pool of
+/// `pool_len` configurations and the cubes of side `cube_m` [m] of `region` (the selection
+/// workspace of `kincal_select_workspace_size`, then six values per candidate and 16 bytes
+/// per cube). Returns 0 for 0 or more than `KINCAL_MAX_PARAMS` parameters, a NULL or invalid
+/// region, a cube side that is not finite and positive, or an overflowing size.
+///
+/// # Safety
+/// `region` NULL or readable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn kincal_cluster_workspace_size(
+    n_params: usize,
+    pool_len: usize,
+    region: *const kincal_region,
+    cube_m: f64,
+) -> usize {
+    ffi_boundary!(on_panic = 0; {
+        // SAFETY: forwarded contract.
+        let Ok(Some(g)) = (unsafe { crate::args::opt(region, c"region") }) else {
+            return 0;
+        };
+        let Ok((_, cubes)) = cluster_geometry(g, cube_m) else {
+            return 0;
+        };
+        match (n_params, capacity_for(n_params)) {
+            (0, _) => 0,
+            (_, Some(32)) => cluster_bytes::<32>(pool_len, cubes).unwrap_or(0),
+            (_, Some(KINCAL_MAX_PARAMS)) => {
+                cluster_bytes::<KINCAL_MAX_PARAMS>(pool_len, cubes).unwrap_or(0)
+            }
+            _ => 0,
+        }
+    })
+}
+
+struct ClusterIn<'a> {
+    pool: &'a [f64],
+    m: usize,
+    objective: Index,
+    region: Region,
+    cubes: usize,
+    cube_m: f64,
+    tolerance: f64,
+}
+
+/// # Safety
+/// As [`workspace`].
+unsafe fn cluster_p<const N: usize, const P: usize>(
+    r: &Robot<N>,
+    a: &ClusterIn<'_>,
+    obs: &ObservabilityOptions,
+    ws: *mut c_void,
+    ws_len: usize,
+    chosen: &mut [usize],
+) -> FfiResult<kincal::selection::ClusterSelection> {
+    let pool_q = rows::<N>(a.pool);
+    let k = pool_q.len();
+    let needed =
+        cluster_bytes::<P>(k, a.cubes).ok_or(kincal_error::new(kincal_status::CapacityExceeded))?;
+    let base = check_ws(ws, ws_len, needed)?;
+    let off_s = ws_bytes::<P>();
+    let off_b = off_s
+        + round_up(
+            core::mem::size_of::<SelectScratch<P>>(),
+            KINCAL_WORKSPACE_ALIGN,
+        );
+    let off_p = round_up(
+        off_b + k * core::mem::size_of::<PoseBlock<P>>(),
+        KINCAL_WORKSPACE_ALIGN,
+    );
+    let off_v = round_up(
+        off_p + k * core::mem::size_of::<[f64; 3]>(),
+        KINCAL_WORKSPACE_ALIGN,
+    );
+    let off_c = round_up(
+        off_v + k * core::mem::size_of::<[f64; 6]>(),
+        KINCAL_WORKSPACE_ALIGN,
+    );
+    // SAFETY: the six regions are disjoint, aligned to KINCAL_WORKSPACE_ALIGN (>= their
+    // alignments) and end at or before `needed` <= `ws_len` (`cluster_bytes` adds an
+    // alignment's slack per region); all-zero bytes are valid values of each type.
+    let (w, s, blocks, pos, per, cube_best) = unsafe {
+        let w = zeroed_at::<Workspace<P>>(base, 0);
+        let s = zeroed_at::<SelectScratch<P>>(base, off_s);
+        let region = |off: usize, bytes: usize| {
+            let p = base.add(off);
+            core::ptr::write_bytes(p, 0, bytes);
+            p
+        };
+        let bp = region(off_b, k * core::mem::size_of::<PoseBlock<P>>());
+        let blocks = core::slice::from_raw_parts_mut(bp.cast::<PoseBlock<P>>(), k);
+        let pp = region(off_p, k * core::mem::size_of::<[f64; 3]>());
+        let pos = core::slice::from_raw_parts_mut(pp.cast::<[f64; 3]>(), k);
+        let vp = region(off_v, k * core::mem::size_of::<[f64; 6]>());
+        let per = core::slice::from_raw_parts_mut(vp.cast::<[f64; 6]>(), k);
+        let cp = region(off_c, a.cubes * core::mem::size_of::<(f64, usize)>());
+        let cubes = core::slice::from_raw_parts_mut(cp.cast::<(f64, usize)>(), a.cubes);
+        (w, s, blocks, pos, per, cubes)
+    };
+    fill_pool(r, pool_q, obs, w, blocks, pos)?;
+    for (d, q) in per.iter_mut().zip(pool_q) {
+        *d = pose_singular_values(r, q, obs, w)?;
+    }
+    let pool = Pool {
+        q: pool_q,
+        blocks,
+        pos,
+    };
+    let opts = kincal::selection::ClusterOptions {
+        region: a.region,
+        cube_m: a.cube_m,
+        tolerance: a.tolerance,
+        objective: Objective::Index(a.objective),
+    };
+    let unit = obs.scaling == ColumnScaling::UnitColumns;
+    Ok(kincal::selection::cluster_select(
+        &pool,
+        per,
+        a.m,
+        obs.params.len(),
+        unit,
+        &opts,
+        s,
+        cube_best,
+        chosen,
+    )?)
+}
+
+/// # Safety
+/// As [`obs_run`].
+#[allow(clippy::too_many_arguments)]
+unsafe fn cluster_run<const N: usize>(
+    r: &Robot<N>,
+    a: &ClusterIn<'_>,
+    params: *const u8,
+    params_len: usize,
+    scaling: Option<&kincal_scaling>,
+    ws: *mut c_void,
+    ws_len: usize,
+    chosen: &mut [usize],
+) -> FfiResult<kincal::selection::ClusterSelection> {
+    // SAFETY: forwarded contract.
+    let mask = unsafe { mask_view(params, params_len, N) }?;
+    let mut obs = ObservabilityOptions::new(param_set(r, mask)?);
+    obs.scaling = scaling_of(scaling)?;
+    // SAFETY (both): forwarded contract.
+    match capacity(obs.params.len())? {
+        32 => unsafe { cluster_p::<N, 32>(r, a, &obs, ws, ws_len, chosen) },
+        _ => unsafe { cluster_p::<N, KINCAL_MAX_PARAMS>(r, a, &obs, ws, ws_len, chosen) },
+    }
+}
+
+/// The workspace-clustering design of the paper (Section 4.2, what `kincal select-poses
+/// --design clustering` and `design-tool` use): `m` members of the caller's pool whose
+/// end-effector positions lie in mutually different cubes of side `cube_m` of `region`, and
+/// whose per-pose indices (`kincal_pose_singular_values`) match a target pose's within
+/// `tolerance` (`max_k |ln σ_k − ln σ_k*|`); among targets whose design is within the
+/// tolerance the index `objective` decides, otherwise the smallest spread. Deterministic.
+///
+/// - `pool_q`, `pool_q_len`: candidate joint values [rad], `pool_len` × N row-major;
+///   `pool_q_len` = `pool_len`·N. Members outside `region` are never chosen.
+/// - `m`: poses to choose, 1 ≤ `m` ≤ `KINCAL_MAX_SELECT` and ≤ the occupied cubes.
+/// - `params`, `params_len`, `scaling`: as `kincal_observability`.
+/// - `objective`: a `kincal_obs_index`.
+/// - `region`: the box split into cubes [m] (required). `cube_m`: cube side [m] (> 0).
+///   `tolerance`: accepted spread (finite, ≥ 0; the CLI's default is 0.1).
+/// - `workspace`, `workspace_len`: caller memory of at least `kincal_cluster_workspace_size(p,
+///   pool_len, region, cube_m)` bytes aligned to `KINCAL_WORKSPACE_ALIGN`; scratch.
+/// - `chosen_out`, `chosen_len`: the zero-based pool indices of the chosen poses; `chosen_len`
+///   = m.
+/// - `selection_out`: spread, objective, target, occupied cubes (NULL if not wanted).
+///
+/// Returns OK, NULL_POINTER, MISALIGNED_POINTER, BAD_LENGTH, NON_FINITE, INVALID_ARGUMENT
+/// (`objective`, `scaling`, `region`, `cube_m`, `tolerance`), TOO_FEW_DATA (`m` = 0, or more
+/// than the occupied cubes), CAPACITY_EXCEEDED (`m` > `KINCAL_MAX_SELECT`, too many cubes),
+/// NOT_CONVERGED, any status of `kincal_robot_validate`. Outputs are written on success only.
+///
+/// # Safety
+/// As `kincal_select_poses`; `chosen_out` writable for `chosen_len` elements.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn kincal_cluster_select(
+    robot: *const kincal_robot,
+    pool_q: *const f64,
+    pool_len: usize,
+    pool_q_len: usize,
+    m: usize,
+    params: *const u8,
+    params_len: usize,
+    scaling: *const kincal_scaling,
+    objective: u32,
+    region: *const kincal_region,
+    cube_m: f64,
+    tolerance: f64,
+    workspace: *mut c_void,
+    workspace_len: usize,
+    chosen_out: *mut usize,
+    chosen_len: usize,
+    selection_out: *mut kincal_cluster_selection,
+    err: *mut kincal_error,
+) -> kincal_status {
+    ffi_boundary!(err = err; {
+        let r = arg_ref!(robot);
+        let s = arg_opt!(scaling);
+        let g = arg_ref!(region);
+        let any = to_any(r)?;
+        let n = any.n_joints();
+        let expected = pool_len
+            .checked_mul(n)
+            .ok_or_else(|| crate::args::bad_length(c"pool_q", usize::MAX, pool_q_len))?;
+        let pool = arg_f64s!(pool_q, pool_q_len, expected);
+        if m == 0 || m > pool_len {
+            return Err(kincal_error::new(kincal_status::TooFewData)
+                .arg(c"m")
+                .counts(m.max(1), pool_len));
+        }
+        if m > KINCAL_MAX_SELECT {
+            return Err(kincal_error::new(kincal_status::CapacityExceeded)
+                .arg(c"m")
+                .counts(KINCAL_MAX_SELECT, m));
+        }
+        let out = arg_out!(chosen_out, chosen_len, m);
+        let sel_out = arg_out_opt!(selection_out, 1, 1);
+        let objective = index_of(objective)?;
+        let (region, cubes) = cluster_geometry(g, cube_m)?;
+        crate::args::finite(&[tolerance], c"tolerance")?;
+        if tolerance < 0.0 {
+            return Err(kincal_error::new(kincal_status::InvalidArgument)
+                .arg(c"tolerance")
+                .value(tolerance));
+        }
+        let a = ClusterIn { pool, m, objective, region, cubes, cube_m, tolerance };
+        let mut chosen = [0usize; KINCAL_MAX_SELECT];
+        let chosen = chosen.get_mut(..m).ok_or(kincal_error::new(kincal_status::Internal))?;
+        // SAFETY: forwarded contract.
+        let cs = with_any_robot!(&any, r => unsafe {
+            cluster_run(r, &a, params, params_len, s, workspace, workspace_len, chosen)
+        })?;
+        // SAFETY: checked by `arg_out!`/`arg_out_opt!`; writable by contract.
+        unsafe {
+            out.write(chosen);
+            if let Some(o) = sel_out {
+                o.put(kincal_cluster_selection {
+                    spread: cs.spread,
+                    value: cs.value,
+                    target: cs.target,
+                    within_tolerance: u32::from(cs.within_tolerance),
+                    occupied_cubes: cs.occupied_cubes,
+                });
+            }
+        }
+        Ok(())
+    })
+}

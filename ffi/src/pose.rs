@@ -70,12 +70,13 @@ pub(crate) fn from_matrix(m: &[f64], name: &'static CStr) -> FfiResult<Transform
 
 /// The 16 column-major values of a transform.
 pub(crate) fn to_matrix(t: &Transform) -> [f64; 16] {
-    let h = t.to_homogeneous();
-    let mut out = [0.0; 16];
-    for (d, s) in out.iter_mut().zip(h.as_slice()) {
-        *d = *s;
-    }
-    out
+    // Not `to_homogeneous()`: its fixed views assert their ranges, a panic path at opt-level z.
+    let [c0, c1, c2] = t.rotation.matrix().data.0;
+    let [[px, py, pz]] = t.translation.vector.data.0;
+    [
+        c0[0], c0[1], c0[2], 0.0, c1[0], c1[1], c1[2], 0.0, c2[0], c2[1], c2[2], 0.0, px, py, pz,
+        1.0,
+    ]
 }
 
 /// `[px, py, pz, qw, qx, qy, qz]` of a transform.

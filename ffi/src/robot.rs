@@ -141,16 +141,16 @@ fn to_robot<const N: usize>(r: &kincal_robot) -> FfiResult<Robot<N>> {
     crate::args::finite(&r.gravity, c"robot->gravity")?;
 
     let mut links = [Link::default(); N];
-    for (l, c) in links.iter_mut().zip(nominal.chunks_exact(5)) {
-        if let [theta0, d, a, alpha, beta] = *c {
-            *l = Link {
-                theta0,
-                d,
-                a,
-                alpha,
-                beta,
-            };
-        }
+    // `as_chunks` rather than `chunks_exact(5)`: the latter divides by a run-time chunk size,
+    // a panic path where it is not inlined (opt-level z).
+    for (l, &[theta0, d, a, alpha, beta]) in links.iter_mut().zip(nominal.as_chunks::<5>().0) {
+        *l = Link {
+            theta0,
+            d,
+            a,
+            alpha,
+            beta,
+        };
     }
     let mut limits = [JointLimits::new(0.0, 0.0); N];
     for (l, (&lo, &hi)) in limits.iter_mut().zip(lower.iter().zip(upper)) {
@@ -231,8 +231,14 @@ pub(crate) fn from_robot<const N: usize>(r: &Robot<N>) -> FfiResult<kincal_robot
     let mut out = kincal_robot::ZERO;
     out.n_joints = u32::try_from(N).map_err(|_| internal())?;
     r.read_params(out.params.get_mut(..num_params(N)).ok_or_else(internal)?)?;
-    for (c, l) in out.nominal.chunks_exact_mut(5).zip(r.nominal_links()) {
-        c.copy_from_slice(&[l.theta0, l.d, l.a, l.alpha, l.beta]);
+    for (c, l) in out
+        .nominal
+        .as_chunks_mut::<5>()
+        .0
+        .iter_mut()
+        .zip(r.nominal_links())
+    {
+        *c = [l.theta0, l.d, l.a, l.alpha, l.beta];
     }
     let (base, tool) = r.nominal_frames();
     let frames = out
@@ -383,16 +389,12 @@ pub unsafe extern "C" fn kincal_robot_init(
         let links = arg_f64s!(links, links_len, 5 * n_joints);
         let limits = arg_f64s!(limits, limits_len, 2 * n_joints);
         let mut ls = [Link::default(); KINCAL_MAX_JOINTS];
-        for (l, c) in ls.iter_mut().zip(links.chunks_exact(5)) {
-            if let [theta0, d, a, alpha, beta] = *c {
-                *l = Link { theta0, d, a, alpha, beta };
-            }
+        for (l, &[theta0, d, a, alpha, beta]) in ls.iter_mut().zip(links.as_chunks::<5>().0) {
+            *l = Link { theta0, d, a, alpha, beta };
         }
         let mut lims = [JointLimits::new(0.0, 0.0); KINCAL_MAX_JOINTS];
-        for (l, c) in lims.iter_mut().zip(limits.chunks_exact(2)) {
-            if let [lo, hi] = *c {
-                *l = JointLimits::new(lo, hi);
-            }
+        for (l, &[lo, hi]) in lims.iter_mut().zip(limits.as_chunks::<2>().0) {
+            *l = JointLimits::new(lo, hi);
         }
         let (ls, lims) = (
             ls.get(..n_joints).ok_or_else(internal)?,
@@ -503,10 +505,8 @@ pub unsafe extern "C" fn kincal_robot_set_limits(
         let n = unsafe { n_joints_of(robot) }?;
         let limits = arg_f64s!(limits, limits_len, 2 * n);
         let mut lims = [JointLimits::new(0.0, 0.0); KINCAL_MAX_JOINTS];
-        for (l, c) in lims.iter_mut().zip(limits.chunks_exact(2)) {
-            if let [lo, hi] = *c {
-                *l = JointLimits::new(lo, hi);
-            }
+        for (l, &[lo, hi]) in lims.iter_mut().zip(limits.as_chunks::<2>().0) {
+            *l = JointLimits::new(lo, hi);
         }
         // SAFETY: forwarded contract.
         unsafe {

@@ -9,6 +9,7 @@ mod diagnosis;
 mod fuzz_regressions;
 mod header;
 mod hostile;
+mod measurement_read;
 mod model_read;
 mod observability;
 mod prepared;

@@ -72,9 +72,12 @@ fn validate_robot<const N: usize>(
             k.pose = l;
             k
         })?;
-        let start = l * KINCAL_POSE_ERRORS_LEN;
-        if let Some(dst) = errors.get_mut(start..start + KINCAL_POSE_ERRORS_LEN) {
-            dst.copy_from_slice(&row);
+        if let Some(dst) = errors
+            .as_chunks_mut::<KINCAL_POSE_ERRORS_LEN>()
+            .0
+            .get_mut(l)
+        {
+            *dst = row;
         }
     }
     Ok(summary)

@@ -120,7 +120,7 @@ pub unsafe extern "C" fn kincal_view_point(
         // Every pose validated above: the fallback is never taken.
         let v = view_point_from(
             n_poses,
-            |l| pose_at(p, l).unwrap_or_else(|_| Transform::identity()),
+            |l| pose_at(p, l).unwrap_or(kincal::fixed3::IDENTITY_TRANSFORM),
             a,
         )?;
         let r = kincal_view_point_result {

@@ -63,6 +63,9 @@ impl Weighting {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Settings {
     pub effects: EffectSet,
+    /// The joints whose scale (`joint_scale`) is identified (`joint_scale@JOINT`,
+    /// [`crate::effects_arg`]); `None`: every joint.
+    pub scale_joints: Option<Vec<usize>>,
     pub algorithms: Vec<Algorithm>,
     /// OPT1 interval half-width for lengths [m] …
     pub bounds_length_m: f64,
@@ -82,11 +85,22 @@ pub struct Settings {
 }
 
 impl Settings {
+    /// The geometric parameters plus those of the effects that apply to `start`, the scale
+    /// limited to [`Settings::scale_joints`].
+    pub fn param_set<const N: usize>(&self, start: &Robot<N>) -> ParamSet {
+        crate::effects_arg::EffectChoice {
+            effects: self.effects,
+            scale_joints: self.scale_joints.clone(),
+        }
+        .param_set(start)
+    }
+
     /// The paper's set-up: geometric parameters, unit weights, exact orientation error,
     /// OPT1 intervals 5 mm / 5°.
     pub fn paper(algorithms: Vec<Algorithm>) -> Self {
         Settings {
             effects: EffectSet::NONE,
+            scale_joints: None,
             algorithms,
             bounds_length_m: kincal::identify::DEFAULT_LENGTH_TOL_M,
             bounds_angle_rad: kincal::identify::DEFAULT_ANGLE_TOL_RAD,
@@ -236,7 +250,7 @@ pub fn calibrate<const N: usize>(
     run_all(
         start,
         Rows::Instrument(data),
-        start.param_set(settings.effects),
+        settings.param_set(start),
         settings,
     )
 }
@@ -365,7 +379,7 @@ fn run_all<const N: usize>(
 /// tool translation (the contacted point, e.g. a ball centre, identified as the tool
 /// translation; the structural test drops it if the last link already covers it).
 pub fn contact_params<const N: usize>(start: &Robot<N>, settings: &Settings) -> ParamSet {
-    let mut requested = start.param_set(settings.effects);
+    let mut requested = settings.param_set(start);
     for k in 0..3 {
         // Tool-frame translation: flat indices 5N + 6 .. 5N + 9.
         let _ = requested.insert(5 * N + 6 + k);

@@ -21,6 +21,7 @@ use serde_json::{Value, json};
 
 use crate::calibration::new_workspace;
 use crate::data;
+use crate::effects_arg::EffectChoice;
 use crate::error::Error;
 use crate::measurements::MeasurementSet;
 use crate::units::param_label;
@@ -66,6 +67,9 @@ pub enum PriorChoice {
 pub struct Options {
     /// Effects identified with the geometry (base_frame/tool_frame also in the nominal model).
     pub effects: EffectSet,
+    /// The joints (0-based) whose scale is identified when `effects` has joint_scale
+    /// (`--effects joint_scale@JOINT`); `None`: every joint.
+    pub scale_joints: Option<Vec<usize>>,
     /// Estimate the base and tool frames from each fold's training poses first.
     pub init_frames: bool,
     /// Folds (2 or more; at most the number of pose groups).
@@ -87,6 +91,7 @@ impl Default for Options {
     fn default() -> Self {
         Options {
             effects: EffectSet::NONE,
+            scale_joints: None,
             init_frames: false,
             folds: 5,
             seed: 1,
@@ -100,6 +105,14 @@ impl Default for Options {
 }
 
 impl Options {
+    /// The effects with their joint selection.
+    pub fn effect_choice(&self) -> EffectChoice {
+        EffectChoice {
+            effects: self.effects,
+            scale_joints: self.scale_joints.clone(),
+        }
+    }
+
     /// The loss of the outlier fit on all poses: `robust`'s, Cauchy by default.
     pub fn outlier_loss(&self) -> Loss {
         self.robust.unwrap_or(Loss::Cauchy)
@@ -634,7 +647,8 @@ pub fn run<const N: usize>(
     let orientation = meas.iter().any(|m| m.mask.has_orientation());
     let (fold_of, n_groups) = assign_folds(set, options.folds, options.seed)?;
     let req_nom = frames_only(options.effects, N);
-    let req_cal = geometry_subset(nominal, &options.geometry).union(&options.effects.params(N));
+    let req_cal = geometry_subset(nominal, &options.geometry)
+        .union(&options.effect_choice().effect_params(N));
     let fail = |what: &str, e: String| Error::numeric(format!("{}: {what}: {e}", set.source));
     let how = |w: Weights| How {
         w,

@@ -142,12 +142,21 @@ pub fn measured_pose(
 /// Every row as a core measurement (the set must have positions); `point_x/y/z` become
 /// [`Measurement::point`].
 pub fn measurements<const N: usize>(set: &MeasurementSet) -> Result<Vec<Measurement<N>>, CliError> {
+    measurements_of_sessions(set, false)
+}
+
+/// [`measurements`], and with `several_sessions` rows of several sessions too, each still
+/// in its own session's frame (the caller registers them, [`crate::session_frames`]).
+pub fn measurements_of_sessions<const N: usize>(
+    set: &MeasurementSet,
+    several_sessions: bool,
+) -> Result<Vec<Measurement<N>>, CliError> {
     let first = set.rows.first();
     let first_session = first.and_then(|r| r.session.as_deref());
     set.rows
         .iter()
         .map(|row| {
-            if row.session.as_deref() != first_session {
+            if !several_sessions && row.session.as_deref() != first_session {
                 return Err(CliError::input(format!(
                     "{}:{}: column 'session': {}",
                     set.source,

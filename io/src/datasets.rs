@@ -19,7 +19,10 @@
 //!   two-axis positioner (`measurements.yaml`, position and unit quaternion). Robot: the
 //!   two classical DH rows stated in the set's README.
 //!
-//! Sets that cannot be used as they are say why ([`UNUSABLE`]).
+//! - `figaroh-tiago-mocap` (alias `tiago`): with the user's URDF, see [`crate::datasets_tiago`].
+//!
+//! Sets that cannot be used as they are say why ([`UNUSABLE`]); sets that need something
+//! the user adds say what ([`NEEDS`]).
 
 use std::collections::HashMap;
 use std::fmt::Write as _;
@@ -70,14 +73,16 @@ pub const USABLE: &[(&str, &str)] = &[
     ),
 ];
 
-/// The sets in the shared folder that are not used, and why.
-pub const UNUSABLE: &[(&str, &str)] = &[(
+/// The sets in the shared folder that are not used, and why (none at present: TIAGo needs
+/// the user's URDF, see [`NEEDS`]).
+pub const UNUSABLE: &[(&str, &str)] = &[];
+
+/// The sets that are usable only with something the user adds, and what.
+pub const NEEDS: &[(&str, &str)] = &[(
     "figaroh-tiago-mocap",
-    "TIAGo's torso_lift_joint is prismatic (it moves 0.015-0.350 m in this recording): kincal \
-         models it, but the set ships no URDF and import-dataset does not read it yet; the file's \
-         4 hand points are moreover computed from \
-         one tracked rigid body (points 3 and 4 are identical, distances constant to 1e-7 m), \
-         not independent marker measurements",
+    "TIAGo torso lift (prismatic) + 7R arm, one motion-capture point, positions only (35); \
+     needs --urdf TIAGO.urdf: PAL's TIAGo URDF is CC BY-NC-ND and not shipped \
+     (pal-robotics/tiago_robot, tiago_description); alias tiago",
 )];
 
 /// One imported set.
@@ -108,12 +113,18 @@ pub fn import(name: &str, dir: &Path) -> Result<Imported, CliError> {
     }
     match name {
         "hilti" | "hilti-jaibot-stationing" => crate::datasets_hilti::import(dir),
+        "tiago" | "figaroh-tiago-mocap" => Err(CliError::usage(crate::datasets_tiago::NEEDS_URDF)),
         "figaroh-ur10e" => ur10e(dir),
         "robotkinecal-fr3" => fr3(dir),
         "figaroh-talos-arm" => talos(dir),
         "ical-2axis-positioner" => positioner(dir),
         _ => {
-            let known: Vec<&str> = USABLE.iter().chain(UNUSABLE).map(|(n, _)| *n).collect();
+            let known: Vec<&str> = USABLE
+                .iter()
+                .chain(NEEDS)
+                .chain(UNUSABLE)
+                .map(|(n, _)| *n)
+                .collect();
             Err(CliError::usage(format!(
                 "unknown data set '{name}': expected one of {}",
                 known.join(", ")
@@ -126,13 +137,13 @@ pub fn import(name: &str, dir: &Path) -> Result<Imported, CliError> {
 // Raw files
 
 /// A CSV file of the set: header and records with their line numbers.
-struct Table {
-    path: String,
-    header: Vec<String>,
-    rows: Vec<(u64, Vec<String>)>,
+pub(crate) struct Table {
+    pub(crate) path: String,
+    pub(crate) header: Vec<String>,
+    pub(crate) rows: Vec<(u64, Vec<String>)>,
 }
 
-fn read_table(path: &Path) -> Result<Table, CliError> {
+pub(crate) fn read_table(path: &Path) -> Result<Table, CliError> {
     let name = path.display().to_string();
     let mut rdr = csv::ReaderBuilder::new()
         .has_headers(true)
@@ -161,7 +172,7 @@ fn read_table(path: &Path) -> Result<Table, CliError> {
 }
 
 impl Table {
-    fn col(&self, name: &str) -> Result<usize, CliError> {
+    pub(crate) fn col(&self, name: &str) -> Result<usize, CliError> {
         self.header.iter().position(|h| h == name).ok_or_else(|| {
             CliError::input(format!(
                 "{}:1: missing column '{name}' (the set's published layout has it)",
@@ -169,7 +180,7 @@ impl Table {
             ))
         })
     }
-    fn num(&self, row: usize, col: usize) -> Result<f64, CliError> {
+    pub(crate) fn num(&self, row: usize, col: usize) -> Result<f64, CliError> {
         let (line, cells) = &self.rows[row];
         let cell = cells.get(col).map_or("", String::as_str);
         match cell.trim().parse::<f64>() {
@@ -190,7 +201,12 @@ pub(crate) fn sha256_of(path: &Path) -> Result<String, CliError> {
         .map_err(|e| CliError::input(format!("{}: cannot read: {e}", path.display())))
 }
 
-fn row(id: String, q: Vec<f64>, p: [f64; 3], orientation: Option<Orientation>) -> MeasurementRow {
+pub(crate) fn row(
+    id: String,
+    q: Vec<f64>,
+    p: [f64; 3],
+    orientation: Option<Orientation>,
+) -> MeasurementRow {
     MeasurementRow {
         line: 0,
         pose_id: Some(id),
@@ -216,24 +232,24 @@ fn quaternion(r: &Matrix3<f64>) -> Orientation {
 
 /// What an adapter read, before the common tail of every import: provenance (files with
 /// their SHA-256, robot) and notes as CSV comments, the measurement set, the robot.
-struct Parts<'a> {
+pub(crate) struct Parts<'a> {
     /// The set's name (its folder name).
-    name: &'a str,
+    pub(crate) name: &'a str,
     /// The files read; the first is the measurement set's source.
-    files: &'a [&'a Path],
+    pub(crate) files: &'a [&'a Path],
     /// The robot, as named in the CSV comments.
-    robot_label: &'a str,
-    n_joints: usize,
-    rows: Vec<MeasurementRow>,
-    form: Option<OrientationForm>,
-    extra_columns: Vec<String>,
-    robot: RobotDescription,
-    robot_comments: Vec<String>,
-    notes: Vec<String>,
+    pub(crate) robot_label: &'a str,
+    pub(crate) n_joints: usize,
+    pub(crate) rows: Vec<MeasurementRow>,
+    pub(crate) form: Option<OrientationForm>,
+    pub(crate) extra_columns: Vec<String>,
+    pub(crate) robot: RobotDescription,
+    pub(crate) robot_comments: Vec<String>,
+    pub(crate) notes: Vec<String>,
 }
 
 impl Parts<'_> {
-    fn finish(self) -> Result<Imported, CliError> {
+    pub(crate) fn finish(self) -> Result<Imported, CliError> {
         let files = self
             .files
             .iter()

@@ -30,7 +30,6 @@ use kincal::{JointKind, JointLimits};
 use kincal::Robot;
 use kincal::identify::ComponentMask;
 use kincal::identify::{Algorithm, IdentifyOptions, Measurement, analyze, identify};
-use kincal::params::ParamId;
 use kincal::pose::pose_to_vector6;
 use kincal::registration::weighted_rigid_fit;
 
@@ -576,12 +575,15 @@ pub fn calibrate(start: &Robot<N>, rows: &[HiltiRow], fit: Fit) -> Result<Robot<
     let tilts = fit == Fit::GeometryAndGains;
     let ms = measurements(rows, tilts);
     let err = |e: kincal::Error| CliError::input(format!("hilti calibration: {e}"));
-    let mut set = start.geometric_param_set();
-    if tilts {
-        for j in SENSOR_JOINTS {
-            set.insert(ParamId::Scale(j).index(N).0).map_err(err)?;
-        }
-    }
+    // The gains are `--effects joint_scale@sensor`: the scale of every sensor joint.
+    let set = if tilts {
+        let names = JOINT_NAMES.map(String::from);
+        let item =
+            crate::effects_arg::parse_effect_item("joint_scale@sensor").map_err(CliError::input)?;
+        crate::effects_arg::resolve(&[item], &names, &start.joint_kinds())?.param_set(start)
+    } else {
+        start.geometric_param_set()
+    };
     let mut ws = crate::calibration::new_workspace();
     let mut opts = IdentifyOptions::new(Algorithm::Ols, set);
     opts.allow_data_deficiency = true;
@@ -751,6 +753,19 @@ column_heights:
         assert!((q[0] - t).abs() < 1e-15 && q[1].abs() < 1e-15, "{q:?}");
         assert!(q[3].abs() < 1e-15 && (q[4] - t).abs() < 1e-15, "{q:?}");
         assert_eq!(q[2], 1.98);
+    }
+
+    /// The study's gains (`joint_scale@sensor`) are the scales of exactly the sensor joints.
+    #[test]
+    fn sensor_selector_picks_the_tilt_joints() {
+        let Some(d) = dir() else { return };
+        let desc = robot(&d.join("data/trailblazer.urdf")).unwrap();
+        let AnyRobot::J11(r) = desc.robot else {
+            panic!("11 joints")
+        };
+        let item = crate::effects_arg::parse_effect_item("joint_scale@sensor").unwrap();
+        let c = crate::effects_arg::resolve(&[item], &desc.joint_names, &r.joint_kinds()).unwrap();
+        assert_eq!(c.scale_joints, Some(SENSOR_JOINTS.to_vec()));
     }
 
     #[test]

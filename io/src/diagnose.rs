@@ -21,14 +21,19 @@ use serde::Serialize;
 
 use crate::calibration::{Calibration, Run, Settings, Weighting};
 use crate::data;
+use crate::diagnose_sessions::{
+    Sessions, SessionsJson, separate_by, session_confounded, session_frames,
+};
+use crate::diagnose_where::{Breakdown, BreakdownJson, breakdown};
 use crate::error::{Error, core_error};
 use crate::measurements::MeasurementSet;
 use crate::model_file::{DataJson, ModelFile};
 use crate::units::{param_label, param_labels};
 
 /// Capacity of the diagnosis workspace: the union of every model's columns of the largest
-/// supported robot (15N + 7 ≤ 142 for 9 joints).
-pub const DIAG_PARAMS: usize = 144;
+/// supported robot (15N + 7 ≤ 187 for 12 joints), and the session test's geometric, frame
+/// (6 per session) and effect columns.
+pub const DIAG_PARAMS: usize = 192;
 
 /// A zeroed diagnosis workspace on the heap (about a megabyte).
 pub fn new_workspace() -> Box<DiagWorkspace<DIAG_PARAMS>> {
@@ -105,12 +110,17 @@ pub struct SigmaNames<'a> {
 #[derive(Debug, Clone)]
 pub struct Study<const N: usize> {
     pub diagnosis: Box<Diagnosis<N>>,
-    /// The rows, in file order.
+    /// The rows, in file order (with several sessions: registered into the robot's base
+    /// frame).
     pub meas: Vec<Measurement<N>>,
     /// Per row: fold, residuals, held-out errors, suspect flag.
     pub poses: Vec<PoseDiagnosis>,
     /// Per row: its pose group ([`group_ids`]).
     pub groups: Vec<u32>,
+    /// Several sessions, each in its own base frame (`None` for one session).
+    pub sessions: Option<Sessions<N>>,
+    /// Where the gap lies by session, `extra_` column and prismatic reading.
+    pub breakdown: Vec<Breakdown>,
 }
 
 /// Group ids from the `pose_id` column: equal labels share an id; rows without one get
@@ -130,7 +140,9 @@ pub fn group_ids(set: &MeasurementSet) -> Vec<u32> {
         .collect()
 }
 
-/// Diagnoses the rows of `set` (read with [`Options::effects_to_read`]) on `robot`.
+/// Diagnoses the rows of `set` (read with [`Options::effects_to_read`]) on `robot`; rows
+/// of several sessions are first registered each into the robot's base frame
+/// ([`session_frames`]), and the candidates are tested for confounding with the sessions.
 /// Errors: no noise floor (a usage error naming the arguments as `names` spells them), too
 /// few pose groups for the folds, and the core's, with the file line of the row at fault.
 pub fn run<const N: usize>(
@@ -140,12 +152,27 @@ pub fn run<const N: usize>(
     names: SigmaNames<'_>,
 ) -> Result<Study<N>, Error> {
     let cfg = options.config();
-    let meas = data::measurements::<N>(set)?;
+    let sessions = session_frames(robot, set, &cfg)?;
+    let meas = match &sessions {
+        Some(s) => s.data.clone(),
+        None => data::measurements::<N>(set)?,
+    };
     let groups = group_ids(set);
     let mut poses = vec![PoseDiagnosis::default(); meas.len()];
     let mut ws = new_workspace();
-    let result = diagnosis::diagnose(robot, &meas, &groups, &cfg, &mut poses, &mut ws);
-    let diagnosis = Box::new(result.map_err(|e| match e {
+    let mut diagnosis = Box::new(Diagnosis::new(robot));
+    let index: &[u16] = sessions.as_ref().map_or(&[], |s| &s.index);
+    let result = diagnosis::diagnose_sessions_into(
+        robot,
+        &meas,
+        &groups,
+        index,
+        &cfg,
+        &mut poses,
+        &mut ws,
+        &mut diagnosis,
+    );
+    result.map_err(|e| match e {
         kincal::Error::MissingInput {
             what: kincal::Quantity::NoiseFloor,
         } => {
@@ -162,12 +189,15 @@ pub fn run<const N: usize>(
             set.source
         )),
         other => core_error(other, &set.source, |i| data::line_of(set, i)),
-    })?);
+    })?;
+    let breakdown = breakdown(robot, set, &poses, sessions.as_ref());
     Ok(Study {
         diagnosis,
         meas,
         poses,
         groups,
+        sessions,
+        breakdown,
     })
 }
 
@@ -317,6 +347,15 @@ fn names(set: EffectSet) -> Vec<String> {
     set.iter().map(|e| e.name().to_string()).collect()
 }
 
+/// Effect names joined by " + " (`geometric only` for none), as the reports word a model.
+pub fn effects_text(s: EffectSet) -> String {
+    if s.is_empty() {
+        "geometric only".into()
+    } else {
+        s.iter().map(|e| e.name()).collect::<Vec<_>>().join(" + ")
+    }
+}
+
 #[derive(Debug, Clone, Serialize)]
 pub struct Report {
     /// `cross_validation` or `in_sample_nested` (too few pose groups for held-out poses).
@@ -342,6 +381,8 @@ pub struct Report {
     pub form: FormJson,
     #[serde(rename = "where")]
     pub where_: WhereJson,
+    /// Several sessions: each registered in its own base frame (null for one session).
+    pub sessions: Option<SessionsJson>,
     pub data: DataInfoJson,
     pub settings: SettingsJson,
     /// The other outputs (the CLI's; none when nothing was written).
@@ -433,6 +474,25 @@ pub struct CandidateJson {
     pub least_distinct: Option<String>,
     pub structurally_redundant: Vec<String>,
     pub data_deficient: Vec<DroppedJson>,
+    /// `["session_frame"]` when the candidate is confounded with the sessions (never
+    /// chosen), else empty.
+    pub confounded_with: Vec<String>,
+    /// The session test (null for one session).
+    pub session: Option<SessionTestJson>,
+}
+
+/// The confounding test of a candidate with the sessions (kincal::diagnosis::sessions).
+#[derive(Debug, Clone, Serialize)]
+pub struct SessionTestJson {
+    /// Largest sin of the principal angle between an effect column and the span of the
+    /// geometric and per-session base-frame columns.
+    pub column_sin: f64,
+    pub columns_in_span: bool,
+    /// √(within-session share of the effect input's variance) (temp_c, s1..sN); null for
+    /// effects of the joint readings alone.
+    pub input_sin: Option<f64>,
+    pub input_constant_within_sessions: bool,
+    pub threshold: f64,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -448,8 +508,9 @@ pub struct VerdictJson {
     pub gap_closed_rot_fraction: f64,
     /// Whitened share of the gap closed (position and rotation): the status's share.
     pub gap_closed_total_fraction: f64,
-    /// Why the status: `closed`, `remaining_gap`, `worsens`, `small_share`,
-    /// `no_significant_candidate`, `at_noise_floor`.
+    /// Why the status: `closed`, `remaining_gap`, `remaining_structure`,
+    /// `does_not_extrapolate`, `form_not_determined`, `worsens`, `small_share`,
+    /// `no_significant_candidate`, `confounded_with_sessions`, `at_noise_floor`.
     pub reason: &'static str,
     pub reason_text: String,
     /// What lies beyond the library when the gap stays open (the smooth check):
@@ -465,6 +526,11 @@ pub struct VerdictJson {
     pub remaining_gap_significant: bool,
     /// Held-out RMS of what remains per axis.
     pub remaining_rms_axis: AxisJson,
+    /// Effects whose single candidate is confounded with the sessions (never chosen, nor
+    /// any pair containing them).
+    pub confounded_with_sessions: Vec<String>,
+    /// What data would separate them from the sessions (null when none).
+    pub separate_by: Option<String>,
     /// Identified effect parameters of the model (SI units) with standard errors.
     pub parameters: Vec<ParamValueJson>,
 }
@@ -577,6 +643,9 @@ pub struct WhereJson {
     pub regions: Vec<RegionJson>,
     pub correlations: Vec<CorrelationJson>,
     pub most_correlated: Option<String>,
+    /// Held-out RMS |Δp| of the geometric model and of the verdict's by session, by each
+    /// `extra_` column and by each prismatic joint's reading.
+    pub by: Vec<BreakdownJson>,
     pub per_pose: Vec<PoseJson>,
 }
 
@@ -658,6 +727,18 @@ fn candidate_json<const N: usize>(c: &ModelScore) -> CandidateJson {
         distinctness: c.distinctness,
         least_distinct: c.least_distinct.map(|p| param_label::<N>(p.0)),
         structurally_redundant: param_labels::<N>(&c.structural),
+        confounded_with: if c.session.confounded() {
+            vec!["session_frame".into()]
+        } else {
+            Vec::new()
+        },
+        session: c.session.evaluated.then(|| SessionTestJson {
+            column_sin: c.session.column_sin,
+            columns_in_span: c.session.columns_in_span,
+            input_sin: c.session.input_sin,
+            input_constant_within_sessions: c.session.input_constant,
+            threshold: Config::default().session_sin_max,
+        }),
         data_deficient: c
             .data_deficient
             .iter()
@@ -700,7 +781,8 @@ pub fn report<const N: usize>(
         remaining_structure: explainable_json(&d.remaining_structure),
         extrapolation: extrapolation_json(&d.extrapolation),
         form: form_json(&d.form),
-        where_: where_json(d, &study.poses, set),
+        where_: where_json(d, study, set),
+        sessions: study.sessions.as_ref().map(Sessions::json),
         data: DataInfoJson {
             path: data_path.display().to_string(),
             sha256: set.sha256.clone(),
@@ -793,6 +875,8 @@ fn verdict_json<const N: usize>(d: &Diagnosis<N>) -> VerdictJson {
         remaining_gap_z_rot: finite(d.remaining.z_rot),
         remaining_gap_significant: d.remaining.z > Config::default().z_gap,
         remaining_rms_axis: axis(&d.final_rms_axis),
+        confounded_with_sessions: names(session_confounded(d)),
+        separate_by: separate_by(d),
         parameters,
     }
 }
@@ -812,7 +896,7 @@ fn form_json(f: &diagnosis::FormCheck) -> FormJson {
 /// Where the geometric residuals lie: by axis, octant, correlated quantity and pose.
 fn where_json<const N: usize>(
     d: &Diagnosis<N>,
-    poses: &[PoseDiagnosis],
+    study: &Study<N>,
     set: &MeasurementSet,
 ) -> WhereJson {
     let loc = &d.location;
@@ -851,7 +935,9 @@ fn where_json<const N: usize>(
         most_correlated: loc
             .most_correlated
             .map(|k| crate::units::quantity_label(loc.correlates()[k].quantity)),
-        per_pose: poses
+        by: study.breakdown.iter().map(Breakdown::json).collect(),
+        per_pose: study
+            .poses
             .iter()
             .zip(&set.rows)
             .map(|(p, row)| PoseJson {
@@ -1003,6 +1089,7 @@ fn reason_code(r: &Reason) -> &'static str {
         Reason::Worsens { .. } => "worsens",
         Reason::SmallShare => "small_share",
         Reason::NoSignificantCandidate => "no_significant_candidate",
+        Reason::ConfoundedWithSessions => "confounded_with_sessions",
     }
 }
 
@@ -1079,5 +1166,9 @@ fn status_reason_text<const N: usize>(d: &Diagnosis<N>) -> String {
         Reason::NoSignificantCandidate => {
             "no candidate improves significantly on the geometric model".into()
         }
+        Reason::ConfoundedWithSessions => format!(
+            "the candidates that improve significantly are confounded with the sessions ({}): the data cannot attribute the gap to them rather than to what differs between the sessions",
+            effects_text(session_confounded(d))
+        ),
     }
 }

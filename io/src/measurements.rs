@@ -239,6 +239,78 @@ pub fn parse_measurements(
     Parser::new(source_name, opts)?.run(reader)
 }
 
+/// The header row of a measurement file, names as written (trimmed): for a binding that
+/// reads a file without knowing the robot (it takes the joint count from the file, then reads
+/// with [`parse_measurements`]) and shows the columns. Only the header is parsed; comments
+/// and rows are checked by [`parse_measurements`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Header {
+    /// 1-based line of the header row.
+    pub line: u64,
+    /// Column names, in file order.
+    pub columns: Vec<String>,
+}
+
+impl Header {
+    /// The highest joint index K of a column `qK` (any unit), 0 without joint columns.
+    pub fn joint_count(&self) -> usize {
+        self.columns
+            .iter()
+            .filter_map(|c| match classify(c) {
+                Ok((Kind::Joint(k), _)) => Some(k + 1),
+                _ => None,
+            })
+            .max()
+            .unwrap_or(0)
+    }
+}
+
+/// Reads the header row (after the comment and blank lines) of measurement CSV.
+pub fn parse_header(reader: impl Read, source_name: &str) -> Result<Header, InputError> {
+    let err = |line: Option<u64>, reason: String| InputError {
+        path: source_name.to_string(),
+        line,
+        column: None,
+        reason,
+    };
+    let hashing = HashingReader::new(reader).map_err(|e| err(None, format!("read error: {e}")))?;
+    let mut src = Records::new(BufReader::with_capacity(64 * 1024, hashing));
+    let mut raw = Vec::new();
+    loop {
+        let at = src.line;
+        let io_err = |e: io::Error| err(Some(at), format!("read error: {e}"));
+        if !src.skip_blank_lines().map_err(io_err)? || src.peek().map_err(io_err)? != Some(b'#') {
+            break;
+        }
+        src.read_raw_line(&mut raw).map_err(io_err)?;
+    }
+    let at = src.line;
+    let line = src
+        .read_record()
+        .map_err(|e| err(Some(at), format!("read error: {e}")))?
+        .ok_or_else(|| {
+            err(
+                Some(src.line),
+                "empty file: expected a header row (q1..qN, ...) and data rows".into(),
+            )
+        })?;
+    let columns = src
+        .fields()
+        .map_err(|(i, e)| {
+            err(
+                Some(line),
+                format!(
+                    "column #{} is not valid UTF-8 ({e}): expected UTF-8 text",
+                    i + 1
+                ),
+            )
+        })?
+        .iter()
+        .map(|c| c.trim().to_string())
+        .collect();
+    Ok(Header { line, columns })
+}
+
 // ---------------------------------------------------------------------------------------
 // Reading
 

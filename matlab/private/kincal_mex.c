@@ -1842,6 +1842,87 @@ static int op_select_poses(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *
     }
     return 0;
 }
+
+static const char *const CLUSTER_FIELDS[] = {
+    "chosen", "spread", "value", "target", "within_tolerance", "occupied_cubes", NULL,
+};
+
+/* cluster_select(robot, pool N x K, m, params, scaling, scaling tolerance, objective,
+ *                region 3 x 2 [min max], cube_m, tolerance) -> q N x m, info struct
+ * (chosen: 1-based pool columns; target 1-based). The paper's workspace-clustering design. */
+static int op_cluster_select(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prhs[])
+{
+    kincal_robot r;
+    kincal_error err;
+    kincal_status st;
+    kincal_scaling sc;
+    kincal_cluster_selection sel;
+    kincal_region region;
+    uint8_t buf[KINCAL_MAX_PARAMS];
+    const uint8_t *mask;
+    const double *pool, *g;
+    uint32_t objective;
+    size_t n, k, m, np, p, i, j;
+    size_t chosen[KINCAL_MAX_SELECT];
+    double cube_m, tolerance;
+    void *ws;
+    size_t ws_len;
+    mxArray *q_out, *s, *idx;
+    if (get_robot(c, prhs[0], &r) != 0) {
+        return -1;
+    }
+    n = r.n_joints;
+    np = kincal_num_params(n);
+    if (get_real_matrix(c, prhs[1], "pool", n, KC_ANY, &pool) != 0 ||
+        get_count(c, prhs[2], "m", (double)KINCAL_MAX_SELECT, &m) != 0 ||
+        get_param_mask(c, &r, prhs[3], buf, &mask, &p) != 0 ||
+        get_scaling(c, prhs[4], prhs[5], &sc) != 0 ||
+        get_choice(c, prhs[6], "objective", OBS_INDICES, &objective) != 0 ||
+        get_real_matrix(c, prhs[7], "region", 3, 2, &g) != 0 ||
+        get_scalar(c, prhs[8], "cube_m", &cube_m) != 0 ||
+        get_scalar(c, prhs[9], "tolerance", &tolerance) != 0) {
+        return -1;
+    }
+    for (i = 0; i < 3; ++i) {
+        region.min_m[i] = g[i];
+        region.max_m[i] = g[3 + i];
+    }
+    k = mxGetN(prhs[1]);
+    ws_len = kincal_cluster_workspace_size(p, k, &region, cube_m);
+    if (ws_len == 0) {
+        return fail(c, "invalidArgument", "no workspace size for %lu parameters, %lu candidates "
+                    "and cubes of %g m in the region (a cube side > 0 and a valid region?)",
+                    (unsigned long)p, (unsigned long)k, cube_m);
+    }
+    if ((ws = aligned_scratch(c, ws_len)) == NULL) {
+        return -1;
+    }
+    st = kincal_cluster_select(&r, pool, k, n * k, m, mask, np, &sc, objective, &region, cube_m,
+                               tolerance, ws, ws_len, chosen, m, &sel, &err);
+    if (st != KINCAL_STATUS_OK) {
+        return fail_status(c, st, &err, NULL);
+    }
+    q_out = mxCreateDoubleMatrix((mwSize)n, (mwSize)m, mxREAL);
+    idx = mxCreateDoubleMatrix(1, (mwSize)m, mxREAL);
+    for (j = 0; j < m; ++j) {
+        memcpy(KC_DOUBLES(q_out) + j * n, pool + chosen[j] * n, n * sizeof(double));
+        KC_DOUBLES(idx)[j] = one_based(chosen[j]);
+    }
+    plhs[0] = q_out;
+    if (nlhs > 1) {
+        s = mxCreateStructMatrix(1, 1, 6, (const char **)CLUSTER_FIELDS);
+        mxSetField(s, 0, "chosen", idx);
+        mxSetField(s, 0, "spread", mxCreateDoubleScalar(sel.spread));
+        mxSetField(s, 0, "value", mxCreateDoubleScalar(sel.value));
+        mxSetField(s, 0, "target", mxCreateDoubleScalar(one_based(sel.target)));
+        mxSetField(s, 0, "within_tolerance", mxCreateLogicalScalar(sel.within_tolerance != 0));
+        mxSetField(s, 0, "occupied_cubes", mxCreateDoubleScalar((double)sel.occupied_cubes));
+        plhs[1] = s;
+    } else {
+        mxDestroyArray(idx);
+    }
+    return 0;
+}
 #endif /* KINCAL_MAX_SELECT */
 
 /* ------------------------------------------------------------------------------------------ */
@@ -2716,6 +2797,159 @@ static int op_model_read(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *pr
     }
     return put_robot(c, &r, "", &plhs[0]);
 }
+
+/* A 1 x k cell of the next k NUL-terminated strings of text (advances *at). */
+static mxArray *next_strings(const char *text, size_t text_len, size_t *at, size_t k, size_t rows)
+{
+    mxArray *cell = mxCreateCellMatrix((mwSize)rows, (mwSize)(rows > 0 ? k / rows : k));
+    size_t i;
+    for (i = 0; i < k && *at < text_len; ++i) {
+        mxSetCell(cell, (mwIndex)i, mxCreateString(text + *at));
+        *at += strlen(text + *at) + 1;
+    }
+    return cell;
+}
+
+static const char *const MEASUREMENT_FIELDS[] = {
+    "comments", "columns", "n_joints", "n_poses", "line", "q", "T", "has_position",
+    "orientation", "pose_id", "approach", "temp_c", "extra", NULL,
+};
+
+/* read_measurements(file, robot or [], flags) -> struct: a measurement CSV read by
+ * kincal-io's reader (the CLI's), in SI units; kincal_read_measurements.m shapes the
+ * toolbox's struct from it. A refused file raises kincal:csv with the reader's message
+ * (file:line: column 'name': reason). */
+static int op_read_measurements(kc_ctx *c, int nlhs, mxArray *plhs[], const mxArray *prhs[])
+{
+    char path[4096];
+    kincal_robot r;
+    const kincal_robot *robot = NULL;
+    double flags_d;
+    kincal_measurement_sizes z;
+    kincal_measurement_buffers b;
+    kincal_read_error re;
+    kincal_error err;
+    kincal_status st;
+    size_t l, n, i, j, at = 0;
+    mxArray *s, *a;
+    double *d;
+    (void)nlhs;
+    if (get_string(c, prhs[0], "file", path, sizeof path) != 0) {
+        return -1;
+    }
+    if (!mxIsEmpty(prhs[1])) {
+        if (get_robot(c, prhs[1], &r) != 0) {
+            return -1;
+        }
+        robot = &r;
+    }
+    if (get_scalar(c, prhs[2], "flags", &flags_d) != 0) {
+        return -1;
+    }
+    st = kincal_measurements_read_sizes(path, robot, (uint32_t)flags_d, &z, &re, &err);
+    if (st == KINCAL_STATUS_BAD_FILE) {
+        return fail(c, "csv", "%s", re.message);
+    }
+    if (st != KINCAL_STATUS_OK) {
+        return fail_status(c, st, &err, NULL);
+    }
+    if (z.has_contacts) {
+        return fail(c, "csv", "%s:%lu: contact columns (point_x/y/z, target, plane, session): "
+                    "the toolbox reads measured poses only; calibrate contact data with the CLI "
+                    "(kincal calibrate)", path, (unsigned long)z.header_line);
+    }
+    l = z.n_rows;
+    n = z.n_joints;
+    memset(&b, 0, sizeof b);
+    b.q_len = l * n;
+    b.poses_len = 16 * l;
+    b.masks_len = l;
+    b.aux_len = l;
+    b.lines_len = l;
+    b.text_len = z.text_len;
+    b.q = (double *)kc_alloc(c, b.q_len * sizeof(double));
+    b.poses = (double *)kc_alloc(c, b.poses_len * sizeof(double));
+    b.masks = (uint8_t *)kc_alloc(c, l);
+    b.aux = (kincal_joint_aux *)kc_alloc(c, l * sizeof(kincal_joint_aux));
+    b.lines = (size_t *)kc_alloc(c, l * sizeof(size_t));
+    b.text = (char *)kc_alloc(c, z.text_len);
+    if (b.q == NULL || b.poses == NULL || b.masks == NULL || b.aux == NULL || b.lines == NULL ||
+        b.text == NULL) {
+        return -1;
+    }
+    st = kincal_measurements_read(path, robot, (uint32_t)flags_d, &b, &re, &err);
+    if (st == KINCAL_STATUS_BAD_FILE) {
+        return fail(c, "csv", "%s", re.message);
+    }
+    if (st != KINCAL_STATUS_OK) {
+        return fail_status(c, st, &err, NULL);
+    }
+    for (j = 0; j < l; ++j) {
+        if (z.has_position && b.masks[j] != 0x07 && b.masks[j] != 0x3f) {
+            return fail(c, "csv", "%s:%lu: some of x, y, z empty: the toolbox's struct holds "
+                        "whole positions only; calibrate such data with the CLI", path,
+                        (unsigned long)b.lines[j]);
+        }
+    }
+    s = mxCreateStructMatrix(1, 1, 13, (const char **)MEASUREMENT_FIELDS);
+    plhs[0] = s;
+    mxSetField(s, 0, "comments", next_strings(b.text, b.text_len, &at, z.n_comments, 1));
+    mxSetField(s, 0, "columns", next_strings(b.text, b.text_len, &at, z.n_columns, 1));
+    mxSetField(s, 0, "n_joints", mxCreateDoubleScalar((double)n));
+    mxSetField(s, 0, "n_poses", mxCreateDoubleScalar((double)l));
+    a = mxCreateDoubleMatrix(1, (mwSize)l, mxREAL);
+    for (j = 0, d = KC_DOUBLES(a); j < l; ++j) {
+        d[j] = (double)b.lines[j];
+    }
+    mxSetField(s, 0, "line", a);
+    /* q: the ABI's L x N row-major is Matlab's N x L column-major. */
+    a = mxCreateDoubleMatrix((mwSize)n, (mwSize)l, mxREAL);
+    memcpy(KC_DOUBLES(a), b.q, l * n * sizeof(double));
+    mxSetField(s, 0, "q", a);
+    a = create_poses(l);
+    memcpy(KC_DOUBLES(a), b.poses, 16 * l * sizeof(double));
+    mxSetField(s, 0, "T", a);
+    mxSetField(s, 0, "has_position", mxCreateLogicalScalar(z.has_position != 0));
+    mxSetField(s, 0, "orientation", mxCreateString(z.orientation == 1   ? "rpy"
+                                                   : z.orientation == 2 ? "quaternion"
+                                                                        : ""));
+    a = mxCreateCellMatrix(z.has_pose_id ? 1 : 0, z.has_pose_id ? (mwSize)l : 0);
+    mxSetField(s, 0, "pose_id", a);
+    if (z.has_approach) {
+        a = mxCreateDoubleMatrix((mwSize)n, (mwSize)l, mxREAL);
+        for (j = 0, d = KC_DOUBLES(a); j < l; ++j) {
+            for (i = 0; i < n; ++i) {
+                d[j * n + i] = b.aux[j].approach[i];
+            }
+        }
+    } else {
+        a = mxCreateDoubleMatrix(0, 0, mxREAL);
+    }
+    mxSetField(s, 0, "approach", a);
+    if (z.has_temperature) {
+        a = mxCreateDoubleMatrix(1, (mwSize)l, mxREAL);
+        for (j = 0, d = KC_DOUBLES(a); j < l; ++j) {
+            d[j] = b.aux[j].temp_c;
+        }
+    } else {
+        a = mxCreateDoubleMatrix(0, 0, mxREAL);
+    }
+    mxSetField(s, 0, "temp_c", a);
+    /* Per row: pose_id (if any), then the extra cells: an L x K cell of the extras. */
+    a = mxCreateCellMatrix((mwSize)l, (mwSize)z.n_extra);
+    for (j = 0; j < l; ++j) {
+        if (z.has_pose_id && at < b.text_len) {
+            mxSetCell(mxGetField(s, 0, "pose_id"), (mwIndex)j, mxCreateString(b.text + at));
+            at += strlen(b.text + at) + 1;
+        }
+        for (i = 0; i < z.n_extra && at < b.text_len; ++i) {
+            mxSetCell(a, (mwIndex)(i * l + j), mxCreateString(b.text + at));
+            at += strlen(b.text + at) + 1;
+        }
+    }
+    mxSetField(s, 0, "extra", a);
+    return 0;
+}
 #endif
 
 typedef struct kc_operation {
@@ -2772,10 +3006,12 @@ static const kc_operation OPERATIONS[] = {
     {"view_point", op_view_point, 2, 2},
 #if defined(KINCAL_STD)
     {"model_read", op_model_read, 2, 1},
+    {"read_measurements", op_read_measurements, 3, 1},
 #endif
 #if defined(KC_HAS_OBSERVABILITY)
     {"observability", op_observability, 5, 2},
     {"select_poses", op_select_poses, 10, 2},
+    {"cluster_select", op_cluster_select, 10, 2},
 #endif
 #if defined(KINCAL_TEST_PANIC)
     {"test_panic", op_test_panic, 0, 0},

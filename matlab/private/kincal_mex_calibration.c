@@ -457,8 +457,8 @@ static const char *reason_name(uint32_t r)
     static const char *const names[] = {"at_noise_floor", "closed", "remaining_gap",
                                         "remaining_structure", "worsens", "small_share",
                                         "no_significant_candidate", "does_not_extrapolate",
-                                        "form_not_determined"};
-    return r < 9 ? names[r] : "?";
+                                        "form_not_determined", "confounded_with_sessions"};
+    return r < 10 ? names[r] : "?";
 }
 
 static const char *part_name(uint32_t p)

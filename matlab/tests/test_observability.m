@@ -4,6 +4,8 @@ tests = {
     'observability_of_table2', @table2
     'select_poses_beats_table2', @select_beats_table2
     'select_poses_bad_inputs', @select_bad
+    'cluster_select_distinct_cubes_equal_observability', @cluster_select
+    'cluster_select_bad_inputs', @cluster_bad
     };
 end
 
@@ -54,4 +56,55 @@ bad = pool;
 bad(2, 3) = NaN;
 expect_error('kincal:nonFinite', @() kincal_select_poses(r, 5, bad));
 expect_error('kincal:badSize', @() kincal_observability(r, zeros(5, 3)));
+end
+
+function cluster_select()
+% The workspace-clustering design: m pool members, one per cube, whose per-pose singular
+% values (the six of a pose's own block, unit columns: KINCAL_OBSERVABILITY of that pose)
+% are within the reported spread of the target's; recomputed here from the outputs.
+r = kincal_robot('aria');
+pool = random_pool(r, 1500);
+region = [-1, 1; -1, 1; 0.05, 1.5];
+cube = 0.4;
+m = 8;
+[q, info] = kincal_cluster_select(r, m, pool, 'region', region, 'cube_m', cube, ...
+    'max_spread', 0.3);
+expect_true(isequal(size(q), [6, m]) && isequal(q, pool(:, info.chosen)), 'm pool members');
+T = kincal_fk(r, q);
+p = reshape(T(1:3, 4, :), 3, m);
+counts = ceil(diff(region, 1, 2) / cube - 1e-9);
+idx = min(floor((p - repmat(region(:, 1), 1, m)) / cube), repmat(counts - 1, 1, m));
+expect_true(all(all(p >= repmat(region(:, 1), 1, m) & p <= repmat(region(:, 2), 1, m))), ...
+    'inside the region');
+expect_true(size(unique(idx', 'rows'), 1) == m, 'one pose per cube');
+sv = @(j) local_sv(r, pool(:, j));
+target = sv(info.target);
+spread = 0;
+for j = info.chosen
+    spread = max(spread, max(abs(log(sv(j)) - log(target))));
+end
+expect_true(abs(spread - info.spread) < 1e-9, 'spread %.17g vs reported %.17g', spread, ...
+    info.spread);
+expect_true(info.within_tolerance == (info.spread <= 0.3), 'within_tolerance');
+I = kincal_observability(r, q);
+expect_true(abs(I.o - info.value) <= 1e-9 * I.o, 'value is the O of the chosen poses');
+% Deterministic.
+q2 = kincal_cluster_select(r, m, pool, 'region', region, 'cube_m', cube, 'max_spread', 0.3);
+expect_true(isequal(q, q2), 'same pool, same poses');
+end
+
+function s = local_sv(r, q)
+[~, sv] = kincal_observability(r, q);
+s = sv(1:6);
+end
+
+function cluster_bad()
+r = kincal_robot('aria');
+pool = random_pool(r, 40);
+region = [-1, 1; -1, 1; 0.05, 1.5];
+expect_error('kincal:badArgCount', @() kincal_cluster_select(r, 5, pool));
+expect_error('kincal:tooFewData', @() kincal_cluster_select(r, 30, pool, 'region', region, ...
+    'cube_m', 1.5));
+expect_error('kincal:invalidArgument', @() kincal_cluster_select(r, 5, pool, 'region', ...
+    region, 'cube_m', 0));
 end

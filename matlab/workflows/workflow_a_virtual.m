@@ -52,8 +52,8 @@ targets = region_poses(linspace(0.166, 0.466, 3), linspace(0.204, 0.504, 3), ...
     [0.235, 0.335], [-150, -160]);
 [q_val, T_val] = reach(truth, targets, seed);
 val = struct('q', q_val, 'T', T_val);
-e_cal = validate_all(models, names, cal, 'Errors at the calibration poses');
-e_val = validate_all(models, names, val, 'Errors at the validation poses');
+e_cal = validate_all(models, names, cal, 'Errors at the calibration poses', [{[]}, reports]);
+e_val = validate_all(models, names, val, 'Errors at the validation poses', [{[]}, reports]);
 
 % 6. Figures.
 files = [kincal_plot_errors(e_cal, names, 'file', fullfile(out, 'calibration_errors'), ...

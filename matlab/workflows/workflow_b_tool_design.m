@@ -1,10 +1,10 @@
 %WORKFLOW_B_TOOL_DESIGN  Toolbox workflow (b): calibration-tool design and analysis
 %   (paper, Sections 4.2-4.4). Compares the poses a calibration tool could hold:
 %     - "Table 2": the paper's arbitrary-choice tool, ten poses on a circle;
-%     - "cubes": workspace clustering (Section 4.2) in its constructive form: the biopsy
-%       working region split into cubes of side 0.1 m, one pose at the centre of each of
-%       ten cubes in a checkerboard, with varied roll and yaw. The paper's search for
-%       configurations of equal observability is not in this build (see below);
+%     - "clustering": the paper's workspace-clustering design (Section 4.2), by
+%       KINCAL_CLUSTER_SELECT: ten candidate poses in ten different cubes of side 0.1 m of
+%       the biopsy working region whose per-pose observability is equal within 10 %
+%       (the CLI's `select-poses --design clustering`, one core function);
 %     - "optimal": ten poses maximising the observability index O, eq. (18), selected
 %       by KINCAL_SELECT_POSES from candidates with the tool in the working region.
 %   For each design: the identifiability analysis (rank, condition number of the scaled
@@ -34,17 +34,6 @@ names = {'NOM', 'OLS', 'OPT1', 'OPT2'};
 % The designs: target tool poses.
 designs = struct('name', {}, 'targets', {});
 designs(end + 1) = struct('name', 'Table 2', 'targets', T_tool);
-% Cubes of side 0.1 m over the working region x 0.066..0.566, y 0.116..0.592,
-% z 0.235..0.335 m (5 x 4 x 1 cubes); centres of a checkerboard half of them.
-[ix, iy] = ndgrid(0:4, 0:3);
-pick = mod(ix(:) + iy(:), 2) == 0;
-cx = 0.066 + 0.05 + 0.1 * ix(pick)';
-cy = 0.116 + 0.05 + 0.1 * iy(pick)';
-m = numel(cx);
-rolls = repmat([-150, -170], 1, ceil(m / 2)) * pi / 180;
-yaws = repmat([-30, 0, 30], 1, ceil(m / 3)) * pi / 180;
-designs(end + 1) = struct('name', 'cubes', 'targets', kincal_pose_from_xyzrpy( ...
-    [cx; cy; 0.285 * ones(1, m); rolls(1:m); zeros(1, m); yaws(1:m)]));
 % Optimal poses (eq. 18): candidates inside the joint limits (deterministic, golden-ratio
 % sequence) whose tool position lies in the working region, selected on the nominal model.
 region = [0.066, 0.566; 0.116, 0.592; 0.235, 0.335];
@@ -55,6 +44,15 @@ T_pool = kincal_fk(nominal, pool);
 p = reshape(T_pool(1:3, 4, :), 3, k);
 inside = all(p >= repmat(region(:, 1), 1, k) & p <= repmat(region(:, 2), 1, k), 1);
 [q_opt, sel] = kincal_select_poses(nominal, 10, pool(:, inside), 'seed', 1, 'region', region);
+% Workspace clustering (Section 4.2) on the same candidates: cubes of 0.1 m of the region
+% (5 x 5 x 1), one pose per cube, per-pose singular values within 10 % of a target pose's.
+[q_cl, cl] = kincal_cluster_select(nominal, 10, pool(:, inside), 'region', region, ...
+    'cube_m', 0.1, 'max_spread', 0.1);
+fprintf(['workspace clustering: %d poses in different 0.1 m cubes (%d occupied), per-pose ' ...
+    'singular values within %.1f %% of the target''s (ln-ratio %.3f)%s\n'], size(q_cl, 2), ...
+    cl.occupied_cubes, (exp(cl.spread) - 1) * 100, cl.spread, ...
+    repmat(', above the tolerance: the smallest spread found', 1, ~cl.within_tolerance));
+designs(end + 1) = struct('name', 'clustering', 'targets', kincal_fk(nominal, q_cl));
 I_t2 = kincal_observability(nominal, kincal_ik(nominal, T_tool, seed));
 fprintf('\nobservability O (eq. 17): Table 2 %.4g, optimal %.4g (%d candidates)\n', ...
     I_t2.o, sel.indices.o, nnz(inside));
@@ -81,7 +79,7 @@ for d = 1:numel(designs)
     kincal_print_params(models, names, 'title', sprintf('Identified parameters, design "%s"', ...
         designs(d).name));
     e_val = validate_all(models, names, val, sprintf('Errors at the validation poses, design "%s"', ...
-        designs(d).name));
+        designs(d).name), [{[]}, reports]);
     [~, s_ols] = kincal_validate(models{2}, val);
     summary(end + 1, :) = {designs(d).name, size(q, 2), a.rank, a.condition_number, ...
         1000 * s_ols.rms_pos_m, 1000 * s_ols.max_pos_m, s_ols.max_rot_rad * 180 / pi}; %#ok<SAGROW>

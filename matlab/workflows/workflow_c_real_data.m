@@ -68,8 +68,8 @@ if reports{1}.n_correlated > 0
 end
 
 % 5. Errors, and the gap a geometric calibration leaves.
-validate_all(models, names, cal, 'Errors at the calibration poses');
-e_val = validate_all(models, names, val, 'Errors at the validation poses');
+validate_all(models, names, cal, 'Errors at the calibration poses', [{[]}, reports]);
+e_val = validate_all(models, names, val, 'Errors at the validation poses', [{[]}, reports]);
 [with_c, rep_c] = kincal_identify(nominal, cal, 'effects', {'joint_compliance'}, ...
     'allow_data_deficiency', true);
 fprintf(['\nOLS with joint compliance identified as well (%d parameters fitted, %d not ' ...

@@ -140,6 +140,7 @@ impl Options {
         };
         Ok(Settings {
             effects,
+            scale_joints: None,
             algorithms,
             bounds_length_m: positive(py, "bounds_mm", self.bounds_mm)? * 1e-3,
             bounds_angle_rad: positive(py, "bounds_deg", self.bounds_deg)?.to_radians(),

@@ -168,6 +168,7 @@ fn crossval_options(
         effects: effect_set(py, effects)?
             .into_iter()
             .fold(EffectSet::NONE, EffectSet::with),
+        scale_joints: None,
         init_frames,
         folds,
         seed,

@@ -23,7 +23,9 @@
 // - the diagnosis (kincal_diagnose): a planted joint compliance is `explained` by it;
 // - a model file the CLI wrote (KINCAL_TEST_MODEL, from run.sh) read by kincal_model_read:
 //   kincal_fk_pq equals the CLI's `kincal predict` (KINCAL_TEST_PREDICT) on every row, and a
-//   broken copy is refused with its line and column.
+//   broken copy is refused with its line and column; the same predictions read back through
+//   the measurement CSV reader (kincal_measurements_read: two calls, caller-owned buffers)
+//   equal the cells parsed here, and a broken row is refused with its line and cell.
 
 #include <kincal.h>
 
@@ -1302,6 +1304,70 @@ void test_model_file_from_cli() {
     CHECK(std::strncmp(re.message, "buffer:", 7) == 0);
 }
 
+void test_measurements_from_cli() {
+    const char *path = std::getenv("KINCAL_TEST_PREDICT");
+    if (path == nullptr) return;  // test_model_file_from_cli reports the missing variable
+    kincal_measurement_sizes z;
+    kincal_read_error re;
+    kincal_error err;
+    CHECK_STATUS(kincal_measurements_read_sizes(path, nullptr, 0, &z, &re, &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    CHECK(z.n_rows >= 10 && z.n_joints == 6 && z.has_position && z.orientation == 2);
+    std::vector<double> q(z.n_rows * z.n_joints), poses(16 * z.n_rows);
+    std::vector<size_t> lines(z.n_rows);
+    std::vector<char> text(z.text_len);
+    kincal_measurement_buffers b{};
+    b.q = q.data();
+    b.q_len = q.size();
+    b.poses = poses.data();
+    b.poses_len = poses.size();
+    b.lines = lines.data();
+    b.lines_len = lines.size();
+    b.text = text.data();
+    b.text_len = text.size();
+    CHECK_STATUS(kincal_measurements_read(path, nullptr, 0, &b, &re, &err), KINCAL_STATUS_OK,
+                 err, nullptr);
+    // The same rows parsed here: q and x, y, z bit for bit.
+    std::ifstream in(path);
+    std::string line, whole;
+    std::vector<std::string> header;
+    size_t row = 0, at = 0;
+    double worst = 0.0;
+    while (std::getline(in, line)) {
+        ++at;
+        whole += line + "\n";
+        if (line.empty() || line[0] == '#') continue;
+        if (header.empty()) {
+            header = split_csv(line);
+            continue;
+        }
+        const std::vector<std::string> cells = split_csv(line);
+        const int q1 = column_of(header, "q1");
+        const int x = column_of(header, "x");
+        if (q1 < 0 || x < 0 || row >= z.n_rows) break;
+        CHECK(lines[row] == at);
+        for (size_t j = 0; j < 6; ++j)
+            worst = std::fmax(worst, std::fabs(q[row * 6 + j] -
+                                               std::strtod(cells.at(q1 + j).c_str(), nullptr)));
+        for (int k = 0; k < 3; ++k)
+            worst = std::fmax(worst, std::fabs(poses[16 * row + 12 + k] -
+                                               std::strtod(cells.at(x + k).c_str(), nullptr)));
+        ++row;
+    }
+    CHECK(row == z.n_rows && worst == 0.0);
+    std::printf("measurement CSV from the CLI: %zu rows, max |reader - strtod| = %g\n", row,
+                worst);
+    // A broken second cell on the last row: refused with that line and cell number.
+    const size_t last = whole.rfind('\n', whole.size() - 2) + 1;
+    const size_t cell = whole.find(',', last) + 1;
+    whole.insert(cell, "x");
+    CHECK_STATUS(kincal_measurements_read_buffer_sizes(whole.data(), whole.size(), nullptr, 0, &z,
+                                                       &re, &err),
+                 KINCAL_STATUS_BAD_FILE, err, nullptr);
+    CHECK(re.line == at && re.column == 2);
+    CHECK(std::strncmp(re.message, "buffer:", 7) == 0);
+}
+
 int main() {
     test_version_and_layout();
     test_fk_against_reference();
@@ -1320,6 +1386,7 @@ int main() {
     test_constraints();
     test_diagnosis();
     test_model_file_from_cli();
+    test_measurements_from_cli();
     std::printf("kincal %s C++ consumer: %d checks, %d failed\n", kincal_version(), g_checks,
                 g_failures);
     return g_failures == 0 ? 0 : 1;

@@ -13,14 +13,14 @@
 #     pkg-config (shared and static) and through CMake find_package(kincal) (static, shared);
 #  5. the panic-never proof (tests/cpp/panic_never.sh): the no_std build for
 #     thumbv7em-none-eabihf (rust-lld) and the host (gcc, also running tests/cpp/panic_never.c)
-#     at opt-levels 3 and s (z is not yet proven, see there), every export outside
+#     at opt-levels 3 and s, and the firmware target also at z, every export outside
 #     tests/cpp/not_panic_proven.txt checked with nm in the linked binary, and a canary that
 #     must break the link on each.
 #
 # Environment: CARGO_TARGET_DIR (default: ./target of the workspace); CC, CXX (default gcc,
 # g++); CI=true turns a missing cmake or pkg-config into a failure (as root they are installed
 # with apt-get when missing); KINCAL_PANIC_NEVER_CONFIGS replaces the panic-never matrix
-# (TARGET:OPT words; default thumbv7em and host at opt-levels 3 and s).
+# (TARGET:OPT words; default thumbv7em at opt-levels 3, s and z, the host at 3 and s).
 set -euo pipefail
 
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
@@ -153,7 +153,7 @@ if have_tool cmake cmake; then
     echo "example_static and example_shared built and ran"
 fi
 
-step "panic-never proof (tests/cpp/panic_never.sh): thumbv7em and host, opt-levels 3 and s"
+step "panic-never proof (tests/cpp/panic_never.sh): thumbv7em at 3, s, z; host at 3, s"
 # KINCAL_PANIC_NEVER_CONFIGS (e.g. "thumbv7em-none-eabihf:z") narrows the matrix for a quick
 # local run; the test command runs all of it.
 # shellcheck disable=SC2086 # a list of TARGET:OPT words by design

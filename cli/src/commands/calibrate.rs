@@ -5,10 +5,10 @@ use std::path::{Path, PathBuf};
 
 use std::fmt::Write as _;
 
+use kincal::Robot;
 use kincal::identify::{Algorithm, RobustOptions};
-use kincal::{EffectSet, Robot};
 
-use crate::args::{AlgorithmArg, LossArg, OrientationArg, parse_effect, positive};
+use crate::args::{AlgorithmArg, LossArg, OrientationArg, positive};
 use crate::error::{CliError, core_error};
 use crate::report;
 use kincal_io::calibration::{self, Failure, Settings, Weighting};
@@ -127,9 +127,10 @@ pub struct Args {
     pub robot: String,
     #[command(flatten)]
     pub chain: kincal_io::robot_arg::UrdfChainArgs,
-    /// Effects to identify with the geometry (comma-separated names of spec/effects.md)
-    #[arg(long, value_name = "E1,E2", value_delimiter = ',', value_parser = parse_effect)]
-    pub effects: Vec<kincal::Effect>,
+    /// Effects to identify with the geometry (comma-separated names of spec/effects.md;
+    /// joint_scale@JOINT for one joint's scale: a joint name, qK or sensor, repeatable)
+    #[arg(long, value_name = "E1,E2", value_delimiter = ',', value_parser = kincal_io::effects_arg::parse_effect_item)]
+    pub effects: Vec<kincal_io::effects_arg::EffectItem>,
     /// Identification algorithm
     #[arg(long, value_enum, default_value = "ols")]
     pub algorithm: AlgorithmArg,
@@ -195,7 +196,7 @@ pub struct Args {
 }
 
 impl Args {
-    fn settings(&self) -> Settings {
+    fn settings(&self, choice: &kincal_io::effects_arg::EffectChoice) -> Settings {
         let weighting = match (
             self.sigma_pos_mm,
             self.sigma_rot_deg,
@@ -213,10 +214,8 @@ impl Args {
             },
         };
         Settings {
-            effects: self
-                .effects
-                .iter()
-                .fold(EffectSet::NONE, |acc, &e| acc.with(e)),
+            effects: choice.effects,
+            scale_joints: choice.scale_joints.clone(),
             algorithms: self.algorithm.algorithms(),
             bounds_length_m: self.bounds_mm * 1e-3,
             bounds_angle_rad: self.bounds_deg.to_radians(),
@@ -238,17 +237,24 @@ impl Args {
 
 pub fn run(args: &Args) -> Result<(), CliError> {
     let spec = robot_arg::resolve_robot(&args.robot, &args.chain)?;
-    kincal::with_any_robot!(&spec.robot, r => calibrate(r, &spec.name, args))
+    let kinds = kincal::with_any_robot!(&spec.robot, r => r.joint_kinds().to_vec());
+    let choice = kincal_io::effects_arg::resolve(&args.effects, &spec.joint_names, &kinds)?;
+    kincal::with_any_robot!(&spec.robot, r => calibrate(r, &spec.name, &choice, args))
 }
 
-fn calibrate<const N: usize>(start: &Robot<N>, name: &str, args: &Args) -> Result<(), CliError> {
+fn calibrate<const N: usize>(
+    start: &Robot<N>,
+    name: &str,
+    choice: &kincal_io::effects_arg::EffectChoice,
+    args: &Args,
+) -> Result<(), CliError> {
     if args.prior == Some(crate::args::PriorArg::Auto) {
         return Err(CliError::usage(
             "--prior auto chooses the size by held-out error: run `kincal crossval --prior auto`, \
              then pass the size it reports (--prior MM,DEG)",
         ));
     }
-    let settings = args.settings();
+    let settings = args.settings(choice);
     let set = data::read(
         &args.data,
         start,
@@ -346,7 +352,16 @@ pub fn summary<const N: usize>(
             cal.settings
                 .effects
                 .iter()
-                .map(|e| e.name())
+                .map(|e| match (&cal.settings.scale_joints, e) {
+                    (Some(js), kincal::Effect::JointScale) => format!(
+                        "joint_scale ({} only)",
+                        js.iter()
+                            .map(|j| format!("q{}", j + 1))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                    _ => e.name().to_string(),
+                })
                 .collect::<Vec<_>>()
                 .join(", ")
         }

@@ -11,12 +11,12 @@ use std::path::{Path, PathBuf};
 
 use kincal::identify::{Loss, PriorSizes};
 use kincal::validation::ErrorSummary;
-use kincal::{Effect, EffectSet, Robot};
+use kincal::{EffectSet, Robot};
 
-use crate::args::parse_effect;
 use crate::error::CliError;
 use kincal_io::crossval::{self as cv, Options, PriorChoice, Weighting};
 use kincal_io::data::{self, DataOptions};
+use kincal_io::effects_arg::EffectChoice;
 use kincal_io::measurements::MeasurementSet;
 use kincal_io::robot_arg;
 
@@ -89,9 +89,10 @@ pub struct Args {
     pub robot: String,
     #[command(flatten)]
     pub chain: kincal_io::robot_arg::UrdfChainArgs,
-    /// Effects to identify with the geometry (comma-separated names of spec/effects.md)
-    #[arg(long, value_name = "E1,E2", value_delimiter = ',', value_parser = parse_effect)]
-    pub effects: Vec<Effect>,
+    /// Effects to identify with the geometry (comma-separated names of spec/effects.md;
+    /// joint_scale@JOINT for one joint's scale: a joint name, qK or sensor, repeatable)
+    #[arg(long, value_name = "E1,E2", value_delimiter = ',', value_parser = kincal_io::effects_arg::parse_effect_item)]
+    pub effects: Vec<kincal_io::effects_arg::EffectItem>,
     /// Estimate the base and tool frames from each fold's training poses first
     #[arg(long)]
     pub init_frames: bool,
@@ -170,13 +171,16 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         }
     }
     let spec = robot_arg::resolve_robot(&args.robot, &args.chain)?;
-    kincal::with_any_robot!(&spec.robot, r => crossval(r, &spec.name, args))
+    let kinds = kincal::with_any_robot!(&spec.robot, r => r.joint_kinds().to_vec());
+    let choice = kincal_io::effects_arg::resolve(&args.effects, &spec.joint_names, &kinds)?;
+    kincal::with_any_robot!(&spec.robot, r => crossval(r, &spec.name, &choice, args))
 }
 
 /// io's options from the arguments.
-fn options(args: &Args, effects: EffectSet) -> Options {
+fn options(args: &Args, choice: &EffectChoice) -> Options {
     Options {
-        effects,
+        effects: choice.effects,
+        scale_joints: choice.scale_joints.clone(),
         init_frames: args.init_frames,
         folds: args.folds,
         seed: args.seed,
@@ -201,8 +205,13 @@ fn options(args: &Args, effects: EffectSet) -> Options {
     }
 }
 
-fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Result<(), CliError> {
-    let effects = args.effects.iter().fold(EffectSet::NONE, |a, &e| a.with(e));
+fn crossval<const N: usize>(
+    nominal: &Robot<N>,
+    name: &str,
+    choice: &EffectChoice,
+    args: &Args,
+) -> Result<(), CliError> {
+    let effects = choice.effects;
     let set = data::read(
         &args.data,
         nominal,
@@ -213,14 +222,14 @@ fn crossval<const N: usize>(nominal: &Robot<N>, name: &str, args: &Args) -> Resu
         },
     )?;
     if args.constraints.is_some() || kincal_io::constraints::has_contacts(&set) {
-        return crossval_contacts(nominal, args, &set, effects);
+        return crossval_contacts(nominal, args, &set, choice);
     }
     if args.group_by.is_some() {
         return Err(CliError::usage(
             "--group-by applies to data with target/plane rows (instrument data: folds by pose_id)",
         ));
     }
-    let options = options(args, effects);
+    let options = options(args, choice);
     let pb = crate::progress::spinner(format!("cross-validating ({} folds)", args.folds));
     let study = cv::run(nominal, &set, &options);
     pb.finish_and_clear();
@@ -318,7 +327,10 @@ fn setup_text<const N: usize>(
             "positions only"
         }
     );
-    let effects = args.effects.iter().fold(EffectSet::NONE, |a, &e| a.with(e));
+    let effects = args
+        .effects
+        .iter()
+        .fold(EffectSet::NONE, |a, i| a.with(i.effect));
     let eff_names: Vec<&str> = effects.iter().map(|e| e.name()).collect();
     let _ = writeln!(
         s,
@@ -620,7 +632,7 @@ fn crossval_contacts<const N: usize>(
     nominal: &Robot<N>,
     args: &Args,
     set: &MeasurementSet,
-    effects: EffectSet,
+    choice: &EffectChoice,
 ) -> Result<(), CliError> {
     if args.init_frames || args.plot.is_some() || args.robot_out.is_some() {
         return Err(CliError::usage(
@@ -638,7 +650,8 @@ fn crossval_contacts<const N: usize>(
     } else {
         crate::commands::crossval_contacts::GroupBy::Target
     });
-    let mut requested = cv::geometry_subset(nominal, &args.geometry).union(&effects.params(N));
+    let mut requested =
+        cv::geometry_subset(nominal, &args.geometry).union(&choice.effect_params(N));
     for k in 0..3 {
         // The contacted point (ball centre) as the tool translation.
         let _ = requested.insert(5 * N + 6 + k);

@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use kincal::diagnosis::{Config, Diagnosis, Method, ModelScore, Status};
+use kincal::diagnosis::{Config, Diagnosis, Method, ModelScore, Reason, Status};
 use kincal::identify::Measurement;
 use kincal::{Effect, EffectSet, ParamId, ParamIndex, ParamSet, Robot};
 
@@ -17,8 +17,9 @@ use crate::plots::diagnosis::Outputs;
 use crate::report::{self, Table, label, quantity_label};
 use kincal_io::data::{self, DataOptions};
 use kincal_io::diagnose::{
-    self, FilesJson, Options, SigmaNames, reason_text, suspect_rows, warning_text,
+    self, FilesJson, Options, SigmaNames, effects_text, reason_text, suspect_rows, warning_text,
 };
+use kincal_io::diagnose_sessions::{SESSIONS_METHOD, Sessions, separate_by};
 use kincal_io::measurements::MeasurementSet;
 
 pub const LONG_ABOUT: &str = "\
@@ -52,6 +53,13 @@ model is extended by that effect?
    Gross outliers are screened first (suspect rows, named by CSV line, are left out); the
    stated σ is checked against the repeats and the residuals. With fewer than 5 pose
    groups per fold, in-sample nested tests replace cross-validation (method in the report).
+6. Sessions: with a `session` column naming several set-ups, each session's rows are
+   registered into the robot's base frame (rigid fit, alternating with the geometric
+   calibration); a candidate whose columns lie in the span of the per-session frames, or
+   whose input (temp_c, s1..sN) is constant within every session, is confounded with the
+   sessions (confounded_with: session_frame) and never chosen; the report says what data
+   would separate them, and where the gap lies by session, extra_ column and prismatic
+   reading.
 
 Writes REPORT.json (spec/cli.md fields plus details), a readable report (--report, default
 REPORT.txt next to it, also printed), three SVG plots next to REPORT.json (residual vectors
@@ -262,6 +270,10 @@ pub fn execute<const N: usize>(
     let report = diagnose::report(&study, &set, &args.data, Some(files_json(&outputs)));
     let json_text = diagnose::report_text(&report);
     let mut text = readable::<N>(name, &set, d, &study.meas);
+    if let Some(sessions) = &study.sessions {
+        text.push_str(&sessions_text(sessions, d));
+    }
+    text.push_str(&super::diagnose_where::text(&study.breakdown));
     let _ = writeln!(
         text,
         "\nFiles: {} (report), {} (readable), {} (model: geometric{}), plots {}",
@@ -363,14 +375,6 @@ fn zfmt(z: f64) -> String {
         "+inf".into()
     } else {
         "-inf".into()
-    }
-}
-
-fn effects_text(s: EffectSet) -> String {
-    if s.is_empty() {
-        "geometric only".into()
-    } else {
-        s.iter().map(|e| e.name()).collect::<Vec<_>>().join(" + ")
     }
 }
 
@@ -618,6 +622,8 @@ fn which_text<const N: usize>(s: &mut String, d: &Diagnosis<N>) {
             )
         } else if c.effects == d.verdict.effects {
             "VERDICT".into()
+        } else if c.session.confounded() {
+            long_note(session_note(c), &mut footnotes)
         } else if d.verdict.confounded().contains(&c.effects) {
             "confounded with the verdict".into()
         } else if c.distinctness < 0.05 {
@@ -697,6 +703,9 @@ fn verdict_text<const N: usize>(s: &mut String, d: &Diagnosis<N>) {
         v.status.name(),
         match v.status {
             Status::NoGap => "the geometric model is already at the noise floor".to_string(),
+            Status::Unexplained if v.reason == Reason::ConfoundedWithSessions =>
+                "a gap; the candidates that close part of it are confounded with the sessions"
+                    .to_string(),
             Status::Unexplained =>
                 "a gap, but no candidate closes a significant share of it".to_string(),
             _ => effects_text(v.effects),
@@ -799,4 +808,68 @@ fn explainable_text<const N: usize>(s: &mut String, d: &Diagnosis<N>) {
             );
         }
     }
+}
+
+// ---------------------------------------------------------------------------------------
+// Several sessions
+
+/// SESSIONS: the sessions, the candidates confounded with them and what would separate
+/// them.
+fn sessions_text<const N: usize>(sessions: &Sessions<N>, d: &Diagnosis<N>) -> String {
+    let mut s = format!(
+        "\nSESSIONS — {} sessions ({}): {SESSIONS_METHOD}.\n",
+        sessions.names.len(),
+        sessions
+            .names
+            .iter()
+            .enumerate()
+            .map(|(k, n)| format!("{n}: {} rows", sessions.rows(k)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    let mut any = false;
+    for c in d.candidates().iter().filter(|c| c.effects.len() == 1) {
+        if c.session.confounded() {
+            any = true;
+            let _ = writeln!(s, "  {}: {}", effects_text(c.effects), session_note(c));
+        }
+    }
+    if !any {
+        let _ = writeln!(
+            s,
+            "  no candidate is confounded with the sessions (sin θ of every effect column and √w of every input above {})",
+            Config::default().session_sin_max
+        );
+    }
+    if let Some(sep) = separate_by(d) {
+        let _ = writeln!(s, "  what would separate them: {sep}");
+    }
+    s
+}
+
+/// Why a candidate is confounded with the sessions, in words.
+fn session_note(c: &ModelScore) -> String {
+    let t = &c.session;
+    let mut parts = Vec::new();
+    if t.input_constant {
+        parts.push(format!(
+            "its input is constant within every session (√(within-session share of its variance) = {:.3}): it is estimated only from differences between sessions, so it is confounded with the session (its base frame and whatever else differs between the set-ups); not chosen",
+            t.input_sin.unwrap_or(0.0)
+        ));
+    }
+    if t.columns_in_span {
+        parts.push(format!(
+            "its columns lie in the span of the per-session base frames and the geometry (largest sin θ = {:.3}): a rigid frame per session does the same; not chosen",
+            t.column_sin
+        ));
+    }
+    if parts.is_empty() {
+        parts.push("not confounded with the sessions".into());
+    } else if !t.columns_in_span {
+        parts.push(format!(
+            "its columns themselves are not in the session frames' span (sin θ = {:.3}): the data see its pattern, but cannot attribute it to its input",
+            t.column_sin
+        ));
+    }
+    format!("confounded with the session frame: {}", parts.join("; "))
 }

@@ -5,8 +5,9 @@
 use std::path::PathBuf;
 
 use crate::error::CliError;
-use kincal_io::datasets::{self, UNUSABLE, USABLE};
+use kincal_io::datasets::{self, NEEDS, UNUSABLE, USABLE};
 use kincal_io::datasets_contact::{self, ContactOptions};
+use kincal_io::datasets_tiago;
 use kincal_io::measurements::write_measurements_csv;
 
 pub const LONG_ABOUT: &str = "\
@@ -35,8 +36,12 @@ Sets (--list prints them with what they measure):
                           robot = the set's URDF (base_link -> prism) + 4 sensor joints.
                           CC BY-NC-SA 3.0 (non-commercial). --study prints the held-out
                           study of docs/real-data.md
-figaroh-tiago-mocap is refused with the reason. --base-link/--tip-link override the chain
-of mukca's and MATE's URDF.
+  tiago (figaroh-tiago-mocap)  TIAGo torso lift (prismatic) + 7R arm, one motion-capture
+                          point on the hand, positions only (points 2-4 kept as extra_
+                          columns); needs --urdf TIAGO.urdf: PAL's TIAGo URDF is CC BY-NC-ND
+                          and not shipped (pal-robotics/tiago_robot, tiago_description).
+                          Default chain base_footprint -> arm_7_link
+--base-link/--tip-link override the chain of mukca's, MATE's and TIAGo's URDF.
 
 In every set the frame of the measurements and the measured frame on the robot are unknown:
 calibrate with --effects base_frame,tool_frame --init-frames (see `kincal help calibrate`),
@@ -71,6 +76,9 @@ pub struct Args {
     pub robot_id: Option<String>,
     #[command(flatten)]
     pub chain: kincal_io::robot_arg::UrdfChainArgs,
+    /// tiago: the robot's URDF (not shipped with the set: CC BY-NC-ND)
+    #[arg(long, value_name = "TIAGO.urdf")]
+    pub urdf: Option<PathBuf>,
     /// List the data sets and exit
     #[arg(long)]
     pub list: bool,
@@ -85,9 +93,15 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         for (n, d) in USABLE {
             s.push_str(&format!("  {n:<24} {d}\n"));
         }
-        s.push_str("Not usable as they are:\n");
-        for (n, d) in UNUSABLE {
+        s.push_str("Usable with what you add:\n");
+        for (n, d) in NEEDS {
             s.push_str(&format!("  {n:<24} {d}\n"));
+        }
+        if !UNUSABLE.is_empty() {
+            s.push_str("Not usable as they are:\n");
+            for (n, d) in UNUSABLE {
+                s.push_str(&format!("  {n:<24} {d}\n"));
+            }
         }
         crate::report::emit(&s);
         return Ok(());
@@ -95,6 +109,12 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     let (Some(name), Some(dir), Some(out)) = (&args.name, &args.dir, &args.out) else {
         return Err(CliError::usage("NAME, DIR and --out are required"));
     };
+    let is_tiago = datasets_tiago::NAMES.contains(&name.as_str());
+    if args.urdf.is_some() && !is_tiago {
+        return Err(CliError::usage(format!(
+            "--urdf applies to the TIAGo set (tiago), whose URDF is not shipped; '{name}' brings its robot"
+        )));
+    }
     if datasets_contact::CONTACT_SETS.contains(&name.as_str()) {
         return run_contact(args, name, dir, out);
     }
@@ -104,16 +124,21 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             datasets_contact::CONTACT_SETS.join(", ")
         )));
     }
-    if args.chain != kincal_io::robot_arg::UrdfChainArgs::default() {
+    if args.chain != kincal_io::robot_arg::UrdfChainArgs::default() && !is_tiago {
         return Err(CliError::usage(format!(
-            "--base-link/--tip-link apply to the contact sets ({}); '{name}' has a fixed robot",
+            "--base-link/--tip-link apply to the contact sets ({}) and tiago; '{name}' has a fixed robot",
             datasets_contact::CONTACT_SETS.join(", ")
         )));
     }
-    let imported = datasets::import(name, dir)?;
-    let inputs: Vec<PathBuf> = std::fs::read_dir(dir)
+    let imported = if is_tiago {
+        datasets_tiago::import(dir, args.urdf.as_deref(), &args.chain)?
+    } else {
+        datasets::import(name, dir)?
+    };
+    let mut inputs: Vec<PathBuf> = std::fs::read_dir(dir)
         .map(|rd| rd.filter_map(|e| e.ok().map(|e| e.path())).collect())
         .unwrap_or_default();
+    inputs.extend(args.urdf.clone());
     let input_refs: Vec<&std::path::Path> = inputs.iter().map(PathBuf::as_path).collect();
     if let (Some(r), o) = (&args.robot_out, out)
         && kincal_io::files::is_same_file(r, o)

@@ -11,6 +11,7 @@ pub mod design;
 pub mod design_tool;
 pub mod diagnose;
 pub mod diagnose_contacts;
+pub mod diagnose_where;
 pub mod evaluate;
 pub mod export;
 pub mod import;

@@ -147,11 +147,13 @@ mod locate;
 mod noise;
 mod rank;
 mod screen;
+mod sessions;
 mod smooth;
 
 pub use extrapolate::ExtrapolationCheck;
 pub use form::FormCheck;
 pub use locate::{Correlate, Location, QuantityKind, RegionStats};
+pub use sessions::{MAX_SESSIONS, SessionConfounding};
 pub use smooth::{SmoothCheck, SmoothWorkspace};
 
 use crate::effects::{Effect, EffectSet};
@@ -215,13 +217,18 @@ pub struct Config {
     pub min_groups_per_fold: usize,
     /// Screen gross outliers before judging the candidates (module documentation).
     pub screen_outliers: bool,
+    /// A candidate is confounded with the sessions when every column's `sin θ` against the
+    /// geometric and session-frame columns, or its input's within-session share `√w`, is
+    /// at most this (`sessions.rs`; [`diagnose_sessions_into`] only).
+    pub session_sin_max: f64,
 }
 
 impl Default for Config {
     /// Estimated noise, 5 folds, all effects with their inputs and their pairs, thresholds
     /// z = 3 / 3 / 3, explained at 80 % of the gap, partial at 25 %, repeats within 0.5 °C,
     /// rank tolerance 1e-6, cross-validation from 5 groups per fold (25 groups), outlier
-    /// screening on.
+    /// screening on, session confounding at sin θ ≤ 0.1 (under 1 % of a column's squared
+    /// length, or of an input's variance, outside the sessions' span: θ < 5.7°).
     fn default() -> Self {
         Config {
             sigma_pos_m: None,
@@ -239,6 +246,7 @@ impl Default for Config {
             rank_tol: 1e-6,
             min_groups_per_fold: 5,
             screen_outliers: true,
+            session_sin_max: 0.1,
         }
     }
 }
@@ -355,6 +363,8 @@ pub struct ModelScore {
     pub z_pos: f64,
     /// Paired z of the improvement in rotation alone (positive: better).
     pub z_rot: f64,
+    /// Confounding with the sessions (`sessions.rs`): never chosen when confounded.
+    pub session: SessionConfounding,
 }
 
 impl ModelScore {
@@ -382,6 +392,13 @@ impl ModelScore {
             gap_closed_total_fraction: 0.0,
             z_pos: 0.0,
             z_rot: 0.0,
+            session: SessionConfounding {
+                evaluated: false,
+                column_sin: 0.0,
+                input_sin: None,
+                columns_in_span: false,
+                input_constant: false,
+            },
         }
     }
 }
@@ -530,6 +547,10 @@ pub enum Reason {
     SmallShare,
     /// `unexplained`: no candidate improves significantly on the geometric model.
     NoSignificantCandidate,
+    /// `unexplained`: the candidates that improve significantly are all confounded with
+    /// the sessions (`sessions.rs`, listed in [`Verdict::confounded_with`]): the data cannot
+    /// attribute the gap to them rather than to what differs between the sessions.
+    ConfoundedWithSessions,
 }
 
 /// How the candidates were judged.
@@ -1295,11 +1316,27 @@ pub fn decide(
     }
     let eligible = |s: &ModelScore| s.evaluated && s.significant && s.z_vs_best < cfg.z_equivalence;
     let key = |s: &ModelScore| (s.effects.len(), s.fitted_params);
-    let Some(w) = (0..n).filter(|&c| eligible(&cands[c])).min_by(|&a, &b| {
-        key(&cands[a])
-            .cmp(&key(&cands[b]))
-            .then(cands[a].heldout_chi2.total_cmp(&cands[b].heldout_chi2))
-    }) else {
+    // A candidate confounded with the sessions is never chosen (sessions.rs).
+    let Some(w) = (0..n)
+        .filter(|&c| eligible(&cands[c]) && !cands[c].session.confounded())
+        .min_by(|&a, &b| {
+            key(&cands[a])
+                .cmp(&key(&cands[b]))
+                .then(cands[a].heldout_chi2.total_cmp(&cands[b].heldout_chi2))
+        })
+    else {
+        // Only session-confounded candidates explain the gap: list them, choose none.
+        for c in 0..n {
+            let set = cands[c].effects;
+            let redundant = v.confounded_with[..v.n_confounded]
+                .iter()
+                .any(|&k| k.iter().all(|e| set.contains(e)));
+            if eligible(&cands[c]) && !redundant && v.n_confounded < MAX_CANDIDATES {
+                v.confounded_with[v.n_confounded] = set;
+                v.n_confounded += 1;
+                v.reason = Reason::ConfoundedWithSessions;
+            }
+        }
         return v;
     };
     v.status = status_class(cands[w].gap_closed_total_fraction, cfg);
@@ -1319,9 +1356,10 @@ pub fn decide(
     v.effects = cands[w].effects;
     v.gap_closed_fraction = cands[w].gap_closed_fraction;
     v.candidate = Some(w);
-    // Equally good alternatives, whatever status class they would reach. A candidate that
-    // adds effects to the winner or to an alternative already listed is as good trivially
-    // and not listed (singles come before pairs).
+    // Equally good alternatives, whatever status class they would reach (confounded with
+    // the sessions or not). A candidate that adds effects to the winner or to an
+    // alternative already listed is as good trivially and not listed (singles come before
+    // pairs).
     let winner = cands[w].effects;
     let contains = |big: EffectSet, small: EffectSet| small.iter().all(|e| big.contains(e));
     for c in 0..n {
@@ -1474,8 +1512,33 @@ pub fn diagnose_into<const N: usize, const P: usize>(
     ws: &mut DiagWorkspace<P>,
     out: &mut Diagnosis<N>,
 ) -> Result<()> {
+    diagnose_sessions_into(robot, data, groups, &[], cfg, poses, ws, out)
+}
+
+/// [`diagnose_into`] of data from several sessions (set-ups), `sessions[l]` row l's
+/// zero-based session (empty: one session). The rows must already be expressed in one base
+/// frame (each session registered into the robot's, e.g. by kincal-io's `session_frames`);
+/// the sessions enter the test of each candidate's confounding with them
+/// ([`ModelScore::session`], `sessions.rs`): a confounded candidate is never chosen.
+#[allow(clippy::too_many_arguments)]
+pub fn diagnose_sessions_into<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    groups: &[u32],
+    sessions: &[u16],
+    cfg: &Config,
+    poses: &mut [PoseDiagnosis],
+    ws: &mut DiagWorkspace<P>,
+    out: &mut Diagnosis<N>,
+) -> Result<()> {
     check_config(cfg)?;
     let n = data.len();
+    if !sessions.is_empty() && sessions.len() != n {
+        return Err(Error::DimensionMismatch {
+            expected: n,
+            found: sessions.len(),
+        });
+    }
     if groups.len() != n || poses.len() != n {
         return Err(Error::DimensionMismatch {
             expected: n,
@@ -1810,6 +1873,50 @@ pub fn diagnose_into<const N: usize, const P: usize>(
             s.gap_closed_fraction = gap_closed(&ws.acc[0], &acc, &noise);
             s.gap_closed_rot_fraction = gap_closed_rot(&ws.acc[0], &acc, &noise);
             s.gap_closed_total_fraction = gap_closed_total(&ws.acc[0], &acc);
+        }
+    }
+    // 5d. Confounding with the sessions: each single effect's fitted columns against the
+    // geometric and session-frame columns, and its input; a pair inherits its effects'.
+    if sessions::count(sessions) >= 2 {
+        let base_geo = out.baseline.identifiable;
+        let mut single = [SessionConfounding::default(); 7];
+        for c in 0..n_cand {
+            let s = out.candidates[c];
+            if s.effects.len() != 1 || !s.evaluated {
+                continue;
+            }
+            let Some(e) = s.effects.iter().next() else {
+                continue;
+            };
+            let mut own = ParamSet::new();
+            for i in s.identifiable.iter().filter(|&i| !geometric.contains(i)) {
+                own.insert(i)?;
+            }
+            let t = sessions::test(
+                &lin,
+                data,
+                sessions,
+                poses,
+                &sw,
+                e,
+                &base_geo,
+                &own,
+                cfg.session_sin_max,
+                cfg.rank_tol,
+                ws,
+            )?;
+            single[e as usize] = t;
+            out.candidates[c].session = t;
+        }
+        for c in 0..n_cand {
+            let set = out.candidates[c].effects;
+            if set.len() == 2 && out.candidates[c].evaluated {
+                let mut it = set.iter();
+                if let (Some(a), Some(b)) = (it.next(), it.next()) {
+                    out.candidates[c].session =
+                        SessionConfounding::combine(&single[a as usize], &single[b as usize]);
+                }
+            }
         }
     }
     let gap = gap_test(&ws.acc[0], &noise);

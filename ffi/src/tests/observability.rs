@@ -498,3 +498,147 @@ fn select_poses_argument_errors() {
     assert_eq!(kincal_select_workspace_size(KINCAL_MAX_PARAMS + 1, 5), 0);
     assert_eq!(kincal_select_workspace_size(p, usize::MAX), 0);
 }
+
+fn c_cluster(
+    r: &kincal_robot,
+    pq: &[[f64; 6]],
+    m: usize,
+    region: &kincal_region,
+    cube_m: f64,
+    tolerance: f64,
+) -> (kincal_status, Vec<usize>, kincal_cluster_selection) {
+    let flat: Vec<f64> = pq.iter().flatten().copied().collect();
+    let p = aria::nominal().geometric_param_set().len();
+    let bytes = unsafe { kincal_cluster_workspace_size(p, pq.len(), region, cube_m) };
+    let mut w = ws(bytes);
+    let mut chosen = vec![usize::MAX; m];
+    let mut sel = kincal_cluster_selection::default();
+    let s = unsafe {
+        kincal_cluster_select(
+            r,
+            flat.as_ptr(),
+            pq.len(),
+            flat.len(),
+            m,
+            null(),
+            0,
+            null(),
+            kincal_obs_index::O as u32,
+            region,
+            cube_m,
+            tolerance,
+            w.as_mut_ptr().cast(),
+            w.len() * 16,
+            chosen.as_mut_ptr(),
+            chosen.len(),
+            &mut sel,
+            null_mut(),
+        )
+    };
+    (s, chosen, sel)
+}
+
+#[test]
+fn cluster_select_matches_core_and_keeps_its_promises() {
+    let r = nominal();
+    let pq = pool(120);
+    let core = aria::nominal();
+    let obs = ObservabilityOptions::new(core.geometric_param_set());
+    let (g_min, g_max) = ([-1.5, -1.5, -1.0], [1.5, 1.5, 1.5]);
+    let region = kincal_region {
+        min_m: g_min,
+        max_m: g_max,
+    };
+    let (cube_m, m, tol) = (0.5, 8, 0.5);
+    let (s, chosen, sel) = c_cluster(&r, &pq, m, &region, cube_m, tol);
+    assert_eq!(s, kincal_status::Ok);
+
+    // The core, called directly on the same pool.
+    let mut cw = boxed::<Workspace<32>>();
+    let mut sc = boxed::<SelectScratch<32>>();
+    let mut blocks = vec![[[0.0; 32]; 6]; pq.len()];
+    let mut pos = vec![[0.0; 3]; pq.len()];
+    fill_pool(&core, &pq, &obs, &mut cw, &mut blocks, &mut pos).unwrap();
+    let per: Vec<[f64; 6]> = pq
+        .iter()
+        .map(|q| pose_singular_values(&core, q, &obs, &mut cw).unwrap())
+        .collect();
+    let g = kincal::selection::Region::new(g_min, g_max).unwrap();
+    let c = g.cube_counts(cube_m);
+    let mut cubes = vec![(0.0, 0usize); c[0] * c[1] * c[2]];
+    let mut out = vec![0usize; m];
+    let opts = kincal::selection::ClusterOptions {
+        region: g,
+        cube_m,
+        tolerance: tol,
+        objective: Objective::Index(Index::O),
+    };
+    let pool = Pool {
+        q: &pq,
+        blocks: &blocks,
+        pos: &pos,
+    };
+    let want = kincal::selection::cluster_select(
+        &pool,
+        &per,
+        m,
+        obs.params.len(),
+        true,
+        &opts,
+        &mut sc,
+        &mut cubes,
+        &mut out,
+    )
+    .unwrap();
+    assert_eq!(chosen, out);
+    assert_eq!(
+        (sel.spread, sel.value, sel.target, sel.occupied_cubes),
+        (want.spread, want.value, want.target, want.occupied_cubes)
+    );
+    assert_eq!(sel.within_tolerance != 0, want.within_tolerance);
+
+    // Its promises, checked from the outputs: distinct cubes, and the spread recomputed
+    // from the per-pose singular values of the chosen poses against the target's.
+    let mut seen: Vec<usize> = chosen
+        .iter()
+        .map(|&i| g.cube_of(&pos[i], cube_m).unwrap())
+        .collect();
+    seen.sort_unstable();
+    seen.dedup();
+    assert_eq!(seen.len(), m, "one pose per cube");
+    let spread = chosen
+        .iter()
+        .flat_map(|&i| (0..6).map(move |k| (i, k)))
+        .map(|(i, k)| (per[i][k].ln() - per[sel.target][k].ln()).abs())
+        .fold(0.0f64, f64::max);
+    assert!(
+        (spread - sel.spread).abs() < 1e-12,
+        "{spread} vs {}",
+        sel.spread
+    );
+    assert_eq!(sel.within_tolerance != 0, sel.spread <= tol);
+}
+
+#[test]
+fn cluster_select_argument_errors() {
+    let r = nominal();
+    let pq = pool(30);
+    let region = kincal_region {
+        min_m: [-1.5, -1.5, -1.0],
+        max_m: [1.5, 1.5, 1.5],
+    };
+    // More poses than occupied cubes.
+    let (s, chosen, _) = c_cluster(&r, &pq, 20, &region, 1.5, 0.1);
+    assert_eq!((s, chosen[0]), (kincal_status::TooFewData, usize::MAX));
+    let (s, _, _) = c_cluster(&r, &pq, 3, &region, 0.5, -1.0);
+    assert_eq!(s, kincal_status::InvalidArgument);
+    assert_eq!(
+        unsafe { kincal_cluster_workspace_size(30, 10, &region, 0.0) },
+        0,
+        "a cube side of 0"
+    );
+    assert_eq!(
+        unsafe { kincal_cluster_workspace_size(30, 10, null(), 0.5) },
+        0
+    );
+}
