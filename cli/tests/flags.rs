@@ -15,17 +15,23 @@ fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
 }
 
-/// The help line(s) of `--robot` of a command (the flag line and its wrapped description).
+/// The help line(s) of `--robot` of a command: its option line (not the usage line, which
+/// names it too) and the description up to the next option.
 fn robot_help(command: &str) -> String {
     let o = kincal(&[command, "--help"]);
     assert_eq!(o.status.code(), Some(0), "{command} --help");
     let help = stdout(&o);
-    let at = help
-        .find("--robot <ROBOT>")
-        .unwrap_or_else(|| panic!("{command}: no --robot in\n{help}"));
-    let rest = &help[at..];
-    let end = rest[1..].find("\n  -").map_or(rest.len(), |e| e + 1);
-    rest[..end].to_string()
+    let mut lines = help
+        .lines()
+        .skip_while(|l| !l.trim_start().starts_with("--robot <ROBOT>"));
+    let first = lines
+        .next()
+        .unwrap_or_else(|| panic!("{command}: no --robot option in\n{help}"));
+    let rest = lines.take_while(|l| !l.trim_start().starts_with('-'));
+    std::iter::once(first)
+        .chain(rest)
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 #[test]
