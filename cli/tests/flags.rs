@@ -15,8 +15,8 @@ fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
 }
 
-/// The help line(s) of `--robot` of a command: its option line (not the usage line, which
-/// names it too) and the description up to the next option.
+/// The help of `--robot` in a command's options (its flag line and the description lines
+/// up to the next option; the usage line that also names the flag is skipped).
 fn robot_help(command: &str) -> String {
     let o = kincal(&[command, "--help"]);
     assert_eq!(o.status.code(), Some(0), "{command} --help");
