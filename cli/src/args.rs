@@ -187,16 +187,8 @@ pub const PRIOR_DEFAULT: PriorArg = PriorArg::Sizes {
     angle_deg: 1.0,
 };
 
-/// The sizes `crossval --prior auto` tries (mm, deg), from tight to loose: the default
-/// scaled by 1/4 … 8 (the last is practically no prior on well-excited data).
-pub const PRIOR_AUTO_GRID: [(f64, f64); 6] = [
-    (1.25, 0.25),
-    (2.5, 0.5),
-    (5.0, 1.0),
-    (10.0, 2.0),
-    (20.0, 4.0),
-    (40.0, 8.0),
-];
+/// The sizes `crossval --prior auto` tries (mm, deg; kincal-io's).
+pub use kincal_io::crossval::PRIOR_AUTO_GRID;
 
 impl PriorArg {
     /// The core's sizes (links only; frames and effects without a prior).

@@ -4,7 +4,6 @@
 
 use std::fmt::Write as _;
 
-use kincal::diagnosis::QuantityKind;
 use kincal::identify::{Identifiability, ResidualStats};
 use kincal::validation::{TARGET_POS_M, TARGET_ROT_RAD};
 use kincal::{ParamId, ParamIndex, ParamSet};
@@ -78,9 +77,7 @@ impl Table {
 }
 
 /// Label of flat parameter `i` of an `N`-joint model.
-pub fn label<const N: usize>(i: usize) -> String {
-    ParamId::from_index(ParamIndex(i), N).map_or_else(|_| format!("#{i}"), |id| id.to_string())
-}
+pub use kincal_io::units::param_label as label;
 
 fn id<const N: usize>(i: usize) -> Option<ParamId> {
     ParamId::from_index(ParamIndex(i), N).ok()
@@ -348,22 +345,7 @@ pub fn fmt_err(v: f64) -> String {
     }
 }
 
-/// The label of a correlated quantity (`q2`, `tau2`, `s2`, `temp_c`).
-pub fn quantity_label(q: QuantityKind) -> String {
-    let mut s = String::new();
-    let _ = q.write_label(&mut s);
-    s
-}
-
-/// Unit of a correlated quantity.
-pub fn quantity_unit(q: QuantityKind) -> &'static str {
-    match q {
-        QuantityKind::JointAngle(_) => "rad",
-        QuantityKind::GravityTorque(_) => "N·m",
-        QuantityKind::Approach(_) => "",
-        QuantityKind::Temperature => "°C",
-    }
-}
+pub use kincal_io::units::{quantity_label, quantity_unit};
 
 /// One row of the residual table: each kind over the poses measuring it (a row giving only
 /// `x` contributes |e_x|), a dash for a kind no pose measures (not a residual of zero).

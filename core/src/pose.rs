@@ -48,6 +48,27 @@ pub fn rot_y(angle: f64) -> Matrix3<f64> {
     Matrix3::new(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c)
 }
 
+/// How far from orthonormal a rotation given from outside may be: every entry of RᵀR − I
+/// within this (the C ABI's `KINCAL_ROTATION_TOLERANCE`; Python's check too).
+pub const ROTATION_TOLERANCE: f64 = 1e-6;
+
+/// A transform from a rotation and a translation \[m\] given from outside (a file, a C
+/// caller, a numpy array): `None` unless every entry is finite and `rotation` is orthonormal
+/// within [`ROTATION_TOLERANCE`] and right-handed. Input checking only: the rotation is kept
+/// as given, not re-orthonormalised.
+#[must_use]
+pub fn checked_transform(rotation: Matrix3<f64>, translation: Vector3<f64>) -> Option<Transform> {
+    let finite = rotation
+        .iter()
+        .chain(translation.iter())
+        .all(|v| v.is_finite());
+    // (kincal::fixed3: nalgebra's product and identity, without their opt-level z panic paths)
+    let gram = mat_mul(&rotation.transpose(), &rotation) - IDENTITY;
+    let orthonormal = gram.iter().all(|v| v.abs() <= ROTATION_TOLERANCE);
+    (finite && orthonormal && rotation.determinant() > 0.0)
+        .then(|| transform(rotation, translation))
+}
+
 /// Elementary rotation about z by `angle` \[rad\].
 #[must_use]
 pub fn rot_z(angle: f64) -> Matrix3<f64> {

@@ -571,6 +571,7 @@ fn residual(t: &Transform, d: &[f64; 3], m: &[f64; 3]) -> (Vector3<f64>, Vector3
 
 /// Weighted rigid registration of one body's markers with outlier identification (module
 /// docs).
+// Long by design: one exclusion search whose scoring, ambiguity and swap checks share the fit state; each check is commented.
 pub fn register(markers: &Markers<'_>, opts: &RegistrationOptions) -> Result<Registration> {
     let n = check_inputs(markers, opts)?;
     let design = markers.design;

@@ -595,6 +595,7 @@ fn dist2(a: &[f64; 3], b: &[f64; 3]) -> f64 {
 /// Errors: `m` of 0, above [`MAX_DESIGN`] − `max_excursion` or above the pool size
 /// ([`Error::TooFewData`] / [`Error::CapacityExceeded`]); `PredictionVariance` without a
 /// reference ([`Error::MissingInput`]); errors of the kinematics.
+// Long by design: DETMAX's four numbered steps share the design, the Gram and the pool in fixed capacity (no heap).
 #[allow(clippy::too_many_arguments)]
 pub fn select_start<const N: usize, const P: usize>(
     robot: &Robot<N>,

@@ -363,3 +363,33 @@ fn rotation_log_matches_nalgebra_scaled_axis() {
         assert!((back - r.scaled_axis()).abs().max() < ANGLE_TOL);
     }
 }
+
+/// `checked_transform` (the input check the C ABI and Python share): a rotation within
+/// `ROTATION_TOLERANCE` of orthonormal passes unchanged; a reflection, a scaled or sheared
+/// matrix and non-finite entries are refused. The Gram residual is computed here by hand.
+#[test]
+fn checked_transform_accepts_rotations_only() {
+    use kincal::pose::{ROTATION_TOLERANCE, checked_transform};
+    let r = rpy_to_matrix(0.3, -1.1, 2.0);
+    let p = Vector3::new(0.1, -0.2, 0.3);
+    let t = checked_transform(r, p).expect("a rotation");
+    assert_eq!(*t.rotation.matrix(), r);
+    assert_eq!(t.translation.vector, p);
+    // Scaled by 1 + ε: RᵀR − I = (2ε + ε²)·I, inside the tolerance below it, outside above.
+    let gram_entry = |eps: f64| (1.0 + eps) * (1.0 + eps) - 1.0;
+    let inside = 0.4 * ROTATION_TOLERANCE;
+    let outside = 0.6 * ROTATION_TOLERANCE;
+    assert!(gram_entry(inside) < ROTATION_TOLERANCE && gram_entry(outside) > ROTATION_TOLERANCE);
+    assert!(checked_transform(r * (1.0 + inside), p).is_some());
+    assert!(checked_transform(r * (1.0 + outside), p).is_none());
+    // A reflection is orthonormal but left-handed.
+    let flip = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -1.0));
+    assert!(checked_transform(r * flip, p).is_none());
+    let mut shear = r;
+    shear[(0, 1)] += 1e-3;
+    assert!(checked_transform(shear, p).is_none());
+    let mut nan = r;
+    nan[(2, 2)] = f64::NAN;
+    assert!(checked_transform(nan, p).is_none());
+    assert!(checked_transform(r, Vector3::new(0.0, f64::INFINITY, 0.0)).is_none());
+}

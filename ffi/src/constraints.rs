@@ -719,6 +719,7 @@ fn session_fault(f: SessionFault, v: &View<'_>) -> kincal_error {
 }
 
 /// Checks every row, group, session and distance, then groups the rows.
+// Long by design: two passes over the caller's arrays (kinds and groups, then rows into place) with no heap; each rule is commented.
 fn build<'w, const N: usize, const P: usize>(
     v: &View<'_>,
     a: Arrays<'w, N, P>,

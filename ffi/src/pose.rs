@@ -9,8 +9,8 @@
 use core::ffi::CStr;
 
 use kincal::pose::{
-    OrientationError, Transform, matrix_to_quaternion, matrix_to_rpy, pose_error,
-    pose_from_xyz_rpy, quaternion_to_matrix, transform,
+    OrientationError, Transform, checked_transform, matrix_to_quaternion, matrix_to_rpy,
+    pose_error, pose_from_xyz_rpy, quaternion_to_matrix, transform,
 };
 use nalgebra::{Matrix3, Vector3};
 
@@ -19,6 +19,8 @@ use crate::status::{FfiResult, kincal_error, kincal_status};
 /// Tolerance of the rigid-transform check of input matrices: every entry of RᵀR − I within
 /// this, and det R > 0.
 pub const KINCAL_ROTATION_TOLERANCE: f64 = 1e-6;
+// The header needs a literal; the check itself is the core's.
+const _: () = assert!(KINCAL_ROTATION_TOLERANCE == kincal::pose::ROTATION_TOLERANCE);
 
 /// Which orientation error `kincal_pose_error*` report.
 #[repr(u32)]
@@ -63,13 +65,7 @@ pub(crate) fn from_matrix(m: &[f64], name: &'static CStr) -> FfiResult<Transform
         return Err(invalid_transform(name));
     }
     let r = Matrix3::new(r00, r01, r02, r10, r11, r12, r20, r21, r22);
-    // Input validation only (no kinematics): orthonormal within tolerance, right-handed.
-    // (kincal::fixed3: nalgebra's product and identity, without their opt-level z panic paths)
-    let gram = kincal::fixed3::mat_mul(&r.transpose(), &r) - kincal::fixed3::IDENTITY;
-    if gram.iter().any(|v| v.abs() > KINCAL_ROTATION_TOLERANCE) || r.determinant() <= 0.0 {
-        return Err(invalid_transform(name));
-    }
-    Ok(transform(r, Vector3::new(px, py, pz)))
+    checked_transform(r, Vector3::new(px, py, pz)).ok_or_else(|| invalid_transform(name))
 }
 
 /// The 16 column-major values of a transform.

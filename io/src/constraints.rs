@@ -495,6 +495,7 @@ fn check_layout(
 /// instrument rows in several sessions (one base frame per session is not implemented), a
 /// row that measures nothing, a distance or known id that no row names, and plane contacts
 /// that are collinear at `start`.
+// Long by design: the contact rules of docs/constraints.md in order (sessions, groups, known ids, distances, collinear planes).
 pub fn build<const N: usize>(
     set: &MeasurementSet,
     cons: Option<&ConstraintsFile>,

@@ -128,6 +128,7 @@ pub fn read_session(path: &Path) -> Result<Vec<HiltiRow>, CliError> {
 }
 
 /// Parses the text of a session file; `name` names it in errors.
+// Long by design: the session file's sections in order (a line-based reader of one vendor format).
 pub fn parse_session(text: &str, name: &str) -> Result<Vec<HiltiRow>, CliError> {
     let bad = |line: usize, what: String| CliError::input(format!("{name}:{line}: {what}"));
     // Join flow lists wrapped over several lines into one logical line.

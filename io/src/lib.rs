@@ -14,11 +14,15 @@
 pub mod calibration;
 pub mod cdr;
 pub mod constraints;
+pub mod crossval;
 pub mod data;
 pub mod datasets;
 pub mod datasets_contact;
 pub mod datasets_hilti;
 pub mod datasets_tiago;
+pub mod diagnose;
+pub mod diagnose_sessions;
+pub mod diagnose_where;
 pub mod effects_arg;
 pub mod error;
 pub mod files;

@@ -898,6 +898,7 @@ impl<'a> Parser<'a> {
         })
     }
 
+    // Long by design: the header's rules, one per column group, in the order spec/measurements.md states them.
     fn layout(&self, header: &[&str], line: u64) -> Result<Layout, InputError> {
         let n = self.opts.n_joints;
         let at = |col: &str, reason: String| self.err(Some(line), Some(col), reason);
@@ -1123,6 +1124,7 @@ impl<'a> Parser<'a> {
         })
     }
 
+    // Long by design: one pass over a CSV row in column-group order, each error naming its line and column.
     fn row(
         &self,
         layout: &Layout,
@@ -1523,6 +1525,7 @@ pub fn write_poses_csv(
 /// numbers, `source` and `sha256`): comments, `pose_id`, `q1..qN` [rad], `x,y,z` [m],
 /// orientation in the set's form (`roll,pitch,yaw` [rad] or `qw,qx,qy,qz`),
 /// `point_x,point_y,point_z` [m], `s1..sN`, `temp_c`, then the `extra_` columns.
+// Long by design: the column groups of spec/measurements.md in order, header and rows side by side.
 pub fn write_measurements_csv(mut out: impl Write, set: &MeasurementSet) -> io::Result<()> {
     let n = set.n_joints;
     for c in &set.comments {

@@ -411,13 +411,7 @@ pub struct DisagreementJson {
 // ---------------------------------------------------------------------------------------
 // Writing
 
-fn label<const N: usize>(i: usize) -> String {
-    ParamId::from_index(ParamIndex(i), N).map_or_else(|_| format!("#{i}"), |id| id.to_string())
-}
-
-fn labels<const N: usize>(set: &ParamSet) -> Vec<String> {
-    set.iter().map(label::<N>).collect()
-}
+use crate::units::{param_label as label, param_labels as labels};
 
 fn finite_or_none(v: f64) -> Option<f64> {
     v.is_finite().then_some(v)

@@ -360,6 +360,7 @@ fn frame(
 }
 
 /// Parses a description from `text`; `file` names it in errors.
+// Long by design: the description's keys in file order, each error naming its line and column.
 pub fn parse_robot_description(
     text: &str,
     file: &str,

@@ -95,6 +95,7 @@ pub fn read_tool(path: &Path) -> Result<Vec<ToolPose>, InputError> {
 }
 
 /// Parses tool-file text; `name` is used in messages.
+// Long by design: the tool file's keys in file order, each error naming its line and column.
 pub fn parse_tool(text: &str, name: &str) -> Result<Vec<ToolPose>, InputError> {
     let mut lines = text.lines().enumerate().map(|(i, l)| (i as u64 + 1, l));
     let (header_line, header) = loop {

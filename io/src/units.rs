@@ -62,6 +62,37 @@ pub fn display_unit(id: ParamId) -> (&'static str, f64) {
     }
 }
 
+/// The label of parameter `i` of an `N`-joint robot (`a2`, `base_x`), or `#i` for an index
+/// the robot has not.
+pub fn param_label<const N: usize>(i: usize) -> String {
+    kincal::ParamId::from_index(kincal::ParamIndex(i), N)
+        .map_or_else(|_| format!("#{i}"), |id| id.to_string())
+}
+
+/// The labels of a parameter set, in index order.
+pub fn param_labels<const N: usize>(set: &kincal::ParamSet) -> Vec<String> {
+    set.iter().map(param_label::<N>).collect()
+}
+
+/// The label of a quantity the diagnosis correlates residuals with (`q2`, `tau2`, `s2`,
+/// `temp_c`).
+pub fn quantity_label(q: kincal::diagnosis::QuantityKind) -> String {
+    let mut s = String::new();
+    let _ = q.write_label(&mut s);
+    s
+}
+
+/// The unit of such a quantity (joint angles in radians).
+pub fn quantity_unit(q: kincal::diagnosis::QuantityKind) -> &'static str {
+    use kincal::diagnosis::QuantityKind;
+    match q {
+        QuantityKind::JointAngle(_) => "rad",
+        QuantityKind::GravityTorque(_) => "N·m",
+        QuantityKind::Approach(_) => "",
+        QuantityKind::Temperature => "°C",
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

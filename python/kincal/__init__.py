@@ -17,6 +17,8 @@ from ._kincal import (
     __version__,
     aria,
     calibrate,
+    crossval,
+    diagnose,
     load_robot,
     read_measurements,
 )
@@ -32,6 +34,8 @@ __all__ = [
     "__version__",
     "aria",
     "calibrate",
+    "crossval",
+    "diagnose",
     "load_robot",
     "read_measurements",
 ]

@@ -1,7 +1,7 @@
 """Type stubs of the Rust extension (units: metres, radians unless ``_mm``/``_deg``)."""
 
 import os
-from typing import Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -130,3 +130,43 @@ def calibrate(
     allow_out_of_limits: bool = False,
     allow_implausible: bool = False,
 ) -> Robot: ...
+def crossval(
+    data: Union[_Path, Measurements],
+    robot: Robot,
+    *,
+    effects: Sequence[str] = (),
+    init_frames: bool = False,
+    folds: int = 5,
+    seed: int = 1,
+    geometry: Sequence[str] = ("theta0", "d", "a", "alpha"),
+    sigma_pos_mm: Optional[float] = None,
+    sigma_rot_deg: Optional[float] = None,
+    unit_weights: bool = False,
+    robust: Optional[str] = None,
+    max_iterations: int = 200,
+    prior: Union[None, Tuple[float, float], str] = None,
+    allow_out_of_limits: bool = False,
+) -> Dict[str, Any]:
+    """K-fold cross-validation by pose_id, as ``kincal crossval``; returns the dict of
+    ``kincal crossval --json`` (held-out and in-sample RMS/max in mm and degrees, per fold,
+    per pose, noise floor, outliers; weights in 1/m² and 1/rad²). ``prior``: ``(mm, deg)``
+    or ``"auto"``. Pose data only (target/plane rows: use the command line)."""
+
+def diagnose(
+    data: Union[_Path, Measurements],
+    robot: Robot,
+    *,
+    sigma_pos_mm: Optional[float] = None,
+    sigma_rot_deg: Optional[float] = None,
+    candidates: Sequence[str] = (),
+    pairs: bool = True,
+    folds: int = 5,
+    seed: Optional[int] = None,
+    allow_out_of_limits: bool = False,
+) -> Dict[str, Any]:
+    """The sim-to-real diagnosis of ``kincal diagnose``; returns REPORT.json's dict
+    (spec/cli.md) without ``files``: ``verdict`` (``status``, ``effects``, ``reason``,
+    ``parameters`` in SI units), ``noise_floor``, ``baseline``, ``candidates``, ``where``;
+    each field names its unit (``_mm``, ``_deg``). ``sigma_*``: the instrument's 1σ per axis
+    [mm, deg] (default: from repeated pose_ids); ``seed``: the fold seed (default: the
+    CLI's)."""

@@ -9,6 +9,7 @@ mod json;
 mod measurements;
 mod pose;
 mod robot;
+mod studies;
 
 use pyo3::prelude::*;
 
@@ -20,6 +21,8 @@ fn _kincal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(robot::load_robot, m)?)?;
     m.add_function(wrap_pyfunction!(measurements::read_measurements_file, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate::calibrate, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::crossval, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::diagnose, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -1,16 +1,12 @@
 //! 4x4 homogeneous matrices (numpy) to and from the core's `Transform`.
 
 use kincal::Transform;
-use kincal::pose::transform;
+use kincal::pose::checked_transform;
 use nalgebra::{Matrix3, Vector3};
 use numpy::ndarray::{Array2, ArrayView2};
 use pyo3::prelude::*;
 
 use crate::errors;
-
-/// How far from orthonormal (each entry of RᵀR − I) an input rotation may be: the C ABI's
-/// tolerance (`KINCAL_ROTATION_TOLERANCE`).
-const ROTATION_TOLERANCE: f64 = 1e-6;
 
 /// `t` as a row-major 4x4 array.
 pub fn homogeneous(t: &Transform) -> Array2<f64> {
@@ -36,9 +32,6 @@ pub fn transform_from_matrix(
         return Err(bad("last row must be [0, 0, 0, 1]"));
     }
     let r = Matrix3::from_fn(|i, j| m[[i, j]]);
-    let gram = r.transpose() * r - Matrix3::identity();
-    if gram.iter().any(|v| v.abs() > ROTATION_TOLERANCE) || r.determinant() <= 0.0 {
-        return Err(bad("the rotation is not orthonormal and right-handed"));
-    }
-    Ok(transform(r, Vector3::new(m[[0, 3]], m[[1, 3]], m[[2, 3]])))
+    checked_transform(r, Vector3::new(m[[0, 3]], m[[1, 3]], m[[2, 3]]))
+        .ok_or_else(|| bad("the rotation is not orthonormal and right-handed"))
 }

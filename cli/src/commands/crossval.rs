@@ -9,19 +9,14 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use kincal::identify::{
-    Algorithm, Identifiability, IdentifyOptions, Loss, Measurement, PoseResidual, Prior,
-    PriorSizes, RobustOptions, identify, identify_robust,
-};
-use kincal::noise::{pooled_repeat_scatter, repeat_leader, residual_sigma};
-use kincal::validation::{ErrorSummary, PoseErrors};
-use kincal::{Effect, EffectSet, ParamSet, Robot};
-use rayon::prelude::*;
-use serde_json::{Value, json};
+use kincal::identify::{Loss, PriorSizes};
+use kincal::validation::ErrorSummary;
+use kincal::{EffectSet, Robot};
 
 use crate::error::CliError;
-use kincal_io::calibration::new_workspace;
+use kincal_io::crossval::{self as cv, Options, PriorChoice, Weighting};
 use kincal_io::data::{self, DataOptions};
+use kincal_io::effects_arg::EffectChoice;
 use kincal_io::measurements::MeasurementSet;
 use kincal_io::robot_arg;
 
@@ -156,13 +151,6 @@ pub struct Args {
     pub prior_kinds: crate::args::PriorKinds,
 }
 
-/// A fold's held-out errors (pose, nominal, calibrated), data-deficient parameter count and
-/// the algorithm that fitted it.
-type FoldResult = Result<(Vec<(usize, PoseErrors, PoseErrors)>, usize, &'static str), String>;
-
-/// Residual-based weighting: rounds of the fixed point.
-const WEIGHT_ROUNDS: usize = 4;
-
 pub fn run(args: &Args) -> Result<(), CliError> {
     if args.folds < 2 {
         return Err(CliError::usage("--folds must be 2 or more"));
@@ -188,489 +176,39 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     kincal::with_any_robot!(&spec.robot, r => crossval(r, &spec.name, &choice, args))
 }
 
-/// How the rows are weighted.
-#[derive(Debug, Clone, Copy)]
-struct Weights {
-    pos: f64,
-    rot: f64,
-    mode: &'static str,
-}
-
-/// One fitted model and how it was fitted.
-struct Fit<const N: usize> {
-    robot: Robot<N>,
-    analysis: Option<Identifiability>,
-    algorithm: &'static str,
-}
-
-fn frames_only(effects: EffectSet, n: usize) -> ParamSet {
-    let mut frames = EffectSet::NONE;
-    for e in [Effect::BaseFrame, Effect::ToolFrame] {
-        if effects.contains(e) {
-            frames = frames.with(e);
-        }
-    }
-    frames.params(n)
-}
-
-/// The geometric parameters of the kinds named (`d` = the link's length parameter, d or β).
-fn geometry_subset<const N: usize>(robot: &Robot<N>, kinds: &[String]) -> ParamSet {
-    use kincal::params::LinkParam;
-    let mut out = ParamSet::new();
-    for i in robot.geometric_param_set().iter() {
-        if let Ok(kincal::ParamId::Link { kind, .. }) =
-            kincal::ParamId::from_index(kincal::ParamIndex(i), N)
-        {
-            let name = match kind {
-                LinkParam::Theta0 => "theta0",
-                LinkParam::D | LinkParam::Beta => "d",
-                LinkParam::A => "a",
-                LinkParam::Alpha => "alpha",
-            };
-            if kinds.iter().any(|k| k == name) {
-                // Indices come from the robot's own set.
-                let _ = out.insert(i);
-            }
-        }
-    }
-    out
-}
-
-/// The loss of the outlier fit on all poses: `--robust`'s, Cauchy by default.
-fn outlier_loss(args: &Args) -> Loss {
-    args.robust.map_or(Loss::Cauchy, Loss::from)
-}
-
-/// How every model is fitted.
-#[derive(Debug, Clone, Copy)]
-struct How {
-    w: Weights,
-    init_frames: bool,
-    robust: Option<Loss>,
-    max_iterations: u32,
-    /// Priors around each fit's starting model (rows whitened: the weights are 1/σ²).
-    prior: Option<PriorSizes>,
-    /// `--prior-frames`/`--prior-effects`, applied to every size `--prior auto` tries.
-    prior_kinds: crate::args::PriorKinds,
-}
-
-/// Fits `requested` on the poses of `data` with a positive weight.
-fn fit<const N: usize>(
-    start: &Robot<N>,
-    data: &[Measurement<N>],
-    requested: ParamSet,
-    how: How,
-) -> Result<Fit<N>, String> {
-    let (w, init_frames, max_iterations) = (how.w, how.init_frames, how.max_iterations);
-    let start = if init_frames {
-        kincal::frames::estimate_frames(start, data)
-            .map_err(|e| format!("frame estimate: {e}"))?
-            .robot
-    } else {
-        *start
-    };
-    if requested.is_empty() {
-        return Ok(Fit {
-            robot: start,
-            analysis: None,
-            algorithm: "none",
-        });
-    }
-    let mut ws = new_workspace();
-    let mut last = String::new();
-    let prior = how
-        .prior
-        .map(|sizes| Box::new(Prior::around(&start, &sizes)));
-    for algorithm in [Algorithm::Ols, Algorithm::Opt2] {
-        let mut o = IdentifyOptions::new(algorithm, requested);
-        o.prior = prior.as_deref();
-        o.weight_pos = w.pos;
-        o.weight_rot = w.rot;
-        o.allow_data_deficiency = true;
-        o.max_iterations = max_iterations;
-        let result = if let Some(loss) = how.robust {
-            let mut d = data.to_vec();
-            let mut report = vec![PoseResidual::default(); d.len()];
-            identify_robust(
-                &start,
-                &mut d,
-                &o,
-                &RobustOptions::new(loss),
-                &mut report,
-                &mut ws,
-            )
-            .map(|r| r.fit)
-        } else {
-            identify(&start, data, &o, &mut ws)
-        };
-        match result {
-            Ok(id) => {
-                return Ok(Fit {
-                    robot: id.robot,
-                    analysis: Some(id.analysis),
-                    algorithm: algorithm.name(),
-                });
-            }
-            Err(e @ kincal::Error::NotConverged { .. }) => last = e.to_string(),
-            Err(e) => return Err(e.to_string()),
-        }
-    }
-    Err(last)
-}
-
-/// Errors of `robot` on pose `m` (components `m` does not measure zero).
-fn errors<const N: usize>(robot: &Robot<N>, m: &Measurement<N>) -> Result<PoseErrors, String> {
-    PoseErrors::of_measurement(robot, m).map_err(|e| e.to_string())
-}
-
-/// Core summary of the poses `keep` selects, each kind over the poses measuring it.
-fn summarize<const N: usize>(
-    meas: &[Measurement<N>],
-    e: &[PoseErrors],
-    keep: impl Fn(usize) -> bool,
-) -> ErrorSummary {
-    let mut s = ErrorSummary::default();
-    for (i, (m, e)) in meas.iter().zip(e).enumerate() {
-        if keep(i) {
-            s.add_measured(e, m.mask);
-        }
-    }
-    s
-}
-
-/// RMS and max of |e_p| [mm] and |e_φ| [deg].
-fn summary_json(s: &ErrorSummary, orientation: bool) -> Value {
-    let mut v = json!({"rms_pos_mm": s.rms_pos_m() * 1e3, "max_pos_mm": s.max_pos_m * 1e3});
-    if orientation {
-        v["rms_rot_deg"] = json!(s.rms_rot_rad().to_degrees());
-        v["max_rot_deg"] = json!(s.max_rot_rad.to_degrees());
-    }
-    v
-}
-
-/// Per-axis residual σ of `robot` on `data` (core `noise::residual_sigma`, corrected for
-/// `p` fitted parameters): (σ_pos [m], σ_rot [rad], position rows, rotation rows).
-fn residual_sigma_of<const N: usize>(
-    robot: &Robot<N>,
-    data: &[Measurement<N>],
-    p: usize,
-) -> Result<(f64, f64, usize, usize), String> {
-    let poses: Vec<(PoseErrors, kincal::identify::ComponentMask)> = data
-        .iter()
-        .map(|m| Ok((errors(robot, m)?, m.mask)))
-        .collect::<Result<_, String>>()?;
-    let s = residual_sigma(poses, p);
-    Ok((s.sigma_pos_m, s.sigma_rot_rad, s.rows_pos, s.rows_rot))
-}
-
-/// Folds by pose group: groups in order of first appearance, shuffled with `seed`, dealt
-/// round-robin.
-fn assign_folds(
-    set: &MeasurementSet,
-    k: usize,
-    seed: u64,
-) -> Result<(Vec<usize>, usize), CliError> {
-    let mut labels: Vec<String> = Vec::new();
-    let mut group_of = Vec::with_capacity(set.rows.len());
-    for (i, r) in set.rows.iter().enumerate() {
-        let label = r.pose_id.clone().unwrap_or_else(|| format!("#row{i}"));
-        let g = match labels.iter().position(|l| *l == label) {
-            Some(g) => g,
-            None => {
-                labels.push(label);
-                labels.len() - 1
-            }
-        };
-        group_of.push(g);
-    }
-    let n_groups = labels.len();
-    if n_groups < k {
-        return Err(CliError::usage(format!(
-            "{}: {n_groups} pose groups, fewer than --folds {k}",
-            set.source
-        )));
-    }
-    let mut order: Vec<usize> = (0..n_groups).collect();
-    kincal::rng::SplitMix64::new(seed).shuffle(&mut order);
-    let mut fold_of_group = vec![0; n_groups];
-    for (pos, &g) in order.iter().enumerate() {
-        fold_of_group[g] = pos % k;
-    }
-    Ok((
-        group_of.iter().map(|&g| fold_of_group[g]).collect(),
-        n_groups,
-    ))
-}
-
-/// Pooled repeat noise `(σ_pos [m], σ_rot [rad], dof_pos, dof_rot)`, or why there is none.
-type Repeats = Result<(f64, f64, usize, usize), &'static str>;
-
-/// Noise floor from repeated pose_ids: the diagnosis's estimator (core
-/// `noise::pooled_repeat_scatter` over the repeat subgroups of `noise::repeat_leader`, with
-/// the diagnosis's default temperature tolerance), residuals against `robot`;
-/// `Ok((σ_pos [m], σ_rot [rad], dof_pos, dof_rot))`, or `Err(why there are no repeats)`.
-fn repeat_noise<const N: usize>(
-    robot: &Robot<N>,
-    set: &MeasurementSet,
-    meas: &[Measurement<N>],
-) -> Result<Repeats, String> {
-    const NO_IDS: &str = "no repeated pose_ids";
-    // Group leader of each row: the first row with its pose_id (strings are the CLI's).
-    let mut firsts: Vec<(&str, usize)> = Vec::new();
-    let mut group_leader = Vec::with_capacity(set.rows.len());
-    for (i, r) in set.rows.iter().enumerate() {
-        let Some(id) = r.pose_id.as_deref() else {
-            return Ok(Err(NO_IDS));
-        };
-        let g = match firsts.iter().find(|(g, _)| *g == id) {
-            Some(&(_, g)) => g,
-            None => {
-                firsts.push((id, i));
-                i
-            }
-        };
-        group_leader.push(g);
-    }
-    let tol = kincal::diagnosis::Config::default().repeat_temp_tol_c;
-    let sub_leader: Vec<usize> = (0..meas.len())
-        .map(|l| repeat_leader(meas, l, |m| group_leader[m], tol))
-        .collect();
-    let r = pooled_repeat_scatter(
-        meas.len(),
-        |l| sub_leader[l],
-        |l| meas[l].mask,
-        |l| {
-            let e = errors(robot, &meas[l])?;
-            let (p, q) = (e.pos_m, e.rot_rad);
-            Ok::<_, String>([p[0], p[1], p[2], q[0], q[1], q[2]])
+/// io's options from the arguments.
+fn options(args: &Args, choice: &EffectChoice) -> Options {
+    Options {
+        effects: choice.effects,
+        scale_joints: choice.scale_joints.clone(),
+        init_frames: args.init_frames,
+        folds: args.folds,
+        seed: args.seed,
+        geometry: args.geometry.clone(),
+        weighting: match (args.sigma_pos_mm, args.sigma_rot_deg, args.unit_weights) {
+            (Some(pos_mm), Some(rot_deg), _) => Weighting::Stated { pos_mm, rot_deg },
+            (_, _, true) => Weighting::Unit,
+            _ => Weighting::Residual,
         },
-    )?;
-    if r.dof_pos + r.dof_rot == 0 {
-        return Ok(Err(if firsts.len() < meas.len() {
-            "no repeated pose_ids under the same conditions (approach directions, temperature)"
-        } else {
-            NO_IDS
-        }));
-    }
-    Ok(Ok((
-        r.sigma_pos_m().unwrap_or(0.0),
-        r.sigma_rot_rad().unwrap_or(0.0),
-        r.dof_pos,
-        r.dof_rot,
-    )))
-}
-
-/// Every fold's held-out errors: (nominal, calibrated) per pose, and per fold (fold, poses,
-/// data-deficient count, algorithm).
-type Folds = (
-    Vec<PoseErrors>,
-    Vec<PoseErrors>,
-    Vec<(usize, usize, usize, &'static str)>,
-);
-
-/// K-fold cross-validation: each fold's poses predicted by the nominal and the calibrated
-/// fit of the other folds.
-fn run_folds<const N: usize>(
-    nominal: &Robot<N>,
-    meas: &[Measurement<N>],
-    fold_of: &[usize],
-    k_folds: usize,
-    req_nom: ParamSet,
-    req_cal: ParamSet,
-    how: How,
-) -> Result<Folds, String> {
-    let folds: Vec<FoldResult> = (0..k_folds)
-        .into_par_iter()
-        .map(|k| {
-            let train: Vec<Measurement<N>> = meas
-                .iter()
-                .zip(fold_of)
-                .map(|(m, &f)| Measurement {
-                    weight: if f == k { 0.0 } else { m.weight },
-                    ..*m
-                })
-                .collect();
-            let a = fit(nominal, &train, req_nom, how)
-                .map_err(|e| format!("fold {}: nominal: {e}", k + 1))?;
-            let b = fit(nominal, &train, req_cal, how)
-                .map_err(|e| format!("fold {}: calibrated: {e}", k + 1))?;
-            let deficient = b.analysis.as_ref().map_or(0, |x| x.data_deficient.len());
-            let mut out = Vec::new();
-            for (i, m) in meas.iter().enumerate() {
-                if fold_of[i] == k {
-                    out.push((i, errors(&a.robot, m)?, errors(&b.robot, m)?));
-                }
-            }
-            Ok((out, deficient, b.algorithm))
-        })
-        .collect();
-    let mut held_nom = vec![PoseErrors::default(); meas.len()];
-    let mut held_cal = vec![PoseErrors::default(); meas.len()];
-    let mut fold_info = Vec::new();
-    for (k, f) in folds.into_iter().enumerate() {
-        let (rows, deficient, algorithm) = f?;
-        for &(i, a, b) in &rows {
-            held_nom[i] = a;
-            held_cal[i] = b;
-        }
-        fold_info.push((k, rows.len(), deficient, algorithm));
-    }
-    Ok((held_nom, held_cal, fold_info))
-}
-
-/// One row of `--prior auto`'s search: the sizes (none: no prior), the held-out RMS of the
-/// calibrated model [m, rad] and its weighted score (`w_pos·RMS_p² + w_rot·RMS_φ²`, the
-/// fit's own cost per pose).
-#[derive(Debug, Clone, Copy)]
-struct AutoRow {
-    sizes: Option<(f64, f64)>,
-    rms_pos_m: f64,
-    rms_rot_rad: f64,
-    score: f64,
-}
-
-/// `--prior auto`: cross-validates without a prior and with every size of
-/// [`crate::args::PRIOR_AUTO_GRID`]; picks the tightest size whose held-out score's square
-/// root (an RMS in noise units) is within [`AUTO_TOLERANCE`] of the best of all rows — the
-/// most physical model the data cannot tell apart from the best-predicting one.
-fn choose_prior<const N: usize>(
-    nominal: &Robot<N>,
-    meas: &[Measurement<N>],
-    fold_of: &[usize],
-    k_folds: usize,
-    req_nom: ParamSet,
-    req_cal: ParamSet,
-    how: How,
-) -> Result<(Option<PriorSizes>, Vec<AutoRow>), String> {
-    let grid = std::iter::once(None).chain(crate::args::PRIOR_AUTO_GRID.iter().map(|&g| Some(g)));
-    let mut rows = Vec::new();
-    for sizes in grid {
-        let prior = sizes.map(|(mm, deg)| {
-            how.prior_kinds
-                .apply(PriorSizes::links(mm * 1e-3, f64::to_radians(deg)))
-        });
-        let (_, held, _) = run_folds(
-            nominal,
-            meas,
-            fold_of,
-            k_folds,
-            req_nom,
-            req_cal,
-            How { prior, ..how },
-        )?;
-        let s = summarize(meas, &held, |_| true);
-        let (p, r) = (s.rms_pos_m(), s.rms_rot_rad());
-        rows.push(AutoRow {
-            sizes,
-            rms_pos_m: p,
-            rms_rot_rad: r,
-            score: how.w.pos * p * p + how.w.rot * r * r,
-        });
-    }
-    let best = rows.iter().map(|r| r.score).fold(f64::INFINITY, f64::min);
-    let limit = best * (1.0 + AUTO_TOLERANCE).powi(2);
-    let chosen = rows
-        .iter()
-        .filter(|r| r.sizes.is_some() && r.score <= limit)
-        .map(|r| r.sizes)
-        .next()
-        .flatten();
-    Ok((
-        chosen.map(|(mm, deg)| PriorSizes::links(mm * 1e-3, f64::to_radians(deg))),
-        rows,
-    ))
-}
-
-/// Prints the prior (and `--prior auto`'s search) into `s`; its JSON (null without one).
-fn prior_report(
-    s: &mut String,
-    prior: Option<PriorSizes>,
-    auto: bool,
-    table: &[AutoRow],
-    orientation: bool,
-) -> Value {
-    let Some(p) = prior else {
-        if auto {
-            let _ = writeln!(
-                s,
-                "Prior (auto): none is within 2 % of the best held-out error"
-            );
-        }
-        return if auto {
-            json!({"auto": true, "length_mm": null, "angle_deg": null})
-        } else {
-            Value::Null
-        };
-    };
-    let (mm, deg) = (p.length_m * 1e3, p.angle_rad.to_degrees());
-    let _ = writeln!(
-        s,
-        "Prior{}: Gaussian around the initial model on the link parameters, σ {mm} mm (lengths), {deg}° (angles); rows whitened by the weights above",
-        if auto {
-            " (auto: the tightest size of the grid within 2 % of the best held-out error)"
-        } else {
-            ""
-        }
-    );
-    let mut rows = Vec::new();
-    for r in table {
-        let _ = writeln!(
-            s,
-            "  prior {:>14}: held-out RMS {:.4} mm{}, score {:.4}",
-            r.sizes
-                .map_or("none".to_string(), |(a, b)| format!("{a} mm, {b}°")),
-            r.rms_pos_m * 1e3,
-            if orientation {
-                format!(", {:.4}°", r.rms_rot_rad.to_degrees())
-            } else {
-                String::new()
+        robust: args.robust.map(Loss::from),
+        max_iterations: args.max_iterations,
+        prior: match args.prior {
+            None => PriorChoice::None,
+            Some(crate::args::PriorArg::Auto) => PriorChoice::Auto {
+                template: args.prior_kinds.apply(PriorSizes::DEFAULT),
             },
-            r.score
-        );
-        rows.push(json!({
-            "length_mm": r.sizes.map(|x| x.0), "angle_deg": r.sizes.map(|x| x.1),
-            "heldout_rms_pos_mm": r.rms_pos_m * 1e3,
-            "heldout_rms_rot_deg": if orientation { json!(r.rms_rot_rad.to_degrees()) } else { Value::Null },
-            "score": r.score,
-        }));
+            Some(p @ crate::args::PriorArg::Sizes { .. }) => args
+                .prior_kinds
+                .sizes(Some(p))
+                .map_or(PriorChoice::None, PriorChoice::Sizes),
+        },
     }
-    json!({"auto": auto, "length_mm": mm, "angle_deg": deg, "grid": rows})
-}
-
-/// `--prior auto` accepts a held-out RMS (in noise units) this much above the best.
-const AUTO_TOLERANCE: f64 = 0.02;
-
-/// The largest change of a link length [m] and a link angle [rad] of `fitted` from
-/// `nominal` among `set`, with the parameters' labels.
-fn largest_changes<const N: usize>(
-    fitted: &Robot<N>,
-    nominal: &Robot<N>,
-    set: &ParamSet,
-) -> ((f64, String), (f64, String)) {
-    let mut len = (0.0, String::from("-"));
-    let mut ang = (0.0, String::from("-"));
-    for i in set.iter() {
-        let Ok(id) = kincal::ParamId::from_index(kincal::ParamIndex(i), N) else {
-            continue;
-        };
-        if !matches!(id, kincal::ParamId::Link { .. }) {
-            continue;
-        }
-        let d = (fitted.param(kincal::ParamIndex(i)).unwrap_or(f64::NAN)
-            - nominal.param(kincal::ParamIndex(i)).unwrap_or(f64::NAN))
-        .abs();
-        let slot = if id.is_length() { &mut len } else { &mut ang };
-        if d > slot.0 || d.is_nan() {
-            *slot = (d, crate::report::label::<N>(i));
-        }
-    }
-    (len, ang)
 }
 
 fn crossval<const N: usize>(
     nominal: &Robot<N>,
     name: &str,
-    choice: &kincal_io::effects_arg::EffectChoice,
+    choice: &EffectChoice,
     args: &Args,
 ) -> Result<(), CliError> {
     let effects = choice.effects;
@@ -691,160 +229,96 @@ fn crossval<const N: usize>(
             "--group-by applies to data with target/plane rows (instrument data: folds by pose_id)",
         ));
     }
-    let meas = data::measurements::<N>(&set)?;
-    let orientation = meas.iter().any(|m| m.mask.has_orientation());
-    let (fold_of, n_groups) = assign_folds(&set, args.folds, args.seed)?;
-    let req_nom = frames_only(effects, N);
-    let req_cal = geometry_subset(nominal, &args.geometry).union(&choice.effect_params(N));
-    let fail = |what: &str, e: String| CliError::numeric(format!("{}: {what}: {e}", set.source));
-
-    // Weights.
-    let mut w = match (args.sigma_pos_mm, args.sigma_rot_deg, args.unit_weights) {
-        (Some(sp), Some(sr), _) => Weights {
-            pos: 1.0 / (sp * 1e-3).powi(2),
-            rot: 1.0 / sr.to_radians().powi(2),
-            mode: "stated",
-        },
-        (_, _, true) => Weights {
-            pos: 1.0,
-            rot: 1.0,
-            mode: "unit",
-        },
-        _ => Weights {
-            pos: 1.0,
-            rot: 1.0,
-            mode: "residual",
-        },
-    };
-    let how = |w: Weights| How {
-        w,
-        init_frames: args.init_frames,
-        robust: args.robust.map(Loss::from),
-        max_iterations: args.max_iterations,
-        prior: None,
-        prior_kinds: args.prior_kinds,
-    };
-    let mut all =
-        fit(nominal, &meas, req_cal, how(w)).map_err(|e| fail("calibration on all poses", e))?;
-    let p_fit = |f: &Fit<N>| f.analysis.as_ref().map_or(0, |a| a.identifiable.len());
-    // Residual-based weights matter only when both kinds of rows are measured.
-    let both = orientation && meas.iter().any(|m| m.mask.has_position());
-    // A prior is weighed against the data's noise: then the weights whiten even one kind.
-    if w.mode == "residual" && !both && args.prior.is_none() {
-        w.mode = "residual (one kind of rows: weights immaterial)";
-    }
-    if w.mode == "residual" {
-        for _ in 0..WEIGHT_ROUNDS {
-            let (sp, sr, _, nr) = residual_sigma_of(&all.robot, &meas, p_fit(&all))
-                .map_err(|e| fail("residuals", e))?;
-            if !(sp > 0.0 && sp.is_finite()) {
-                break;
-            }
-            w.pos = 1.0 / (sp * sp);
-            w.rot = if nr > 0 && sr > 0.0 && sr.is_finite() {
-                1.0 / (sr * sr)
-            } else {
-                1.0
-            };
-            all = fit(nominal, &meas, req_cal, how(w))
-                .map_err(|e| fail("calibration on all poses", e))?;
-        }
-    }
-    let (sig_p, sig_r, _, _) =
-        residual_sigma_of(&all.robot, &meas, p_fit(&all)).map_err(|e| fail("residuals", e))?;
-    let nom_all =
-        fit(nominal, &meas, req_nom, how(w)).map_err(|e| fail("nominal fit on all poses", e))?;
-
-    // The prior: as given, or chosen by held-out error (`auto`). The weights above come
-    // from fits without it, so that a prior changes the model, not the weighting.
-    let no_prior = all.robot;
-    let (prior, auto_table) = match args.prior {
-        None => (None, Vec::new()),
-        Some(crate::args::PriorArg::Sizes { .. }) => {
-            (args.prior_kinds.sizes(args.prior), Vec::new())
-        }
-        Some(crate::args::PriorArg::Auto) => choose_prior(
-            nominal,
-            &meas,
-            &fold_of,
-            args.folds,
-            req_nom,
-            req_cal,
-            how(w),
-        )
-        .map_err(|e| fail("--prior auto", e))?,
-    };
-    let how = |w: Weights| How { prior, ..how(w) };
-    if prior.is_some() {
-        all = fit(nominal, &meas, req_cal, how(w))
-            .map_err(|e| fail("calibration on all poses with the prior", e))?;
-    }
-
-    // Folds.
+    let options = options(args, choice);
     let pb = crate::progress::spinner(format!("cross-validating ({} folds)", args.folds));
-    let folds = run_folds(
-        nominal,
-        &meas,
-        &fold_of,
-        args.folds,
-        req_nom,
-        req_cal,
-        how(w),
-    );
+    let study = cv::run(nominal, &set, &options);
     pb.finish_and_clear();
-    let (held_nom, held_cal, fold_info) = folds.map_err(|e| fail("cross-validation", e))?;
-    let all_poses = |_: usize| true;
-    let s_nom = summarize(&meas, &held_nom, all_poses);
-    let s_cal = summarize(&meas, &held_cal, all_poses);
-    let in_cal: Vec<PoseErrors> = meas
-        .iter()
-        .map(|m| errors(&all.robot, m))
-        .collect::<Result<_, _>>()
-        .map_err(|e| fail("residuals", e))?;
-    let in_nom: Vec<PoseErrors> = meas
-        .iter()
-        .map(|m| errors(&nom_all.robot, m))
-        .collect::<Result<_, _>>()
-        .map_err(|e| fail("residuals", e))?;
-    let s_in_cal = summarize(&meas, &in_cal, all_poses);
-    let s_in_nom = summarize(&meas, &in_nom, all_poses);
+    let study = study?;
+    let mut s = readable(&study, &set, nominal, name, args);
 
-    // Noise floor.
-    let repeats = repeat_noise(&all.robot, &set, &meas).map_err(|e| fail("noise floor", e))?;
+    // Outputs.
+    let mut inputs: Vec<&Path> = vec![&args.data];
+    let robot_path = Path::new(&args.robot);
+    if robot_path.is_file() {
+        inputs.push(robot_path);
+    }
+    if let Some(p) = &args.json {
+        let doc = cv::json(&study, &set, nominal, name, &options);
+        let text = serde_json::to_string_pretty(&doc).map_err(|e| CliError::io(e.to_string()))?;
+        kincal_io::files::write_atomic(p, &inputs, |w| w.write_all(text.as_bytes()))?;
+        let _ = writeln!(s, "JSON written to {}.", p.display());
+    }
+    if let Some(p) = &args.plot {
+        let svg = crate::plots::pose_errors::heldout_svg(
+            &format!("{name}: held-out errors per pose ({} folds)", args.folds),
+            &study.held_nom,
+            &study.held_cal,
+            study.orientation,
+        )
+        .map_err(|e| CliError::io(format!("{}: cannot draw the figure: {e}", p.display())))?;
+        kincal_io::files::write_atomic(p, &inputs, |w| w.write_all(svg.as_bytes()))?;
+        let _ = writeln!(s, "Figure written to {}.", p.display());
+    }
+    if let Some(p) = &args.robot_out {
+        let r = cv::robot_with_frames(nominal, &study, &options, &set.source)?;
+        let joint_names: Vec<String> = (1..=N).map(|k| format!("joint{k}")).collect();
+        let text = format!(
+            "# {name}: nominal geometry with the base and tool frames of the calibration on all\n\
+             # poses of {} (written by kincal crossval --robot-out)\n{}",
+            set.source,
+            kincal_io::robot_file::write_generic(&format!("{name}-frames"), &joint_names, &r)
+        );
+        kincal_io::files::write_atomic(p, &inputs, |w| w.write_all(text.as_bytes()))?;
+        let _ = writeln!(
+            s,
+            "Robot with the calibrated frames written to {}.",
+            p.display()
+        );
+    }
+    crate::report::emit(&s);
+    Ok(())
+}
 
-    // Robust fit and outliers (IRLS with --robust's loss, Cauchy by default, from the calibrated start).
-    let robust_start = if args.init_frames {
-        kincal::frames::estimate_frames(nominal, &meas)
-            .map_err(|e| fail("frame estimate", e.to_string()))?
-            .robot
-    } else {
-        *nominal
-    };
-    let mut rdata = meas.clone();
-    let mut report = vec![PoseResidual::default(); meas.len()];
-    let mut o = IdentifyOptions::new(Algorithm::Ols, req_cal);
-    o.weight_pos = w.pos;
-    o.weight_rot = w.rot;
-    o.allow_data_deficiency = true;
-    o.max_iterations = args.max_iterations;
-    let mut ws = new_workspace();
-    let robust = identify_robust(
-        &robust_start,
-        &mut rdata,
-        &o,
-        &RobustOptions::new(outlier_loss(args)),
-        &mut report,
-        &mut ws,
-    );
-
-    // Report.
-    let analysis = all.analysis.as_ref();
+/// The readable report: the set-up, weights, prior, residual tables, noise floor and
+/// outliers.
+fn readable<const N: usize>(
+    study: &cv::Study<N>,
+    set: &MeasurementSet,
+    nominal: &Robot<N>,
+    name: &str,
+    args: &Args,
+) -> String {
     let mut s = String::new();
+    setup_text(&mut s, study, set, name, args);
+    prior_text(
+        &mut s,
+        study.prior,
+        args.prior == Some(crate::args::PriorArg::Auto),
+        &study.auto_table,
+        study.orientation,
+    );
+    changes_text(&mut s, study, nominal);
+    residuals_text(&mut s, study);
+    noise_text(&mut s, study);
+    outliers_text(&mut s, study, set, args);
+    s
+}
+
+/// The data, the models, the fits and the weighting.
+fn setup_text<const N: usize>(
+    s: &mut String,
+    study: &cv::Study<N>,
+    set: &MeasurementSet,
+    name: &str,
+    args: &Args,
+) {
+    let (orientation, w) = (study.orientation, study.weights);
     let _ = writeln!(
         s,
-        "Cross-validation of '{name}' on {}:\n  {n_groups} poses (pose_id groups, {} rows), {} folds (seed {}), {}",
+        "Cross-validation of '{name}' on {}:\n  {} poses (pose_id groups, {} rows), {} folds (seed {}), {}",
         set.source,
-        meas.len(),
+        study.n_groups,
+        study.meas.len(),
         args.folds,
         args.seed,
         if orientation {
@@ -853,11 +327,15 @@ fn crossval<const N: usize>(
             "positions only"
         }
     );
+    let effects = args
+        .effects
+        .iter()
+        .fold(EffectSet::NONE, |a, i| a.with(i.effect));
     let eff_names: Vec<&str> = effects.iter().map(|e| e.name()).collect();
     let _ = writeln!(
         s,
         "Models: nominal = ROBOT geometry{}; calibrated = geometry ({}){}{}",
-        if req_nom.is_empty() {
+        if study.req_nom.is_empty() {
             String::new()
         } else {
             " with fitted frames".to_string()
@@ -897,39 +375,73 @@ fn crossval<const N: usize>(
             _ => String::new(),
         }
     );
-    let prior_json = prior_report(
-        &mut s,
-        prior,
-        args.prior == Some(crate::args::PriorArg::Auto),
-        &auto_table,
-        orientation,
-    );
-    let changes = |r: &Robot<N>| {
-        let ((dl, pl), (da, pa)) = largest_changes(r, nominal, &req_cal);
-        json!({"length_mm": dl * 1e3, "length_param": pl, "angle_deg": da.to_degrees(), "angle_param": pa})
+}
+
+/// Prints the prior (and `--prior auto`'s search).
+fn prior_text(
+    s: &mut String,
+    prior: Option<PriorSizes>,
+    auto: bool,
+    table: &[cv::AutoRow],
+    orientation: bool,
+) {
+    let Some(p) = prior else {
+        if auto {
+            let _ = writeln!(
+                s,
+                "Prior (auto): none is within 2 % of the best held-out error"
+            );
+        }
+        return;
     };
-    let change_json =
-        json!({"calibrated": changes(&all.robot), "without_prior": changes(&no_prior)});
-    {
-        let ((dl, pl), (da, pa)) = largest_changes(&all.robot, nominal, &req_cal);
+    let (mm, deg) = (p.length_m * 1e3, p.angle_rad.to_degrees());
+    let _ = writeln!(
+        s,
+        "Prior{}: Gaussian around the initial model on the link parameters, σ {mm} mm (lengths), {deg}° (angles); rows whitened by the weights above",
+        if auto {
+            " (auto: the tightest size of the grid within 2 % of the best held-out error)"
+        } else {
+            ""
+        }
+    );
+    for r in table {
         let _ = writeln!(
             s,
-            "Largest change from nominal (calibrated on all poses): |Δ length| {:.3} mm ({pl}), |Δ angle| {:.3}° ({pa}){}",
-            dl * 1e3,
-            da.to_degrees(),
-            if prior.is_some() {
-                let ((dl, pl), (da, pa)) = largest_changes(&no_prior, nominal, &req_cal);
-                format!(
-                    "; without the prior {:.3} mm ({pl}), {:.3}° ({pa})",
-                    dl * 1e3,
-                    da.to_degrees()
-                )
+            "  prior {:>14}: held-out RMS {:.4} mm{}, score {:.4}",
+            r.sizes
+                .map_or("none".to_string(), |(a, b)| format!("{a} mm, {b}°")),
+            r.rms_pos_m * 1e3,
+            if orientation {
+                format!(", {:.4}°", r.rms_rot_rad.to_degrees())
             } else {
                 String::new()
-            }
+            },
+            r.score
         );
     }
-    if let Some(a) = analysis {
+}
+
+/// The largest change from nominal and the identifiability of the calibrated model.
+fn changes_text<const N: usize>(s: &mut String, study: &cv::Study<N>, nominal: &Robot<N>) {
+    let ((dl, pl), (da, pa)) = cv::largest_changes(&study.all.robot, nominal, &study.req_cal);
+    let _ = writeln!(
+        s,
+        "Largest change from nominal (calibrated on all poses): |Δ length| {:.3} mm ({pl}), |Δ angle| {:.3}° ({pa}){}",
+        dl * 1e3,
+        da.to_degrees(),
+        if study.prior.is_some() {
+            let ((dl, pl), (da, pa)) =
+                cv::largest_changes(&study.no_prior, nominal, &study.req_cal);
+            format!(
+                "; without the prior {:.3} mm ({pl}), {:.3}° ({pa})",
+                dl * 1e3,
+                da.to_degrees()
+            )
+        } else {
+            String::new()
+        }
+    );
+    if let Some(a) = &study.all.analysis {
         let _ = writeln!(
             s,
             "Calibrated model on all poses: {} of {} requested parameters identified (rank {}, condition {:.3e}), {} structurally redundant, {} data-deficient",
@@ -942,6 +454,11 @@ fn crossval<const N: usize>(
         );
     }
     s.push('\n');
+}
+
+/// The residual table (held-out and in-sample), the held-out ratio and the per-fold table.
+fn residuals_text<const N: usize>(s: &mut String, study: &cv::Study<N>) {
+    let orientation = study.orientation;
     let mut t = crate::report::Table::new(&[
         "model",
         "RMS e_p [mm]",
@@ -966,10 +483,11 @@ fn crossval<const N: usize>(
             },
         ]
     };
-    t.row(line("nominal, held-out", &s_nom));
-    t.row(line("calibrated, held-out", &s_cal));
-    t.row(line("nominal, in-sample", &s_in_nom));
-    t.row(line("calibrated, in-sample", &s_in_cal));
+    let (s_nom, s_cal) = (&study.heldout_nominal, &study.heldout_calibrated);
+    t.row(line("nominal, held-out", s_nom));
+    t.row(line("calibrated, held-out", s_cal));
+    t.row(line("nominal, in-sample", &study.insample_nominal));
+    t.row(line("calibrated, in-sample", &study.insample_calibrated));
     s.push_str("Residuals (held-out: each pose predicted by the fit of the other folds):\n");
     s.push_str(&t.render("  "));
     let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { f64::INFINITY };
@@ -1001,30 +519,30 @@ fn crossval<const N: usize>(
         "data-deficient",
         "algorithm",
     ]);
-    let mut folds_json = Vec::new();
-    for &(k, n, deficient, algorithm) in &fold_info {
-        let keep = |i: usize| fold_of[i] == k;
+    for f in &study.folds {
+        let keep = |i: usize| study.fold_of[i] == f.fold;
         let (a, b) = (
-            summarize(&meas, &held_nom, keep),
-            summarize(&meas, &held_cal, keep),
+            cv::summarize(&study.meas, &study.held_nom, keep),
+            cv::summarize(&study.meas, &study.held_cal, keep),
         );
         ft.row(vec![
-            format!("{}", k + 1),
-            n.to_string(),
+            format!("{}", f.fold + 1),
+            f.poses.to_string(),
             format!("{:.4}", a.rms_pos_m() * 1e3),
             format!("{:.4}", b.rms_pos_m() * 1e3),
-            deficient.to_string(),
-            algorithm.to_uppercase(),
+            f.data_deficient.to_string(),
+            f.algorithm.to_uppercase(),
         ]);
-        folds_json.push(json!({
-            "fold": k + 1, "poses": n, "data_deficient": deficient, "algorithm": algorithm,
-            "nominal": summary_json(&a, orientation), "calibrated": summary_json(&b, orientation),
-        }));
     }
     s.push_str("Per fold (RMS):\n");
     s.push_str(&ft.render("  "));
     s.push('\n');
-    let noise_json = match repeats {
+}
+
+/// The noise floor: the repeats' scatter, or the residuals' upper bound.
+fn noise_text<const N: usize>(s: &mut String, study: &cv::Study<N>) {
+    let orientation = study.orientation;
+    match study.repeats {
         Ok((sp, sr, dp, dr)) => {
             let _ = writeln!(
                 s,
@@ -1036,9 +554,9 @@ fn crossval<const N: usize>(
                     String::new()
                 }
             );
-            json!({"source": "repeats", "sigma_pos_mm": sp * 1e3, "sigma_rot_deg": sr.to_degrees(), "dof_pos": dp, "dof_rot": dr})
         }
         Err(why) => {
+            let (sig_p, sig_r) = (study.residual_sigma_pos_m, study.residual_sigma_rot_rad);
             let _ = writeln!(
                 s,
                 "Noise floor: {why}; upper bound from the calibrated residual (dof-corrected): σ_pos {:.4} mm per axis (√3σ = {:.4} mm){}",
@@ -1050,12 +568,22 @@ fn crossval<const N: usize>(
                     String::new()
                 }
             );
-            json!({"source": "residual_upper_bound", "sigma_pos_mm": sig_p * 1e3, "sigma_rot_deg": if orientation { json!(sig_r.to_degrees()) } else { Value::Null }})
         }
-    };
-    let outliers_json = match &robust {
+    }
+}
+
+/// The outlier fit: its scales and the suspects, or why it failed.
+fn outliers_text<const N: usize>(
+    s: &mut String,
+    study: &cv::Study<N>,
+    set: &MeasurementSet,
+    args: &Args,
+) {
+    let orientation = study.orientation;
+    let report = &study.robust_report;
+    match &study.robust {
         Ok(r) => {
-            let suspects: Vec<usize> = (0..meas.len()).filter(|&i| report[i].suspect).collect();
+            let suspects = study.suspects();
             let _ = writeln!(
                 s,
                 "Robust fit ({} IRLS, {} reweighted fits): robust scales σ_pos {:.4} mm{}; {} outlier(s) by the 99.99 % residual test{}",
@@ -1087,105 +615,16 @@ fn crossval<const N: usize>(
                     report[i].robust_weight
                 );
             }
-            json!({
-                "loss": "cauchy", "scale_pos_mm": r.test.scale_pos_m * 1e3,
-                "scale_rot_deg": if orientation { json!(r.test.scale_rot_rad.to_degrees()) } else { Value::Null },
-                "suspects": suspects.iter().map(|&i| json!({
-                    "pose_id": set.rows[i].pose_id, "line": set.rows[i].line,
-                    "distance": report[i].distance, "pos_mm": report[i].pos_m * 1e3,
-                    "rot_deg": report[i].rot_rad.to_degrees(), "robust_weight": report[i].robust_weight,
-                })).collect::<Vec<_>>(),
-            })
         }
         Err(e) => {
             let _ = writeln!(s, "Robust fit failed: {e} (no outlier test)");
-            json!({"error": e.to_string()})
         }
-    };
+    }
+}
 
-    // Outputs.
-    let mut inputs: Vec<&Path> = vec![&args.data];
-    let robot_path = Path::new(&args.robot);
-    if robot_path.is_file() {
-        inputs.push(robot_path);
-    }
-    if let Some(p) = &args.json {
-        let poses: Vec<Value> = (0..meas.len())
-            .map(|i| {
-                json!({
-                    "pose_id": set.rows[i].pose_id, "line": set.rows[i].line, "fold": fold_of[i] + 1,
-                    "nominal_pos_mm": held_nom[i].pos_norm_m * 1e3,
-                    "calibrated_pos_mm": held_cal[i].pos_norm_m * 1e3,
-                    "nominal_rot_deg": held_nom[i].rot_norm_rad.to_degrees(),
-                    "calibrated_rot_deg": held_cal[i].rot_norm_rad.to_degrees(),
-                })
-            })
-            .collect();
-        let doc = json!({
-            "format": "kincal-crossval", "schema_version": "1.0",
-            "data": {"path": set.source, "sha256": set.sha256, "poses": meas.len(), "groups": n_groups, "orientation": orientation},
-            "robot": name, "effects": eff_names, "geometry": args.geometry, "init_frames": args.init_frames, "robust": args.robust.is_some(), "robust_loss": args.robust.map(|l| Loss::from(l).name()),
-            "folds": args.folds, "seed": args.seed,
-            "weighting": {"mode": w.mode, "weight_pos": w.pos, "weight_rot": w.rot},
-            "prior": prior_json, "largest_change": change_json,
-            "identifiability": analysis.map(|a| json!({
-                "requested": a.requested.len(), "identifiable": a.identifiable.len(),
-                "structurally_redundant": a.structural.iter().map(crate::report::label::<N>).collect::<Vec<_>>(),
-                "data_deficient": a.data_deficient.iter().map(crate::report::label::<N>).collect::<Vec<_>>(),
-                "rank": a.rank,
-                "condition_number": if a.condition_number.is_finite() { json!(a.condition_number) } else { Value::Null },
-            })),
-            "heldout": {"nominal": summary_json(&s_nom, orientation), "calibrated": summary_json(&s_cal, orientation)},
-            "insample": {"nominal": summary_json(&s_in_nom, orientation), "calibrated": summary_json(&s_in_cal, orientation)},
-            "per_fold": folds_json,
-            "noise_floor": noise_json,
-            "outliers": outliers_json,
-            "poses": poses,
-        });
-        let text = serde_json::to_string_pretty(&doc).map_err(|e| CliError::io(e.to_string()))?;
-        kincal_io::files::write_atomic(p, &inputs, |w| w.write_all(text.as_bytes()))?;
-        let _ = writeln!(s, "JSON written to {}.", p.display());
-    }
-    if let Some(p) = &args.plot {
-        let svg = crate::plots::pose_errors::heldout_svg(
-            &format!("{name}: held-out errors per pose ({} folds)", args.folds),
-            &held_nom,
-            &held_cal,
-            orientation,
-        )
-        .map_err(|e| CliError::io(format!("{}: cannot draw the figure: {e}", p.display())))?;
-        kincal_io::files::write_atomic(p, &inputs, |w| w.write_all(svg.as_bytes()))?;
-        let _ = writeln!(s, "Figure written to {}.", p.display());
-    }
-    if let Some(p) = &args.robot_out {
-        let (base, tool) = (all.robot.base(), all.robot.tool());
-        let start = if args.init_frames {
-            kincal::frames::estimate_frames(nominal, &meas)
-                .map_err(|e| fail("frame estimate", e.to_string()))?
-                .robot
-        } else {
-            *nominal
-        };
-        let r = start
-            .with_base(base)
-            .and_then(|r| r.with_tool(tool))
-            .map_err(|e| fail("frames", e.to_string()))?;
-        let joint_names: Vec<String> = (1..=N).map(|k| format!("joint{k}")).collect();
-        let text = format!(
-            "# {name}: nominal geometry with the base and tool frames of the calibration on all\n\
-             # poses of {} (written by kincal crossval --robot-out)\n{}",
-            set.source,
-            kincal_io::robot_file::write_generic(&format!("{name}-frames"), &joint_names, &r)
-        );
-        kincal_io::files::write_atomic(p, &inputs, |w| w.write_all(text.as_bytes()))?;
-        let _ = writeln!(
-            s,
-            "Robot with the calibrated frames written to {}.",
-            p.display()
-        );
-    }
-    crate::report::emit(&s);
-    Ok(())
+/// The loss of the outlier fit on all poses: `--robust`'s, Cauchy by default.
+fn outlier_loss(args: &Args) -> Loss {
+    args.robust.map_or(Loss::Cauchy, Loss::from)
 }
 
 /// Cross-validation of contact data by whole groups (see [`crate::commands::crossval_contacts`]).
@@ -1193,7 +632,7 @@ fn crossval_contacts<const N: usize>(
     nominal: &Robot<N>,
     args: &Args,
     set: &MeasurementSet,
-    choice: &kincal_io::effects_arg::EffectChoice,
+    choice: &EffectChoice,
 ) -> Result<(), CliError> {
     if args.init_frames || args.plot.is_some() || args.robot_out.is_some() {
         return Err(CliError::usage(
@@ -1211,7 +650,8 @@ fn crossval_contacts<const N: usize>(
     } else {
         crate::commands::crossval_contacts::GroupBy::Target
     });
-    let mut requested = geometry_subset(nominal, &args.geometry).union(&choice.effect_params(N));
+    let mut requested =
+        cv::geometry_subset(nominal, &args.geometry).union(&choice.effect_params(N));
     for k in 0..3 {
         // The contacted point (ball centre) as the tool translation.
         let _ = requested.insert(5 * N + 6 + k);

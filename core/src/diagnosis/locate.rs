@@ -162,6 +162,7 @@ fn value<const N: usize>(q: QuantityKind, m: &Measurement<N>, tau: &[f64; N]) ->
     }
 }
 
+// Long by design: one pass per statistic (quantities, axes, regions, correlations) into the fixed-size `Location` (no heap).
 pub(crate) fn locate<const N: usize>(
     robot: &Robot<N>,
     data: &[Measurement<N>],

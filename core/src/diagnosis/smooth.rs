@@ -586,6 +586,7 @@ fn choose<const N: usize>(
 /// `base` is the baseline's accumulator (its expected totals at the noise floor); the
 /// folds and the significance threshold are the configuration's. Uses `poses[l].scratch`. Never fails: a check that cannot run is returned with `evaluated =
 /// false`.
+// Long by design: nested cross-validation over the caller's workspace: features, Grams and the outer folds share its buffers (no heap).
 pub(crate) fn check<const N: usize>(
     robot: &Robot<N>,
     data: &[Measurement<N>],
