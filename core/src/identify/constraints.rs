@@ -575,13 +575,12 @@ fn cache_mean<const N: usize, const P: usize>(
     jbar: &[[f64; P]; 3],
     ws: &mut Workspace<P>,
 ) {
-    if data.distances.iter().any(|d| d.a == gi || d.b == gi) {
-        if let Some(m) = ws.means.get_mut(gi % MEAN_CACHE) {
-            m.group = gi;
-            m.w = w;
-            m.p = p;
-            m.jbar = *jbar;
-        }
+    let named = data.distances.iter().any(|d| d.a == gi || d.b == gi);
+    if let Some(m) = ws.means.get_mut(gi % MEAN_CACHE).filter(|_| named) {
+        m.group = gi;
+        m.w = w;
+        m.p = p;
+        m.jbar = *jbar;
     }
 }
 
