@@ -430,3 +430,78 @@ fn prior_holds_the_written_model_and_is_recorded() {
     let o = kincal(&[&base[..], &["--prior", "auto"]].concat(), dir.path());
     assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
 }
+
+/// The widest line of `text` (characters) and the line itself.
+fn widest(text: &str) -> (usize, String) {
+    text.lines()
+        .map(|l| (l.chars().count(), l.to_string()))
+        .max_by_key(|(n, _)| *n)
+        .unwrap_or_default()
+}
+
+/// Issue #19 item 6: what the reports print fits 100 columns (prose wraps; the tables of
+/// these runs fit too): diagnose, crossval, validate, calibrate, demo, evaluate-designs,
+/// design-tool and `kincal help` with each command's help.
+#[test]
+fn screen_output_fits_100_columns() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(
+        dir.path().join("s.csv"),
+        session_csv(Some(Effect::JointCompliance), 20, false, 5),
+    )
+    .unwrap();
+    let runs: &[&[&str]] = &[
+        &[
+            "diagnose", "s.csv", "--robot", "aria", "--json", "r.json", "--out", "d.json",
+        ],
+        &["crossval", "s.csv", "--robot", "aria"],
+        &["calibrate", "s.csv", "--robot", "aria", "--out", "m.json"],
+        &["validate", "m.json", "s.csv"],
+        &["demo", "--out", "demo"],
+        &["evaluate-designs", "--designs", "table2", "--runs", "20"],
+        &[
+            "design-tool",
+            "--plate-z-mm",
+            "285",
+            "--screen-runs",
+            "20",
+            "--runs",
+            "20",
+            "--starts",
+            "1",
+            "--robust-robots",
+            "2",
+            "--grid-mm",
+            "50",
+            "--objectives",
+            "dopt",
+            "--out",
+            "tool.csv",
+        ],
+        &["help"],
+    ];
+    let mut report = Vec::new();
+    for args in runs {
+        let o = kincal(args, dir.path());
+        assert!(o.status.success(), "{args:?}: {}", text(&o.stderr));
+        let (n, line) = widest(&text(&o.stdout));
+        report.push(format!("{}: {n}", args[0]));
+        assert!(n <= 100, "{args:?}: a line of {n} columns:\n{line}");
+    }
+    for c in [
+        "calibrate",
+        "predict",
+        "validate",
+        "diagnose",
+        "crossval",
+        "demo",
+        "select-poses",
+        "design-tool",
+        "evaluate-designs",
+    ] {
+        let o = kincal(&["help", c], dir.path());
+        let (n, line) = widest(&text(&o.stdout));
+        assert!(n <= 100, "help {c}: a line of {n} columns:\n{line}");
+    }
+    eprintln!("widest lines: {}", report.join(", "));
+}
