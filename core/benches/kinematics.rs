@@ -71,9 +71,6 @@ fn kinematics<M: Measurement + 'static>(c: &mut Criterion<M>, prefix: &str) {
     c.bench_function(&format!("{prefix}sincos6_kincal"), |b| {
         b.iter(|| black_box(&angles[next()]).map(kincal::sin_cos))
     });
-    c.bench_function(&format!("{prefix}sincos6_poly"), |b| {
-        b.iter(|| black_box(&angles[next()]).map(kincal::sin_cos_poly))
-    });
     c.bench_function(&format!("{prefix}fk_aria"), |b| {
         b.iter(|| black_box(&robot).fk(black_box(&states[next()])))
     });

@@ -42,51 +42,6 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
     )
 }
 
-/// Largest `|x|` \[rad\] [`sin_cos_poly`] reduces itself; beyond, it calls [`sin_cos`].
-pub const SIN_COS_POLY_MAX_ABS: f64 = 1024.0;
-
-/// `(sin x, cos x)` without branches on the argument, for joint angles: libm's first
-/// reduction round (`x − n·π/2` as the two-part `y0 + y1`, `n` rounded to nearest) and its
-/// kernel polynomials, the quadrant chosen by bit masks; arguments beyond
-/// [`SIN_COS_POLY_MAX_ABS`] (and non-finite ones) go to [`sin_cos`]. Not bit-identical to
-/// libm: it skips libm's threshold rules for `|x| < 9π/4` and its extra reduction rounds
-/// for arguments within about `|x|·2^-16` of a multiple of π/2. Error bound, checked
-/// against libm in `sin_cos_poly_error_bound` (unit test) over 3·10^6 arguments and every
-/// double within 200 ulps of `k·π/2`, `|k| <= 40`: at most 1 ulp of the result, and where
-/// the result is below 1e-3 in magnitude (the argument that near a multiple of π/2) at most
-/// 1e-22 absolute. Measured as a candidate for FK's six sines and cosines (`sincos6_poly`
-/// in benches/kinematics.rs); FK itself still uses [`sin_cos`].
-#[inline(always)]
-#[must_use]
-pub fn sin_cos_poly(x: f64) -> (f64, f64) {
-    const TO_INT: f64 = 1.5 / f64::EPSILON;
-    const INV_PIO2: f64 = f64::from_bits(0x3FE4_5F30_6DC9_C883);
-    const PIO2_1: f64 = f64::from_bits(0x3FF9_21FB_5440_0000);
-    const PIO2_1T: f64 = f64::from_bits(0x3DD0_B461_1A62_6331);
-    // (`!(a <= b)` also sends NaN to the fallback)
-    if !(x.abs() <= SIN_COS_POLY_MAX_ABS) {
-        return sin_cos(x);
-    }
-    // t = 1.5·2^52 + n: n sits in the low bits of t's mantissa (two's complement).
-    let t = x * INV_PIO2 + TO_INT;
-    let n = t.to_bits();
-    let f_n = t - TO_INT;
-    let r = x - f_n * PIO2_1;
-    let w = f_n * PIO2_1T;
-    let y0 = r - w;
-    let (s, c) = sincos_kernels(y0, (r - y0) - w, false);
-    let swap = 0u64.wrapping_sub(n & 1);
-    let (sb, cb) = (s.to_bits(), c.to_bits());
-    let first = (sb & !swap) | (cb & swap);
-    let second = (cb & !swap) | (sb & swap);
-    let sin_sign = (n & 2) << 62;
-    let cos_sign = (n.wrapping_add(1) & 2) << 62;
-    (
-        f64::from_bits(first ^ sin_sign),
-        f64::from_bits(second ^ cos_sign),
-    )
-}
-
 /// libm's `rem_pio2` for `|x| < 2^20·π/2` (`ix` = high word of `|x|`): `x = n·π/2 + y0 + y1`.
 /// Up to 9π/4 libm picks n by magnitude thresholds, beyond by rounding `x·2/π`; both are
 /// reproduced, as is its rule for the second and third rounds (only on the "medium" path).
@@ -224,66 +179,8 @@ pub(crate) fn column3(m: &nalgebra::Matrix3<f64>, k: usize) -> nalgebra::Vector3
 
 #[cfg(test)]
 mod tests {
-    use super::{sin_cos, sin_cos_poly};
+    use super::sin_cos;
     use crate::rng::SplitMix64;
-
-    /// The error of [`sin_cos_poly`] against libm at `x`: (ulps of libm's result, absolute).
-    fn poly_error(x: f64) -> [(f64, f64); 2] {
-        let (s, c) = sin_cos_poly(x);
-        let (ls, lc) = libm::sincos(x);
-        let err = |a: f64, b: f64| {
-            let ulp = f64::from_bits(b.abs().to_bits() + 1) - b.abs();
-            ((a - b).abs() / ulp, (a - b).abs())
-        };
-        [err(s, ls), err(c, lc)]
-    }
-
-    /// The stated bound of [`sin_cos_poly`]: at most 1 ulp of the result, or 1e-22 absolute
-    /// where the result is below 1e-3; bit-identical to libm for most arguments.
-    #[test]
-    fn sin_cos_poly_error_bound() {
-        let mut rng = SplitMix64::new(0x9017);
-        let (mut worst_ulp, mut worst_abs_small, mut identical, mut checked) =
-            (0.0f64, 0.0f64, 0usize, 0usize);
-        let mut check = |x: f64| {
-            let (ls, lc) = libm::sincos(x);
-            for ((ulps, abs), value) in poly_error(x).into_iter().zip([ls, lc]) {
-                if value.abs() < 1e-3 {
-                    worst_abs_small = worst_abs_small.max(abs);
-                    assert!(abs <= 1e-22, "{x:e}: {abs:e} absolute");
-                } else {
-                    worst_ulp = worst_ulp.max(ulps);
-                    assert!(ulps <= 1.0, "{x:e}: {ulps} ulp");
-                }
-                identical += usize::from(abs == 0.0);
-                checked += 1;
-            }
-        };
-        for (count, half_width) in [
-            (1_000_000, 2.0 * core::f64::consts::PI),
-            (1_000_000, 4.0 * core::f64::consts::PI),
-            (1_000_000, super::SIN_COS_POLY_MAX_ABS),
-        ] {
-            for _ in 0..count {
-                check((2.0 * rng.uniform() - 1.0) * half_width);
-            }
-        }
-        for k in -40..=40 {
-            let c = f64::from(k) * core::f64::consts::FRAC_PI_2;
-            for d in -200i64..=200 {
-                check(f64::from_bits(c.to_bits().wrapping_add_signed(d)));
-            }
-        }
-        for x in [0.0, -0.0, 1e-300, 1e-9, 2000.0, -1e10] {
-            check(x);
-        }
-        let (s, c) = sin_cos_poly(f64::NAN);
-        assert!(s.is_nan() && c.is_nan());
-        std::println!(
-            "sin_cos_poly: {checked} values, {identical} bit-identical to libm, worst {worst_ulp} \
-             ulp, worst absolute below 1e-3: {worst_abs_small:e}"
-        );
-    }
 
     fn same(x: f64) -> bool {
         let (s, c) = sin_cos(x);
