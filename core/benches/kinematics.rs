@@ -1,6 +1,7 @@
 //! Kinematics benchmarks on the nominal ARIA: six sines and cosines (libm against the core's
 //! bit-identical `kincal::sin_cos`), FK, FK + joint Jacobian, FK + identification Jacobian
-//! (geometric columns and all columns), IK of a Table 2 pose.
+//! (geometric columns and all columns), IK of a Table 2 pose and of random reachable targets
+//! (control-loop preset from 5° seeds, global search, default).
 //!
 //! FK and the Jacobians cycle through a precomputed table of random configurations within the
 //! joint limits (one per iteration): a single fixed configuration lets the branch predictor
@@ -117,9 +118,57 @@ fn ik(c: &mut Criterion) {
     g.finish();
 }
 
+/// IK on random reachable targets (`fk(q)`, `q` from [`random_states`], one target per
+/// iteration): the control-loop preset from seeds within 5° of `q` (clamped), the global
+/// search and the default from ARIA's Table 2 seed. Failures (about 1 in 1,000 for the
+/// control loop, see tests/ik_fast.rs) are timed as they come.
+fn ik_random<M: Measurement + 'static>(c: &mut Criterion<M>, prefix: &str) {
+    let robot = aria::nominal();
+    let mut rng = SplitMix64::new(0x1c_5eed);
+    let cases: Vec<_> = random_states(&robot, false)
+        .into_iter()
+        .map(|s| {
+            let target = robot
+                .fk(&s)
+                .expect("fk of a configuration within the limits");
+            let near = core::array::from_fn(|j| {
+                let l = robot.limits()[j];
+                let d = 5f64.to_radians();
+                (s.q[j] + rng.range(-d, d)).clamp(l.lower, l.upper)
+            });
+            (target, JointState::new(near))
+        })
+        .collect();
+    let home = JointState::new(aria::TOOL_SEED_Q);
+    let mut k = 0usize;
+    let mut next = move || {
+        k = (k + 1) & (TABLE - 1);
+        k
+    };
+    let mut g = c.benchmark_group(format!("{prefix}ik_random"));
+    let local = IkOptions::control_loop();
+    g.bench_function("control_loop_5deg_seed", |b| {
+        b.iter(|| {
+            let (target, seed) = &cases[next()];
+            solve_ik(&robot, black_box(target), seed, &local)
+        })
+    });
+    let global = IkOptions::global_search();
+    g.bench_function("global_search", |b| {
+        b.iter(|| solve_ik(&robot, black_box(&cases[next()].0), &home, &global))
+    });
+    g.sample_size(10);
+    let default = IkOptions::default();
+    g.bench_function("default", |b| {
+        b.iter(|| solve_ik(&robot, black_box(&cases[next()].0), &home, &default))
+    });
+    g.finish();
+}
+
 fn cpu_time(c: &mut Criterion<ThreadCpuTime>) {
     if thread_cpu_ns().is_some() {
         kinematics(c, "cpu_time/");
+        ik_random(c, "cpu_time/");
     } else {
         eprintln!("no thread CPU clock: CPU-time benchmarks skipped");
     }

@@ -22,7 +22,10 @@ const _: () = assert!(
 );
 use crate::pose::{Transform, rotation_log};
 
-/// Options of [`solve_ik`]. [`IkOptions::validate`] (run by [`solve_ik`]) bounds every field
+/// Options of [`solve_ik`]. Three presets: [`IkOptions::control_loop`] (seed near the answer,
+/// one short descent: microseconds), [`IkOptions::global_search`] (any seed: Halton seeds,
+/// short descents, first solution) and the [`Default`] (every one of 17 seeds to the end,
+/// the solution nearest the seed: milliseconds). [`IkOptions::validate`] (run by [`solve_ik`]) bounds every field
 /// and the total budget `(1 + extra_seeds) · max_iterations` <=
 /// [`IkOptions::MAX_TOTAL_ITERATIONS`], so one call's worst case is bounded: a control loop
 /// gets an error for absurd options, not a call that never returns.
@@ -58,6 +61,47 @@ impl Default for IkOptions {
 }
 
 impl IkOptions {
+    /// The control-loop preset: one damped least-squares descent from the caller's seed (the
+    /// last cycle's answer, near the target), no further seeds, at most 50 iterations.
+    /// From seeds within 5° of an answer it converges in 4 iterations (median; 9 at the
+    /// 99th percentile on ARIA, 16 on a 7R arm) to the default tolerances, a few
+    /// microseconds; it never jumps to another branch. When it returns
+    /// [`Error::Unreachable`] (rarely: the answer touches a joint limit or a singularity, about
+    /// 1 to 4 in 1,000 random cases in `tests/ik_fast.rs`), fall back to
+    /// [`IkOptions::global_search`].
+    #[must_use]
+    pub const fn control_loop() -> Self {
+        IkOptions {
+            max_iterations: 50,
+            tol_pos_m: 1e-11,
+            tol_rot_rad: 1e-11,
+            extra_seeds: 0,
+            first_solution: true,
+        }
+    }
+
+    /// The global-search preset, for a target whose branch is unknown (no good seed). Seed
+    /// strategy: the caller's seed first, then up to 128 seeds of the Halton sequence over
+    /// the joint ranges (clipped to ±π; low-discrepancy, so every branch of the workspace is
+    /// visited early), each descent cut off after 20 iterations, stopping at the first that
+    /// converges. The cut-off is what makes it fast: a descent that converges from a random
+    /// start does so in about 10 iterations (19 at the 99th percentile on ARIA and a 7R
+    /// arm), one that has not by 20 is mostly stuck in a local minimum or against a limit,
+    /// and a fresh seed is cheaper than waiting (the default spends up to 200 iterations on
+    /// each of its 17 seeds). The answer is the first solution found, not the one nearest
+    /// the seed. Found a solution for 1,000 of 1,000 random reachable targets of ARIA and 999 of
+    /// 1,000 of a 7R arm (`tests/ik_fast.rs`; the default: 997 of the same 1,000 on ARIA).
+    #[must_use]
+    pub const fn global_search() -> Self {
+        IkOptions {
+            max_iterations: 20,
+            tol_pos_m: 1e-11,
+            tol_rot_rad: 1e-11,
+            extra_seeds: 128,
+            first_solution: true,
+        }
+    }
+
     /// Largest `max_iterations`: 5x the default; a descent that has not converged by then
     /// is stuck (a control loop must get an error, not a watchdog reset).
     pub const MAX_ITERATIONS: u32 = 1000;

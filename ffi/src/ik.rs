@@ -8,9 +8,12 @@ use crate::kinematics::{CALL_AUX, joint_state, kincal_joint_aux, robot_and_q};
 use crate::robot::{KINCAL_MAX_JOINTS, kincal_robot};
 use crate::status::{FfiResult, kincal_error, kincal_status};
 
-/// Options of `kincal_ik` and `kincal_prepared_ik`; get the defaults from
-/// `kincal_ik_options_default`. Every field is checked against its bounds before any work
-/// (INVALID_ARGUMENT naming the field, e.g. `opts->extra_seeds`, and its value), and so is
+/// Options of `kincal_ik` and `kincal_prepared_ik`; start from one of three presets:
+/// `kincal_ik_options_control_loop` (seed near the answer: microseconds),
+/// `kincal_ik_options_global_search` (any seed, first solution: tens of microseconds) or
+/// `kincal_ik_options_default` (every seed, the solution nearest the seed: milliseconds).
+/// Every field is checked against its bounds before any work (INVALID_ARGUMENT naming the
+/// field, e.g. `opts->extra_seeds`, and its value), and so is
 /// the budget (1 + extra_seeds)·max_iterations <= `KINCAL_IK_MAX_TOTAL_ITERATIONS` (20000,
 /// about 6x the defaults' 3400), so every call ends in bounded time.
 #[repr(C)]
@@ -114,6 +117,48 @@ pub unsafe extern "C" fn kincal_ik_options_default(
     })
 }
 
+/// Writes the control-loop IK options into `opts_out`: one descent of at most 50 iterations
+/// from the caller's seed (the last cycle's answer), no further seeds; a few microseconds
+/// from a seed within a few degrees of the answer, never a jump to another branch. On
+/// UNREACHABLE (rare: an answer against a joint limit or at a singularity) fall back to
+/// `kincal_ik_options_global_search`. Returns OK, NULL_POINTER or MISALIGNED_POINTER.
+///
+/// # Safety
+/// `opts_out` must be NULL or writable; `err` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn kincal_ik_options_control_loop(
+    opts_out: *mut kincal_ik_options,
+    err: *mut kincal_error,
+) -> kincal_status {
+    ffi_boundary!(err = err; {
+        let out = arg_out1!(opts_out);
+        // SAFETY: checked by `arg_out1!`; writable by contract.
+        unsafe { out.put(IkOptions::control_loop().into()) };
+        Ok(())
+    })
+}
+
+/// Writes the global-search IK options into `opts_out`, for a target whose branch is unknown:
+/// the caller's seed, then up to 128 Halton seeds over the joint ranges, each descent cut
+/// off after 20 iterations, stopping at the first solution (not the one nearest the seed).
+/// Tens of microseconds where the default (every seed to the end) takes milliseconds.
+/// Returns OK, NULL_POINTER or MISALIGNED_POINTER.
+///
+/// # Safety
+/// `opts_out` must be NULL or writable; `err` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn kincal_ik_options_global_search(
+    opts_out: *mut kincal_ik_options,
+    err: *mut kincal_error,
+) -> kincal_status {
+    ffi_boundary!(err = err; {
+        let out = arg_out1!(opts_out);
+        // SAFETY: checked by `arg_out1!`; writable by contract.
+        unsafe { out.put(IkOptions::global_search().into()) };
+        Ok(())
+    })
+}
+
 /// The solution of one IK call on a built model: readings (first N used) and the info.
 pub(crate) fn ik_of<const N: usize>(
     r: &Robot<N>,
@@ -148,7 +193,9 @@ pub(crate) fn ik_of<const N: usize>(
 ///
 /// - `q_seed`, `q_seed_len`: start configuration [rad], N doubles (clamped into the limits).
 /// - `aux`: approach directions / temperature the model needs, or NULL.
-/// - `opts`: NULL for the defaults (`kincal_ik_options_default`).
+/// - `opts`: NULL for the defaults (`kincal_ik_options_default`); a control loop passes
+///   `kincal_ik_options_control_loop`'s options, a search without a good seed
+///   `kincal_ik_options_global_search`'s.
 /// - `q_out`, `q_out_len`: N doubles, written on success only; may overlap `q_seed`.
 /// - `info_out`: residuals, iterations and seed of the solution, or NULL.
 ///

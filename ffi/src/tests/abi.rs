@@ -1359,6 +1359,21 @@ fn ik_reaches_every_tool_pose() {
         kincal_status::Ok
     );
     assert_eq!(opts, kincal_ik_options::from(IkOptions::default()));
+    let mut presets = opts;
+    assert_eq!(
+        unsafe { kincal_ik_options_control_loop(&mut presets, null_mut()) },
+        kincal_status::Ok
+    );
+    assert_eq!(presets, kincal_ik_options::from(IkOptions::control_loop()));
+    assert_eq!(
+        unsafe { kincal_ik_options_global_search(&mut presets, null_mut()) },
+        kincal_status::Ok
+    );
+    assert_eq!(presets, kincal_ik_options::from(IkOptions::global_search()));
+    assert_eq!(
+        unsafe { kincal_ik_options_control_loop(null_mut(), null_mut()) },
+        kincal_status::NullPointer
+    );
     for l in 0..KINCAL_ARIA_NUM_TOOL_POSES {
         let mut target = [0.0; 16];
         assert_eq!(
