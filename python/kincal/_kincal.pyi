@@ -146,11 +146,16 @@ def crossval(
     max_iterations: int = 200,
     prior: Union[None, Tuple[float, float], str] = None,
     allow_out_of_limits: bool = False,
+    constraints: Optional[_Path] = None,
+    group_by: Optional[str] = None,
 ) -> Dict[str, Any]:
     """K-fold cross-validation by pose_id, as ``kincal crossval``; returns the dict of
     ``kincal crossval --json`` (held-out and in-sample RMS/max in mm and degrees, per fold,
     per pose, noise floor, outliers; weights in 1/m² and 1/rad²). ``prior``: ``(mm, deg)``
-    or ``"auto"``. Pose data only (target/plane rows: use the command line)."""
+    or ``"auto"``. Target/plane rows (or a ``constraints`` TOML file): whole groups held out
+    by ``group_by`` (``"session"``, ``"target"``, ``"pose_id"``), scored in mm about each
+    target/plane re-estimated from the held-out contacts, as ``kincal crossval
+    --constraints``."""
 
 def diagnose(
     data: Union[_Path, Measurements],
@@ -163,10 +168,13 @@ def diagnose(
     folds: int = 5,
     seed: Optional[int] = None,
     allow_out_of_limits: bool = False,
+    constraints: Optional[_Path] = None,
 ) -> Dict[str, Any]:
     """The sim-to-real diagnosis of ``kincal diagnose``; returns REPORT.json's dict
     (spec/cli.md) without ``files``: ``verdict`` (``status``, ``effects``, ``reason``,
     ``parameters`` in SI units), ``noise_floor``, ``baseline``, ``candidates``, ``where``;
     each field names its unit (``_mm``, ``_deg``). ``sigma_*``: the instrument's 1σ per axis
     [mm, deg] (default: from repeated pose_ids); ``seed``: the fold seed (default: the
-    CLI's)."""
+    CLI's). Target/plane rows (or a ``constraints`` TOML file): leave-one-session-out, as
+    ``kincal diagnose --constraints`` (its REPORT.json: ``method``
+    ``"leave_one_group_out_contacts"``; ``sigma_pos_mm`` states the floor)."""

@@ -3,12 +3,16 @@
 //! Each returns its report as plain Python data: the dict `kincal crossval --json` writes,
 //! and REPORT.json's dict (without `files`: nothing is written).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use kincal::identify::{Loss, PriorSizes};
 use kincal::{Effect, EffectSet, Robot as CoreRobot};
+use kincal_io::constraints::ConstraintsFile;
 use kincal_io::crossval::{self as cv, PriorChoice, Weighting};
+use kincal_io::crossval_contacts::{self as ccv, GroupBy};
 use kincal_io::diagnose::{self as diag, SigmaNames};
+use kincal_io::diagnose_contacts as diag_contacts;
+use kincal_io::effects_arg::EffectChoice;
 use kincal_io::measurements::MeasurementSet;
 use pyo3::prelude::*;
 
@@ -55,15 +59,13 @@ fn check_folds(py: Python<'_>, folds: usize) -> PyResult<()> {
     Ok(())
 }
 
-/// The rows of `data` for `robot`, refusing contact (target/plane) rows and data without
-/// the columns `effects` need.
-fn pose_rows(
+/// The rows of `data` for `robot`, refusing data without the columns `effects` need.
+fn study_rows(
     py: Python<'_>,
     data: &Bound<'_, PyAny>,
     robot: &Robot,
     effects: EffectSet,
     allow_out_of_limits: bool,
-    study: &str,
 ) -> PyResult<MeasurementSet> {
     let set = crate::measurements::measurement_set(py, data, robot, allow_out_of_limits)?;
     let source = set.source.clone();
@@ -79,15 +81,26 @@ fn pose_rows(
     }
     kincal_io::data::require_inputs(&set, effects)
         .map_err(|e| errors::from_io(py, &e, &[&source]))?;
-    if kincal_io::constraints::has_contacts(&set) {
-        return Err(errors::usage(
-            py,
-            format!(
-                "{source}: target/plane rows: the {study} of contact data is not in the Python package yet (use `kincal {study} --constraints`)"
-            ),
-        ));
-    }
     Ok(set)
+}
+
+/// Whether the study takes the contact route: a constraints file, or target/plane rows.
+fn is_contact_study(set: &MeasurementSet, constraints: Option<&Path>) -> bool {
+    constraints.is_some() || kincal_io::constraints::has_contacts(set)
+}
+
+/// `group_by` of a contact cross-validation (`None`: by session when the data have one).
+fn group_by(py: Python<'_>, name: Option<&str>, set: &MeasurementSet) -> PyResult<GroupBy> {
+    match name {
+        None => Ok(GroupBy::default_for(set)),
+        Some("target") => Ok(GroupBy::Target),
+        Some("session") => Ok(GroupBy::Session),
+        Some("pose_id" | "pose-id") => Ok(GroupBy::PoseId),
+        Some(other) => Err(errors::usage(
+            py,
+            format!("group_by {other:?}: expected 'target', 'session' or 'pose_id'"),
+        )),
+    }
 }
 
 /// The io crate's crossval options from the keyword arguments.
@@ -194,6 +207,57 @@ fn crossval_run<'py, const N: usize>(
     crate::json::loads(py, &doc.to_string())
 }
 
+/// The constraints file `path`, read by io (errors name its line and column).
+fn read_constraints(py: Python<'_>, path: Option<&Path>) -> PyResult<Option<ConstraintsFile>> {
+    path.map(|p| {
+        kincal_io::constraints::read_constraints(p)
+            .map_err(|e| errors::from_io(py, &e, &[&p.display().to_string()]))
+    })
+    .transpose()
+}
+
+/// io's contact cross-validation (`kincal crossval` on target/plane rows) with the keyword
+/// arguments' settings: whole groups held out, the contacted point fitted as the tool
+/// translation, weight 1/σ² from ``sigma_pos_mm``.
+fn crossval_contacts_run<'py, const N: usize>(
+    py: Python<'py>,
+    nominal: &CoreRobot<N>,
+    set: &MeasurementSet,
+    options: &cv::Options,
+    group_by: GroupBy,
+    constraints: Option<&Path>,
+) -> PyResult<Bound<'py, PyAny>> {
+    if options.init_frames || options.prior != PriorChoice::None {
+        return Err(errors::usage(
+            py,
+            "init_frames and prior are not implemented for data with target/plane rows",
+        ));
+    }
+    let cons = read_constraints(py, constraints)?;
+    let sigma_pos_mm = match options.weighting {
+        Weighting::Stated { pos_mm, .. } => Some(pos_mm),
+        Weighting::Unit | Weighting::Residual => None,
+    };
+    let plan = ccv::Plan {
+        group_by,
+        folds: options.folds,
+        seed: options.seed,
+        requested: ccv::requested_params(
+            nominal,
+            &options.geometry,
+            &EffectChoice::all(options.effects),
+        ),
+        weight_pos: ccv::weight_pos(sigma_pos_mm),
+        max_iterations: options.max_iterations,
+        constraints: cons.as_ref(),
+        robust: options.robust,
+    };
+    let report = py
+        .detach(|| ccv::run(nominal, set, &plan))
+        .map_err(|e| errors::from_io(py, &e, &[&set.source]))?;
+    crate::json::loads(py, &ccv::json(&report).to_string())
+}
+
 /// K-fold cross-validation of a calibration on held-out poses, as ``kincal crossval``:
 /// poses dealt to ``folds`` folds by ``pose_id`` (seeded by ``seed``), each predicted by the
 /// nominal model (``robot``; base/tool frames fitted when ``effects`` names them) and the
@@ -205,9 +269,18 @@ fn crossval_run<'py, const N: usize>(
 /// ``rms_pos_mm``, ``max_pos_mm``, ``rms_rot_deg``, ``max_rot_deg``), ``per_fold``,
 /// ``noise_floor``, ``outliers``, ``poses`` (per row: line, fold, held-out error norms in
 /// mm and degrees), ``weighting`` (``weight_pos`` [1/m²], ``weight_rot`` [1/rad²]), ….
+///
+/// Data with target/plane rows (or a ``constraints`` TOML file: known targets, planes,
+/// distances) are cross-validated as ``kincal crossval --constraints``: whole groups held
+/// out (``group_by`` ``"session"`` (default with a session column), ``"target"`` or
+/// ``"pose_id"``), each held-out contact scored about its target/plane re-estimated from
+/// the held-out contacts only; weight 1/``sigma_pos_mm``² [mm]. The dict is that command's
+/// ``--json``: ``group_by``, ``robust_loss``, ``folds`` (``held_out`` labels, ``nominal``/
+/// ``calibrated`` ``mean_mm``, ``distance_error_mm``, ``algorithm``), ``held_out``
+/// (``scored_groups``; ``mean_mm``, ``rms_mm``, ``max_mm``, ``distance_error_mm``).
 /// The GIL is released during the fits.
 #[pyfunction]
-#[pyo3(signature = (data, robot, *, effects=Vec::new(), init_frames=false, folds=5, seed=1, geometry=vec!["theta0".to_string(), "d".to_string(), "a".to_string(), "alpha".to_string()], sigma_pos_mm=None, sigma_rot_deg=None, unit_weights=false, robust=None, max_iterations=200, prior=None, allow_out_of_limits=false))]
+#[pyo3(signature = (data, robot, *, effects=Vec::new(), init_frames=false, folds=5, seed=1, geometry=vec!["theta0".to_string(), "d".to_string(), "a".to_string(), "alpha".to_string()], sigma_pos_mm=None, sigma_rot_deg=None, unit_weights=false, robust=None, max_iterations=200, prior=None, allow_out_of_limits=false, constraints=None, group_by=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn crossval<'py>(
     py: Python<'py>,
@@ -225,6 +298,8 @@ pub fn crossval<'py>(
     max_iterations: u32,
     prior: Option<&Bound<'py, PyAny>>,
     allow_out_of_limits: bool,
+    constraints: Option<PathBuf>,
+    group_by: Option<String>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let options = crossval_options(
         py,
@@ -240,14 +315,20 @@ pub fn crossval<'py>(
         max_iterations,
         prior,
     )?;
-    let set = pose_rows(
-        py,
-        data,
-        robot,
-        options.effects,
-        allow_out_of_limits,
-        "crossval",
-    )?;
+    let set = study_rows(py, data, robot, options.effects, allow_out_of_limits)?;
+    let constraints = constraints.as_deref();
+    if is_contact_study(&set, constraints) {
+        let by = self::group_by(py, group_by.as_deref(), &set)?;
+        return kincal::with_any_robot!(&robot.robot, r => {
+            crossval_contacts_run(py, r, &set, &options, by, constraints)
+        });
+    }
+    if group_by.is_some() {
+        return Err(errors::usage(
+            py,
+            "group_by applies to data with target/plane rows (instrument data: folds by pose_id)",
+        ));
+    }
     kincal::with_any_robot!(&robot.robot, r => crossval_run(py, r, &robot.name, &set, &options))
 }
 
@@ -276,9 +357,19 @@ fn diagnose_run<'py, const N: usize>(
 /// ``seed``). Returns REPORT.json's dict (spec/cli.md; no ``files``): ``verdict``
 /// (``status``, ``effects``, ``reason``, ``parameters`` in SI units), ``noise_floor``,
 /// ``baseline``, ``candidates``, ``where`` (``per_pose`` residuals), …; fields say their
-/// units (``_mm``, ``_deg``). The GIL is released during the diagnosis.
+/// units (``_mm``, ``_deg``).
+///
+/// Data with target/plane rows (or a ``constraints`` TOML file) are diagnosed as ``kincal
+/// diagnose --constraints``: leave-one-session-out (without sessions, ``folds`` folds of
+/// whole targets/planes), candidates compared with the geometric model by a paired
+/// signed-rank z, the gap by a χ² test against ``sigma_pos_mm`` [mm] when given
+/// (``sigma_rot_deg`` and ``seed`` are unused). The dict is that command's REPORT.json:
+/// ``method`` ``"leave_one_group_out_contacts"``, ``noise_floor``, ``gap_z``,
+/// ``candidates`` (``heldout_mean_mm``, ``heldout_rms_mm``, ``distance_error_mm``,
+/// ``improvement_z``, ``gap_closed_fraction``), ``not_candidates``, ``verdict``.
+/// The GIL is released during the diagnosis.
 #[pyfunction]
-#[pyo3(signature = (data, robot, *, sigma_pos_mm=None, sigma_rot_deg=None, candidates=Vec::new(), pairs=true, folds=5, seed=None, allow_out_of_limits=false))]
+#[pyo3(signature = (data, robot, *, sigma_pos_mm=None, sigma_rot_deg=None, candidates=Vec::new(), pairs=true, folds=5, seed=None, allow_out_of_limits=false, constraints=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn diagnose<'py>(
     py: Python<'py>,
@@ -291,6 +382,7 @@ pub fn diagnose<'py>(
     folds: usize,
     seed: Option<u64>,
     allow_out_of_limits: bool,
+    constraints: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyAny>> {
     check_folds(py, folds)?;
     let sigma_pos_mm = sigma_pos_mm
@@ -308,13 +400,26 @@ pub fn diagnose<'py>(
         folds,
         seed: seed.unwrap_or(defaults.seed),
     };
-    let set = pose_rows(
-        py,
-        data,
-        robot,
-        options.effects_to_read(),
-        allow_out_of_limits,
-        "diagnose",
-    )?;
+    // Contact data read no effect columns up front: a candidate whose inputs are absent is
+    // reported as not a candidate, as `kincal diagnose` does.
+    let set = study_rows(py, data, robot, EffectSet::NONE, allow_out_of_limits)?;
+    let constraints = constraints.as_deref();
+    if is_contact_study(&set, constraints) {
+        let contact_options = diag_contacts::Options {
+            candidates: &options.candidates,
+            no_pairs: !options.pairs,
+            constraints,
+            sigma_pos_mm: options.sigma_pos_mm,
+            folds: options.folds,
+        };
+        return kincal::with_any_robot!(&robot.robot, r => {
+            let report = py
+                .detach(|| diag_contacts::run(r, &set, &contact_options))
+                .map_err(|e| errors::from_io(py, &e, &[&set.source]))?;
+            crate::json::loads(py, &diag_contacts::json(&report).to_string())
+        });
+    }
+    kincal_io::data::require_inputs(&set, options.effects_to_read())
+        .map_err(|e| errors::from_io(py, &e, &[&set.source]))?;
     kincal::with_any_robot!(&robot.robot, r => diagnose_run(py, r, &set, &options))
 }

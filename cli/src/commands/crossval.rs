@@ -15,6 +15,7 @@ use kincal::{EffectSet, Robot};
 
 use crate::error::CliError;
 use kincal_io::crossval::{self as cv, Options, PriorChoice, Weighting};
+use kincal_io::crossval_contacts as ccv;
 use kincal_io::data::{self, DataOptions};
 use kincal_io::effects_arg::EffectChoice;
 use kincal_io::measurements::MeasurementSet;
@@ -138,7 +139,7 @@ pub struct Args {
     /// Data with target/plane rows: what a fold holds out (default: session when the data
     /// have sessions, else target); see docs/constraints.md
     #[arg(long, value_enum, value_name = "BY")]
-    pub group_by: Option<crate::commands::crossval_contacts::GroupBy>,
+    pub group_by: Option<kincal_io::crossval_contacts::GroupBy>,
     /// Known geometry of the fixtures (TOML) for data with target/plane rows
     #[arg(long, value_name = "FILE")]
     pub constraints: Option<PathBuf>,
@@ -627,7 +628,7 @@ fn outlier_loss(args: &Args) -> Loss {
     args.robust.map_or(Loss::Cauchy, Loss::from)
 }
 
-/// Cross-validation of contact data by whole groups (see [`crate::commands::crossval_contacts`]).
+/// Cross-validation of contact data by whole groups (see [`kincal_io::crossval_contacts`]).
 fn crossval_contacts<const N: usize>(
     nominal: &Robot<N>,
     args: &Args,
@@ -645,29 +646,21 @@ fn crossval_contacts<const N: usize>(
         .as_deref()
         .map(kincal_io::constraints::read_constraints)
         .transpose()?;
-    let group_by = args.group_by.unwrap_or(if set.has_session {
-        crate::commands::crossval_contacts::GroupBy::Session
-    } else {
-        crate::commands::crossval_contacts::GroupBy::Target
-    });
-    let mut requested =
-        cv::geometry_subset(nominal, &args.geometry).union(&choice.effect_params(N));
-    for k in 0..3 {
-        // The contacted point (ball centre) as the tool translation.
-        let _ = requested.insert(5 * N + 6 + k);
-    }
-    let weight_pos = args.sigma_pos_mm.map_or(1.0, |s| 1.0 / (s * 1e-3).powi(2));
-    let plan = crate::commands::crossval_contacts::Plan {
-        group_by,
+    let plan = ccv::Plan {
+        group_by: args.group_by.unwrap_or(ccv::GroupBy::default_for(set)),
         folds: args.folds,
         seed: args.seed,
-        requested,
-        weight_pos,
+        requested: ccv::requested_params(nominal, &args.geometry, choice),
+        weight_pos: ccv::weight_pos(args.sigma_pos_mm),
         max_iterations: args.max_iterations,
         constraints: cons.as_ref(),
         robust: args.robust.map(Loss::from),
     };
-    let (text, json) = crate::commands::crossval_contacts::run(nominal, set, &plan)?;
+    let report = ccv::run(nominal, set, &plan)?;
+    let (text, json) = (
+        crate::commands::crossval_contacts::text(&report),
+        ccv::json(&report),
+    );
     if let Some(path) = &args.json {
         let body = serde_json::to_string_pretty(&json)
             .map_err(|e| CliError::io(format!("{}: {e}", path.display())))?;

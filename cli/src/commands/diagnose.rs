@@ -146,7 +146,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     })
 }
 
-/// The diagnosis of data with target/plane rows ([`crate::commands::diagnose_contacts`]); `None`
+/// The diagnosis of data with target/plane rows ([`kincal_io::diagnose_contacts`]); `None`
 /// for instrument data. Writes REPORT.json and the readable report; no model (contact data
 /// are calibrated by `kincal calibrate`).
 fn contact_diagnosis<const N: usize>(
@@ -165,14 +165,21 @@ fn contact_diagnosis<const N: usize>(
     if args.constraints.is_none() && !kincal_io::constraints::has_contacts(&set) {
         return Ok(None);
     }
-    let options = crate::commands::diagnose_contacts::Options {
+    let options = kincal_io::diagnose_contacts::Options {
         candidates: &args.candidates,
         no_pairs: args.no_pairs,
         constraints: args.constraints.as_deref(),
         sigma_pos_mm: args.sigma_pos_mm,
         folds: args.folds,
     };
-    let (mut text, json) = crate::commands::diagnose_contacts::run(robot, &set, &options)?;
+    let pb = crate::progress::spinner("diagnosing contact data (every candidate held out)");
+    let report = kincal_io::diagnose_contacts::run(robot, &set, &options);
+    pb.finish_and_clear();
+    let report = report?;
+    let (mut text, json) = (
+        crate::commands::diagnose_contacts::text(&report),
+        kincal_io::diagnose_contacts::json(&report),
+    );
     let _ = writeln!(
         text,
         "No model written to {}: calibrate contact data with `kincal calibrate DATA --robot R \

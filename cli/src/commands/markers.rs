@@ -450,42 +450,101 @@ fn markers<const N: usize>(robot: &Robot<N>, args: &Args) -> Result<(), CliError
     }
     let frames = read_export(&args.export, &design)?;
     let (joints, frame_col) = read_joints::<N>(&args.joints, robot, args.allow_out_of_limits)?;
+    check_frame_labels(&joints, frame_col)?;
     let by_label: HashMap<&str, &Frame> = frames.iter().map(|(l, f)| (l.as_str(), f)).collect();
-    {
-        let mut seen = HashMap::new();
-        for r in &joints.rows {
-            let label = r.extras[frame_col].trim();
-            if label.is_empty() {
-                return Err(CliError::input(format!(
-                    "{}:{}: column 'frame': expected a frame label, found an empty cell",
-                    joints.source, r.line
-                )));
-            }
-            if let Some(prev) = seen.insert(label.to_string(), r.line) {
-                return Err(CliError::input(format!(
-                    "{}:{}: frame {label} already has joint readings (line {prev})",
-                    joints.source, r.line
-                )));
-            }
+    let outcome = register_frames(&joints, frame_col, &by_label, &design, &opts, args.points);
+    let joint_labels: Vec<&str> = joints
+        .rows
+        .iter()
+        .map(|r| r.extras[frame_col].trim())
+        .collect();
+    let unused: Vec<&str> = frames
+        .iter()
+        .map(|(l, _)| l.as_str())
+        .filter(|l| !joint_labels.contains(l))
+        .collect();
+    let mut s = report_text(&ReportInputs {
+        joints: &joints,
+        export_frames: frames.len(),
+        sigma_m,
+        args,
+        design_notes: &design_notes,
+        outcome: &outcome,
+        unused: &unused,
+    });
+    let failed = &outcome.failed;
+    if !failed.is_empty() && !args.skip_failed {
+        crate::report::emit(&s);
+        return Err(CliError::input(format!(
+            "{} frame(s) could not be registered (listed above); fix the export or the design, or pass --skip-failed to leave them out",
+            failed.len()
+        )));
+    }
+    if outcome.rows.is_empty() {
+        crate::report::emit(&s);
+        return Err(CliError::input(
+            "no frame could be registered: nothing to write",
+        ));
+    }
+    write_outputs::<N>(args, &design, &joints, sigma_m, outcome, &mut s)?;
+    crate::report::emit(&s);
+    Ok(())
+}
+
+/// Refuses a joints file with an empty frame label or two rows for one frame.
+fn check_frame_labels(joints: &MeasurementSet, frame_col: usize) -> Result<(), CliError> {
+    let mut seen = HashMap::new();
+    for r in &joints.rows {
+        let label = r.extras[frame_col].trim();
+        if label.is_empty() {
+            return Err(CliError::input(format!(
+                "{}:{}: column 'frame': expected a frame label, found an empty cell",
+                joints.source, r.line
+            )));
+        }
+        if let Some(prev) = seen.insert(label.to_string(), r.line) {
+            return Err(CliError::input(format!(
+                "{}:{}: frame {label} already has joint readings (line {prev})",
+                joints.source, r.line
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Every marker of every registration: the residuals CSV, per-marker statistics and the
+/// flagged markers, in the order the frames were registered.
+struct MarkerLog {
+    residuals_csv: String,
+    stats: BTreeMap<(String, String), MarkerStats>,
+    flagged: Vec<String>,
+}
+
+impl MarkerLog {
+    fn new() -> Self {
+        MarkerLog {
+            residuals_csv: String::from(
+                "frame,body,marker,status,dx_mm,dy_mm,dz_mm,distance_mm,threshold_mm\n",
+            ),
+            stats: BTreeMap::new(),
+            flagged: Vec::new(),
         }
     }
 
-    let mut out_rows = Vec::new();
-    let mut failed: Vec<(String, u64, String)> = Vec::new();
-    let mut flagged: Vec<String> = Vec::new();
-    let mut resid_csv =
-        String::from("frame,body,marker,status,dx_mm,dy_mm,dz_mm,distance_mm,threshold_mm\n");
-    let mut stats: BTreeMap<(String, String), MarkerStats> = BTreeMap::new();
-    let mut base_poses: Vec<(String, Transform)> = Vec::new();
-    let mut record = |body: &str,
-                      names: &[(String, [f64; 3])],
-                      label: &str,
-                      reg: &Registration,
-                      flagged: &mut Vec<String>,
-                      stats: &mut BTreeMap<(String, String), MarkerStats>| {
+    /// Records the markers of one registration of `body` in frame `label`.
+    fn record(
+        &mut self,
+        body: &str,
+        names: &[(String, [f64; 3])],
+        label: &str,
+        reg: &Registration,
+    ) {
         for (k, f) in reg.markers().iter().enumerate() {
             let name = &names[k].0;
-            let st = stats.entry((body.to_string(), name.clone())).or_default();
+            let st = self
+                .stats
+                .entry((body.to_string(), name.clone()))
+                .or_default();
             let status = status_name(f.status, names);
             if f.status != MarkerStatus::Missing {
                 st.seen += 1;
@@ -497,14 +556,14 @@ fn markers<const N: usize>(robot: &Robot<N>, args: &Args) -> Result<(), CliError
                 MarkerStatus::Moved | MarkerStatus::Swapped { .. } | MarkerStatus::Suspect
             ) {
                 st.flagged += 1;
-                flagged.push(format!(
+                self.flagged.push(format!(
                     "frame {label}: {body} marker {name} {status} (residual {:.3} mm, threshold {:.3} mm)",
                     f.distance_m * 1e3,
                     f.threshold_m * 1e3
                 ));
             }
             let _ = writeln!(
-                resid_csv,
+                self.residuals_csv,
                 "{label},{body},{name},{status},{},{},{},{},{}",
                 f.residual_m[0] * 1e3,
                 f.residual_m[1] * 1e3,
@@ -513,175 +572,259 @@ fn markers<const N: usize>(robot: &Robot<N>, args: &Args) -> Result<(), CliError
                 f.threshold_m * 1e3
             );
         }
-    };
+    }
+}
 
+/// What registering every frame produced.
+struct Outcome {
+    /// The rows of DATA.csv.
+    rows: Vec<MeasurementRow>,
+    /// Frames left out: label, joints line, why.
+    failed: Vec<(String, u64, String)>,
+    log: MarkerLog,
+    /// The base's registered pose per frame (with base markers).
+    base_poses: Vec<(String, Transform)>,
+}
+
+/// Registers the base and the probe of every frame with joint readings.
+fn register_frames(
+    joints: &MeasurementSet,
+    frame_col: usize,
+    by_label: &HashMap<&str, &Frame>,
+    design: &Design,
+    opts: &RegistrationOptions,
+    points: bool,
+) -> Outcome {
+    let mut out = Outcome {
+        rows: Vec::new(),
+        failed: Vec::new(),
+        log: MarkerLog::new(),
+        base_poses: Vec::new(),
+    };
     for r in &joints.rows {
         let label = r.extras[frame_col].trim().to_string();
         let Some(frame) = by_label.get(label.as_str()) else {
-            failed.push((
+            out.failed.push((
                 label,
                 r.line,
                 "no markers in the export for this frame".into(),
             ));
             continue;
         };
-        // Base.
-        let t_mocap_base = if design.base.is_empty() {
-            Transform::identity()
-        } else {
-            let (d, m, v) = body_markers(&design.base, Some(frame));
-            let mk = Markers {
-                visible: Some(&v),
-                ..Markers::new(&d, &m)
-            };
-            match register(&mk, &opts) {
-                Ok(reg) if reg.consistent && reg.ambiguity.is_some() => {
-                    failed.push((label, r.line, ambiguous_reason("base", &design.base, &reg)));
-                    continue;
-                }
-                Ok(reg) if reg.consistent => {
-                    record("base", &design.base, &label, &reg, &mut flagged, &mut stats);
-                    base_poses.push((label.clone(), reg.t_mocap_body));
-                    reg.t_mocap_body
-                }
-                Ok(reg) => {
-                    record("base", &design.base, &label, &reg, &mut flagged, &mut stats);
-                    failed.push((
-                        label,
-                        r.line,
-                        format!(
-                            "base markers inconsistent (RMS {:.3} mm, no exclusion of up to {} markers fits)",
-                            reg.rms_m * 1e3,
-                            args.max_outliers
-                        ),
-                    ));
-                    continue;
-                }
-                Err(e) => {
-                    failed.push((label, r.line, reg_failure(MarkerBody::Base, &e, &v)));
-                    continue;
-                }
+        let t_mocap_base = match register_base(design, frame, opts, &label, &mut out) {
+            Ok(t) => t,
+            Err(why) => {
+                out.failed.push((label, r.line, why));
+                continue;
             }
         };
-        let to_base = t_mocap_base.inverse();
-        let (d, m, v) = body_markers(&design.probe, Some(frame));
+        let probe = Probe {
+            row: r,
+            label: &label,
+            design,
+            frame,
+            to_base: t_mocap_base.inverse(),
+            opts,
+        };
+        let rows = if points {
+            probe.point_rows(&mut out.log)
+        } else {
+            probe.pose_row(&mut out.log).map(|row| vec![row])
+        };
+        match rows {
+            Ok(rows) => out.rows.extend(rows),
+            Err(why) => out.failed.push((label, r.line, why)),
+        }
+    }
+    out
+}
+
+/// The base's pose in the motion-capture frame (identity without base markers), or why it
+/// cannot be registered in this frame.
+fn register_base(
+    design: &Design,
+    frame: &Frame,
+    opts: &RegistrationOptions,
+    label: &str,
+    out: &mut Outcome,
+) -> Result<Transform, String> {
+    if design.base.is_empty() {
+        return Ok(Transform::identity());
+    }
+    let (d, m, v) = body_markers(&design.base, Some(frame));
+    let mk = Markers {
+        visible: Some(&v),
+        ..Markers::new(&d, &m)
+    };
+    match register(&mk, opts) {
+        Ok(reg) if reg.consistent && reg.ambiguity.is_some() => {
+            Err(ambiguous_reason("base", &design.base, &reg))
+        }
+        Ok(reg) if reg.consistent => {
+            out.log.record("base", &design.base, label, &reg);
+            out.base_poses.push((label.to_string(), reg.t_mocap_body));
+            Ok(reg.t_mocap_body)
+        }
+        Ok(reg) => {
+            out.log.record("base", &design.base, label, &reg);
+            Err(format!(
+                "base markers inconsistent (RMS {:.3} mm, no exclusion of up to {} markers fits)",
+                reg.rms_m * 1e3,
+                opts.max_outliers
+            ))
+        }
+        Err(e) => Err(reg_failure(MarkerBody::Base, &e, &v)),
+    }
+}
+
+/// The probe of one frame, to be registered into the base frame.
+struct Probe<'a> {
+    row: &'a MeasurementRow,
+    label: &'a str,
+    design: &'a Design,
+    frame: &'a Frame,
+    /// Motion-capture frame to robot base.
+    to_base: Transform,
+    opts: &'a RegistrationOptions,
+}
+
+impl Probe<'_> {
+    /// `--points`: one position row per consistent (or, with fewer than 3 markers seen,
+    /// unscreened) probe marker.
+    fn point_rows(&self, log: &mut MarkerLog) -> Result<Vec<MeasurementRow>, String> {
+        let probe = &self.design.probe;
+        let (d, m, v) = body_markers(probe, Some(self.frame));
         let mk = Markers {
             visible: Some(&v),
             ..Markers::new(&d, &m)
         };
-        let reg = register(&mk, &opts);
-        if args.points {
-            // Point rows: the consistent (or unscreened, with fewer than 3) probe markers.
-            let usable: Vec<usize> = match &reg {
-                Ok(reg) => {
-                    record(
-                        "probe",
-                        &design.probe,
-                        &label,
-                        reg,
-                        &mut flagged,
-                        &mut stats,
-                    );
-                    if !reg.consistent {
-                        failed.push((label, r.line, "probe markers inconsistent".into()));
-                        continue;
-                    }
-                    if reg.ambiguity.is_some() {
-                        failed.push((label, r.line, ambiguous_reason("probe", &design.probe, reg)));
-                        continue;
-                    }
-                    (0..d.len())
-                        .filter(|&k| reg.markers()[k].status == MarkerStatus::Inlier)
-                        .collect()
+        let usable: Vec<usize> = match &register(&mk, self.opts) {
+            Ok(reg) => {
+                log.record("probe", probe, self.label, reg);
+                if !reg.consistent {
+                    return Err("probe markers inconsistent".into());
                 }
-                Err(_) => (0..d.len()).filter(|&k| v[k]).collect(),
-            };
-            if usable.is_empty() {
-                failed.push((label, r.line, "no probe marker visible".into()));
-                continue;
+                if reg.ambiguity.is_some() {
+                    return Err(ambiguous_reason("probe", probe, reg));
+                }
+                (0..d.len())
+                    .filter(|&k| reg.markers()[k].status == MarkerStatus::Inlier)
+                    .collect()
             }
-            for k in usable {
-                let p = to_base.transform_point(&nalgebra::Point3::from(m[k]));
-                let mut row = joint_row(r, &label);
+            Err(_) => (0..d.len()).filter(|&k| v[k]).collect(),
+        };
+        if usable.is_empty() {
+            return Err("no probe marker visible".into());
+        }
+        Ok(usable
+            .into_iter()
+            .map(|k| {
+                let p = self.to_base.transform_point(&nalgebra::Point3::from(m[k]));
+                let mut row = joint_row(self.row, self.label);
                 row.position_m = Some([p.x, p.y, p.z]);
                 row.point_m = Some(d[k]);
-                row.extras.push(design.probe[k].0.clone());
-                out_rows.push(row);
-            }
-            continue;
-        }
-        match reg {
+                row.extras.push(probe[k].0.clone());
+                row
+            })
+            .collect())
+    }
+
+    /// The probe's pose in the base frame, with its registration RMS [mm] as an extra.
+    fn pose_row(&self, log: &mut MarkerLog) -> Result<MeasurementRow, String> {
+        let probe = &self.design.probe;
+        let (d, m, v) = body_markers(probe, Some(self.frame));
+        let mk = Markers {
+            visible: Some(&v),
+            ..Markers::new(&d, &m)
+        };
+        match register(&mk, self.opts) {
             Ok(reg) if reg.consistent && reg.ambiguity.is_some() => {
-                failed.push((
-                    label,
-                    r.line,
-                    ambiguous_reason("probe", &design.probe, &reg),
-                ));
+                Err(ambiguous_reason("probe", probe, &reg))
             }
             Ok(reg) if reg.consistent => {
-                record(
-                    "probe",
-                    &design.probe,
-                    &label,
-                    &reg,
-                    &mut flagged,
-                    &mut stats,
-                );
-                let t = to_base * reg.t_mocap_body;
+                log.record("probe", probe, self.label, &reg);
+                let t = self.to_base * reg.t_mocap_body;
                 let p = t.translation.vector;
                 let [w, x, y, z] = matrix_to_quaternion(t.rotation.matrix());
-                let mut row = joint_row(r, &label);
+                let mut row = joint_row(self.row, self.label);
                 row.position_m = Some([p.x, p.y, p.z]);
                 row.orientation = Some(Orientation::Quaternion { w, x, y, z });
                 row.extras.push(format!("{:?}", reg.rms_m * 1e3));
-                out_rows.push(row);
+                Ok(row)
             }
             Ok(reg) => {
-                record(
-                    "probe",
-                    &design.probe,
-                    &label,
-                    &reg,
-                    &mut flagged,
-                    &mut stats,
-                );
-                failed.push((
-                    label,
-                    r.line,
-                    format!(
-                        "probe markers inconsistent (RMS {:.3} mm, no exclusion of up to {} markers fits)",
-                        reg.rms_m * 1e3,
-                        args.max_outliers
-                    ),
-                ));
+                log.record("probe", probe, self.label, &reg);
+                Err(format!(
+                    "probe markers inconsistent (RMS {:.3} mm, no exclusion of up to {} markers fits)",
+                    reg.rms_m * 1e3,
+                    self.opts.max_outliers
+                ))
             }
-            Err(e) => {
-                failed.push((label, r.line, reg_failure(MarkerBody::Probe, &e, &v)));
-            }
+            Err(e) => Err(reg_failure(MarkerBody::Probe, &e, &v)),
         }
     }
-    let joint_labels: Vec<&str> = joints
-        .rows
-        .iter()
-        .map(|r| r.extras[frame_col].trim())
-        .collect();
-    let unused: Vec<&str> = frames
-        .iter()
-        .map(|(l, _)| l.as_str())
-        .filter(|l| !joint_labels.contains(l))
-        .collect();
+}
 
-    // Report.
+/// What the readable report is made of.
+struct ReportInputs<'a> {
+    joints: &'a MeasurementSet,
+    export_frames: usize,
+    sigma_m: f64,
+    args: &'a Args,
+    design_notes: &'a [String],
+    outcome: &'a Outcome,
+    /// Export frames without joint readings.
+    unused: &'a [&'a str],
+}
+
+/// The readable report up to the files written.
+fn report_text(r: &ReportInputs<'_>) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
         "Marker registration: {} frames with joint readings, {} export frames; σ = {:.3} mm, threshold {}σ, up to {} outliers per body",
-        joints.rows.len(),
-        frames.len(),
-        sigma_m * 1e3,
-        args.k_sigma,
-        args.max_outliers
+        r.joints.rows.len(),
+        r.export_frames,
+        r.sigma_m * 1e3,
+        r.args.k_sigma,
+        r.args.max_outliers
     );
+    for note in r.design_notes {
+        let _ = writeln!(s, "Design: {note}");
+    }
+    s.push_str("Per marker (residuals of the frames registered, flagged markers included):\n");
+    s.push_str(&marker_table(&r.outcome.log.stats));
+    let flagged = &r.outcome.log.flagged;
+    if flagged.is_empty() {
+        s.push_str("Flagged markers: none\n");
+    } else {
+        let _ = writeln!(s, "Flagged markers ({}):", flagged.len());
+        for f in flagged {
+            let _ = writeln!(s, "  {f}");
+        }
+    }
+    if let Some(line) = base_drift(&r.outcome.base_poses, r.sigma_m) {
+        s.push_str(&line);
+    }
+    if !r.unused.is_empty() {
+        let _ = writeln!(
+            s,
+            "Export frames without joint readings (not used): {}",
+            r.unused.join(", ")
+        );
+    }
+    let failed = &r.outcome.failed;
+    if !failed.is_empty() {
+        let _ = writeln!(s, "Frames that could not be registered ({}):", failed.len());
+        for (label, line, why) in failed {
+            let _ = writeln!(s, "  frame {label} ({}:{line}): {why}", r.joints.source);
+        }
+    }
+    s
+}
+
+/// The per-marker table: frames seen, RMS and largest residual, times flagged.
+fn marker_table(stats: &BTreeMap<(String, String), MarkerStats>) -> String {
     let mut t = crate::report::Table::new(&[
         "body",
         "marker",
@@ -690,7 +833,7 @@ fn markers<const N: usize>(robot: &Robot<N>, args: &Args) -> Result<(), CliError
         "max [mm]",
         "flagged",
     ]);
-    for ((body, name), st) in &stats {
+    for ((body, name), st) in stats {
         t.row(vec![
             body.clone(),
             name.clone(),
@@ -704,72 +847,50 @@ fn markers<const N: usize>(robot: &Robot<N>, args: &Args) -> Result<(), CliError
             st.flagged.to_string(),
         ]);
     }
-    for note in &design_notes {
-        let _ = writeln!(s, "Design: {note}");
-    }
-    s.push_str("Per marker (residuals of the frames registered, flagged markers included):\n");
-    s.push_str(&t.render("  "));
-    if flagged.is_empty() {
-        s.push_str("Flagged markers: none\n");
-    } else {
-        let _ = writeln!(s, "Flagged markers ({}):", flagged.len());
-        for f in &flagged {
-            let _ = writeln!(s, "  {f}");
-        }
-    }
-    if base_poses.len() >= 2 {
-        let first = base_poses[0].1;
-        let (mut dp, mut dr, mut at) = (0.0f64, 0.0f64, String::new());
-        for (label, t) in &base_poses {
-            let e = kincal::pose::pose_error(t, &first, kincal::OrientationError::Exact);
-            let p = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
-            if p > dp {
-                at = label.clone();
-            }
-            dp = dp.max(p);
-            dr = dr.max((e[3] * e[3] + e[4] * e[4] + e[5] * e[5]).sqrt());
-        }
-        let _ = writeln!(
-            s,
-            "Base registration: largest change from frame {} is {:.3} mm / {:.4}° (frame {at}){}",
-            base_poses[0].0,
-            dp * 1e3,
-            dr.to_degrees(),
-            if dp > 4.0 * sigma_m {
-                " — more than 4σ: did the base or its markers move?"
-            } else {
-                ""
-            }
-        );
-    }
-    if !unused.is_empty() {
-        let _ = writeln!(
-            s,
-            "Export frames without joint readings (not used): {}",
-            unused.join(", ")
-        );
-    }
-    if !failed.is_empty() {
-        let _ = writeln!(s, "Frames that could not be registered ({}):", failed.len());
-        for (label, line, why) in &failed {
-            let _ = writeln!(s, "  frame {label} ({}:{line}): {why}", joints.source);
-        }
-    }
-    if !failed.is_empty() && !args.skip_failed {
-        crate::report::emit(&s);
-        return Err(CliError::input(format!(
-            "{} frame(s) could not be registered (listed above); fix the export or the design, or pass --skip-failed to leave them out",
-            failed.len()
-        )));
-    }
-    if out_rows.is_empty() {
-        crate::report::emit(&s);
-        return Err(CliError::input(
-            "no frame could be registered: nothing to write",
-        ));
-    }
+    t.render("  ")
+}
 
-    // DATA.csv.
+/// The largest change of the base's registered pose from the first frame (a moved base or
+/// base marker shows here), with at least two base registrations.
+fn base_drift(base_poses: &[(String, Transform)], sigma_m: f64) -> Option<String> {
+    let [(first_label, first), ..] = base_poses else {
+        return None;
+    };
+    if base_poses.len() < 2 {
+        return None;
+    }
+    let (mut dp, mut dr, mut at) = (0.0f64, 0.0f64, String::new());
+    for (label, t) in base_poses {
+        let e = kincal::pose::pose_error(t, first, kincal::OrientationError::Exact);
+        let p = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
+        if p > dp {
+            at = label.clone();
+        }
+        dp = dp.max(p);
+        dr = dr.max((e[3] * e[3] + e[4] * e[4] + e[5] * e[5]).sqrt());
+    }
+    Some(format!(
+        "Base registration: largest change from frame {first_label} is {:.3} mm / {:.4}° (frame {at}){}\n",
+        dp * 1e3,
+        dr.to_degrees(),
+        if dp > 4.0 * sigma_m {
+            " — more than 4σ: did the base or its markers move?"
+        } else {
+            ""
+        }
+    ))
+}
+
+/// Writes DATA.csv (and the residuals CSV with `--residuals`) and says so in `s`.
+fn write_outputs<const N: usize>(
+    args: &Args,
+    design: &Design,
+    joints: &MeasurementSet,
+    sigma_m: f64,
+    outcome: Outcome,
+    s: &mut String,
+) -> Result<(), CliError> {
+    let failed = &outcome.failed;
     let mut comments = joints.comments.clone();
     comments.push(format!(
         " poses from marker registration (kincal markers): design {}, σ {:.3} mm",
@@ -781,7 +902,7 @@ fn markers<const N: usize>(robot: &Robot<N>, args: &Args) -> Result<(), CliError
     if design.base.is_empty() {
         comments.push(" no base markers: poses are in the motion-capture frame".into());
     }
-    for (label, line, why) in &failed {
+    for (label, line, why) in failed {
         comments.push(format!(
             " left out: frame {label} (joints line {line}): {why}"
         ));
@@ -792,12 +913,12 @@ fn markers<const N: usize>(robot: &Robot<N>, args: &Args) -> Result<(), CliError
     } else {
         "extra_probe_rms_mm".into()
     });
-    let n_rows = out_rows.len();
+    let n_rows = outcome.rows.len();
     let set = MeasurementSet {
         source: args.out.display().to_string(),
         comments,
         n_joints: N,
-        rows: out_rows,
+        rows: outcome.rows,
         extra_columns,
         orientation_form: (!args.points).then_some(OrientationForm::Quaternion),
         has_position: true,
@@ -826,10 +947,10 @@ fn markers<const N: usize>(robot: &Robot<N>, args: &Args) -> Result<(), CliError
     if let Some(p) = &args.residuals {
         let mut ins = inputs.clone();
         ins.push(&args.out);
-        kincal_io::files::write_atomic(p, &ins, |w| w.write_all(resid_csv.as_bytes()))?;
+        let csv = &outcome.log.residuals_csv;
+        kincal_io::files::write_atomic(p, &ins, |w| w.write_all(csv.as_bytes()))?;
         let _ = writeln!(s, "Per-marker residuals written to {}", p.display());
     }
-    crate::report::emit(&s);
     Ok(())
 }
 

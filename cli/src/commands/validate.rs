@@ -399,12 +399,7 @@ fn validate<const N: usize>(
         None => (i + 1).to_string(),
     };
 
-    let d_m = args
-        .biopsy_d_mm
-        .map_or(main.summary.max_pos_m, |d| d * 1e-3);
-    let r_t = args.tumour_radius_mm * 1e-3;
-    let l_max = args.insertion_mm * 1e-3;
-    let eq3 = biopsy_allowed_rotation_rad(r_t, d_m, l_max).ok();
+    let biopsy = Biopsy::of(args, &main);
 
     // Outputs first, so a refused path fails before anything is printed.
     let mut inputs: Vec<&Path> = vec![&args.data];
@@ -413,49 +408,14 @@ fn validate<const N: usize>(
         inputs.push(model_path);
     }
     if let Some(p) = &args.json {
-        let report = ReportJson {
-            model: &args.model,
-            data: DataRef {
-                path: args.data.display().to_string(),
-                sha256: &set.sha256,
-            },
-            targets: TargetsJson {
-                pos_m: targets.pos_m,
-                rot_rad: targets.rot_rad,
-            },
-            eq3: eq3.map(|a| Eq3Json {
-                tumour_radius_m: r_t,
-                insertion_m: l_max,
-                d_m,
-                allowed_rot_rad: a,
-                rot_ok: has_rot.then_some(main.summary.max_rot_rad < a),
-            }),
-            summary: summary_json(&main, targets, has_rot),
-            variants: evals
-                .iter()
-                .map(|e| summary_json(e, targets, has_rot))
-                .collect(),
-            poses: main
-                .errors
-                .iter()
-                .enumerate()
-                .map(|(i, e)| PoseJson {
-                    index: i + 1,
-                    pose_id: set.rows[i].pose_id.as_deref(),
-                    line: set.rows[i].line,
-                    e_pos_m: e.pos_m,
-                    e_pos_norm_m: e.pos_norm_m,
-                    e_rot_rad: has_rot.then_some(e.rot_rad),
-                    e_rot_norm_rad: has_rot.then_some(e.rot_norm_rad),
-                })
-                .collect(),
+        let judged = Judged {
+            main: &main,
+            evals: &evals,
+            set: &set,
+            targets,
+            has_rot,
         };
-        let text = serde_json::to_string_pretty(&report)
-            .map_err(|e| CliError::io(format!("{}: {e}", p.display())))?;
-        kincal_io::files::write_atomic(p, &inputs, |w| {
-            w.write_all(text.as_bytes())?;
-            w.write_all(b"\n")
-        })?;
+        write_json(p, &inputs, args, &judged, &biopsy)?;
     }
     if let Some(p) = &args.plot {
         let series: Vec<Series> = evals
@@ -496,6 +456,125 @@ fn validate<const N: usize>(
             "  ",
         );
     }
+    out.push_str(&summary_section(
+        args, file, name, &main, &evals, targets, has_rot,
+    ));
+    // Eq. (3) is the ARIA biopsy's budget: printed for ARIA or when asked for (--biopsy-d-mm).
+    if is_aria(file) || args.biopsy_d_mm.is_some() {
+        out.push_str(&eq3_text(args, &biopsy, &main, has_rot));
+    }
+    if let Some(p) = &args.plot {
+        let _ = writeln!(out, "Error figure written to {}", p.display());
+    }
+    if let Some(p) = &args.json {
+        let _ = writeln!(out, "Report written to {}", p.display());
+    }
+    crate::report::emit(&out);
+    Ok(())
+}
+
+/// The biopsy budget of eq. (3): the distance d [m] at the puncture point (`--biopsy-d-mm`,
+/// else the model's worst position error), the tumour radius and insertion depth [m], and
+/// the orientation error it allows [rad] (`None` when d is not below the radius).
+struct Biopsy {
+    d_m: f64,
+    tumour_radius_m: f64,
+    insertion_m: f64,
+    allowed_rot_rad: Option<f64>,
+}
+
+impl Biopsy {
+    fn of(args: &Args, main: &Evaluation) -> Self {
+        let d_m = args
+            .biopsy_d_mm
+            .map_or(main.summary.max_pos_m, |d| d * 1e-3);
+        let tumour_radius_m = args.tumour_radius_mm * 1e-3;
+        let insertion_m = args.insertion_mm * 1e-3;
+        Biopsy {
+            d_m,
+            tumour_radius_m,
+            insertion_m,
+            allowed_rot_rad: biopsy_allowed_rotation_rad(tumour_radius_m, d_m, insertion_m).ok(),
+        }
+    }
+}
+
+/// A model's errors on the data, and what they are judged against.
+struct Judged<'a> {
+    main: &'a Evaluation,
+    evals: &'a [Evaluation],
+    set: &'a kincal_io::measurements::MeasurementSet,
+    targets: Targets,
+    has_rot: bool,
+}
+
+/// Writes `--json`: summaries of the model and of every variant, eq. (3), per-pose errors.
+fn write_json(
+    path: &Path,
+    inputs: &[&Path],
+    args: &Args,
+    j: &Judged<'_>,
+    biopsy: &Biopsy,
+) -> Result<(), CliError> {
+    let (main, set, targets, has_rot) = (j.main, j.set, j.targets, j.has_rot);
+    let report = ReportJson {
+        model: &args.model,
+        data: DataRef {
+            path: args.data.display().to_string(),
+            sha256: &set.sha256,
+        },
+        targets: TargetsJson {
+            pos_m: targets.pos_m,
+            rot_rad: targets.rot_rad,
+        },
+        eq3: biopsy.allowed_rot_rad.map(|a| Eq3Json {
+            tumour_radius_m: biopsy.tumour_radius_m,
+            insertion_m: biopsy.insertion_m,
+            d_m: biopsy.d_m,
+            allowed_rot_rad: a,
+            rot_ok: has_rot.then_some(main.summary.max_rot_rad < a),
+        }),
+        summary: summary_json(main, targets, has_rot),
+        variants: j
+            .evals
+            .iter()
+            .map(|e| summary_json(e, targets, has_rot))
+            .collect(),
+        poses: main
+            .errors
+            .iter()
+            .enumerate()
+            .map(|(i, e)| PoseJson {
+                index: i + 1,
+                pose_id: set.rows[i].pose_id.as_deref(),
+                line: set.rows[i].line,
+                e_pos_m: e.pos_m,
+                e_pos_norm_m: e.pos_norm_m,
+                e_rot_rad: has_rot.then_some(e.rot_rad),
+                e_rot_norm_rad: has_rot.then_some(e.rot_norm_rad),
+            })
+            .collect(),
+    };
+    let text = serde_json::to_string_pretty(&report)
+        .map_err(|e| CliError::io(format!("{}: {e}", path.display())))?;
+    kincal_io::files::write_atomic(path, inputs, |w| {
+        w.write_all(text.as_bytes())?;
+        w.write_all(b"\n")
+    })?;
+    Ok(())
+}
+
+/// The summary against the targets, and of every model in the file when it has several.
+fn summary_section(
+    args: &Args,
+    file: &kincal_io::model_file::ModelFile,
+    name: &str,
+    main: &Evaluation,
+    evals: &[Evaluation],
+    targets: Targets,
+    has_rot: bool,
+) -> String {
+    let mut out = String::new();
     let default_targets = args.target_pos_mm == 1.0 && args.target_rot_deg == 0.66;
     let whose = if is_aria(file) {
         "the paper's ARIA targets"
@@ -509,60 +588,46 @@ fn validate<const N: usize>(
         "\nSummary (per pose: e_p < {} mm, e_φ < {}°; {whose}):",
         args.target_pos_mm, args.target_rot_deg
     );
-    out.push_str(&summary_table(
-        std::slice::from_ref(&main),
-        targets,
-        has_rot,
-    ));
+    out.push_str(&summary_table(std::slice::from_ref(main), targets, has_rot));
     if evals.len() > 1 || evals.first().is_some_and(|e| e.name != name) {
         let _ = writeln!(out, "\nAll models in {}:", args.model);
-        out.push_str(&summary_table(&evals, targets, has_rot));
+        out.push_str(&summary_table(evals, targets, has_rot));
         out.push_str(&bounded_runs_note(file));
     }
-    // Eq. (3) is the ARIA biopsy's budget: printed for ARIA or when asked for (--biopsy-d-mm).
-    let show_eq3 = is_aria(file) || args.biopsy_d_mm.is_some();
-    match eq3.filter(|_| show_eq3) {
-        Some(a) => {
-            let _ = writeln!(
-                out,
-                "\nEq. (3): with d = {:.4} mm at the puncture point (r_t = {} mm, l_max = {} mm)\n  a biopsy allows e_φ up to {:.4}°{}",
-                d_m * 1e3,
-                args.tumour_radius_mm,
-                args.insertion_mm,
-                a.to_degrees(),
-                if has_rot {
-                    format!(
-                        ": worst e_φ {:.4}° {}",
-                        main.summary.max_rot_rad.to_degrees(),
-                        if main.summary.max_rot_rad < a {
-                            "PASS"
-                        } else {
-                            "FAIL"
-                        }
-                    )
-                } else {
-                    String::new()
-                }
-            );
-        }
-        None if show_eq3 => {
-            let _ = writeln!(
-                out,
-                "\nEq. (3): d = {:.4} mm is not below r_t = {} mm: no orientation error is allowed",
-                d_m * 1e3,
-                args.tumour_radius_mm
-            );
-        }
-        None => {}
+    out
+}
+
+/// Eq. (3): the orientation error a biopsy allows at the model's worst position error, and
+/// whether the worst orientation error is within it.
+fn eq3_text(args: &Args, biopsy: &Biopsy, main: &Evaluation, has_rot: bool) -> String {
+    let d_m = biopsy.d_m;
+    match biopsy.allowed_rot_rad {
+        Some(a) => format!(
+            "\nEq. (3): with d = {:.4} mm at the puncture point (r_t = {} mm, l_max = {} mm)\n  a biopsy allows e_φ up to {:.4}°{}\n",
+            d_m * 1e3,
+            args.tumour_radius_mm,
+            args.insertion_mm,
+            a.to_degrees(),
+            if has_rot {
+                format!(
+                    ": worst e_φ {:.4}° {}",
+                    main.summary.max_rot_rad.to_degrees(),
+                    if main.summary.max_rot_rad < a {
+                        "PASS"
+                    } else {
+                        "FAIL"
+                    }
+                )
+            } else {
+                String::new()
+            }
+        ),
+        None => format!(
+            "\nEq. (3): d = {:.4} mm is not below r_t = {} mm: no orientation error is allowed\n",
+            d_m * 1e3,
+            args.tumour_radius_mm
+        ),
     }
-    if let Some(p) = &args.plot {
-        let _ = writeln!(out, "Error figure written to {}", p.display());
-    }
-    if let Some(p) = &args.json {
-        let _ = writeln!(out, "Report written to {}", p.display());
-    }
-    crate::report::emit(&out);
-    Ok(())
 }
 
 /// Says which recorded runs ended on their OPT1 interval bounds (at least
