@@ -603,3 +603,46 @@ fn position_only_residuals_have_no_orientation() {
     assert_eq!(d.location.rms_rot_rad, 0.0);
     assert!(d.location.regions.iter().all(|r| r.rms_rot_rad == 0.0));
 }
+
+/// `Config::effect_params` restricts a candidate's effect parameters (the front ends'
+/// `joint_scale@JOINT`): the joint_scale candidate fits the third joint's scale only, the
+/// unrestricted one every joint's it can, and the geometric parameters are the same.
+#[test]
+fn effect_params_restrict_a_candidate_to_chosen_joints() {
+    let truth = truth_with(Some(Effect::JointScale), 1.0, 31);
+    let (data, groups) = session(&truth, 32, |_| {});
+    let scale = |j: usize| ParamId::Scale(j).index(6).0;
+    let base = Config {
+        candidates: Some(EffectSet::of(Effect::JointScale)),
+        pairs: false,
+        ..Config::default()
+    };
+    let mut only = kincal::ParamSet::new();
+    only.insert(scale(2)).unwrap();
+    let restricted = Config {
+        effect_params: Some(only),
+        ..base
+    };
+    let mut ws = workspace();
+    let (all, _) = run(&data, &groups, &base, &mut ws);
+    let (one, _) = run(&data, &groups, &restricted, &mut ws);
+    let scales = |d: &Diagnosis<6>| -> Vec<usize> {
+        (0..6)
+            .filter(|&j| d.candidates()[0].identifiable.contains(scale(j)))
+            .collect()
+    };
+    assert_eq!(scales(&one), [2]);
+    assert!(scales(&all).len() >= 4, "{:?}", scales(&all));
+    let geometric = |d: &Diagnosis<6>| {
+        let mut s = d.candidates()[0].identifiable;
+        for j in 0..6 {
+            s.remove(scale(j));
+        }
+        s
+    };
+    assert_eq!(geometric(&one), geometric(&all));
+    assert_eq!(
+        one.candidates()[0].fitted_params + scales(&all).len() - 1,
+        all.candidates()[0].fitted_params
+    );
+}
