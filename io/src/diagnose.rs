@@ -1118,7 +1118,7 @@ pub fn warning_text(w: &Warning) -> String {
         ),
         Warning::TooManySuspects { count, cap } => format!(
             "{count} rows fail the outlier test, {} more than the {cap} the screen may exclude (at most {} or a tenth of the rows): too many to be gross outliers (heavy-tailed residuals, or an effect outside the library); none excluded",
-            count.saturating_sub(*cap),
+            count.saturating_sub(cap),
             diagnosis::MAX_SUSPECTS
         ),
     }
