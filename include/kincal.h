@@ -190,7 +190,7 @@
 /*
  Suspect rows (gross outliers) a report lists at most.
  */
-#define KINCAL_DIAG_MAX_SUSPECTS 16
+#define KINCAL_DIAG_MAX_SUSPECTS 64
 
 /*
  Warnings a report lists at most.

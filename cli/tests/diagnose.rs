@@ -433,6 +433,110 @@ fn prior_holds_the_written_model_and_is_recorded() {
     assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
 }
 
+/// `session_csv` without the orientation columns (position-only data, e.g. a laser
+/// tracker without a 6-DOF probe).
+fn position_only(csv: &str) -> String {
+    csv.lines()
+        .map(|l| {
+            if l.starts_with('#') {
+                return l.to_string();
+            }
+            let cells: Vec<&str> = l.split(',').collect();
+            [&cells[..10], &cells[14..]].concat().join(",")
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+        + "\n"
+}
+
+/// Position-only data: the noise floor of orientation is "not measured" in the text and
+/// in REPORT.json (null σ, source `not_measured`), not the core's 1 rad placeholder.
+#[test]
+fn position_only_data_report_orientation_as_not_measured() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = position_only(&session_csv(Some(Effect::JointCompliance), 20, false, 8));
+    assert!(csv.lines().nth(1).unwrap().ends_with(",x,y,z"), "{csv}");
+    fs::write(dir.path().join("pos.csv"), csv).unwrap();
+    let o = kincal(
+        &[
+            "diagnose", "pos.csv", "--robot", "aria", "--json", "R.json", "--out", "m.json",
+        ],
+        dir.path(),
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let stdout = text(&o.stdout);
+    assert!(stdout.contains("orientation not measured"), "{stdout}");
+    assert!(!stdout.contains("57.3"), "{stdout}");
+    let r: Value =
+        serde_json::from_str(&fs::read_to_string(dir.path().join("R.json")).unwrap()).unwrap();
+    let nf = &r["noise_floor"];
+    assert_eq!(nf["rot_source"], "not_measured", "{nf}");
+    assert!(
+        nf["rot_deg"].is_null() && nf["rms_rot_deg"].is_null(),
+        "{nf}"
+    );
+    assert_eq!(nf["pos_source"], "repeats", "{nf}");
+    assert!(nf["pos_mm"].as_f64().unwrap() > 0.05, "{nf}");
+    // The outlier screen says its cap and count (60 + 20 rows: a tenth, 8).
+    let os = &r["outlier_screen"];
+    assert_eq!(os["cap"], 8, "{os}");
+    assert_eq!(
+        os["excluded"].as_u64().unwrap(),
+        r["suspect_rows"].as_array().unwrap().len() as u64
+    );
+}
+
+/// `--candidates` takes the joint selectors of calibrate/crossval: `joint_scale@q3` gives
+/// the candidate the third joint's scale only (REPORT.json `settings.scale_joints`, one
+/// fitted parameter over the geometric model); a joint the robot lacks is exit 2.
+#[test]
+fn candidates_take_joint_selectors() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(
+        dir.path().join("s.csv"),
+        session_csv(Some(Effect::JointScale), 20, false, 9),
+    )
+    .unwrap();
+    let run = |cands: &str, json: &str| {
+        kincal(
+            &[
+                "diagnose",
+                "s.csv",
+                "--robot",
+                "aria",
+                "--candidates",
+                cands,
+                "--json",
+                json,
+                "--out",
+                "m.json",
+            ],
+            dir.path(),
+        )
+    };
+    let read = |json: &str| -> Value {
+        serde_json::from_str(&fs::read_to_string(dir.path().join(json)).unwrap()).unwrap()
+    };
+    let o = run("joint_scale@q3", "one.json");
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let one = read("one.json");
+    assert_eq!(names(&one["settings"]["scale_joints"]), ["q3"]);
+    let o = run("joint_scale", "all.json");
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let all = read("all.json");
+    assert!(all["settings"]["scale_joints"].is_null());
+    let fitted = |r: &Value| r["candidates"][0]["fitted_params"].as_u64().unwrap();
+    let scales_all = fitted(&all) - fitted(&one) + 1;
+    assert!(scales_all >= 4, "{} vs {}", fitted(&all), fitted(&one));
+    let bad = run("joint_scale@q9", "bad.json");
+    assert_eq!(bad.status.code(), Some(2), "{}", text(&bad.stderr));
+    let err = text(&bad.stderr);
+    assert!(
+        err.contains("--candidates joint_scale@q9") && err.contains("no joint"),
+        "{err}"
+    );
+}
+
 /// The widest line of `text` (characters) and the line itself; with `prose_only`, of the
 /// lines that are not table rows (no two-space column gap after the indentation, not a
 /// rule).

@@ -45,8 +45,32 @@ pub fn repeat_leader<const N: usize>(
     temp_tol_c: f64,
 ) -> usize {
     let g = group_leader(l);
-    (0..l)
-        .find(|&m| group_leader(m) == g && same_conditions(&data[m], &data[l], temp_tol_c))
+    repeat_leader_among(
+        data,
+        l,
+        (0..l).filter(|&m| group_leader(m) == g),
+        temp_tol_c,
+    )
+}
+
+/// [`repeat_leader`] given the rows of `l`'s group in ascending order (`members`, possibly
+/// running past `l`): O(group size) time when the caller keeps its groups as lists.
+#[must_use]
+pub fn repeat_leader_among<const N: usize>(
+    data: &[Measurement<N>],
+    l: usize,
+    members: impl Iterator<Item = usize>,
+    temp_tol_c: f64,
+) -> usize {
+    let Some(row) = data.get(l) else {
+        return l;
+    };
+    members
+        .take_while(|&m| m < l)
+        .find(|&m| {
+            data.get(m)
+                .is_some_and(|d| same_conditions(d, row, temp_tol_c))
+        })
         .unwrap_or(l)
 }
 
@@ -98,6 +122,20 @@ pub fn pooled_repeat_scatter<E>(
     n: usize,
     sub_leader: impl Fn(usize) -> usize,
     mask: impl Fn(usize) -> ComponentMask,
+    residual: impl FnMut(usize) -> Result<[f64; 6], E>,
+) -> Result<RepeatScatter, E> {
+    pooled_repeat_scatter_linked(n, sub_leader, |l| l + 1, mask, residual)
+}
+
+/// [`pooled_repeat_scatter`] with the rows that may share a subgroup linked: `next(l)` is
+/// the next row after `l` that may (its group's next row; `n` or more after the last), so a
+/// subgroup's members are found in O(group size) instead of O(n). Same sums in the same
+/// order as the unlinked form.
+pub fn pooled_repeat_scatter_linked<E>(
+    n: usize,
+    sub_leader: impl Fn(usize) -> usize,
+    next: impl Fn(usize) -> usize,
+    mask: impl Fn(usize) -> ComponentMask,
     mut residual: impl FnMut(usize) -> Result<[f64; 6], E>,
 ) -> Result<RepeatScatter, E> {
     let mut out = RepeatScatter::default();
@@ -105,7 +143,11 @@ pub fn pooled_repeat_scatter<E>(
         if sub_leader(s) != s {
             continue;
         }
-        let members = || (s..n).filter(|&l| sub_leader(l) == s);
+        let members = || {
+            core::iter::successors(Some(s), |&l| Some(next(l)))
+                .take_while(|&l| l < n)
+                .filter(|&l| sub_leader(l) == s)
+        };
         if members().count() < 2 {
             continue;
         }

@@ -397,12 +397,41 @@ fn gross_outliers_are_named_and_do_not_spoil_the_verdict() {
     );
     assert_eq!(d.suspects(), &[25, 40, 55], "{s}");
     assert!(poses[25].suspect && !poses[24].suspect);
+    // The screen's cap on 80 rows is a tenth of them; three rows were over the threshold.
+    assert_eq!((d.suspect_cap, d.rows_over_threshold), (8, 3), "{s}");
     // Judged on the clean rows: the gap closed matches the clean data's within 0.05.
     assert!(
         (d.verdict.gap_closed_fraction - d0.verdict.gap_closed_fraction).abs() < 0.05,
         "{s} vs {}",
         summary(&d0)
     );
+}
+
+/// More rows over the outlier threshold than the cap (a tenth of 80 rows): none excluded,
+/// and the warning and the result say how many were over and what the cap was.
+#[test]
+fn too_many_outliers_are_counted_against_the_cap() {
+    let truth = geometric_truth(61);
+    let (mut data, groups) = noisy_session(&truth, 62, |_| {});
+    // Twelve poses measured once (rows 20..), each 4 mm off: more than 8 = 80/10.
+    for l in (24..72).step_by(4) {
+        data[l].pose.translation.vector.z += 4e-3;
+    }
+    let (d, poses) = run_diag(&data, &groups, &Config::default());
+    let s = summary(&d);
+    assert!(
+        d.suspects().is_empty() && poses.iter().all(|p| !p.suspect),
+        "{s}"
+    );
+    let warned = d.warnings().find_map(|w| match *w {
+        Warning::TooManySuspects { count, cap } => Some((count, cap)),
+        _ => None,
+    });
+    let (count, cap) = warned.unwrap_or_else(|| panic!("no too_many_suspects: {s}"));
+    assert_eq!(cap, 8, "{s}");
+    // Most of the twelve fail (4 mm is ~20σ against a robust scale): more than the cap.
+    assert!(count > cap && count <= 12, "{count}: {s}");
+    assert_eq!((d.suspect_cap, d.rows_over_threshold), (8, count), "{s}");
 }
 
 /// The ten poses of the paper's Table 2 reached by IK on `truth`, each measured `repeats`

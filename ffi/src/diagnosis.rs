@@ -24,7 +24,7 @@ use crate::status::{FfiResult, KINCAL_NO_INDEX, kincal_error, kincal_status};
 /// Candidate models a report lists at most: every effect alone and every pair (7 + 21).
 pub const KINCAL_DIAG_MAX_CANDIDATES: usize = 28;
 /// Suspect rows (gross outliers) a report lists at most.
-pub const KINCAL_DIAG_MAX_SUSPECTS: usize = 16;
+pub const KINCAL_DIAG_MAX_SUSPECTS: usize = 64;
 /// Warnings a report lists at most.
 pub const KINCAL_DIAG_MAX_WARNINGS: usize = 8;
 const _: () = assert!(KINCAL_DIAG_MAX_CANDIDATES == MAX_CANDIDATES);
@@ -508,6 +508,7 @@ fn config(o: &kincal_diagnose_options) -> FfiResult<Config> {
         fold_seed: o.fold_seed,
         candidates,
         pairs: o.pairs != 0,
+        effect_params: None,
         z_gap: o.z_gap,
         z_significance: o.z_significance,
         z_equivalence: o.z_equivalence,
@@ -656,7 +657,7 @@ fn warning(w: &Warning) -> kincal_diagnosis_warning {
             out.z_gap = z_gap;
             out.z_candidate = z_candidate;
         }
-        Warning::TooManySuspects { count } => {
+        Warning::TooManySuspects { count, .. } => {
             out.code = kincal_diagnosis_warning_code::TooManySuspects as u32;
             out.count = count;
         }

@@ -51,6 +51,10 @@ pub struct Options {
     pub sigma_rot_deg: Option<f64>,
     /// Candidate effects; empty: every effect whose inputs the data have.
     pub candidates: Vec<Effect>,
+    /// The joints (0-based) whose scale the `joint_scale` candidate fits (the front end's
+    /// `joint_scale@JOINT` selectors, resolved by [`crate::effects_arg::resolve`]); `None`:
+    /// every joint.
+    pub scale_joints: Option<Vec<usize>>,
     /// Also evaluate pairs of effects.
     pub pairs: bool,
     /// Cross-validation folds (2 or more: the front end checks, naming its argument).
@@ -66,6 +70,7 @@ impl Default for Options {
             sigma_pos_mm: None,
             sigma_rot_deg: None,
             candidates: Vec::new(),
+            scale_joints: None,
             pairs: c.pairs,
             folds: c.folds,
             seed: c.fold_seed,
@@ -89,6 +94,20 @@ impl Options {
             fold_seed: self.seed,
             ..Config::default()
         }
+    }
+
+    /// [`Options::config`] for an `n`-joint robot: with the `joint_scale` candidate
+    /// restricted to the selected joints.
+    pub fn config_for(&self, n: usize) -> Config {
+        let mut cfg = self.config();
+        if let Some(joints) = &self.scale_joints {
+            let choice = crate::effects_arg::EffectChoice {
+                effects: cfg.candidates.unwrap_or(EffectSet::NONE),
+                scale_joints: Some(joints.clone()),
+            };
+            cfg.effect_params = Some(choice.effect_params(n));
+        }
+        cfg
     }
 
     /// The effect columns to read from the data: the candidates given, else none (the core
@@ -121,6 +140,8 @@ pub struct Study<const N: usize> {
     pub sessions: Option<Sessions<N>>,
     /// Where the gap lies by session, `extra_` column and prismatic reading.
     pub breakdown: Vec<Breakdown>,
+    /// The joints (0-based) the `joint_scale` candidate was restricted to (`None`: all).
+    pub scale_joints: Option<Vec<usize>>,
 }
 
 /// Group ids from the `pose_id` column: equal labels share an id; rows without one get
@@ -151,7 +172,7 @@ pub fn run<const N: usize>(
     options: &Options,
     names: SigmaNames<'_>,
 ) -> Result<Study<N>, Error> {
-    let cfg = options.config();
+    let cfg = options.config_for(N);
     let sessions = session_frames(robot, set, &cfg)?;
     let meas = match &sessions {
         Some(s) => s.data.clone(),
@@ -198,6 +219,7 @@ pub fn run<const N: usize>(
         groups,
         sessions,
         breakdown,
+        scale_joints: options.scale_joints.clone(),
     })
 }
 
@@ -364,6 +386,7 @@ pub struct Report {
     pub warnings: Vec<WarningJson>,
     /// Gross outliers excluded from every fit and test.
     pub suspect_rows: Vec<SuspectJson>,
+    pub outlier_screen: OutlierScreenJson,
     pub noise_floor: NoiseJson,
     pub baseline: BaselineJson,
     pub candidates: Vec<CandidateJson>,
@@ -394,20 +417,37 @@ pub struct Report {
 
 #[derive(Debug, Clone, Serialize)]
 pub struct NoiseJson {
-    pub pos_mm: f64,
-    pub rot_deg: f64,
-    /// "stated" or "repeats", per component type.
+    /// σ per axis [mm], [°]; null for a component type no row measures (unless stated).
+    pub pos_mm: Option<f64>,
+    pub rot_deg: Option<f64>,
+    /// "stated", "repeats" or "not_measured" (no row measures it and no σ was stated),
+    /// per component type.
     pub pos_source: &'static str,
     pub rot_source: &'static str,
     pub dof_pos: Option<f64>,
     pub dof_rot: Option<f64>,
     pub repeat_subgroups: usize,
-    /// √3·σ_pos: RMS position error of pure noise [mm].
-    pub rms_pos_mm: f64,
-    pub rms_rot_deg: f64,
+    /// √3·σ_pos: RMS position error of pure noise [mm] (null when not measured).
+    pub rms_pos_mm: Option<f64>,
+    pub rms_rot_deg: Option<f64>,
     /// σ per axis the repeats alone give (also when σ was stated) [mm], [°].
     pub repeats_pos_mm: Option<f64>,
     pub repeats_rot_deg: Option<f64>,
+}
+
+/// The outlier screen: how many rows it may exclude and how many were over its threshold.
+#[derive(Debug, Clone, Serialize)]
+pub struct OutlierScreenJson {
+    /// Suspects it may exclude on these data: the core's capacity (`MAX_SUSPECTS`) or a
+    /// tenth of the rows, whichever is less.
+    pub cap: usize,
+    /// Rows over the threshold (χ² 99.99 %) at its last pass.
+    pub rows_over_threshold: usize,
+    /// Rows excluded (`suspect_rows`): all of those over the threshold, or none when they
+    /// exceed the cap (then `too_many_suspects` is among the warnings).
+    pub excluded: usize,
+    /// Rows over the threshold beyond the cap (0 when none was over it).
+    pub over_cap: usize,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -679,6 +719,9 @@ pub struct SettingsJson {
     pub partial_fraction: f64,
     pub pairs: bool,
     pub candidates: Vec<String>,
+    /// The joints whose scale the `joint_scale` candidate fits, as data columns (`q3`);
+    /// null: every joint.
+    pub scale_joints: Option<Vec<String>>,
     pub paired_test: &'static str,
 }
 
@@ -773,6 +816,7 @@ pub fn report<const N: usize>(
             })
             .collect(),
         suspect_rows: suspect_rows(d, set),
+        outlier_screen: outlier_screen_json(d),
         noise_floor: noise_json(&d.noise),
         baseline: baseline_json(d),
         candidates: d.candidates().iter().map(candidate_json::<N>).collect(),
@@ -792,25 +836,54 @@ pub fn report<const N: usize>(
             has_approach: set.has_approach,
             has_temperature: set.has_temperature,
         },
-        settings: settings_json(d),
+        settings: SettingsJson {
+            scale_joints: study
+                .scale_joints
+                .as_ref()
+                .map(|js| js.iter().map(|j| format!("q{}", j + 1)).collect()),
+            ..settings_json(d)
+        },
         files,
     }
 }
 
-/// The noise floor in mm and degrees, and where it came from.
+/// The noise floor in mm and degrees, and where it came from; a component type no row
+/// measures (and with no stated σ) is "not_measured", its σ null rather than the core's
+/// placeholder.
 fn noise_json(n: &diagnosis::NoiseFloor) -> NoiseJson {
+    let known_pos = n.measured_pos || n.stated_pos;
+    let known_rot = n.measured_rot || n.stated_rot;
     NoiseJson {
-        pos_mm: n.sigma_pos_m * 1e3,
-        rot_deg: n.sigma_rot_rad.to_degrees(),
-        pos_source: if n.stated_pos { "stated" } else { "repeats" },
-        rot_source: if n.stated_rot { "stated" } else { "repeats" },
-        dof_pos: finite(n.dof_pos),
-        dof_rot: finite(n.dof_rot),
+        pos_mm: known_pos.then_some(n.sigma_pos_m * 1e3),
+        rot_deg: known_rot.then(|| n.sigma_rot_rad.to_degrees()),
+        pos_source: noise_source(n.stated_pos, n.measured_pos),
+        rot_source: noise_source(n.stated_rot, n.measured_rot),
+        dof_pos: if known_pos { finite(n.dof_pos) } else { None },
+        dof_rot: if known_rot { finite(n.dof_rot) } else { None },
         repeat_subgroups: n.repeat_subgroups,
-        rms_pos_mm: n.rms_pos_m() * 1e3,
-        rms_rot_deg: n.rms_rot_rad().to_degrees(),
+        rms_pos_mm: known_pos.then_some(n.rms_pos_m() * 1e3),
+        rms_rot_deg: known_rot.then(|| n.rms_rot_rad().to_degrees()),
         repeats_pos_mm: n.repeat_pos.map(|(s, _)| s * 1e3),
         repeats_rot_deg: n.repeat_rot.map(|(s, _)| s.to_degrees()),
+    }
+}
+
+/// Where a noise σ came from: `stated`, `repeats` or `not_measured`.
+pub fn noise_source(stated: bool, measured: bool) -> &'static str {
+    match (stated, measured) {
+        (true, _) => "stated",
+        (false, true) => "repeats",
+        (false, false) => "not_measured",
+    }
+}
+
+/// The outlier screen's cap and count.
+fn outlier_screen_json<const N: usize>(d: &Diagnosis<N>) -> OutlierScreenJson {
+    OutlierScreenJson {
+        cap: d.suspect_cap,
+        rows_over_threshold: d.rows_over_threshold,
+        excluded: d.suspects().len(),
+        over_cap: d.rows_over_threshold.saturating_sub(d.suspect_cap),
     }
 }
 
@@ -974,6 +1047,7 @@ fn settings_json<const N: usize>(d: &Diagnosis<N>) -> SettingsJson {
             candidates: names(d.candidates().iter().fold(EffectSet::NONE, |acc, c| {
                 c.effects.iter().fold(acc, EffectSet::with)
             })),
+            scale_joints: None,
             paired_test: match d.method {
                 Method::CrossValidation => {
                     "Wilcoxon signed-rank over pose_id groups of the whitened held-out squared errors"
@@ -1042,8 +1116,10 @@ pub fn warning_text(w: &Warning) -> String {
         Warning::GapDespiteGapTest { z_gap, z_candidate } => format!(
             "the gap test finds no gap at the stated noise (z = {z_gap:.1}) but a candidate improves significantly (z = {z_candidate:.1}): there is a gap; the stated noise is probably too large"
         ),
-        Warning::TooManySuspects { count } => format!(
-            "{count} rows fail the outlier test: too many to be gross outliers (heavy-tailed residuals, or an effect outside the library); none excluded"
+        Warning::TooManySuspects { count, cap } => format!(
+            "{count} rows fail the outlier test, {} more than the {cap} the screen may exclude (at most {} or a tenth of the rows): too many to be gross outliers (heavy-tailed residuals, or an effect outside the library); none excluded",
+            count.saturating_sub(cap),
+            diagnosis::MAX_SUSPECTS
         ),
     }
 }

@@ -396,6 +396,7 @@ pub fn diagnose<'py>(
         sigma_pos_mm,
         sigma_rot_deg,
         candidates: effect_set(py, &candidates)?,
+        scale_joints: None,
         pairs,
         folds,
         seed: seed.unwrap_or(defaults.seed),

@@ -232,7 +232,7 @@ pub fn sim_to_real_diagnosis(ctx: &DemoContext<'_>) -> Result<String, CliError> 
         prior_kinds: Default::default(),
     };
     let nominal = aria::nominal();
-    let outcome = crate::commands::diagnose::execute::<N>(&nominal, "aria", &args)?;
+    let outcome = crate::commands::diagnose::execute::<N>(&nominal, "aria", &args, None)?;
     let d = &outcome.diagnosis;
     let before = errors(&nominal, &val);
     let geo = errors(&d.geometric, &val);

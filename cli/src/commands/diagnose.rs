@@ -11,7 +11,6 @@ use kincal::diagnosis::{Config, Diagnosis, Method, ModelScore, Reason, Status};
 use kincal::identify::Measurement;
 use kincal::{Effect, EffectSet, ParamId, ParamIndex, ParamSet, Robot};
 
-use crate::args::parse_effect;
 use crate::error::CliError;
 use crate::plots::diagnosis::Outputs;
 use crate::report::{self, Table, label, quantity_label};
@@ -50,7 +49,9 @@ model is extended by that effect?
    nor rotation significantly worse; partially_explained from 25 % (or when the remaining
    gap is significant: the reason says where), else unexplained. A significant candidate
    is a gap even when the gap test says no_gap (σ stated too large: a warning says so).
-   Gross outliers are screened first (suspect rows, named by CSV line, are left out); the
+   Gross outliers are screened first (suspect rows, named by CSV line, are left out: at
+   most 64 or a tenth of the rows; more rows over the threshold are heavy tails, none is
+   left out, and REPORT.json's outlier_screen and a warning say how many); the
    stated σ is checked against the repeats and the residuals. With fewer than 5 pose
    groups per fold, in-sample nested tests replace cross-validation (method in the report).
 6. Sessions: with a `session` column naming several set-ups, each session's rows are
@@ -102,9 +103,11 @@ pub struct Args {
     /// Readable report (default: REPORT.json with the extension .txt)
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
-    /// Candidate effects (comma-separated; default: every effect whose inputs DATA has)
-    #[arg(long, value_name = "E1,E2", value_delimiter = ',', value_parser = parse_effect)]
-    pub candidates: Vec<Effect>,
+    /// Candidate effects (comma-separated; default: every effect whose inputs DATA has);
+    /// joint_scale@JOINT (a joint name, qK or sensor; repeatable) gives the joint_scale
+    /// candidate the scale of those joints only, as calibrate --effects does
+    #[arg(long, value_name = "E1,E2", value_delimiter = ',', value_parser = kincal_io::effects_arg::parse_effect_item)]
+    pub candidates: Vec<kincal_io::effects_arg::EffectItem>,
     /// Evaluate single effects only, not pairs
     #[arg(long)]
     pub no_pairs: bool,
@@ -133,12 +136,15 @@ pub struct Args {
 
 pub fn run(args: &Args) -> Result<(), CliError> {
     let spec = kincal_io::robot_arg::resolve_robot(&args.robot, &args.chain)?;
+    let kinds = kincal::with_any_robot!(&spec.robot, r => r.joint_kinds().to_vec());
+    let choice = kincal_io::effects_arg::resolve(&args.candidates, &spec.joint_names, &kinds)
+        .map_err(|e| CliError::usage(e.message.replacen("--effects", "--candidates", 1)))?;
     kincal::with_any_robot!(&spec.robot, r => {
-        if let Some(text) = contact_diagnosis(r, args)? {
+        if let Some(text) = contact_diagnosis(r, args, choice.scale_joints.is_some())? {
             report::emit(&text);
             return Ok(());
         }
-        let out = execute(r, &spec.name, args)?;
+        let out = execute(r, &spec.name, args, choice.scale_joints.as_deref())?;
         // The run time goes to the screen only: the report files are byte-for-byte
         // reproducible.
         report::emit(&format!("{}Diagnosis took {:.2} s.\n", out.text, out.seconds));
@@ -152,6 +158,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
 fn contact_diagnosis<const N: usize>(
     robot: &Robot<N>,
     args: &Args,
+    selectors: bool,
 ) -> Result<Option<String>, CliError> {
     let set = data::read(
         &args.data,
@@ -165,8 +172,15 @@ fn contact_diagnosis<const N: usize>(
     if args.constraints.is_none() && !kincal_io::constraints::has_contacts(&set) {
         return Ok(None);
     }
+    if selectors {
+        return Err(CliError::usage(
+            "--candidates joint_scale@JOINT: the contact-data diagnosis tests whole effects only \
+             (give joint_scale without a joint)",
+        ));
+    }
+    let candidates = candidate_effects(args);
     let options = kincal_io::diagnose_contacts::Options {
-        candidates: &args.candidates,
+        candidates: &candidates,
         no_pairs: args.no_pairs,
         constraints: args.constraints.as_deref(),
         sigma_pos_mm: args.sigma_pos_mm,
@@ -208,7 +222,18 @@ pub struct Outcome<const N: usize> {
     pub seconds: f64,
 }
 
-fn options(args: &Args) -> Result<Options, CliError> {
+/// The candidate effects of `--candidates`, without their joint selectors.
+fn candidate_effects(args: &Args) -> Vec<Effect> {
+    let mut out: Vec<Effect> = Vec::new();
+    for item in &args.candidates {
+        if !out.contains(&item.effect) {
+            out.push(item.effect);
+        }
+    }
+    out
+}
+
+fn options(args: &Args, scale_joints: Option<&[usize]>) -> Result<Options, CliError> {
     if args.folds < 2 {
         return Err(CliError::usage(format!(
             "--folds {}: at least 2 folds are needed",
@@ -218,7 +243,8 @@ fn options(args: &Args) -> Result<Options, CliError> {
     Ok(Options {
         sigma_pos_mm: args.sigma_pos_mm,
         sigma_rot_deg: args.sigma_rot_deg,
-        candidates: args.candidates.clone(),
+        candidates: candidate_effects(args),
+        scale_joints: scale_joints.map(<[usize]>::to_vec),
         pairs: !args.no_pairs,
         folds: args.folds,
         seed: args.seed,
@@ -226,10 +252,12 @@ fn options(args: &Args) -> Result<Options, CliError> {
 }
 
 /// Reads DATA, runs the diagnosis and writes every output; returns the readable report.
+/// `scale_joints`: the joints (0-based) of the `joint_scale@JOINT` selectors, resolved.
 pub fn execute<const N: usize>(
     robot: &Robot<N>,
     name: &str,
     args: &Args,
+    scale_joints: Option<&[usize]>,
 ) -> Result<Outcome<N>, CliError> {
     let t0 = Instant::now();
     if args.prior == Some(crate::args::PriorArg::Auto) {
@@ -238,7 +266,7 @@ pub fn execute<const N: usize>(
              then pass the size it reports (--prior MM,DEG)",
         ));
     }
-    let options = options(args)?;
+    let options = options(args, scale_joints)?;
     let set = data::read(
         &args.data,
         robot,
@@ -431,15 +459,37 @@ fn overview_text<const N: usize>(
             format!("from repeats, {dof:.0} degrees of freedom")
         }
     };
+    // A component type no row measures (and no σ stated) has no noise floor: say so
+    // instead of the core's placeholder σ.
+    let pos = if n.measured_pos || n.stated_pos {
+        format!(
+            "{} mm ({})",
+            mm(n.sigma_pos_m),
+            src(n.stated_pos, n.dof_pos)
+        )
+    } else {
+        "position not measured".to_string()
+    };
+    let rot = if n.measured_rot || n.stated_rot {
+        format!(
+            "{}° ({})",
+            deg(n.sigma_rot_rad),
+            src(n.stated_rot, n.dof_rot)
+        )
+    } else {
+        "orientation not measured".to_string()
+    };
+    let pure = match (
+        n.measured_pos || n.stated_pos,
+        n.measured_rot || n.stated_rot,
+    ) {
+        (true, true) => format!("{} mm, {}°", mm(n.rms_pos_m()), deg(n.rms_rot_rad())),
+        (true, false) => format!("{} mm", mm(n.rms_pos_m())),
+        (false, _) => format!("{}°", deg(n.rms_rot_rad())),
+    };
     let _ = writeln!(
         s,
-        "Noise floor: {} mm ({}) and {}° ({}) per axis; pure noise gives an RMS of √3σ = {} mm, {}°.",
-        mm(n.sigma_pos_m),
-        src(n.stated_pos, n.dof_pos),
-        deg(n.sigma_rot_rad),
-        src(n.stated_rot, n.dof_rot),
-        mm(n.rms_pos_m()),
-        deg(n.rms_rot_rad())
+        "Noise floor: {pos} and {rot} per axis; pure noise gives an RMS of √3σ = {pure}."
     );
     let _ = writeln!(
         s,
@@ -461,9 +511,20 @@ fn overview_text<const N: usize>(
     );
 
     if !d.suspects().is_empty() {
+        // At the cap every row over the threshold is excluded, but a few more would have
+        // excluded none (too_many_suspects): the user should know how close that was.
+        let cap_note = if d.n_suspects >= d.suspect_cap {
+            format!(
+                "\n  (the cap: the screen excludes at most {} rows here, {} or a tenth of the rows)",
+                d.suspect_cap,
+                kincal::diagnosis::MAX_SUSPECTS
+            )
+        } else {
+            String::new()
+        };
         let _ = writeln!(
             s,
-            "Suspect rows (gross outliers, excluded from every fit and test): {}\n",
+            "Suspect rows (gross outliers, excluded from every fit and test): {}{cap_note}\n",
             suspect_rows(d, set)
                 .iter()
                 .map(|r| match &r.pose_id {

@@ -107,24 +107,28 @@ pub(crate) fn bonferroni_threshold(z: f64, splits: usize) -> f64 {
     }
 }
 
-/// The lower median of `q_j` over the clean rows (`None` without clean rows).
+/// The lower median of `q_j` over the clean rows (`None` without clean rows): the
+/// smallest value with at least half the rows at or below it. Sorted in place in the
+/// first records' `scratch` (O(n log n), no memory).
 fn median_q<const N: usize>(
     data: &[Measurement<N>],
-    poses: &[PoseDiagnosis],
+    poses: &mut [PoseDiagnosis],
     j: usize,
 ) -> Option<f64> {
-    let clean = || {
-        data.iter()
-            .zip(poses)
-            .filter(|(_, p)| !p.suspect)
-            .filter_map(move |(m, _)| m.state.q.get(j).copied())
-    };
-    let n = clean().count();
-    let half = n.div_ceil(2);
-    // The smallest value with at least half the rows at or below it: O(n²), no memory.
-    clean()
-        .filter(|&v| clean().filter(|&w| w <= v).count() >= half)
-        .min_by(f64::total_cmp)
+    let mut n = 0;
+    for l in 0..poses.len().min(data.len()) {
+        if poses[l].suspect {
+            continue;
+        }
+        if let Some(&q) = data[l].state.q.get(j) {
+            // Slot n ≤ l: every record at or before it has been read.
+            poses[n].scratch = q;
+            n += 1;
+        }
+    }
+    let values = poses.get_mut(..n)?;
+    super::rank::sort_by_value(values);
+    values.get(n.div_ceil(2).checked_sub(1)?).map(|p| p.scratch)
 }
 
 /// Whether clean row `l` is held out by the split of joint `j` at `cut` (`upper`: the rows
@@ -201,7 +205,7 @@ pub(crate) fn check<const N: usize, const P: usize>(
     lin: &Robot<N>,
     data: &[Measurement<N>],
     sw: &[f64; 6],
-    poses: &[PoseDiagnosis],
+    poses: &mut [PoseDiagnosis],
     mdl: usize,
     cfg: &Config,
     ws: &mut DiagWorkspace<P>,
@@ -213,7 +217,7 @@ pub(crate) fn check<const N: usize, const P: usize>(
     };
     let rows_all: usize = data
         .iter()
-        .zip(poses)
+        .zip(poses.iter())
         .filter(|(_, pd)| !pd.suspect)
         .map(|(m, _)| (0..6).filter(|&k| m.mask.has(k)).count())
         .sum();
@@ -231,7 +235,7 @@ pub(crate) fn check<const N: usize, const P: usize>(
             }
             ws.g_fold.reset(ws.n_u)?;
             let mut m_rows = 0usize;
-            for (m, pd) in data.iter().zip(poses) {
+            for (m, pd) in data.iter().zip(poses.iter()) {
                 if held_out(m, pd, j, cut, upper) {
                     cv::pose_rows(lin, m, sw, ws)?;
                     cv::fold_rows(ws, true)?;

@@ -174,8 +174,12 @@ pub const MAX_CANDIDATES: usize = 28;
 pub const MAX_MODELS: usize = MAX_CANDIDATES + 2;
 /// Slot of the union model of the outlier screening.
 pub(crate) const SCREEN_MODEL: usize = MAX_CANDIDATES + 1;
-/// Suspect rows (gross outliers) listed and excluded at most.
-pub const MAX_SUSPECTS: usize = 16;
+/// Suspect rows (gross outliers) listed and excluded at most; the screen excludes at most
+/// this many or a tenth of the rows, whichever is less (more rows over the threshold are
+/// heavy tails, not gross outliers: none is then excluded, [`Warning::TooManySuspects`]).
+/// 64: 2 % of a 3,000-row set such as Hilti's (whose screen stopped at the former 16),
+/// 256 bytes of result.
+pub const MAX_SUSPECTS: usize = 64;
 /// Warnings stored at most.
 pub const MAX_WARNINGS: usize = 8;
 /// Dropped effect parameters stored per model (with their partners).
@@ -197,6 +201,10 @@ pub struct Config {
     pub candidates: Option<EffectSet>,
     /// Also evaluate every pair of candidate effects.
     pub pairs: bool,
+    /// The candidates' effect parameters restricted to this set (e.g. `joint_scale` on the
+    /// sensor joints only: the scale parameters of the other joints left out); `None`:
+    /// every parameter of each effect. Geometric parameters are not affected.
+    pub effect_params: Option<ParamSet>,
     /// Threshold of the gap test (one-sided z).
     pub z_gap: f64,
     /// Threshold of a candidate's improvement over the baseline (one-sided z).
@@ -237,6 +245,7 @@ impl Default for Config {
             fold_seed: 0x6b69_6e63_616c,
             candidates: None,
             pairs: true,
+            effect_params: None,
             z_gap: 3.0,
             z_significance: 3.0,
             z_equivalence: 3.0,
@@ -268,6 +277,13 @@ pub struct NoiseFloor {
     pub stated_pos: bool,
     /// Whether σ_rot was stated.
     pub stated_rot: bool,
+    /// Whether any row measures a position component. Without, and without a stated
+    /// σ_pos, `sigma_pos_m` is a placeholder (1 m) that weighs nothing: report "not
+    /// measured", not a number.
+    pub measured_pos: bool,
+    /// Whether any row measures an orientation component (position-only data: `false`,
+    /// and `sigma_rot_rad` is a placeholder of 1 rad unless stated).
+    pub measured_rot: bool,
     /// Position σ per axis the repeats alone give \[m\] and its degrees of freedom (also
     /// when σ_pos was stated: the check of [`Warning::NoiseVsRepeats`]).
     pub repeat_pos: Option<(f64, f64)>,
@@ -609,10 +625,13 @@ pub enum Warning {
         /// The best candidate improvement z.
         z_candidate: f64,
     },
-    /// More rows failed the outlier test than outliers can be (`count`): none excluded.
+    /// More rows failed the outlier test (`count`) than gross outliers can be (`cap`:
+    /// [`MAX_SUSPECTS`] or a tenth of the rows, whichever is less): none excluded.
     TooManySuspects {
         /// Rows that failed.
         count: usize,
+        /// Suspects the screen may exclude on these data.
+        cap: usize,
     },
 }
 
@@ -666,12 +685,18 @@ pub struct PoseDiagnosis {
     /// A gross outlier by the screening: excluded from every fit and test.
     pub suspect: bool,
     pub(crate) leader: u32,
+    /// The next row of the same group ([`folds::NO_NEXT`] after the last): the group's
+    /// rows in order from its leader, without a scan of all rows.
+    pub(crate) next: u32,
     pub(crate) sub_leader: u32,
     pub(crate) sq: [f64; MAX_MODELS],
     pub(crate) sq_rot: [f64; MAX_MODELS],
     pub(crate) gsq: [f64; MAX_MODELS],
     pub(crate) gsq_rot: [f64; MAX_MODELS],
     pub(crate) scratch: f64,
+    /// The smooth check's per-pose features that do not depend on its hyperparameters
+    /// (`smooth.rs`), kept so they are computed once per check.
+    pub(crate) smooth: [f64; smooth::FEATURES],
 }
 
 impl PoseDiagnosis {
@@ -684,12 +709,14 @@ impl PoseDiagnosis {
         heldout_final: [0.0; 6],
         suspect: false,
         leader: 0,
+        next: folds::NO_NEXT,
         sub_leader: 0,
         sq: [0.0; MAX_MODELS],
         sq_rot: [0.0; MAX_MODELS],
         gsq: [0.0; MAX_MODELS],
         gsq_rot: [0.0; MAX_MODELS],
         scratch: 0.0,
+        smooth: [0.0; smooth::FEATURES],
     };
     /// Whitened held-out squared error of model `model` (0 = baseline, c + 1 = candidate c).
     #[must_use]
@@ -853,6 +880,12 @@ pub struct Diagnosis<const N: usize> {
     pub suspects: [u32; MAX_SUSPECTS],
     /// Number of suspect rows.
     pub n_suspects: usize,
+    /// Suspects the outlier screen may exclude on these data: [`MAX_SUSPECTS`] or a tenth
+    /// of the rows, whichever is less (0 without screening).
+    pub suspect_cap: usize,
+    /// Rows over the outlier threshold at the screen's last pass: `n_suspects` when they
+    /// were excluded, more than `suspect_cap` when there were too many to exclude any.
+    pub rows_over_threshold: usize,
     /// Warnings (first `n_warnings`).
     pub warnings: [Option<Warning>; MAX_WARNINGS],
     /// Number of warnings.
@@ -904,6 +937,8 @@ impl<const N: usize> Diagnosis<N> {
                 repeat_subgroups: 0,
                 stated_pos: false,
                 stated_rot: false,
+                measured_pos: false,
+                measured_rot: false,
                 repeat_pos: None,
                 repeat_rot: None,
                 overruled_pos: None,
@@ -939,6 +974,8 @@ impl<const N: usize> Diagnosis<N> {
             method: Method::CrossValidation,
             suspects: [0; MAX_SUSPECTS],
             n_suspects: 0,
+            suspect_cap: 0,
+            rows_over_threshold: 0,
             warnings: [None; MAX_WARNINGS],
             n_warnings: 0,
             final_rms_axis: [0.0; 6],
@@ -1610,11 +1647,26 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
     let (points, n_points) = crate::identify::distinct_points(data);
     let any_approach = data.iter().any(|m| m.state.approach.is_some());
     let any_temp = data.iter().any(|m| m.state.temp_c.is_some());
+    // An effect's parameters, restricted by the caller's selection.
+    let effect_params = |e: Effect| {
+        let all = e.params(N);
+        match cfg.effect_params {
+            Some(allowed) => {
+                let mut kept = ParamSet::new();
+                for i in all.iter().filter(|&i| allowed.contains(i)) {
+                    // Same capacity as `all`: cannot fail.
+                    let _ = kept.insert(i);
+                }
+                kept
+            }
+            None => all,
+        }
+    };
     let mut structural = [ParamSet::new(); 7];
     let mut universe = geometric;
     for e in effects.iter() {
         let mut o = opts;
-        o.requested = geometric.union(&e.params(N));
+        o.requested = geometric.union(&effect_params(e));
         let mut partner = [None; MAX_MODEL_PARAMS];
         crate::identify::structural_step(
             &lin,
@@ -1627,7 +1679,7 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
             &mut structural[e as usize],
             &mut partner,
         )?;
-        for i in e.params(N).iter() {
+        for i in effect_params(e).iter() {
             if !structural[e as usize].contains(i) {
                 universe.insert(i)?;
             }
@@ -1657,7 +1709,7 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
         let mut structural_set = ParamSet::new();
         for e in set.iter() {
             structural_set = structural_set.union(&structural[e as usize]);
-            for i in e.params(N).iter() {
+            for i in effect_params(e).iter() {
                 if !structural[e as usize].contains(i) {
                     requested.insert(i)?;
                 }
@@ -1681,15 +1733,25 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
     // geometric calibration again without them.
     let mut suspects = [0u32; MAX_SUSPECTS];
     let mut n_susp = 0;
+    out.suspect_cap = 0;
+    out.rows_over_threshold = 0;
     if cfg.screen_outliers {
+        out.suspect_cap = screen::cap(MAX_SUSPECTS, data.len());
         ws.model_n[SCREEN_MODEL] = n_u;
         for k in 0..n_u {
             ws.model_cols[SCREEN_MODEL][k] = k as u8;
         }
         match screen::screen(&lin, data, &sw, poses, MAX_SUSPECTS, cfg.rank_tol, ws)? {
-            screen::Screening::TooMany(count) => out.warn(Warning::TooManySuspects { count }),
+            screen::Screening::TooMany(count) => {
+                out.rows_over_threshold = count;
+                out.warn(Warning::TooManySuspects {
+                    count,
+                    cap: out.suspect_cap,
+                });
+            }
             screen::Screening::Suspects(0) => {}
-            screen::Screening::Suspects(_) => {
+            screen::Screening::Suspects(count) => {
+                out.rows_over_threshold = count;
                 for (l, _) in poses.iter().enumerate().filter(|(_, p)| p.suspect) {
                     if let Some(slot) = suspects.get_mut(n_susp) {
                         *slot = l as u32;

@@ -67,28 +67,34 @@ fn before<D: RankValues + ?Sized>(d: &D, i: usize, j: usize) -> bool {
     magnitude(d, i).total_cmp(&magnitude(d, j)).is_lt()
 }
 
-/// Restores the max-heap property below `root` within the first `end` records.
-fn sift_down<D: RankValues + ?Sized>(d: &mut D, mut root: usize, end: usize) {
-    loop {
+/// Sorts the `scratch` values of `d` by magnitude, ascending: an in-place heapsort
+/// (O(G log G), no recursion, no memory).
+pub(crate) fn sort_by_magnitude<D: RankValues + ?Sized>(d: &mut D) {
+    heapsort(d, before);
+}
+
+/// Sorts the values of `d` ascending (signed, total order): the same heapsort.
+pub(crate) fn sort_by_value<D: RankValues + ?Sized>(d: &mut D) {
+    heapsort(d, |d, i, j| d.value(i).total_cmp(&d.value(j)).is_lt());
+}
+
+/// In-place heapsort of `d` by the strict order `less(d, i, j)`.
+fn heapsort<D: RankValues + ?Sized>(d: &mut D, less: impl Fn(&D, usize, usize) -> bool) {
+    let n = d.count();
+    let sift_down = |d: &mut D, mut root: usize, end: usize| loop {
         let mut child = 2 * root + 1;
         if child >= end {
             return;
         }
-        if child + 1 < end && before(d, child, child + 1) {
+        if child + 1 < end && less(d, child, child + 1) {
             child += 1;
         }
-        if !before(d, root, child) {
+        if !less(d, root, child) {
             return;
         }
         d.swap_values(root, child);
         root = child;
-    }
-}
-
-/// Sorts the `scratch` values of `d` by magnitude, ascending: an in-place heapsort
-/// (O(G log G), no recursion, no memory).
-pub(crate) fn sort_by_magnitude<D: RankValues + ?Sized>(d: &mut D) {
-    let n = d.count();
+    };
     for root in (0..n / 2).rev() {
         sift_down(d, root, n);
     }

@@ -47,7 +47,7 @@ pub(crate) fn screen<const N: usize, const P: usize>(
     ws: &mut DiagWorkspace<P>,
 ) -> Result<Screening> {
     let n = data.len();
-    let cap = max_suspects.min(n / 10);
+    let cap = cap(max_suspects, n);
     let mut outcome = Screening::Suspects(0);
     for _ in 0..MAX_PASSES {
         ws.g_all.reset(ws.n_u)?;
@@ -129,6 +129,12 @@ pub(crate) fn screen<const N: usize, const P: usize>(
         q.heldout_final = [0.0; 6];
     }
     Ok(outcome)
+}
+
+/// Suspects the screen excludes at most among `rows` rows: `max_suspects` (the capacity
+/// of the result) or a tenth of the rows, whichever is less.
+pub(crate) fn cap(max_suspects: usize, rows: usize) -> usize {
+    max_suspects.min(rows / 10)
 }
 
 /// Standardised squared residual of a screened row at the part scales.

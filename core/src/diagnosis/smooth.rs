@@ -262,6 +262,23 @@ fn project<const N: usize>(ws: &mut SmoothWorkspace, robot: &Robot<N>, state: &J
     }
 }
 
+/// Keeps the pose's [`project`] results in its record (`PoseDiagnosis::smooth`: the
+/// linear and task-space slots, then the Fourier projections), so the nested
+/// cross-validation, which needs them about 20 times per pose, computes them once.
+fn stash_projection(ws: &SmoothWorkspace, p: &mut PoseDiagnosis) {
+    let nl = ws.n_linear + TASK;
+    for (k, c) in p.smooth.iter_mut().enumerate() {
+        *c = if k < nl { ws.phi[k] } else { ws.u[k] };
+    }
+}
+
+/// [`project`]'s results for pose `p` from its record ([`stash_projection`]).
+fn load_projection(ws: &mut SmoothWorkspace, p: &PoseDiagnosis) {
+    let nl = ws.n_linear + TASK;
+    ws.phi[..nl].copy_from_slice(&p.smooth[..nl]);
+    ws.u[nl..].copy_from_slice(&p.smooth[nl..]);
+}
+
 /// Task-space terms of a pose, each of unit mean square over the data (about): the
 /// nominal tool position `s = (p − p̄)·scale`, the products `s_i·s_j` (i ≤ j) and the tool
 /// axis `z`, every group divided by √(its size) so each group has unit norm. Zero when the
@@ -330,7 +347,6 @@ fn accumulate(g: &mut [[f64; M]; M], r: &mut [[f64; 6]; M], phi: &[f64; M], y: &
 #[allow(clippy::too_many_arguments)]
 fn fold_gram<const N: usize>(
     ws: &mut SmoothWorkspace,
-    robot: &Robot<N>,
     data: &[Measurement<N>],
     poses: &[PoseDiagnosis],
     sw: &[f64; 6],
@@ -357,7 +373,7 @@ fn fold_gram<const N: usize>(
             continue;
         }
         let y = target(m, p, sw);
-        project(ws, robot, &m.state);
+        load_projection(ws, p);
         features(ws, inv_l);
         let SmoothWorkspace {
             g_out,
@@ -512,7 +528,6 @@ type Choice = Option<(usize, f64)>;
 #[allow(clippy::too_many_arguments)]
 fn choose<const N: usize>(
     ws: &mut SmoothWorkspace,
-    robot: &Robot<N>,
     data: &[Measurement<N>],
     poses: &[PoseDiagnosis],
     sw: &[f64; 6],
@@ -532,11 +547,11 @@ fn choose<const N: usize>(
     }
     for (li, &scale) in LENGTH_SCALES.iter().enumerate() {
         let inv_l = inv_l0 / scale;
-        fold_gram(ws, robot, data, poses, sw, act, Some(f), inv_l, false);
+        fold_gram(ws, data, poses, sw, act, Some(f), inv_l, false);
         let mut err = [[0.0f64; 2]; R];
         let mut ok = [true; R];
         for g in (0..folds).filter(|&g| g != f) {
-            fold_gram(ws, robot, data, poses, sw, act, Some(g), inv_l, true);
+            fold_gram(ws, data, poses, sw, act, Some(g), inv_l, true);
             // Every ridge's solution first, so each validation row's features are computed
             // once for all ridges (the features cost more than the predictions).
             let mut solved = [false; R];
@@ -556,7 +571,7 @@ fn choose<const N: usize>(
                     continue;
                 }
                 let y = target(m, p, sw);
-                project(ws, robot, &m.state);
+                load_projection(ws, p);
                 features(ws, inv_l);
                 for ((e_r, beta), _) in err
                     .iter_mut()
@@ -702,19 +717,17 @@ pub(crate) fn check<const N: usize>(
         *b = 2.0 * core::f64::consts::PI * rng.uniform();
     }
 
+    // Each fitted pose's ℓ-independent features, once.
+    for (m, p) in data.iter().zip(poses.iter_mut()) {
+        if fits(m, &act) {
+            project(ws, robot, &m.state);
+            stash_projection(ws, p);
+        }
+    }
+
     // Grams over all fitted poses, one per length scale.
     for (li, &scale) in LENGTH_SCALES.iter().enumerate() {
-        fold_gram(
-            ws,
-            robot,
-            data,
-            poses,
-            &sw,
-            &act,
-            None,
-            inv_l0 / scale,
-            false,
-        );
+        fold_gram(ws, data, poses, &sw, &act, None, inv_l0 / scale, false);
         if let (Some(g), Some(r)) = (ws.g_all.get_mut(li), ws.r_all.get_mut(li)) {
             *g = ws.g_out;
             *r = ws.r_out;
@@ -728,7 +741,7 @@ pub(crate) fn check<const N: usize>(
     }
     let mut delta = [0.0; 2];
     for f in 0..folds {
-        let choice = choose(ws, robot, data, poses, &sw, &act, folds, f, inv_l0);
+        let choice = choose(ws, data, poses, &sw, &act, folds, f, inv_l0);
         // One fit per distinct choice (both types usually agree).
         for c in 0..2 {
             let Some((li, lambda)) = choice[c] else {
@@ -740,7 +753,7 @@ pub(crate) fn check<const N: usize>(
             }
             let use_class = [c == 0 || same, c == 1 || same];
             let inv_l = inv_l0 / LENGTH_SCALES.get(li).copied().unwrap_or(1.0);
-            fold_gram(ws, robot, data, poses, &sw, &act, Some(f), inv_l, false);
+            fold_gram(ws, data, poses, &sw, &act, Some(f), inv_l, false);
             if !factor(ws, li, false, lambda) {
                 continue;
             }
@@ -750,7 +763,7 @@ pub(crate) fn check<const N: usize>(
                     continue;
                 }
                 let y = target(m, p, &sw);
-                project(ws, robot, &m.state);
+                load_projection(ws, p);
                 features(ws, inv_l);
                 let pred = predict(ws, &act, &use_class);
                 let (before, after) = (class_sq(&y, &[0.0; 6]), class_sq(&y, &pred));

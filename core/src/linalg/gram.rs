@@ -118,6 +118,59 @@ impl<const P: usize> GramAccumulator<P> {
         self.btb += (0..6).map(|r| w[r] * b[r] * b[r]).sum::<f64>();
         Ok(())
     }
+    /// Folds the six unit-weight equations `a[r]·x ≈ b[r]` with the same sums, added in
+    /// the same order, as six [`add_row_weighted`](Self::add_row_weighted) calls with
+    /// `w = 1` (bit-identical results: each entry adds its six products one after the
+    /// other, rows 0 to 5), in one pass over the matrix instead of six. Zero rows and
+    /// entries add ±0, which leaves every sum unchanged (a sum of products started at +0
+    /// is never −0). Non-finite input fails as the single-row calls would.
+    pub fn add_rows6_in_order(&mut self, a: &[[f64; P]; 6], b: &[f64; 6]) -> Result<()> {
+        let n = self.n.min(P);
+        let finite = super::util::all_finite(a.iter().flat_map(|r| r[..n].iter()))
+            && super::util::all_finite(b.iter());
+        if !finite {
+            for (r, &br) in a.iter().zip(b) {
+                self.add_row_weighted(&r[..n], br, 1.0)?;
+            }
+            return Ok(());
+        }
+        let [a0, a1, a2, a3, a4, a5] = a;
+        let rows = self.g.iter_mut().zip(self.atb.iter_mut()).take(n);
+        for (i, (grow, atb)) in rows.enumerate() {
+            let c = [a0[i], a1[i], a2[i], a3[i], a4[i], a5[i]];
+            if c.iter().all(|&v| v == 0.0) {
+                continue;
+            }
+            for (ck, bk) in c.iter().zip(b) {
+                *atb += ck * bk;
+            }
+            let (Some(row), Some(r0), Some(r1), Some(r2), Some(r3), Some(r4), Some(r5)) = (
+                grow.get_mut(i..n),
+                a0.get(i..n),
+                a1.get(i..n),
+                a2.get(i..n),
+                a3.get(i..n),
+                a4.get(i..n),
+                a5.get(i..n),
+            ) else {
+                continue;
+            };
+            for (j, g) in row.iter_mut().enumerate() {
+                let mut v = *g;
+                v += c[0] * r0[j];
+                v += c[1] * r1[j];
+                v += c[2] * r2[j];
+                v += c[3] * r3[j];
+                v += c[4] * r4[j];
+                v += c[5] * r5[j];
+                *g = v;
+            }
+        }
+        for &br in b {
+            self.btb += br * br;
+        }
+        Ok(())
+    }
     /// Subtracts `w·a·aᵀ` (`w >= 0`) from the Gram matrix, leaving `Aᵀb` and `bᵀb` alone:
     /// the downdate that turns `Σ w_i·J_iᵀJ_i` into the centred `Σ w_i·(J_i − J̄)ᵀ(J_i − J̄)`
     /// (with `a = J̄` row by row, `w = Σ w_i`) when the rows were folded uncentred.
