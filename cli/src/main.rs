@@ -25,6 +25,15 @@ it, since the data belong to one arm and a default would read them against anoth
 commands, which simulate (select-poses, design-tool, evaluate-designs), default to the paper's
 arm, aria; demo always runs aria; predict and validate take a MODEL instead.
 
+Output flags name the kind of file, the same in every command: --out the command's product
+(a model: calibrate, diagnose; a measurement or pose CSV: predict, select-poses, markers,
+import-dataset, import-bag, observed-point; a tool CSV: design-tool; a folder: demo);
+--json the machine-readable report (validate, diagnose, crossval, design-tool,
+evaluate-designs); --report diagnose's readable report; --plot (and --plate-plot) an SVG
+figure; --robot-out a robot file, --constraints-out a constraints file; export names its
+formats (--urdf, --mdh-table, --c-header).
+No kind of file has two flag names.
+
 Exit status: 0 success, 1 an output could not be written, 2 usage error, 3 bad input (file,
 line, column and reason on stderr), 4 numerical failure (no convergence, rank too low).";
 
@@ -49,39 +58,34 @@ enum Command {
     /// Per-pose and summary errors of MODEL against measured poses
     #[command(long_about = validate::LONG_ABOUT, after_help = validate::EXAMPLE)]
     Validate(validate::Args),
-    /// Observability-optimal calibration poses (standard, local or workspace clustering)
+    /// Observability-optimal calibration poses (standard, local or clustering design)
     #[command(long_about = select::LONG_ABOUT, after_help = select::EXAMPLE)]
     SelectPoses(Box<select::Args>),
-    /// An optimised calibration tool that beats a baseline tool, as a workshop specification
+    /// An optimised calibration tool beating a baseline tool, as a workshop spec
     #[command(long_about = design_tool::LONG_ABOUT, after_help = design_tool::EXAMPLE)]
     DesignTool(Box<design_tool::Args>),
     /// Monte-Carlo comparison of data-acquisition designs on the same random robots
     #[command(long_about = evaluate::LONG_ABOUT, after_help = evaluate::EXAMPLE)]
     EvaluateDesigns(Box<evaluate::Args>),
-    /// The sim-to-real diagnosis: where the residual lies, which effect causes it, how far
-    /// it shrinks
+    /// Sim-to-real diagnosis: where the residual lies, which effect causes it
     #[command(long_about = diagnose::LONG_ABOUT, after_help = diagnose::EXAMPLE)]
     Diagnose(diagnose::Args),
-    /// Held-out residuals of the nominal and the calibrated model (k-fold by pose_id), noise
-    /// floor, outliers
+    /// Held-out residuals of nominal and calibrated model, noise floor, outliers
     #[command(long_about = crossval::LONG_ABOUT, after_help = crossval::EXAMPLE)]
     Crossval(crossval::Args),
-    /// Motion-capture marker export + marker design + joint readings -> measurement CSV
+    /// Motion-capture markers + marker design + joint readings -> measurement CSV
     #[command(long_about = markers::LONG_ABOUT, after_help = markers::EXAMPLE)]
     Markers(markers::Args),
-    /// A public real-robot data set, read as published, as measurement CSV and robot file
+    /// A public real-robot data set as measurement CSV and robot file
     #[command(name = "import-dataset", long_about = import::LONG_ABOUT, after_help = import::EXAMPLE)]
     ImportDataset(import::Args),
-    /// A ROS 2 bag (MCAP): joint readings and measured poses or points, one row per
-    /// standstill, as measurement CSV
+    /// A ROS 2 bag (MCAP) as measurement CSV, one row per standstill
     #[command(name = "import-bag", long_about = import_bag::LONG_ABOUT, after_help = import_bag::EXAMPLE)]
     ImportBag(Box<import_bag::Args>),
-    /// Camera poses re-expressed at the point the camera looks at (position rows where
-    /// the measurement is precise)
+    /// Camera poses re-expressed at the point the camera looks at
     #[command(name = "observed-point", long_about = observed_point::LONG_ABOUT, after_help = observed_point::EXAMPLE)]
     ObservedPoint(observed_point::Args),
-    /// The model as a URDF and/or an mDH/Hayati table (CSV, YAML) for ROS, controllers and
-    /// Matlab
+    /// The model as a URDF, an mDH/Hayati table (CSV, YAML) or a C header
     #[command(long_about = export::LONG_ABOUT, after_help = export::EXAMPLE)]
     Export(export::Args),
 }

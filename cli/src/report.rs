@@ -13,10 +13,67 @@ use kincal_io::units::display_unit;
 
 /// Writes a report to stdout. A closed pipe (`kincal … | head`) is not an error: the
 /// outputs are already written.
+/// Prose lines longer than [`TEXT_WIDTH`] are wrapped ([`wrap_prose`]).
 pub fn emit(text: &str) {
     use std::io::Write as _;
+    let text = wrap_prose(text, TEXT_WIDTH);
     let mut out = std::io::stdout().lock();
     let _ = out.write_all(text.as_bytes()).and_then(|()| out.flush());
+}
+
+/// Widest line of the reports on screen (issue #19 item 6): prose wraps here; a table row
+/// may be wider only where its cells cannot fit.
+pub const TEXT_WIDTH: usize = 100;
+
+/// Wraps each prose line of `text` longer than `width` characters at spaces; continuation
+/// lines keep the line's indentation (two more after a leading `- ` or `* ` bullet). A line
+/// with a column gap (two spaces after its indentation) or a rule is a table row and is
+/// left as it is, as is a single word longer than `width` (a path).
+pub fn wrap_prose(text: &str, width: usize) -> std::borrow::Cow<'_, str> {
+    if text.lines().all(|l| l.chars().count() <= width) {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len() + text.len() / width);
+    for piece in text.split_inclusive('\n') {
+        let (line, end) = match piece.strip_suffix('\n') {
+            Some(l) => (l, "\n"),
+            None => (piece, ""),
+        };
+        let body = line.trim_start_matches(' ');
+        let indent = &line[..line.len() - body.len()];
+        let table_row = body.trim_end().contains("  ")
+            || body.starts_with('|')
+            || body.starts_with("--")
+            || body.starts_with("==");
+        if line.chars().count() <= width || table_row {
+            out.push_str(piece);
+            continue;
+        }
+        let hang = if body.starts_with("- ") || body.starts_with("* ") {
+            format!("{indent}  ")
+        } else {
+            indent.to_string()
+        };
+        let mut col = 0;
+        for word in body.split(' ').filter(|w| !w.is_empty()) {
+            let n = word.chars().count();
+            if col == 0 {
+                out.push_str(indent);
+                col = indent.chars().count();
+            } else if col + 1 + n > width {
+                out.push('\n');
+                out.push_str(&hang);
+                col = hang.chars().count();
+            } else {
+                out.push(' ');
+                col += 1;
+            }
+            out.push_str(word);
+            col += n;
+        }
+        out.push_str(end);
+    }
+    std::borrow::Cow::Owned(out)
 }
 
 /// A plain text table: first column left-aligned, the others right-aligned.
@@ -38,42 +95,86 @@ impl Table {
     }
     /// Renders with two spaces between columns, each line indented by `indent`.
     pub fn render(&self, indent: &str) -> String {
-        let ncol = self.header.len();
-        let mut w = vec![0usize; ncol];
-        for r in std::iter::once(&self.header).chain(&self.rows) {
-            for (k, c) in r.iter().enumerate().take(ncol) {
-                w[k] = w[k].max(c.chars().count());
-            }
-        }
+        let w = column_widths(&self.header, self.rows.iter().map(Vec::as_slice));
         let mut out = String::new();
-        let line = |out: &mut String, r: &[String]| {
-            out.push_str(indent);
-            for (k, c) in r.iter().enumerate().take(ncol) {
-                let pad = w[k] - c.chars().count();
-                if k == 0 {
-                    out.push_str(c);
-                    out.push_str(&" ".repeat(pad));
-                } else {
-                    out.push_str("  ");
-                    out.push_str(&" ".repeat(pad));
-                    out.push_str(c);
-                }
-            }
-            while out.ends_with(' ') {
-                out.pop();
-            }
-            out.push('\n');
-        };
-        line(&mut out, &self.header);
-        let total: usize = w.iter().sum::<usize>() + 2 * ncol.saturating_sub(1);
-        out.push_str(indent);
-        out.push_str(&"-".repeat(total));
-        out.push('\n');
+        render_head(&mut out, &self.header, &w, indent);
         for r in &self.rows {
-            line(&mut out, r);
+            render_line(&mut out, r, &w, indent);
         }
         out
     }
+}
+
+/// The width of each column (in characters) over the header and `rows`.
+fn column_widths<'a>(header: &'a [String], rows: impl Iterator<Item = &'a [String]>) -> Vec<usize> {
+    let mut w = vec![0usize; header.len()];
+    for r in std::iter::once(header).chain(rows) {
+        for (wk, c) in w.iter_mut().zip(r) {
+            *wk = (*wk).max(c.chars().count());
+        }
+    }
+    w
+}
+
+/// The header line and the rule under it.
+fn render_head(out: &mut String, header: &[String], w: &[usize], indent: &str) {
+    render_line(out, header, w, indent);
+    let total: usize = w.iter().sum::<usize>() + 2 * w.len().saturating_sub(1);
+    out.push_str(indent);
+    out.push_str(&"-".repeat(total));
+    out.push('\n');
+}
+
+/// One line: first cell left-aligned, the others right-aligned, two spaces apart.
+fn render_line(out: &mut String, r: &[String], w: &[usize], indent: &str) {
+    out.push_str(indent);
+    for (k, (c, &wk)) in r.iter().zip(w).enumerate() {
+        let pad = wk.saturating_sub(c.chars().count());
+        if k == 0 {
+            out.push_str(c);
+            out.push_str(&" ".repeat(pad));
+        } else {
+            out.push_str("  ");
+            out.push_str(&" ".repeat(pad));
+            out.push_str(c);
+        }
+    }
+    while out.ends_with(' ') {
+        out.pop();
+    }
+    out.push('\n');
+}
+
+/// A [`Table`] written straight to standard output without keeping its rows: `rows` is
+/// called twice (column widths, then the lines), so a table of a row per pose of a
+/// million-row file costs the memory of one row (issue #16 item 6). Ignores a closed
+/// stdout, as [`emit`] does.
+pub fn emit_streamed_table<I: Iterator<Item = Vec<String>>>(
+    header: &[&str],
+    rows: impl Fn() -> I,
+    indent: &str,
+) {
+    use std::io::Write as _;
+    let header: Vec<String> = header.iter().map(|s| s.to_string()).collect();
+    let mut w = vec![0usize; header.len()];
+    for r in std::iter::once(header.clone()).chain(rows()) {
+        for (wk, c) in w.iter_mut().zip(&r) {
+            *wk = (*wk).max(c.chars().count());
+        }
+    }
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    let mut line = String::new();
+    render_head(&mut line, &header, &w, indent);
+    let mut ok = out.write_all(line.as_bytes()).is_ok();
+    for r in rows() {
+        if !ok {
+            break;
+        }
+        line.clear();
+        render_line(&mut line, &r, &w, indent);
+        ok = out.write_all(line.as_bytes()).is_ok();
+    }
+    let _ = out.flush();
 }
 
 /// Label of flat parameter `i` of an `N`-joint model.
@@ -577,4 +678,40 @@ pub fn consensus<const N: usize>(c: &Consensus) -> String {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod wrap_tests {
+    use super::wrap_prose;
+
+    #[test]
+    fn prose_wraps_at_the_width_and_tables_stay() {
+        let words: Vec<String> = (0..60).map(|i| format!("w{i}")).collect();
+        let prose = format!("  - {}\n", words.join(" "));
+        let table = format!("  {}\n", words.join("  "));
+        let text = format!("{prose}{table}short\n");
+        let out = wrap_prose(&text, 40);
+        let lines: Vec<&str> = out.lines().collect();
+        // The prose: every line within 40, continuation lines hang under the bullet's text.
+        let wrapped: Vec<&str> = lines
+            .iter()
+            .take_while(|l| !l.contains("  w1  "))
+            .copied()
+            .collect();
+        assert!(wrapped.len() > 3, "{out}");
+        assert!(wrapped.iter().all(|l| l.chars().count() <= 40), "{out}");
+        assert!(wrapped[1..].iter().all(|l| l.starts_with("    w")), "{out}");
+        // No word lost or reordered.
+        let back: Vec<&str> = wrapped.iter().flat_map(|l| l.split_whitespace()).collect();
+        assert_eq!(
+            back[1..],
+            words.iter().map(String::as_str).collect::<Vec<_>>()[..]
+        );
+        // The table row and the short line untouched.
+        assert!(out.ends_with(&format!("{table}short\n")), "{out}");
+        // A single word longer than the width stays whole.
+        let long = "x".repeat(50);
+        assert_eq!(wrap_prose(&long, 40), long);
+        assert_eq!(wrap_prose("a b\n", 40), "a b\n");
+    }
 }

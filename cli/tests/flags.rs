@@ -55,3 +55,92 @@ fn the_robot_rule_is_stated_and_kept_by_every_command() {
         assert!(line.contains("[default: aria]"), "{command}: {line}");
     }
 }
+
+/// The flags of a command's `--help` (`--name` at the start of a line of its options).
+fn flags_of(command: &str) -> Vec<String> {
+    let o = kincal(&[command, "--help"]);
+    assert_eq!(o.status.code(), Some(0), "{command} --help");
+    stdout(&o)
+        .lines()
+        .skip_while(|l| !l.starts_with("Options:"))
+        .filter_map(|l| {
+            let l = l.trim_start();
+            let l = l.strip_prefix("-m, ").unwrap_or(l);
+            l.strip_prefix("--")
+                .map(|f| f.split([' ', ',', '=']).next().unwrap_or("").to_string())
+        })
+        .collect()
+}
+
+/// #19 item 7: each design command lists only the flags it uses, and one it does not use is
+/// refused (exit 2) instead of being accepted and ignored.
+#[test]
+fn design_commands_take_only_the_flags_they_use() {
+    let noise = [
+        "noise-pos-mm",
+        "noise-rot-deg",
+        "tool-tol-mm",
+        "tool-tol-deg",
+    ];
+    let pool = [
+        "index",
+        "pool",
+        "refine",
+        "workspace",
+        "cube-mm",
+        "tolerance",
+    ];
+    let common = [
+        "robot",
+        "region",
+        "seed",
+        "poses",
+        "starts",
+        "min-dexterity",
+        "robust-robots",
+        "length-error-mm",
+        "angle-error-deg",
+    ];
+    let select = flags_of("select-poses");
+    let tool = flags_of("design-tool");
+    let evaluate = flags_of("evaluate-designs");
+    for f in common {
+        for (c, flags) in [
+            ("select-poses", &select),
+            ("design-tool", &tool),
+            ("evaluate-designs", &evaluate),
+        ] {
+            assert!(flags.iter().any(|g| g == f), "{c} lacks --{f}: {flags:?}");
+        }
+    }
+    for f in noise {
+        assert!(!select.iter().any(|g| g == f), "select-poses lists --{f}");
+        assert!(
+            tool.iter().any(|g| g == f) && evaluate.iter().any(|g| g == f),
+            "--{f}"
+        );
+    }
+    for f in pool {
+        assert!(!tool.iter().any(|g| g == f), "design-tool lists --{f}");
+        assert!(
+            select.iter().any(|g| g == f) && evaluate.iter().any(|g| g == f),
+            "--{f}"
+        );
+    }
+    // Refused before any work, naming the flag.
+    for (args, flag) in [
+        (
+            &["select-poses", "--noise-pos-mm", "0.1", "--out", "x.csv"][..],
+            "--noise-pos-mm",
+        ),
+        (
+            &["design-tool", "--pool", "100", "--out", "t.csv"][..],
+            "--pool",
+        ),
+    ] {
+        let o = kincal(args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(flag), "{args:?}: {err}");
+    }
+}

@@ -1,6 +1,21 @@
 //! Criterion benchmarks of identification: a full 10-pose, 24-parameter ARIA calibration
-//! (Table 2 poses, Table 3 truth, start at Table 1) per algorithm, with the identifiability
-//! analysis included and with it done once beforehand (as a Monte-Carlo study does).
+//! (Table 2 poses, Table 3 truth, start at Table 1) per algorithm, and FK over random
+//! configurations in the same process, so that the calibration's cost reads as a number of
+//! FK evaluations whatever the machine's load (issue 18, goal 2: at most 150).
+//!
+//! Per algorithm:
+//! - `with_analysis`: `identify` on a reused workspace, as a loop of calibrations of one
+//!   robot runs it (the structural step of the analysis is remembered in the workspace);
+//! - `with_analysis_cold`: the same with the remembered structural step forgotten before
+//!   every call (the cost of a first calibration, and of every call before the memo);
+//! - `no_covariance`: `with_analysis` without standard errors and correlations
+//!   (`IdentifyOptions::covariance = false`);
+//! - `analysis_reused`: the analysis done once beforehand (as a Monte-Carlo study does).
+//!
+//! Everything is measured in the benchmark thread's CPU time (`cpu_time/…`), which other
+//! processes on the shared build machine do not inflate (much).
+//!
+//! Run: `cargo bench -p kincal --bench identification -- --noplot`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use kincal::identify::{
@@ -8,8 +23,15 @@ use kincal::identify::{
     identify_with_analysis,
 };
 use kincal::ik::{IkOptions, solve_ik};
+use kincal::rng::SplitMix64;
 use kincal::{JointState, aria};
 use std::hint::black_box;
+
+mod common;
+use common::{ThreadCpuTime, thread_cpu_ns};
+
+/// Random configurations for the FK line (a power of two: the index wraps with a mask).
+const TABLE: usize = 1024;
 
 fn tool_data() -> Vec<Measurement<6>> {
     let truth = aria::virtual_truth();
@@ -28,8 +50,29 @@ fn tool_data() -> Vec<Measurement<6>> {
         .collect()
 }
 
-fn bench(c: &mut Criterion) {
+fn bench(c: &mut Criterion<ThreadCpuTime>) {
+    if thread_cpu_ns().is_none() {
+        eprintln!("no thread CPU clock: identification benchmarks skipped");
+        return;
+    }
     let nominal = aria::nominal();
+    // FK over random configurations within the limits (the unit of goal 2).
+    let mut rng = SplitMix64::new(0x6b69_6e63_616c);
+    let states: Vec<JointState<6>> = (0..TABLE)
+        .map(|_| {
+            JointState::new(core::array::from_fn(|j| {
+                let l = nominal.limits()[j];
+                rng.range(l.lower, l.upper)
+            }))
+        })
+        .collect();
+    let mut k = 0usize;
+    c.bench_function("cpu_time/fk_aria_random", |b| {
+        b.iter(|| {
+            k = (k + 1) & (TABLE - 1);
+            black_box(&nominal).fk(black_box(&states[k]))
+        })
+    });
     let data = tool_data();
     let bounds = Bounds::around(&nominal, 0.05, 1.0);
     let mut ws = Box::<Workspace<32>>::default();
@@ -37,36 +80,44 @@ fn bench(c: &mut Criterion) {
         let mut opts = IdentifyOptions::new(alg, nominal.geometric_param_set());
         opts.bounds = Some(&bounds);
         let analysis = analyze(&nominal, &data, &opts, &mut ws).expect("analysis");
-        c.bench_function(
-            &format!("calibrate_10_poses_24_params/{}/with_analysis", alg.name()),
-            |b| {
-                b.iter(|| {
-                    black_box(identify(&nominal, black_box(&data), &opts, &mut ws).expect("fit"))
-                })
-            },
-        );
-        c.bench_function(
-            &format!(
-                "calibrate_10_poses_24_params/{}/analysis_reused",
+        let name = |what: &str| {
+            format!(
+                "cpu_time/calibrate_10_poses_24_params/{}/{what}",
                 alg.name()
-            ),
-            |b| {
-                b.iter(|| {
-                    black_box(
-                        identify_with_analysis(
-                            &nominal,
-                            black_box(&data),
-                            &opts,
-                            &analysis,
-                            &mut ws,
-                        )
+            )
+        };
+        c.bench_function(&name("with_analysis"), |b| {
+            b.iter(|| black_box(identify(&nominal, black_box(&data), &opts, &mut ws).expect("fit")))
+        });
+        c.bench_function(&name("with_analysis_cold"), |b| {
+            b.iter(|| {
+                ws.forget_structure();
+                black_box(identify(&nominal, black_box(&data), &opts, &mut ws).expect("fit"))
+            })
+        });
+        let no_cov = IdentifyOptions {
+            covariance: false,
+            ..opts
+        };
+        c.bench_function(&name("no_covariance"), |b| {
+            b.iter(|| {
+                black_box(identify(&nominal, black_box(&data), &no_cov, &mut ws).expect("fit"))
+            })
+        });
+        c.bench_function(&name("analysis_reused"), |b| {
+            b.iter(|| {
+                black_box(
+                    identify_with_analysis(&nominal, black_box(&data), &opts, &analysis, &mut ws)
                         .expect("fit"),
-                    )
-                })
-            },
-        );
+                )
+            })
+        });
     }
 }
 
-criterion_group!(benches, bench);
+criterion_group! {
+    name = benches;
+    config = Criterion::default().with_measurement(ThreadCpuTime);
+    targets = bench
+}
 criterion_main!(benches);

@@ -901,6 +901,99 @@ impl<const N: usize> Robot<N> {
     }
 }
 
+/// Number of words [`Robot::for_each_key_word`] gives for `n` joints.
+pub(crate) const fn key_words(n: usize) -> usize {
+    2 * (11 * n + 36) + n + 1 + 2 * n + (n + 4) + (7 * n + 1)
+}
+
+impl<const N: usize> Robot<N> {
+    /// Feeds every number of the model to `f`, bit for bit (`f64::to_bits`), in a fixed
+    /// order: two robots give the same words exactly when every field is bitwise equal, so
+    /// the words are an exact key for work that depends only on the model (the structural
+    /// step of the identifiability analysis, see `identify::memo`). The destructuring names
+    /// every field: adding one to `Robot`, `Geometry`, `MassModel` or `EffectParams`
+    /// without adding it here does not compile.
+    pub(crate) fn for_each_key_word(&self, f: &mut impl FnMut(u64)) {
+        let Robot {
+            geom,
+            nominal,
+            length_param,
+            kind_bits,
+            limits,
+            mass,
+            effects,
+        } = self;
+        geom.for_each_key_word(f);
+        nominal.for_each_key_word(f);
+        for l in length_param {
+            f(*l as u64);
+        }
+        f(*kind_bits);
+        for l in limits {
+            let JointLimits { lower, upper } = l;
+            f(lower.to_bits());
+            f(upper.to_bits());
+        }
+        let MassModel {
+            link_masses_kg,
+            tool_mass_kg,
+            gravity,
+        } = mass;
+        link_masses_kg.iter().for_each(|v| f(v.to_bits()));
+        f(tool_mass_kg.to_bits());
+        gravity.iter().for_each(|v| f(v.to_bits()));
+        let EffectParams {
+            compliance,
+            scale,
+            cyclic,
+            backlash,
+            thermal_kappa,
+        } = effects;
+        compliance.iter().for_each(|v| f(v.to_bits()));
+        scale.iter().for_each(|v| f(v.to_bits()));
+        cyclic.iter().flatten().for_each(|v| f(v.to_bits()));
+        backlash.iter().for_each(|v| f(v.to_bits()));
+        f(thermal_kappa.to_bits());
+    }
+}
+
+impl<const N: usize> Geometry<N> {
+    /// The geometry's part of [`Robot::for_each_key_word`]: `11·N + 36` words.
+    fn for_each_key_word(&self, f: &mut impl FnMut(u64)) {
+        let Geometry {
+            links,
+            base,
+            tool,
+            link_cs,
+            theta0_cs,
+            t_base,
+            t_tool,
+        } = self;
+        for l in links {
+            let Link {
+                theta0,
+                d,
+                a,
+                alpha,
+                beta,
+            } = l;
+            [theta0, d, a, alpha, beta]
+                .into_iter()
+                .for_each(|v| f(v.to_bits()));
+        }
+        base.iter().chain(tool.iter()).for_each(|v| f(v.to_bits()));
+        link_cs.iter().flatten().for_each(|v| f(v.to_bits()));
+        theta0_cs.iter().flatten().for_each(|v| f(v.to_bits()));
+        for t in [t_base, t_tool] {
+            t.rotation
+                .matrix()
+                .iter()
+                .chain(t.translation.vector.iter())
+                .for_each(|v| f(v.to_bits()));
+        }
+    }
+}
+
 fn set_at<const N: usize>(arr: &mut [f64; N], j: usize, value: f64) {
     if let Some(v) = arr.get_mut(j) {
         *v = value;

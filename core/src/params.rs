@@ -386,6 +386,10 @@ impl ParamSet {
     pub fn is_empty(&self) -> bool {
         self.bits.iter().all(|&w| w == 0)
     }
+    /// The membership bits (bit `i % 64` of word `i / 64`): an exact key of the set.
+    pub(crate) const fn words(&self) -> &[u64; PARAM_SET_CAPACITY / 64] {
+        &self.bits
+    }
     /// Members in increasing order.
     pub fn iter(&self) -> impl Iterator<Item = usize> + '_ {
         (0..PARAM_SET_CAPACITY).filter(move |&i| self.contains(i))

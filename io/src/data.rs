@@ -28,13 +28,42 @@ pub fn read<const N: usize>(
     effects: EffectSet,
     opts: DataOptions,
 ) -> Result<MeasurementSet, CliError> {
+    let set = crate::measurements::read_measurements(path, &read_options(robot, opts))?;
+    require_inputs(&set, effects)?;
+    Ok(set)
+}
+
+/// How [`read`] reads DATA for `robot`.
+pub fn read_options<const N: usize>(robot: &Robot<N>, opts: DataOptions) -> ReadOptions {
     let mut ro = ReadOptions::new(N);
     ro.joint_limits = Some(robot.limits().iter().map(|l| (l.lower, l.upper)).collect());
     ro.allow_out_of_limits = opts.allow_out_of_limits;
     ro.require_pose = opts.require_pose;
-    let set = crate::measurements::read_measurements(path, &ro)?;
-    require_inputs(&set, effects)?;
-    Ok(set)
+    ro
+}
+
+/// [`read`] row by row for one-pass commands: `on_row` gets each checked row (after the
+/// columns `effects` need were checked), and no row is kept, so memory does not grow with
+/// the file. Returns the file's description (`rows` empty).
+pub fn stream<const N: usize>(
+    path: &Path,
+    robot: &Robot<N>,
+    effects: EffectSet,
+    opts: DataOptions,
+    mut on_row: impl FnMut(&MeasurementSet, MeasurementRow) -> Result<(), CliError>,
+) -> Result<MeasurementSet, CliError> {
+    let mut checked = false;
+    crate::measurements::stream_measurements(path, &read_options(robot, opts), |set, row| {
+        if !checked {
+            require_inputs(set, effects)?;
+            checked = true;
+        }
+        on_row(set, row)
+    })
+    .map_err(|e| match e {
+        crate::measurements::StreamError::Input(e) => e.into(),
+        crate::measurements::StreamError::Row(e) => e,
+    })
 }
 
 /// Refuses data without the columns that `effects` need, naming the missing column.

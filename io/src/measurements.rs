@@ -239,6 +239,38 @@ pub fn parse_measurements(
     Parser::new(source_name, opts)?.run(reader)
 }
 
+/// Reads a measurement file row by row without keeping the rows: `on_row` gets the file's
+/// description (columns and flags; `rows` and `sha256` empty) and each checked row in file
+/// order. For one-pass commands (`predict`) on files of any length: memory stays that of
+/// one row. Returns the description with its `sha256`.
+pub fn stream_measurements<E>(
+    path: &Path,
+    opts: &ReadOptions,
+    on_row: impl FnMut(&MeasurementSet, MeasurementRow) -> Result<(), E>,
+) -> Result<MeasurementSet, StreamError<E>> {
+    let name = path.display().to_string();
+    let file = File::open(path).map_err(|e| InputError {
+        path: name.clone(),
+        line: None,
+        column: None,
+        reason: format!("cannot open the file: {e}"),
+    })?;
+    Parser::new(&name, opts)?.run_with(file, on_row)
+}
+
+/// Why [`stream_measurements`] stopped: the file was refused, or the row handler failed.
+#[derive(Debug)]
+pub enum StreamError<E> {
+    Input(InputError),
+    Row(E),
+}
+
+impl<E> From<InputError> for StreamError<E> {
+    fn from(e: InputError) -> Self {
+        StreamError::Input(e)
+    }
+}
+
 /// The header row of a measurement file, names as written (trimmed): for a binding that
 /// reads a file without knowing the robot (it takes the joint count from the file, then reads
 /// with [`parse_measurements`]) and shows the columns. Only the header is parsed; comments
@@ -775,6 +807,28 @@ impl<'a> Parser<'a> {
     }
 
     fn run(&self, reader: impl Read) -> Result<MeasurementSet, InputError> {
+        let mut rows = Vec::new();
+        let mut set = self
+            .run_with(reader, |_, row| {
+                rows.push(row);
+                Ok::<(), std::convert::Infallible>(())
+            })
+            .map_err(|e| match e {
+                StreamError::Input(e) => e,
+                StreamError::Row(never) => match never {},
+            })?;
+        rows.shrink_to_fit();
+        set.rows = rows;
+        Ok(set)
+    }
+
+    /// Reads the file and hands each checked row to `on_row` with the file's description
+    /// (its `rows` empty, its `sha256` empty until the end), keeping no row.
+    fn run_with<E>(
+        &self,
+        reader: impl Read,
+        mut on_row: impl FnMut(&MeasurementSet, MeasurementRow) -> Result<(), E>,
+    ) -> Result<MeasurementSet, StreamError<E>> {
         let hashing = HashingReader::new(reader).map_err(|e| self.io_err(None, e))?;
         let mut src = Records::new(BufReader::with_capacity(64 * 1024, hashing));
 
@@ -801,21 +855,25 @@ impl<'a> Parser<'a> {
             if content.contains(&b'\r') {
                 // A lone CR would end the line for the CSV records but not here, and the
                 // comment could not be written back (found by fuzzing).
-                return Err(self.err(
-                    Some(at),
-                    None,
-                    "comment line contains a carriage return (CR) before its end: expected \
+                return Err(self
+                    .err(
+                        Some(at),
+                        None,
+                        "comment line contains a carriage return (CR) before its end: expected \
                      one line ending in LF or CR LF",
-                ));
+                    )
+                    .into());
             }
             match std::str::from_utf8(&content[1..]) {
                 Ok(c) => comments.push(c.to_string()),
                 Err(e) => {
-                    return Err(self.err(
-                        Some(at),
-                        None,
-                        format!("comment is not valid UTF-8 ({e}): expected UTF-8 text"),
-                    ));
+                    return Err(self
+                        .err(
+                            Some(at),
+                            None,
+                            format!("comment is not valid UTF-8 ({e}): expected UTF-8 text"),
+                        )
+                        .into());
                 }
             }
         }
@@ -825,11 +883,13 @@ impl<'a> Parser<'a> {
         let header_line = match src.read_record().map_err(|e| self.io_err(Some(at), e))? {
             Some(line) => line,
             None => {
-                return Err(self.err(
-                    Some(src.line),
-                    None,
-                    "empty file: expected a header row (q1..qN, ...) and data rows",
-                ));
+                return Err(self
+                    .err(
+                        Some(src.line),
+                        None,
+                        "empty file: expected a header row (q1..qN, ...) and data rows",
+                    )
+                    .into());
             }
         };
         let header = src.fields().map_err(|(i, e)| {
@@ -842,38 +902,11 @@ impl<'a> Parser<'a> {
         let layout = self.layout(&header, header_line)?;
         let n_fields = layout.columns.len();
 
-        // Data rows.
-        let mut rows = Vec::new();
-        loop {
-            let at = src.line;
-            let Some(line) = src.read_record().map_err(|e| self.io_err(Some(at), e))? else {
-                break;
-            };
-            let fields = src.fields().map_err(|(i, e)| {
-                let column = layout.columns.get(i).map(|c| c.name.clone());
-                self.err(
-                    Some(line),
-                    Some(column.as_deref().unwrap_or(&format!("#{}", i + 1))),
-                    format!("cell is not valid UTF-8 ({e}): expected UTF-8 text"),
-                )
-            })?;
-            self.check_field_lengths(&fields, &layout.columns, line)?;
-            rows.push(self.row(&layout, &fields, line, n_fields)?);
-        }
-        if rows.is_empty() {
-            return Err(self.err(
-                Some(header_line),
-                None,
-                "no data rows: expected at least one row after the header",
-            ));
-        }
-
-        let sha256 = src.into_inner().into_inner().finish_hex();
-        Ok(MeasurementSet {
+        let mut set = MeasurementSet {
             source: self.source.to_string(),
             comments,
             n_joints: self.opts.n_joints,
-            rows,
+            rows: Vec::new(),
             extra_columns: layout
                 .extra_cols
                 .iter()
@@ -893,9 +926,41 @@ impl<'a> Parser<'a> {
             has_session: layout.session_col.is_some(),
             has_approach: layout.approach_cols.is_some(),
             has_temperature: layout.temp_col.is_some(),
-            sha256,
+            sha256: String::new(),
             header_line,
-        })
+        };
+
+        // Data rows.
+        let mut n_rows = 0u64;
+        loop {
+            let at = src.line;
+            let Some(line) = src.read_record().map_err(|e| self.io_err(Some(at), e))? else {
+                break;
+            };
+            let fields = src.fields().map_err(|(i, e)| {
+                let column = layout.columns.get(i).map(|c| c.name.clone());
+                self.err(
+                    Some(line),
+                    Some(column.as_deref().unwrap_or(&format!("#{}", i + 1))),
+                    format!("cell is not valid UTF-8 ({e}): expected UTF-8 text"),
+                )
+            })?;
+            self.check_field_lengths(&fields, &layout.columns, line)?;
+            let row = self.row(&layout, &fields, line, n_fields)?;
+            on_row(&set, row).map_err(StreamError::Row)?;
+            n_rows += 1;
+        }
+        if n_rows == 0 {
+            return Err(self
+                .err(
+                    Some(header_line),
+                    None,
+                    "no data rows: expected at least one row after the header",
+                )
+                .into());
+        }
+        set.sha256 = src.into_inner().into_inner().finish_hex();
+        Ok(set)
     }
 
     // Long by design: the header's rules, one per column group, in the order spec/measurements.md states them.
@@ -1473,20 +1538,55 @@ pub fn write_poses_csv(
     with_pose_id: bool,
     rows: &[PoseRow],
 ) -> io::Result<()> {
-    let mut header: Vec<String> = Vec::new();
-    if with_pose_id {
-        header.push("pose_id".into());
+    let mut w = PosesCsvWriter::new(out, n_joints, with_pose_id)?;
+    for r in rows {
+        w.write(r)?;
     }
-    header.extend((1..=n_joints).map(|k| format!("q{k}")));
-    header.extend(POS_NAMES.iter().map(|s| s.to_string()));
-    header.extend(QUAT_NAMES.iter().map(|s| s.to_string()));
+    w.finish()
+}
 
-    let mut w = csv::WriterBuilder::new().from_writer(out);
-    w.write_record(&header).map_err(csv_io)?;
-    let mut rec: Vec<String> = Vec::with_capacity(header.len());
-    for (i, r) in rows.iter().enumerate() {
+/// [`write_poses_csv`] one row at a time, so that `predict` streams a file of any length.
+#[derive(Debug)]
+pub struct PosesCsvWriter<W: Write> {
+    w: csv::Writer<W>,
+    n_joints: usize,
+    with_pose_id: bool,
+    /// Rows written so far (for messages).
+    rows: usize,
+    rec: Vec<String>,
+}
+
+impl<W: Write> PosesCsvWriter<W> {
+    /// Writes the header.
+    pub fn new(out: W, n_joints: usize, with_pose_id: bool) -> io::Result<Self> {
+        let mut header: Vec<String> = Vec::new();
+        if with_pose_id {
+            header.push("pose_id".into());
+        }
+        header.extend((1..=n_joints).map(|k| format!("q{k}")));
+        header.extend(POS_NAMES.iter().map(|s| s.to_string()));
+        header.extend(QUAT_NAMES.iter().map(|s| s.to_string()));
+        let mut w = csv::WriterBuilder::new().from_writer(out);
+        w.write_record(&header).map_err(csv_io)?;
+        Ok(PosesCsvWriter {
+            w,
+            n_joints,
+            with_pose_id,
+            rows: 0,
+            rec: Vec::with_capacity(header.len()),
+        })
+    }
+
+    /// Rows written so far.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// Writes one row.
+    pub fn write(&mut self, r: &PoseRow) -> io::Result<()> {
+        let (i, n_joints, rec) = (self.rows, self.n_joints, &mut self.rec);
         rec.clear();
-        match (&r.pose_id, with_pose_id) {
+        match (&r.pose_id, self.with_pose_id) {
             (Some(id), true) if !id.trim().is_empty() => rec.push(id.clone()),
             (None, false) => {}
             (_, true) => {
@@ -1509,16 +1609,21 @@ pub fn write_poses_csv(
         for (k, &q) in r.q_rad.iter().enumerate() {
             rec.push(finite(q, i, &format!("q{}", k + 1))?);
         }
-        for (a, &p) in r.position_m.iter().enumerate() {
-            rec.push(finite(p, i, POS_NAMES[a])?);
+        for (&p, name) in r.position_m.iter().zip(POS_NAMES) {
+            rec.push(finite(p, i, name)?);
         }
-        for (a, &c) in r.quaternion_wxyz.iter().enumerate() {
-            rec.push(finite(c, i, QUAT_NAMES[a])?);
+        for (&c, name) in r.quaternion_wxyz.iter().zip(QUAT_NAMES) {
+            rec.push(finite(c, i, name)?);
         }
-        w.write_record(&rec).map_err(csv_io)?;
+        self.w.write_record(&*rec).map_err(csv_io)?;
+        self.rows += 1;
+        Ok(())
     }
-    w.flush()?;
-    Ok(())
+
+    /// Flushes the output.
+    pub fn finish(mut self) -> io::Result<()> {
+        self.w.flush()
+    }
 }
 
 /// Writes a whole measurement set so that it reads back identically (apart from `line`

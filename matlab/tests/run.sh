@@ -64,10 +64,28 @@ export KINCAL_PANIC_MEX=$out/panic_mex/kincal_mex_panic.mex
 
 printf '\n=== octave-cli: make_kincal, run_tests (outputs in %s)\n' "$out"
 cd "$root/matlab"
-# tempname() in the tests then lands in the temporary folder this script removes.
-export TMPDIR=$out
+# tempname() in the tests then lands in a folder of the temporary folder this script removes;
+# the check after the run fails if a test left anything there or in the system's folder.
+system_tmp=${TMPDIR:-/tmp}
+mkdir -p "$out/tmp"
+export TMPDIR=$out/tmp
+start_marker=$out/start-marker
+touch "$start_marker"
 # The test-panic test panics on purpose: its message is expected, a backtrace of it is noise.
 export RUST_BACKTRACE=0
 # The filter is passed through the environment, never spliced into the Octave code.
 octave-cli -q --norc --no-history --eval \
     "make_kincal('all'); addpath('tests'); run_tests('filter', getenv('KINCAL_TEST_FILTER'), 'exit', true);"
+
+# Issue #19 item 8: a run leaves no temporary file behind. run_tests gives each test a fresh
+# TMPDIR and removes it; anything in $TMPDIR now, or a new Octave temporary file (oct-*) in
+# the system's temporary folder, is a leak.
+left=$(find "$TMPDIR" -mindepth 1 -maxdepth 1 -printf '%f\n' | head -n 20)
+leaked=$(find "$system_tmp" -mindepth 1 -maxdepth 1 -name 'oct-*' -user "$(id -u)" \
+    -newer "$start_marker" -printf '%f\n' 2>/dev/null | head -n 20)
+if [[ -n $left || -n $leaked ]]; then
+    echo "matlab/tests/run.sh: FAILED: the run left temporary files:" ${left:+"in \$TMPDIR: $left"} \
+        ${leaked:+"in $system_tmp: $leaked"} >&2
+    exit 1
+fi
+echo "matlab/tests/run.sh: no temporary file left behind"

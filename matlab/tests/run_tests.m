@@ -6,6 +6,9 @@ function failures = run_tests(varargin)
 %   RUN_TESTS('filter', TEXT) runs only the tests whose "file/name" contains TEXT.
 %   RUN_TESTS(..., 'exit', true) ends the interpreter with exit status 1 on a failure and 0
 %   otherwise (for CI: octave-cli --eval "run_tests('exit', true)").
+%   Each test runs with TEMPDIR (TMPDIR) set to a fresh folder that is removed after it,
+%   whatever the test leaves; a test that leaves files there fails all the same (each test
+%   removes its own files with onCleanup).
 %   A test that cannot run here calls SKIP_TEST (printed as SKIP); when the environment
 %   variable CI is "true" a skip counts as a failure.
 %
@@ -43,7 +46,7 @@ for f = 1:numel(names)
         end
         t0 = tic();
         try
-            tests{t, 2}();
+            run_in_sandbox(tests{t, 2});
             passed = passed + 1;
             fprintf('PASS  %-60s %6.2f s\n', id, toc(t0));
         catch err
@@ -66,5 +69,32 @@ for k = 1:numel(failed)
 end
 if opts.exit
     exit(double(failures > 0));
+end
+end
+
+function run_in_sandbox(test)
+% Runs TEST with TMPDIR (and so TEMPDIR and TEMPNAME) in a fresh folder; removes the folder
+% afterwards (onCleanup: also when the test fails) and fails when the test left files in it.
+outer = getenv('TMPDIR');
+box = tempname(tempdir());
+mkdir(box);
+setenv('TMPDIR', box);
+restore = onCleanup(@() leave_sandbox(box, outer)); %#ok<NASGU>
+test();
+left = dir(box);
+left = {left(~ismember({left.name}, {'.', '..'})).name};
+if ~isempty(left)
+    error('test:tempFiles', 'the test left %d temporary file(s): %s', numel(left), ...
+        strjoin(left, ', '));
+end
+end
+
+function leave_sandbox(box, outer)
+setenv('TMPDIR', outer);
+if exist('OCTAVE_VERSION', 'builtin')
+    confirm_recursive_rmdir(false, 'local');
+end
+if exist(box, 'dir')
+    rmdir(box, 's');
 end
 end

@@ -10,8 +10,9 @@ tests = {
     };
 end
 
-function d = work_dir()
-d = tempname(tempdir());
+function [d, cleanup] = work_dir()
+% A fresh folder, removed when the caller's CLEANUP goes out of scope.
+[d, cleanup] = temp_path();
 mkdir(d);
 end
 
@@ -33,7 +34,7 @@ end
 
 function predict_matches_fk()
 require_cli_command('predict');
-d = work_dir();
+[d, cleanup] = work_dir(); %#ok<ASGLU> removed on return
 r = kincal_robot('aria');
 q = configurations(r);
 joints = fullfile(d, 'joints.csv');
@@ -49,7 +50,7 @@ end
 function calibrate_matches_identify()
 require_cli_command('calibrate');
 require_function('kincal_identify', 'kincal_identify');
-d = work_dir();
+[d, cleanup] = work_dir(); %#ok<ASGLU> removed on return
 start = kincal_robot('aria');
 [q, T] = tool_data(kincal_robot('aria_real'));
 data = fullfile(d, 'data.csv');
@@ -69,7 +70,7 @@ end
 function validate_matches_validate()
 require_cli_command('validate');
 require_function('kincal_validate', 'kincal_validate');
-d = work_dir();
+[d, cleanup] = work_dir(); %#ok<ASGLU> removed on return
 r = kincal_robot('aria');
 [q, T] = tool_data(kincal_robot('aria_true'));
 data = fullfile(d, 'data.csv');
@@ -99,7 +100,7 @@ end
 function model_file_matches_robot()
 require_cli_command('calibrate');
 require_function('kincal_load_model', 'kincal_identify (for the calibrated model)');
-d = work_dir();
+[d, cleanup] = work_dir(); %#ok<ASGLU> removed on return
 start = kincal_robot('aria');
 [q, T] = tool_data(kincal_robot('aria_true'));
 data = fullfile(d, 'data.csv');
@@ -123,7 +124,7 @@ end
 % CLI's file:line:column message).
 function model_files_the_cli_refuses_are_refused()
 require_cli_command('calibrate');
-d = work_dir();
+[d, cleanup] = work_dir(); %#ok<ASGLU> removed on return
 [q, T] = tool_data(kincal_robot('aria_true'));
 data = fullfile(d, 'data.csv');
 model = fullfile(d, 'model.json');

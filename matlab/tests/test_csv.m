@@ -11,13 +11,39 @@ tests = {
 end
 
 function f = write_file(text)
+% A temporary CSV file holding TEXT; the calling test removes it with remove_written.
 f = [tempname(tempdir()) '.csv'];
 fid = fopen(f, 'w');
 fwrite(fid, text);
 fclose(fid);
+written_files(f);
+end
+
+function list = written_files(f)
+% The files write_file wrote since the last call without an argument (which returns them).
+persistent files
+if isempty(files)
+    files = {};
+end
+if nargin > 0
+    files{end + 1} = f;
+else
+    list = files;
+    files = {};
+end
+end
+
+function remove_written()
+list = written_files();
+for k = 1:numel(list)
+    if exist(list{k}, 'file')
+        delete(list{k});
+    end
+end
 end
 
 function spec_example()
+cleanup = onCleanup(@remove_written); %#ok<NASGU> the files write_file wrote
 f = write_file(sprintf(['# robot: aria\n# instrument: motion capture, 0.1 mm\n' ...
     'pose_id,q1,q2,q3,q4,q5,q6,x,y,z,roll_deg,pitch_deg,yaw_deg\n' ...
     '1,0.4813,0.7750,-1.0383,3.6605,1.1053,-2.8499,0.566,0.354,0.235,-150,0,0\n']));
@@ -36,6 +62,7 @@ expect_true(norm(e(1:3)) < 1e-4, 'spec example is Table 2 pose 1 on the nominal 
 end
 
 function units_order_and_extras()
+cleanup = onCleanup(@remove_written); %#ok<NASGU> the files write_file wrote
 rad = write_file(sprintf(['q1,q2,q3,q4,q5,q6,x,y,z,roll,pitch,yaw\n' ...
     '0.1,0.2,0.3,0.4,0.5,0.6,0.5,0.25,0.125,0.5,0.25,-0.5\n']));
 deg = write_file(sprintf(['extra_operator,yaw_deg,z_mm,q6_deg,q5,q4,q3,q2,q1_rad,x_m,y,' ...
@@ -60,6 +87,7 @@ expect_true(isempty(d.T) && isequal(d.q, [0.1; 0.2]) && isequal(d.approach, [-1;
 end
 
 function quaternions()
+cleanup = onCleanup(@remove_written); %#ok<NASGU> the files write_file wrote
 [Tt, ~] = kincal_aria_tool();
 pq = kincal_pose_to_pq(Tt(:, :, 3));
 cells = arrayfun(@(v) sprintf('%.17g', v), [pq(1:3); pq(4:7) * (1 + 5e-7)], ...
@@ -76,7 +104,7 @@ function round_trip()
 r = kincal_robot('aria');
 [Tt, seed] = kincal_aria_tool();
 q = kincal_ik(r, Tt, seed);
-f = [tempname(tempdir()) '.csv'];
+[f, cleanup] = temp_path('.csv'); %#ok<ASGLU> deleted on return
 kincal_write_measurements(f, q, Tt, 'pose_id', 1:10, 'comments', {'robot: aria'});
 d = kincal_read_measurements(f, 'robot', r);
 expect_true(isequal(d.q, q), 'joint readings bit for bit');
@@ -91,6 +119,7 @@ expect_near(d.T, Tt, 1e-15, 'poses through quaternions');
 end
 
 function line_endings()
+cleanup = onCleanup(@remove_written); %#ok<NASGU> the files write_file wrote
 text = sprintf('\xEF\xBB\xBF# c\r\n\r\nq1,q2\r\n0.5,0.25\r\n\r\n0.125,1\r\n\r\n');
 d = kincal_read_measurements(write_file(text));
 expect_true(isequal(d.q, [0.5 0.125; 0.25 1]) && isequal(d.line, [4 6]), ...
@@ -100,6 +129,7 @@ expect_true(isequal(d.q, [0.5; 0.25]), 'quoted cells and spaces');
 end
 
 function rejections()
+cleanup = onCleanup(@remove_written); %#ok<NASGU> the files write_file wrote
 % The messages are kincal-io's, the reader the CLI uses (the toolbox's own .m parser is
 % gone): "file:line: column 'name': what was expected".
 r = kincal_robot('aria');

@@ -87,7 +87,7 @@ function data_struct()
 require_identify();
 nominal = kincal_robot('aria');
 [q, T] = tool_data(kincal_robot('aria_real'));
-f = [tempname(tempdir()) '.csv'];
+[f, cleanup] = temp_path('.csv'); %#ok<ASGLU> deleted on return
 kincal_write_measurements(f, q, T);
 d = kincal_read_measurements(f, 'robot', nominal);
 a = kincal_identify(nominal, q, T);

@@ -109,7 +109,7 @@ require_cli_command('observed-point');
 % Not quite converging: a few millimetres of miss, well under the CLI's 25 % limit.
 T(1:3, 4, 2) = T(1:3, 4, 2) + [2e-3; -1e-3; 0];
 T(1:3, 4, 5) = T(1:3, 4, 5) + [0; 1.5e-3; 1e-3];
-d = tempname(tempdir());
+[d, cleanup] = temp_path(); %#ok<ASGLU> removed on return
 mkdir(d);
 data = fullfile(d, 'cameras.csv');
 out = fullfile(d, 'observed.csv');

@@ -15,11 +15,25 @@ tests = {
     };
 end
 
-function base = out_base()
+function [base, cleanup] = out_base()
+% $KINCAL_OUT, or else a fresh folder set as KINCAL_OUT for this test only and removed (with
+% KINCAL_OUT unset again) when the caller's CLEANUP goes out of scope.
 base = getenv('KINCAL_OUT');
+cleanup = [];
 if isempty(base)
     base = tempname(tempdir());
     setenv('KINCAL_OUT', base);
+    cleanup = onCleanup(@() leave_out(base));
+end
+end
+
+function leave_out(base)
+setenv('KINCAL_OUT', '');
+if exist(base, 'dir')
+    if exist('OCTAVE_VERSION', 'builtin')
+        confirm_recursive_rmdir(false, 'local');
+    end
+    rmdir(base, 's');
 end
 end
 
@@ -28,7 +42,8 @@ function text = run_workflow(script, folder, figures)
 if ~any(strcmp(ops, 'identify'))
     error('test:pendingExport', '%s needs the identify operation (C ABI kincal_identify)', script);
 end
-out = fullfile(out_base(), folder);
+[base, cleanup] = out_base(); %#ok<ASGLU> a temporary base is removed on return
+out = fullfile(base, folder);
 for k = 1:numel(figures)
     for kind = {'position', 'orientation'}
         f = fullfile(out, sprintf('%s_%s.png', figures{k}, kind{1}));
@@ -82,7 +97,7 @@ function example_data_current()
 % columns, labels and roles, and the same numbers up to rounding (1e-12: the library's FK
 % may change in the last bits between versions).
 committed = fullfile(repo_root(), 'matlab', 'workflows', 'data', 'aria_example.csv');
-fresh = [tempname(tempdir()) '.csv'];
+[fresh, cleanup] = temp_path('.csv'); %#ok<ASGLU> deleted on return
 addpath(fullfile(repo_root(), 'matlab', 'workflows'));
 evalc('make_example_data(fresh)');
 a = kincal_read_measurements(committed);

@@ -13,7 +13,7 @@ use kincal::selection::{Constraints, Objective, SelectOptions};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
-use crate::commands::design::args::{Context, P, ScenarioArgs, SelectionArgs, SetupArgs, finite};
+use crate::commands::design::args::{Context, DesignSizeArgs, P, ScenarioArgs, SetupArgs, finite};
 use crate::commands::design::designs::{self, Design, OwnedPool};
 use crate::commands::design::study::{self, DesignResult};
 use crate::error::CliError;
@@ -38,7 +38,12 @@ the baseline with --screen-runs Monte-Carlo runs on robots of their own (seed + 
 is the largest of the four ratios median/95th percentile of e_p/e_φ to the baseline's. The
 best tool is then evaluated with --runs runs on the main seed's robots, the same robots as the
 baseline, and written to --out: pose_id, x_mm, y_mm, z_mm, roll_deg, pitch_deg, yaw_deg and
-the nominal configuration (extra_q*_rad), with the design assumptions as comments.";
+the nominal configuration (extra_q*_rad), with the design assumptions as comments.
+
+The candidates are the plate grid's sockets and the objectives --objectives, so the pose
+selections' pool flags of select-poses and evaluate-designs (--index, --pool, --refine,
+--workspace, --cube-mm, --tolerance) do not apply and are refused (exit 2) rather than
+ignored.";
 
 pub const EXAMPLE: &str = "\
 Example:
@@ -52,7 +57,7 @@ pub struct Args {
     #[command(flatten)]
     pub scenario: ScenarioArgs,
     #[command(flatten)]
-    pub selection: SelectionArgs,
+    pub selection: DesignSizeArgs,
     /// Plate heights to try [mm] (default: the region's bottom, middle and top)
     #[arg(long, value_parser = finite, value_delimiter = ',', value_name = "Z1,Z2,..")]
     pub plate_z_mm: Option<Vec<f64>>,
@@ -240,7 +245,8 @@ fn design<const N: usize>(
     args: &Args,
 ) -> Result<(), CliError> {
     let ctx = Context::new(robot, name, &args.setup)?;
-    let settings = args.selection.settings()?;
+    let sizes = &args.selection;
+    let m = sizes.m()?;
     let scenario = args.scenario.scenario();
     let baseline = match (&args.baseline, ctx.is_aria) {
         (Some(b), _) => {
@@ -275,7 +281,7 @@ fn design<const N: usize>(
         region: Some(ctx.region),
         cone: None,
         joint_margin_rad: ctx.margin_rad,
-        min_dexterity: settings.min_dexterity,
+        min_dexterity: sizes.min_dexterity,
     };
     let mut log = String::new();
     let _ = writeln!(log, "Tool design: {}", ctx.describe());
@@ -288,8 +294,8 @@ fn design<const N: usize>(
         args.yaws_deg,
         args.min_separation_mm,
         args.setup.margin_deg,
-        settings.min_dexterity,
-        settings.robust_robots
+        sizes.min_dexterity,
+        sizes.robust_robots
     );
     let objectives: Vec<(&str, f64, Objective)> =
         args.objectives.iter().map(|o| o.spec()).collect();
@@ -297,14 +303,14 @@ fn design<const N: usize>(
     let mut candidates: Vec<Candidate<N>> = Vec::new();
     for &z in &heights {
         pb.set_message(format!("sockets on the plate at z = {:.0} mm", z * 1e3));
-        let (q, poses) = plate_candidates(&ctx, args, z, &c, settings.robust_robots, &pb)?;
+        let (q, poses) = plate_candidates(&ctx, args, z, &c, sizes.robust_robots, &pb)?;
         let _ = writeln!(
             log,
             "  plate z = {:.0} mm: {} admissible sockets",
             z * 1e3,
             q.len()
         );
-        if q.len() < settings.m {
+        if q.len() < m {
             continue;
         }
         for &(label, w, objective) in &objectives {
@@ -324,13 +330,13 @@ fn design<const N: usize>(
                     .map_err(|e| CliError::numeric(format!("validation blocks: {e}")))?
             };
             let mut opts = SelectOptions::new(objective, ctx.seed);
-            opts.starts = settings.starts;
+            opts.starts = sizes.starts.max(1);
             opts.refine_trials = 0;
             opts.min_separation_m = args.min_separation_mm * 1e-3;
             let sel = designs::select_best(
                 &ctx,
                 &pool,
-                settings.m,
+                m,
                 &obs,
                 &c,
                 &opts,
@@ -511,9 +517,9 @@ fn design<const N: usize>(
             "sockets at least {} mm apart; joint margin {}°; reached by {} random robots (±{} mm, ±{}°)",
             args.min_separation_mm,
             args.setup.margin_deg,
-            settings.robust_robots,
-            args.scenario.length_error_mm,
-            args.scenario.angle_error_deg
+            sizes.robust_robots,
+            args.scenario.errors.length_error_mm,
+            args.scenario.errors.angle_error_deg
         ),
         format!("chosen by {}; seed {}", chosen.objective, ctx.seed),
         format!(

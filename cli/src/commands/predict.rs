@@ -1,5 +1,6 @@
 //! `kincal predict MODEL DATA --out POSES.csv`.
 
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
 use kincal::Robot;
@@ -7,7 +8,7 @@ use kincal::pose::matrix_to_quaternion;
 
 use crate::error::{CliError, core_error};
 use kincal_io::data::{self, DataOptions};
-use kincal_io::measurements::{PoseRow, write_poses_csv};
+use kincal_io::measurements::{MeasurementRow, PoseRow, PosesCsvWriter};
 use kincal_io::robot_arg;
 
 pub const LONG_ABOUT: &str = "\
@@ -65,49 +66,82 @@ fn predict<const N: usize>(
         .iter()
         .chain(robot.active_effects().iter())
         .fold(kincal::EffectSet::NONE, kincal::EffectSet::with);
-    let set = data::read(
-        &args.data,
-        robot,
-        needed,
-        DataOptions {
-            require_pose: false,
-            allow_out_of_limits: args.allow_out_of_limits,
-        },
-    )?;
-    let with_id = set.has_pose_id();
-    let rows = set
-        .rows
-        .iter()
-        .enumerate()
-        .map(|(i, row)| {
-            // A row naming a measured point (point_x/y/z) predicts that point's frame.
-            let mut m = kincal::identify::Measurement::new([0.0; N], kincal::Transform::identity());
-            m.state = data::joint_state::<N>(row);
-            m.point = row.point_m;
-            let t = m
-                .model_pose(robot)
-                .map_err(|e| core_error(e, &set.source, |_| data::line_of(&set, i)))?;
-            let p = t.translation.vector;
-            Ok(PoseRow {
-                pose_id: if with_id { row.pose_id.clone() } else { None },
-                q_rad: row.q_rad.clone(),
-                position_m: [p.x, p.y, p.z],
-                quaternion_wxyz: matrix_to_quaternion(t.rotation.matrix()),
-            })
-        })
-        .collect::<Result<Vec<_>, CliError>>()?;
+    let opts = DataOptions {
+        require_pose: false,
+        allow_out_of_limits: args.allow_out_of_limits,
+    };
     let mut inputs: Vec<&Path> = vec![&args.data];
     let model_path = Path::new(&args.model);
     if model_is_file {
         inputs.push(model_path);
     }
-    kincal_io::files::write_atomic(&args.out, &inputs, |w| {
-        write_poses_csv(w, N, with_id, &rows)
-    })?;
-    eprintln!(
-        "{} poses predicted, written to {}",
-        rows.len(),
-        args.out.display()
-    );
+    // One pass, row by row: each row is read, predicted and written before the next is
+    // read, so memory does not grow with the file (issue #16 item 6).
+    let mut refused: Option<CliError> = None;
+    let mut count = 0usize;
+    let written = kincal_io::files::write_atomic(&args.out, &inputs, |w| {
+        // The writer is made at the first row, which says whether there are pose ids.
+        let mut target = Some(w);
+        let mut out: Option<PosesCsvWriter<&mut dyn Write>> = None;
+        let mut write_failure: Option<io::Error> = None;
+        let streamed = data::stream(&args.data, robot, needed, opts, |set, row| {
+            let pose = predicted_row(robot, row, &set.source)?;
+            let mut put = || -> io::Result<()> {
+                let writer = match (&mut out, target.take()) {
+                    (Some(o), _) => o,
+                    (None, Some(t)) => {
+                        out.insert(PosesCsvWriter::new(t, N, pose.pose_id.is_some())?)
+                    }
+                    (None, None) => return Err(io::Error::other("the output was lost")),
+                };
+                writer.write(&pose)
+            };
+            put().map_err(|e| {
+                write_failure = Some(e);
+                CliError::io("write failed")
+            })
+        });
+        if let Some(e) = write_failure {
+            return Err(e);
+        }
+        if let Err(e) = streamed {
+            refused = Some(e);
+            return Err(io::Error::other("the data were refused"));
+        }
+        match out {
+            Some(o) => {
+                count = o.rows();
+                o.finish()
+            }
+            None => Ok(()),
+        }
+    });
+    if let Some(e) = refused {
+        return Err(e);
+    }
+    written?;
+    eprintln!("{count} poses predicted, written to {}", args.out.display());
     Ok(())
+}
+
+/// The model's pose for one row: the row's joint state (a row naming a measured point,
+/// point_x/y/z, predicts that point's frame); the row's pose_id and readings move into it.
+fn predicted_row<const N: usize>(
+    robot: &Robot<N>,
+    row: MeasurementRow,
+    source: &str,
+) -> Result<PoseRow, CliError> {
+    let mut m = kincal::identify::Measurement::new([0.0; N], kincal::Transform::identity());
+    m.state = data::joint_state::<N>(&row);
+    m.point = row.point_m;
+    let t = m
+        .model_pose(robot)
+        .map_err(|e| core_error(e, source, |_| Some(row.line)))?;
+    let p = t.translation.vector;
+    Ok(PoseRow {
+        pose_id: row.pose_id,
+        q_rad: row.q_rad,
+        position_m: [p.x, p.y, p.z],
+        quaternion_wxyz: matrix_to_quaternion(t.rotation.matrix()),
+    })
 }

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use kincal::observability::{Index, Indices};
 use kincal::selection::Constraints;
 
-use crate::commands::design::args::{Context, ScenarioArgs, SelectionArgs, SetupArgs};
+use crate::commands::design::args::{Context, RobotErrorArgs, SelectionArgs, SetupArgs};
 use crate::commands::design::designs::{self, Design, OwnedPool};
 use crate::error::CliError;
 use kincal_io::measurements::{PoseRow, write_poses_csv};
@@ -36,7 +36,12 @@ Prints every index (O = eq. 17, O1 Borm–Menq, O2 inverse condition number, O3 
 noise amplification, O5 1/σ_max, A = 1/Σσ⁻¹, D = ln det JᵀJ) of the selection next to the
 median and best of random m-pose sets from the same pool, and writes --out: pose_id, q1..qN
 [rad], x, y, z [m], qw, qx, qy, qz of the nominal poses (usable as `evaluate-designs
---commanded`, or as a tool after design-tool's format).";
+--commanded`, or as a tool after design-tool's format).
+
+The scenario's random robots (--length-error-mm, --angle-error-deg) serve the robust-reach
+test only: select-poses simulates no measurement, so design-tool's and evaluate-designs'
+noise and tool-tolerance flags (--noise-pos-mm, --noise-rot-deg, --tool-tol-mm,
+--tool-tol-deg) do not apply and are refused (exit 2) rather than ignored.";
 
 pub const EXAMPLE: &str = "\
 Examples:
@@ -58,7 +63,7 @@ pub struct Args {
     #[command(flatten)]
     pub selection: SelectionArgs,
     #[command(flatten)]
-    pub scenario: ScenarioArgs,
+    pub scenario: RobotErrorArgs,
     /// Which design
     #[arg(long, value_enum, default_value = "standard")]
     pub design: Which,

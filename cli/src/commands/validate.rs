@@ -185,25 +185,30 @@ pub fn summary_table(evals: &[Evaluation], targets: Targets, has_rot: bool) -> S
     t.render("  ")
 }
 
-/// Per-pose table of one evaluation; a component `masks[i]` does not measure prints a dash
-/// (a row giving only `x` has no e_y, e_z; a position-only row no orientation error), not
-/// a zero one; |e_p| and |e_φ| run over the measured components.
-pub fn pose_table(
-    e: &Evaluation,
-    ids: &[String],
-    has_rot: bool,
-    masks: &[ComponentMask],
-) -> String {
+/// Header of the per-pose table.
+pub fn pose_table_header(has_rot: bool) -> Vec<&'static str> {
     let mut header = vec!["pose", "e_x [mm]", "e_y [mm]", "e_z [mm]", "|e_p| [mm]"];
     if has_rot {
         header.extend(["e_φx [deg]", "e_φy [deg]", "e_φz [deg]", "|e_φ| [deg]"]);
     }
-    let mut t = Table::new(&header);
-    for (i, p) in e.errors.iter().enumerate() {
-        let mask = masks.get(i).copied().unwrap_or(ComponentMask::ALL);
+    header
+}
+
+/// Per-pose table rows of one evaluation, made on demand (a file of a million rows is
+/// printed without holding its table): `id(i)` names pose `i`; a component `mask(i)` does
+/// not measure prints a dash (a row giving only `x` has no e_y, e_z; a position-only row no
+/// orientation error), not a zero one; |e_p| and |e_φ| run over the measured components.
+pub fn pose_table_rows<'a>(
+    e: &'a Evaluation,
+    id: impl Fn(usize) -> String + 'a,
+    has_rot: bool,
+    mask: impl Fn(usize) -> ComponentMask + 'a,
+) -> impl Iterator<Item = Vec<String>> + 'a {
+    e.errors.iter().enumerate().map(move |(i, p)| {
+        let mask = mask(i);
         let cell = |k: usize, v: String| if mask.has(k) { v } else { "-".to_string() };
         let any = |mut ks: core::ops::Range<usize>| ks.any(|k| mask.has(k));
-        let mut row = vec![ids.get(i).cloned().unwrap_or_else(|| (i + 1).to_string())];
+        let mut row = vec![id(i)];
         row.extend((0..3).map(|k| cell(k, crate::report::fmt_signed6(p.pos_m[k] * 1e3))));
         row.push(if any(0..3) {
             format!("{:.6}", p.pos_norm_m * 1e3)
@@ -220,9 +225,8 @@ pub fn pose_table(
                 "-".to_string()
             });
         }
-        t.row(row);
-    }
-    t.render("  ")
+        row
+    })
 }
 
 /// "10 poses (46 rows)" when rows share pose ids, else "46 poses".
@@ -390,12 +394,10 @@ fn validate<const N: usize>(
         pos_m: args.target_pos_mm * 1e-3,
         rot_rad: args.target_rot_deg.to_radians(),
     };
-    let ids: Vec<String> = set
-        .rows
-        .iter()
-        .enumerate()
-        .map(|(i, r)| r.pose_id.clone().unwrap_or_else(|| (i + 1).to_string()))
-        .collect();
+    let id = |i: usize| match set.rows.get(i).and_then(|r| r.pose_id.as_ref()) {
+        Some(p) => p.clone(),
+        None => (i + 1).to_string(),
+    };
 
     let d_m = args
         .biopsy_d_mm
@@ -483,9 +485,16 @@ fn validate<const N: usize>(
         let _ = writeln!(out, "Warning: {w}");
     }
     if !args.quiet {
-        let masks: Vec<ComponentMask> = meas.iter().map(|m| m.mask).collect();
+        // Streamed to stdout: one row per pose, never held whole.
         let _ = writeln!(out, "\nPer-pose errors ({name}, measured − model):");
-        out.push_str(&pose_table(&main, &ids, has_rot, &masks));
+        crate::report::emit(&out);
+        out.clear();
+        let mask = |i: usize| meas.get(i).map_or(ComponentMask::ALL, |m| m.mask);
+        crate::report::emit_streamed_table(
+            &pose_table_header(has_rot),
+            || pose_table_rows(&main, id, has_rot, mask),
+            "  ",
+        );
     }
     let default_targets = args.target_pos_mm == 1.0 && args.target_rot_deg == 0.66;
     let whose = if is_aria(file) {

@@ -339,6 +339,10 @@ pub(crate) fn structural_step_with<const N: usize, const P: usize>(
             capacity: P,
         });
     }
+    if ws.memo.lookup(robot, sel, opts) {
+        let Workspace { memo, free, .. } = ws;
+        return memo.replay(&requested, free, structural, partner);
+    }
     if base_first {
         let rest = requested.iter().filter(|i| !base.contains(i));
         load_cols(ws, base.clone().chain(rest));
@@ -389,10 +393,17 @@ pub(crate) fn structural_step_with<const N: usize, const P: usize>(
         if kept.contains(k) {
             ws.free[n_struct] = col;
             n_struct += 1;
-        } else if requested.contains(col) {
-            structural.insert(col)?;
+        } else {
+            ws.memo
+                .store_dropped(col, partner.get(col).copied().flatten());
+            if requested.contains(col) {
+                structural.insert(col)?;
+            }
         }
     }
+    let Workspace { memo, free, .. } = ws;
+    memo.store_kept(free.get(..n_struct).unwrap_or(&[]));
+    memo.commit();
     Ok(n_struct)
 }
 

@@ -5,7 +5,10 @@
 //! Memory: everything of size p×p (p = fitted parameters, at most the workspace capacity
 //! `P`) lives in a caller-provided [`Workspace`]; the data are a caller slice, folded pose
 //! by pose into a streaming triangular factor, so memory does not grow with the number
-//! of poses. No heap, no panics.
+//! of poses. No heap, no panics. The workspace also remembers the structural step of the
+//! identifiability analysis under an exact key of the model and the selection (`memo`),
+//! so repeated fits of one model skip it with bit-identical results
+//! ([`Workspace::forget_structure`] drops it).
 //!
 //! Problem: `min Σ_l Σ_rows w_row·e_row²`, `e = [p_meas − p_model; φ(R_meas·R_modelᵀ)]`
 //! (positions in metres, rotations in radians, [`IdentifyOptions::orientation`] decides
@@ -17,6 +20,7 @@
 pub mod constraints;
 mod data;
 mod identifiability;
+mod memo;
 mod prior;
 pub mod robust;
 mod sessions;

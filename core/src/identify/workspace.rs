@@ -41,6 +41,9 @@ pub struct Workspace<const P: usize> {
     pub(crate) n_sv: usize,
     /// Means of the last few constraint groups folded (for known distances).
     pub(crate) means: [super::constraints::GroupMean<P>; super::constraints::MEAN_CACHE],
+    /// The last structural step of the identifiability analysis, with its exact key
+    /// ([`super::memo`]): repeated fits of one model skip it.
+    pub(crate) memo: super::memo::StructuralMemo<P>,
 }
 
 impl<const P: usize> Workspace<P> {
@@ -67,7 +70,16 @@ impl<const P: usize> Workspace<P> {
             free: [0; P],
             n_sv: 0,
             means: [super::constraints::GroupMean::EMPTY; super::constraints::MEAN_CACHE],
+            memo: super::memo::StructuralMemo::new(),
         }
+    }
+
+    /// Forgets the remembered structural step of the identifiability analysis, so that the
+    /// next analysis computes it again. Never needed for correct results (the step is
+    /// remembered under an exact key of the model and the selection); for timing the
+    /// analysis from scratch, or to compare both paths.
+    pub fn forget_structure(&mut self) {
+        self.memo.clear();
     }
 
     /// Singular values (descending) of the unit-column-scaled identification Jacobian of the

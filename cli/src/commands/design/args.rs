@@ -110,15 +110,42 @@ pub struct SetupArgs {
     pub seed: u64,
 }
 
-/// The Monte-Carlo scenario (defaults: [`Scenario::paper`]).
+/// The Monte-Carlo scenario (defaults: [`Scenario::paper`]): the random robots' errors and
+/// the measurement and tool noise. `select-poses` takes only [`RobotErrorArgs`] (its random
+/// robots test reachability; it simulates no measurement).
 #[derive(clap::Args, Debug, Clone)]
 pub struct ScenarioArgs {
+    #[command(flatten)]
+    pub errors: RobotErrorArgs,
+    #[command(flatten)]
+    pub noise: NoiseArgs,
+}
+
+/// The random robots of the Monte-Carlo runs and of the robust-reach test.
+#[derive(clap::Args, Debug, Clone)]
+pub struct RobotErrorArgs {
     /// Random robots: each identified length off by up to ± this [mm] (uniform)
     #[arg(long, default_value_t = 5.0, value_name = "MM", value_parser = crate::args::amount_mm)]
     pub length_error_mm: f64,
     /// … and each identified angle off by up to ± this [deg]
     #[arg(long, default_value_t = 5.0, value_name = "DEG", value_parser = crate::args::amount_deg)]
     pub angle_error_deg: f64,
+}
+
+impl RobotErrorArgs {
+    /// The paper's scenario with these robot errors (its noise unused by the caller).
+    pub fn scenario(&self) -> Scenario {
+        Scenario {
+            length_error_m: self.length_error_mm * 1e-3,
+            angle_error_rad: self.angle_error_deg.to_radians(),
+            ..Scenario::paper()
+        }
+    }
+}
+
+/// The simulated measurement noise and tool tolerance.
+#[derive(clap::Args, Debug, Clone)]
+pub struct NoiseArgs {
     /// Measurement noise (instrument) or seating noise (tool), 1σ per position axis [mm]
     #[arg(long, default_value_t = 0.05, value_name = "MM", value_parser = crate::args::amount_mm)]
     pub noise_pos_mm: f64,
@@ -136,26 +163,27 @@ pub struct ScenarioArgs {
 
 impl ScenarioArgs {
     pub fn scenario(&self) -> Scenario {
+        let n = &self.noise;
         Scenario {
-            length_error_m: self.length_error_mm * 1e-3,
-            angle_error_rad: self.angle_error_deg.to_radians(),
-            noise_pos_m: self.noise_pos_mm * 1e-3,
-            noise_rot_rad: self.noise_rot_deg.to_radians(),
-            tool_tol_pos_m: self.tool_tol_mm * 1e-3,
-            tool_tol_rot_rad: self.tool_tol_deg.to_radians(),
+            noise_pos_m: n.noise_pos_mm * 1e-3,
+            noise_rot_rad: n.noise_rot_deg.to_radians(),
+            tool_tol_pos_m: n.tool_tol_mm * 1e-3,
+            tool_tol_rot_rad: n.tool_tol_deg.to_radians(),
+            ..self.errors.scenario()
         }
     }
     /// One line for reports.
     pub fn describe(&self) -> String {
+        let (e, n) = (&self.errors, &self.noise);
         format!(
             "random robots ±{} mm / ±{}° per identified parameter; noise σ {} mm / {}° per axis; \
              tool tolerance ±{} mm / ±{}° per axis",
-            self.length_error_mm,
-            self.angle_error_deg,
-            self.noise_pos_mm,
-            self.noise_rot_deg,
-            self.tool_tol_mm,
-            self.tool_tol_deg
+            e.length_error_mm,
+            e.angle_error_deg,
+            n.noise_pos_mm,
+            n.noise_rot_deg,
+            n.tool_tol_mm,
+            n.tool_tol_deg
         )
     }
 }
@@ -172,21 +200,55 @@ pub fn parse_index(s: &str) -> Result<kincal::observability::Index, String> {
     })
 }
 
-/// How the selection-based designs are built.
+/// How the selection-based designs are built: the sizes every design command uses
+/// ([`DesignSizeArgs`]) and the candidate pool of the pose selections ([`PoolArgs`]), which
+/// `design-tool` (candidates from its plate grid, objectives from --objectives) does not take.
 #[derive(clap::Args, Debug, Clone)]
 pub struct SelectionArgs {
+    #[command(flatten)]
+    pub size: DesignSizeArgs,
+    #[command(flatten)]
+    pub pool: PoolArgs,
+}
+
+/// What every design command uses to build a design.
+#[derive(clap::Args, Debug, Clone)]
+pub struct DesignSizeArgs {
     /// Number of poses m of every design
     #[arg(short = 'm', long = "poses", default_value_t = 10, value_name = "M")]
     pub poses: usize,
+    /// Starts of the exchange (run in parallel; the best is kept)
+    #[arg(long, default_value_t = 8)]
+    pub starts: usize,
+    /// Tool poses: smallest distance from singularity (smallest singular value of the
+    /// joint Jacobian, m/rad and rad/rad rows)
+    #[arg(long, default_value_t = 0.08, value_parser = crate::args::non_negative)]
+    pub min_dexterity: f64,
+    /// Tool poses: random robots (of the scenario's errors) that must all reach each pose
+    /// within the joint limits (0: no test)
+    #[arg(long, default_value_t = 32)]
+    pub robust_robots: u64,
+}
+
+impl DesignSizeArgs {
+    /// The number of poses m, checked (1..=48).
+    pub fn m(&self) -> Result<usize, CliError> {
+        if self.poses == 0 || self.poses > 48 {
+            return Err(CliError::usage("--poses: expected 1..=48"));
+        }
+        Ok(self.poses)
+    }
+}
+
+/// The candidate pool and objective of the pose selections (standard, local, clustering).
+#[derive(clap::Args, Debug, Clone)]
+pub struct PoolArgs {
     /// Observability index to maximise: o (eq. 17), o1 … o5, aopt, dopt
     #[arg(long, default_value = "o", value_parser = parse_index)]
     pub index: kincal::observability::Index,
     /// Candidate configurations in the pool
     #[arg(long, default_value_t = 2000)]
     pub pool: usize,
-    /// Starts of the exchange (run in parallel; the best is kept)
-    #[arg(long, default_value_t = 8)]
-    pub starts: usize,
     /// Joint-space refinement trials per start (standard design)
     #[arg(long, default_value_t = 200)]
     pub refine: usize,
@@ -200,34 +262,25 @@ pub struct SelectionArgs {
     /// 0.1 ≈ 10 %)
     #[arg(long, default_value_t = 0.1, value_parser = crate::args::non_negative)]
     pub tolerance: f64,
-    /// Tool poses: smallest distance from singularity (smallest singular value of the
-    /// joint Jacobian, m/rad and rad/rad rows)
-    #[arg(long, default_value_t = 0.08, value_parser = crate::args::non_negative)]
-    pub min_dexterity: f64,
-    /// Tool poses: random robots (of the scenario's errors) that must all reach each pose
-    /// within the joint limits (0: no test)
-    #[arg(long, default_value_t = 32)]
-    pub robust_robots: u64,
 }
 
 impl SelectionArgs {
     pub fn settings(&self) -> Result<SelectionSettings, CliError> {
-        if self.poses == 0 || self.poses > 48 {
-            return Err(CliError::usage("--poses: expected 1..=48"));
-        }
-        let w = self.workspace;
+        let (size, pool) = (&self.size, &self.pool);
+        let m = size.m()?;
+        let w = pool.workspace;
         Ok(SelectionSettings {
-            m: self.poses,
-            index: self.index,
-            pool: self.pool.max(self.poses),
-            starts: self.starts.max(1),
-            refine_trials: self.refine,
+            m,
+            index: pool.index,
+            pool: pool.pool.max(m),
+            starts: size.starts.max(1),
+            refine_trials: pool.refine,
             workspace: Region::new([w[0], w[1], w[2]], [w[3], w[4], w[5]])
                 .map_err(|e| CliError::usage(format!("--workspace: {e}")))?,
-            cube_m: self.cube_mm * 1e-3,
-            tolerance: self.tolerance,
-            min_dexterity: self.min_dexterity,
-            robust_robots: self.robust_robots,
+            cube_m: pool.cube_mm * 1e-3,
+            tolerance: pool.tolerance,
+            min_dexterity: size.min_dexterity,
+            robust_robots: size.robust_robots,
         })
     }
 }
