@@ -121,7 +121,9 @@ else
 fi
 
 # Hilti (CC BY-NC-SA: read from the data folder, nothing copied): every floor a session,
-# accelerometer tilts as sensor joints; the held-out study of docs/real-data.md.
+# accelerometer tilts as sensor joints; the held-out study of docs/real-data.md (trained
+# on flat, every other floor with a new base frame only; the variants of the tilt model;
+# leave one session out).
 D=$OUT/hilti
 mkdir -p "$D"
 "$K" import-dataset hilti "$DATA/hilti-jaibot-stationing" --out "$D/data.csv" \

@@ -27,12 +27,6 @@ use kincal::axis_chain::{AxisChain, JointAxis, link_transform_at_zero};
 use kincal::pose::Transform;
 use kincal::{JointKind, JointLimits};
 
-use kincal::Robot;
-use kincal::identify::ComponentMask;
-use kincal::identify::{Algorithm, IdentifyOptions, Measurement, analyze, identify};
-use kincal::pose::pose_to_vector6;
-use kincal::registration::weighted_rigid_fit;
-
 use crate::error::Error as CliError;
 use crate::measurements::{MeasurementRow, MeasurementSet};
 use crate::robot_file::RobotDescription;
@@ -296,6 +290,18 @@ fn num_key(s: &str) -> Option<f64> {
 /// joints inserted after the column: tilts about the base x and y axes through the arm's
 /// mounting point (where the first arm axis meets the column top).
 pub fn robot(urdf: &Path) -> Result<RobotDescription, CliError> {
+    robot_with_order(urdf, IMPORT_ORDER)
+}
+
+/// The chain's first five joints as readings of [`HiltiRow::q`] (base tilt x, y, column,
+/// bending x, y) in the import's order.
+pub const IMPORT_ORDER: [usize; 5] = [0, 1, 2, 3, 4];
+
+/// The model with its first five joints in `order` (indices into [`HiltiRow::q`]'s first
+/// five readings; the arm follows): a tilt joint placed after the column turns about the
+/// arm's mounting point, one placed before it about the base origin, so the column's
+/// extension lies inside or outside its lever. The joint names follow the order.
+pub fn robot_with_order(urdf: &Path, order: [usize; 5]) -> Result<RobotDescription, CliError> {
     let sel = ChainSelection {
         base_link: Some("base_link"),
         tip_link: Some("prism"),
@@ -321,12 +327,24 @@ pub fn robot(urdf: &Path) -> Result<RobotDescription, CliError> {
         JointAxis::new([p.x, p.y, p.z], [z.x, z.y, z.z])
     };
     let mount = frames[1].translation.vector;
+    let column_at = order.iter().position(|&j| j == 2);
     let mut axes = [axis(&frames[0]); N];
-    axes[0] = JointAxis::new([0.0; 3], [1.0, 0.0, 0.0]);
-    axes[1] = JointAxis::new([0.0; 3], [0.0, 1.0, 0.0]);
-    axes[2] = axis(&frames[0]);
-    axes[3] = JointAxis::new([mount.x, mount.y, mount.z], [1.0, 0.0, 0.0]);
-    axes[4] = JointAxis::new([mount.x, mount.y, mount.z], [0.0, 1.0, 0.0]);
+    let mut names = JOINT_NAMES;
+    for (k, &j) in order.iter().enumerate() {
+        let pivot = if column_at.is_some_and(|c| k > c) {
+            [mount.x, mount.y, mount.z]
+        } else {
+            [0.0; 3]
+        };
+        let about_x = [1.0, 0.0, 0.0];
+        let about_y = [0.0, 1.0, 0.0];
+        axes[k] = match j {
+            0 | 3 => JointAxis::new(pivot, about_x),
+            1 | 4 => JointAxis::new(pivot, about_y),
+            _ => axis(&frames[0]),
+        };
+        names[k] = JOINT_NAMES[j];
+    }
     for k in 1..7 {
         axes[k + 4] = axis(&frames[k]);
     }
@@ -337,17 +355,27 @@ pub fn robot(urdf: &Path) -> Result<RobotDescription, CliError> {
     };
     let l7 = r7.limits();
     let tilt = JointLimits::new(-TILT_LIMIT_RAD, TILT_LIMIT_RAD);
-    let limits = [
-        tilt, tilt, l7[0], tilt, tilt, l7[1], l7[2], l7[3], l7[4], l7[5], l7[6],
+    let mut limits = [
+        tilt, tilt, tilt, tilt, tilt, l7[1], l7[2], l7[3], l7[4], l7[5], l7[6],
     ];
+    if let Some(c) = column_at.and_then(|c| limits.get_mut(c)) {
+        *c = l7[0];
+    }
     let mut r9 = chain.to_robot(limits).map_err(err)?;
-    r9.set_joint_kind(2, JointKind::Prismatic).map_err(err)?;
-    for j in SENSOR_JOINTS {
-        r9.set_joint_kind(j, JointKind::Sensor).map_err(err)?;
+    for (k, &j) in order.iter().enumerate() {
+        let kind = if j == 2 {
+            JointKind::Prismatic
+        } else {
+            JointKind::Sensor
+        };
+        r9.set_joint_kind(k, kind).map_err(err)?;
     }
     // The model equals the URDF's chain with the tilts at zero.
     let q7 = [2.5, 0.3, -0.4, 0.5, 0.6, -0.7, 0.8];
-    let q9 = [0.0, 0.0, 2.5, 0.0, 0.0, 0.3, -0.4, 0.5, 0.6, -0.7, 0.8];
+    let mut q9 = [0.0, 0.0, 0.0, 0.0, 0.0, 0.3, -0.4, 0.5, 0.6, -0.7, 0.8];
+    if let Some(c) = column_at.and_then(|c| q9.get_mut(c)) {
+        *c = 2.5;
+    }
     let (a, b) = (r7.fk_q(&q7).map_err(err)?, r9.fk_q(&q9).map_err(err)?);
     if (a.to_homogeneous() - b.to_homogeneous()).abs().max() > 1e-9 {
         return Err(CliError::input(
@@ -356,7 +384,7 @@ pub fn robot(urdf: &Path) -> Result<RobotDescription, CliError> {
     }
     Ok(RobotDescription {
         name: "trailblazer-tilt".into(),
-        joint_names: JOINT_NAMES.iter().map(|s| (*s).to_string()).collect(),
+        joint_names: names.iter().map(|s| (*s).to_string()).collect(),
         robot: AnyRobot::J11(r9),
     })
 }
@@ -504,203 +532,6 @@ pub fn measurement_set(dir: &Path) -> Result<MeasurementSet, CliError> {
     })
 }
 
-// ---------------------------------------------------------------------------------------
-// The held-out study (docs/real-data.md): what a calibration on `flat` leaves on every floor.
-
-/// One session's rows as the core's position measurements.
-fn measurements(rows: &[HiltiRow], tilts: bool) -> Vec<Measurement<N>> {
-    rows.iter()
-        .map(|r| {
-            let mut q = r.q();
-            if !tilts {
-                for j in SENSOR_JOINTS {
-                    q[j] = 0.0;
-                }
-            }
-            let p = r.prism_m;
-            let pose = Transform::from_parts(
-                nalgebra::Translation3::new(p[0], p[1], p[2]),
-                nalgebra::Rotation3::identity(),
-            );
-            let mut m = Measurement::new(q, pose);
-            m.mask = ComponentMask::POSITION;
-            m
-        })
-        .collect()
-}
-
-/// RMS [mm] of `sqrt(mean |Δp|²)` of the model's prism positions against the measured ones
-/// after the best rigid base frame for these rows alone (a new stationing): the error that a
-/// model leaves when only the base is fitted.
-pub fn rigid_base_rms_mm(
-    robot: &Robot<N>,
-    rows: &[HiltiRow],
-    tilts: bool,
-) -> Result<f64, CliError> {
-    let ms = measurements(rows, tilts);
-    let err = |e: kincal::Error| CliError::input(format!("hilti study: {e}"));
-    let mut design = Vec::with_capacity(ms.len());
-    let inv = robot.t_base_0().inverse();
-    for m in &ms {
-        // In the robot's own base frame (the fitted transform replaces the base).
-        let p = (inv * robot.fk(&m.state).map_err(err)?).translation.vector;
-        design.push([p.x, p.y, p.z]);
-    }
-    let measured: Vec<[f64; 3]> = rows.iter().map(|r| r.prism_m).collect();
-    let t = weighted_rigid_fit(&design, &measured, &vec![1.0; design.len()], SIGMA_POS_M)
-        .map_err(err)?;
-    let sum: f64 = design
-        .iter()
-        .zip(&measured)
-        .map(|(d, m)| {
-            let p = t * nalgebra::Point3::from(*d);
-            (p.coords - nalgebra::Vector3::from(*m)).norm_squared()
-        })
-        .sum();
-    Ok((sum / design.len().max(1) as f64).sqrt() * 1e3)
-}
-
-/// What a fit identifies.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Fit {
-    /// Geometry (links, base, tool translation), tilt readings ignored.
-    Geometry,
-    /// Geometry plus the two bending gains (the sensor joints' scale parameters).
-    GeometryAndGains,
-}
-
-/// Calibrates `start` on `rows` (one session: one base frame). Structurally redundant
-/// parameters are left out by the core's analysis.
-pub fn calibrate(start: &Robot<N>, rows: &[HiltiRow], fit: Fit) -> Result<Robot<N>, CliError> {
-    let tilts = fit == Fit::GeometryAndGains;
-    let ms = measurements(rows, tilts);
-    let err = |e: kincal::Error| CliError::input(format!("hilti calibration: {e}"));
-    // The gains are `--effects joint_scale@sensor`: the scale of every sensor joint.
-    let set = if tilts {
-        let names = JOINT_NAMES.map(String::from);
-        let item =
-            crate::effects_arg::parse_effect_item("joint_scale@sensor").map_err(CliError::input)?;
-        crate::effects_arg::resolve(&[item], &names, &start.joint_kinds())?.param_set(start)
-    } else {
-        start.geometric_param_set()
-    };
-    let mut ws = crate::calibration::new_workspace();
-    let mut opts = IdentifyOptions::new(Algorithm::Ols, set);
-    opts.allow_data_deficiency = true;
-    let a = analyze(start, &ms, &opts, &mut ws).map_err(err)?;
-    let mut opts = IdentifyOptions::new(Algorithm::Ols, a.identifiable);
-    opts.allow_data_deficiency = true;
-    opts.max_iterations = 2000;
-    opts.xtol = 1e-10;
-    opts.ftol = 1e-12;
-    Ok(identify(start, &ms, &opts, &mut ws).map_err(err)?.robot)
-}
-
-/// RMS [mm] of `robot` on `rows` with its own base frame (no refit).
-pub fn rms_mm(robot: &Robot<N>, rows: &[HiltiRow], tilts: bool) -> Result<f64, CliError> {
-    let ms = measurements(rows, tilts);
-    let err = |e: kincal::Error| CliError::input(format!("hilti study: {e}"));
-    let mut sum = 0.0;
-    for m in &ms {
-        let d = robot.fk(&m.state).map_err(err)?.translation.vector - m.pose.translation.vector;
-        sum += d.norm_squared();
-    }
-    Ok((sum / ms.len().max(1) as f64).sqrt() * 1e3)
-}
-
-/// The study's figures.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Study {
-    /// Per session: CAD model with a rigid base per session [mm].
-    pub cad_mm: Vec<(String, f64)>,
-    /// `flat` in-sample RMS after geometry only / geometry + gains [mm].
-    pub flat_in_sample_mm: (f64, f64),
-    /// `flat` held out with geometry + gains (5 folds over its rows: row i in fold i mod 5;
-    /// base, geometry and gains from the other 4) [mm].
-    pub flat_held_out_mm: f64,
-    /// Per other session: trained on all of `flat`, new rigid base only [mm]
-    /// (geometry only, geometry + gains).
-    pub transfer_mm: Vec<(String, f64, f64)>,
-    /// The identified gains `1 + k` of the sensor joints (base tilt x, y; column bending
-    /// x, y) on all of `flat`.
-    pub gains: [f64; 4],
-}
-
-/// Runs the study on the set in `dir`.
-pub fn study(dir: &Path) -> Result<Study, CliError> {
-    let desc = robot(&dir.join("data/trailblazer.urdf"))?;
-    let AnyRobot::J11(nominal) = desc.robot else {
-        return Err(CliError::input("hilti: expected the 9-joint model"));
-    };
-    let sessions = read_all(dir)?;
-    let mut cad_mm = Vec::new();
-    for (s, _, rows) in &sessions {
-        cad_mm.push(((*s).to_string(), rigid_base_rms_mm(&nominal, rows, false)?));
-    }
-    let flat = &sessions
-        .first()
-        .ok_or_else(|| CliError::input("hilti: no flat session"))?
-        .2;
-    // Start from the CAD model with flat's rigid base.
-    let start = with_rigid_base(&nominal, flat)?;
-    let geo = calibrate(&start, flat, Fit::Geometry)?;
-    let both = calibrate(&start, flat, Fit::GeometryAndGains)?;
-    let flat_in_sample_mm = (rms_mm(&geo, flat, false)?, rms_mm(&both, flat, true)?);
-    let (mut s_both, mut n) = (0.0, 0usize);
-    for fold in 0..5 {
-        let (mut train, mut test) = (Vec::new(), Vec::new());
-        for (i, r) in flat.iter().enumerate() {
-            if i % 5 == fold {
-                test.push(r.clone());
-            } else {
-                train.push(r.clone());
-            }
-        }
-        let b = calibrate(&start, &train, Fit::GeometryAndGains)?;
-        s_both += rms_mm(&b, &test, true)?.powi(2) * test.len() as f64;
-        n += test.len();
-    }
-    let n = n.max(1) as f64;
-    let flat_held_out_mm = (s_both / n).sqrt();
-    let mut transfer_mm = Vec::new();
-    for (s, _, rows) in sessions.iter().skip(1) {
-        transfer_mm.push((
-            (*s).to_string(),
-            rigid_base_rms_mm(&geo, rows, false)?,
-            rigid_base_rms_mm(&both, rows, true)?,
-        ));
-    }
-    let k = both.effect_params().scale;
-    Ok(Study {
-        cad_mm,
-        flat_in_sample_mm,
-        flat_held_out_mm,
-        transfer_mm,
-        gains: SENSOR_JOINTS.map(|j| 1.0 + k[j]),
-    })
-}
-
-/// `robot` with the rigid base frame that best fits `rows` (tilts ignored).
-fn with_rigid_base(robot: &Robot<N>, rows: &[HiltiRow]) -> Result<Robot<N>, CliError> {
-    let ms = measurements(rows, false);
-    let err = |e: kincal::Error| CliError::input(format!("hilti study: {e}"));
-    let inv = robot.t_base_0().inverse();
-    let design: Vec<[f64; 3]> = ms
-        .iter()
-        .map(|m| {
-            let p = (inv * robot.fk(&m.state)?).translation.vector;
-            Ok([p.x, p.y, p.z])
-        })
-        .collect::<Result<_, kincal::Error>>()
-        .map_err(err)?;
-    let measured: Vec<[f64; 3]> = rows.iter().map(|r| r.prism_m).collect();
-    let t = weighted_rigid_fit(&design, &measured, &vec![1.0; design.len()], SIGMA_POS_M)
-        .map_err(err)?;
-    robot
-        .with_base(pose_to_vector6(&(t * robot.t_base_0())))
-        .map_err(err)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -779,13 +610,5 @@ column_heights:
         let bad = TWO.replace("0.5, 0.7]", "0.5]");
         let e = parse_session(&bad, "t.yaml").unwrap_err().to_string();
         assert!(e.contains("expected 7 numbers"), "{e}");
-    }
-
-    #[test]
-    #[ignore = "prints the study (minutes in debug)"]
-    fn print_study() {
-        let Some(d) = dir() else { return };
-        let s = study(&d).unwrap();
-        println!("{s:#?}");
     }
 }

@@ -28,6 +28,7 @@ pub mod diagnose_where;
 pub mod effects_arg;
 pub mod error;
 pub mod files;
+pub mod hilti_study;
 pub mod mcap_reader;
 pub mod measurements;
 pub mod model_file;

@@ -13,6 +13,7 @@
 //! row is small, and it is stated in the report).
 
 use kincal::identify::{Algorithm, IdentifyOptions, Measurement, identify};
+use kincal::params::ParamSet;
 use kincal::registration::weighted_rigid_fit;
 use kincal::{Robot, Transform};
 
@@ -63,6 +64,26 @@ pub fn register<const N: usize>(
     n_sessions: usize,
     sigma_m: f64,
 ) -> kincal::Result<Registered<N>> {
+    register_with(
+        robot,
+        data,
+        index,
+        n_sessions,
+        sigma_m,
+        robot.geometric_param_set(),
+    )
+}
+
+/// [`register`] with the model's parameters `params` calibrated between the
+/// registrations (the geometry plus effects, e.g. sensor joints' gains).
+pub fn register_with<const N: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    index: &[u16],
+    n_sessions: usize,
+    sigma_m: f64,
+    params: ParamSet,
+) -> kincal::Result<Registered<N>> {
     let mut ws = crate::calibration::new_workspace();
     let mut model = *robot;
     let mut out = data.to_vec();
@@ -84,7 +105,7 @@ pub fn register<const N: usize>(
             }
         }
         if round + 1 < ROUNDS {
-            let mut opts = IdentifyOptions::new(Algorithm::Ols, robot.geometric_param_set());
+            let mut opts = IdentifyOptions::new(Algorithm::Ols, params);
             opts.allow_data_deficiency = true;
             model = identify(robot, &out, &opts, &mut ws)?.robot;
         }

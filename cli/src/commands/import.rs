@@ -178,39 +178,69 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         if !matches!(name.as_str(), "hilti" | "hilti-jaibot-stationing") {
             return Err(CliError::usage("--study applies to the hilti set only"));
         }
-        s.push_str(&study_text(&kincal_io::datasets_hilti::study(dir)?));
+        s.push_str(&study_text(&kincal_io::hilti_study::study(dir)?));
     }
     crate::report::emit(&s);
     Ok(())
 }
 
-/// The Hilti study as the table docs/real-data.md shows (RMS of |Δp| in mm).
-fn study_text(st: &kincal_io::datasets_hilti::Study) -> String {
+/// The Hilti study as the tables docs/real-data.md show (RMS of |Δp| in mm).
+fn study_text(st: &kincal_io::hilti_study::Study) -> String {
     let floor = 3f64.sqrt() * kincal_io::datasets_hilti::SIGMA_POS_M * 1e3;
+    let fin = &st.final_model;
+    let gains: Vec<String> = fin.gains.iter().map(|g| format!("{g:.3}")).collect();
     let mut s = format!(
         "Hilti study (RMS |dp| in mm; noise floor sqrt(3)*0.75 = {floor:.2} mm)\n\
+         final model: {}\n\
          flat in-sample: geometry {:.2}, geometry + sensor joints {:.2}\n\
          flat held-out (5 folds): geometry + sensor joints {:.2} ({:.2}x the floor)\n\
-         gains 1+k: base tilt x {:.3}, y {:.3}; column bending x {:.3}, y {:.3}\n\
-         session            CAD+rigid base   geometry (flat)   geometry+sensors (flat)\n",
-        st.flat_in_sample_mm.0,
-        st.flat_in_sample_mm.1,
-        st.flat_held_out_mm,
-        st.flat_held_out_mm / floor,
-        st.gains[0],
-        st.gains[1],
-        st.gains[2],
-        st.gains[3],
+         gains 1+k (column bending x, y): {}\n\
+         session            CAD+rigid base   geometry (flat)   geometry+sensors (flat)   leave-one-session-out\n",
+        fin.variant.name,
+        st.geometry.flat_in_sample_mm,
+        fin.flat_in_sample_mm,
+        fin.flat_held_out_mm,
+        fin.flat_held_out_mm / floor,
+        gains.join(", "),
     );
     for (name, cad) in &st.cad_mm {
-        let t = st.transfer_mm.iter().find(|t| &t.0 == name);
-        match t {
-            Some((_, g, b)) => s.push_str(&format!("{name:<18} {cad:>14.2} {g:>17.2} {b:>24.2}\n")),
-            None => s.push_str(&format!(
-                "{name:<18} {cad:>14.2} {:>17} {:>24}\n",
+        let loso = st
+            .loso_mm
+            .iter()
+            .find(|l| &l.0 == name)
+            .map_or(f64::NAN, |l| l.1);
+        let geo = st.geometry.transfer_mm.iter().find(|t| &t.0 == name);
+        let sensors = fin.transfer_mm.iter().find(|t| &t.0 == name);
+        match (geo, sensors) {
+            (Some((_, g)), Some((_, b))) => s.push_str(&format!(
+                "{name:<18} {cad:>14.2} {g:>17.2} {b:>24.2} {loso:>23.2}\n"
+            )),
+            _ => s.push_str(&format!(
+                "{name:<18} {cad:>14.2} {:>17} {:>24} {loso:>23.2}\n",
                 "(training)", "(training)"
             )),
         }
+    }
+    s.push_str(
+        "variants trained on flat: in-sample, held out (5 folds), then each other floor with a \
+         new base only | the variant, its gains 1+k\n",
+    );
+    for (i, v) in st.variants.iter().enumerate() {
+        let transfer: Vec<String> = v
+            .transfer_mm
+            .iter()
+            .map(|t| format!("{:.2}", t.1))
+            .collect();
+        let gains: Vec<String> = v.gains.iter().map(|g| format!("{g:.2}")).collect();
+        s.push_str(&format!(
+            "variant {}: {:.2} {:.2} {} | {} ({})\n",
+            i + 1,
+            v.flat_in_sample_mm,
+            v.flat_held_out_mm,
+            transfer.join(" "),
+            v.variant.name,
+            gains.join(", ")
+        ));
     }
     s
 }

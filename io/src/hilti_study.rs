@@ -1,0 +1,568 @@
+//! The Hilti held-out study (docs/real-data.md, "Hilti"): what a model calibrated on some
+//! floors leaves on another floor when only a new rigid base frame (a new stationing of
+//! the total station) is fitted there.
+//!
+//! A [`Variant`] says where the tilt sensor joints sit in the chain (before the column:
+//! they turn about the base origin and the column's extension lies inside their lever;
+//! after it: about the arm's mounting point) and which of them get an identified gain.
+//! Their link parameters are geometry and identified with the rest, so the pivot of each
+//! tilt joint is identified too; what the order fixes is whether that pivot moves with
+//! the column.
+
+use std::path::Path;
+
+use kincal::Robot;
+use kincal::any::AnyRobot;
+use kincal::identify::ComponentMask;
+use kincal::identify::{Algorithm, IdentifyOptions, Measurement, analyze, identify};
+use kincal::params::{LinkParam, ParamId, ParamSet};
+use kincal::pose::{Transform, pose_to_vector6};
+use kincal::registration::weighted_rigid_fit;
+
+use crate::datasets_hilti::{HiltiRow, N, SIGMA_POS_M, read_all, robot_with_order};
+use crate::error::Error as CliError;
+
+/// Readings of [`HiltiRow::q`]'s first five: base tilt about x, y; column; bending x, y.
+const BASE_X: usize = 0;
+const BASE_Y: usize = 1;
+const BEND_X: usize = 3;
+const BEND_Y: usize = 4;
+
+/// One model of the tilts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Variant {
+    /// Short name (the study's table).
+    pub name: &'static str,
+    /// The chain's first five joints as readings of [`HiltiRow::q`] (the arm follows).
+    pub order: [usize; 5],
+    /// Readings whose gain `1 + k` is identified (the others enter at gain 1).
+    pub gains: &'static [usize],
+    /// `false`: the tilt readings are set to zero (the geometry-only model).
+    pub tilts: bool,
+    /// Readings set to zero (tilts the variant does not use).
+    pub unused: &'static [usize],
+    /// Chain links (model order) whose parameters stay at the CAD values: a tilt joint
+    /// that turns about the base origin, not an identified pivot.
+    pub fixed_links: &'static [usize],
+}
+
+/// Geometry only (tilts ignored), the import's chain.
+pub const GEOMETRY: Variant = Variant {
+    name: "geometry",
+    order: [0, 1, 2, 3, 4],
+    gains: &[],
+    tilts: false,
+    unused: &[],
+    fixed_links: &[],
+};
+
+/// The import's chain with all four gains: base tilt before the column, bending after it.
+pub const SENSORS: Variant = Variant {
+    name: "sensor joints, 4 gains",
+    order: [0, 1, 2, 3, 4],
+    gains: &[BASE_X, BASE_Y, BEND_X, BEND_Y],
+    tilts: true,
+    unused: &[],
+    fixed_links: &[],
+};
+
+/// The final model: the base's tilt enters at gain 1 (a rigid rotation of the whole
+/// robot, as the base accelerometer reads it), the column's bending with a gain per axis.
+pub const FINAL: Variant = Variant {
+    name: "base tilt at gain 1, 2 bending gains",
+    order: [0, 1, 2, 3, 4],
+    gains: &[BEND_X, BEND_Y],
+    tilts: true,
+    unused: &[],
+    fixed_links: &[],
+};
+
+/// The variants the study reports (docs/real-data.md's table of variants), trained on
+/// `flat`; the release test checks their figures.
+pub const VARIANTS: [Variant; 4] = [
+    SENSORS,
+    FINAL,
+    Variant {
+        name: "base tilt at gain 1, its links held at CAD, 2 bending gains",
+        order: [0, 1, 2, 3, 4],
+        gains: &[BEND_X, BEND_Y],
+        tilts: true,
+        unused: &[],
+        fixed_links: &[0, 1],
+    },
+    Variant {
+        name: "base tilt unused, 2 bending gains",
+        order: [0, 1, 2, 3, 4],
+        gains: &[BEND_X, BEND_Y],
+        tilts: true,
+        unused: &[BASE_X, BASE_Y],
+        fixed_links: &[],
+    },
+];
+
+/// Variants tried and reported but not rerun by the study (their fits converge slowly:
+/// 1–3 min each on the loaded machine; `KINCAL_HILTI_SLOW=1` and `print_variants` rerun
+/// them).
+pub const SLOW_VARIANTS: [Variant; 4] = [
+    Variant {
+        name: "base tilt at gain 1, bending before the column, 2 gains",
+        order: [0, 1, 3, 4, 2],
+        gains: &[BEND_X, BEND_Y],
+        tilts: true,
+        unused: &[],
+        fixed_links: &[],
+    },
+    Variant {
+        name: "bending before the column, 4 gains",
+        order: [0, 1, 3, 4, 2],
+        gains: &[BASE_X, BASE_Y, BEND_X, BEND_Y],
+        tilts: true,
+        unused: &[],
+        fixed_links: &[],
+    },
+    Variant {
+        name: "base tilt after the column, 4 gains",
+        order: [2, 0, 1, 3, 4],
+        gains: &[BASE_X, BASE_Y, BEND_X, BEND_Y],
+        tilts: true,
+        unused: &[],
+        fixed_links: &[],
+    },
+    Variant {
+        name: "all tilts before the column, 4 gains",
+        order: [3, 4, 0, 1, 2],
+        gains: &[BASE_X, BASE_Y, BEND_X, BEND_Y],
+        tilts: true,
+        unused: &[],
+        fixed_links: &[],
+    },
+];
+
+impl Variant {
+    /// The same chain with the tilts ignored: the start's base frame is fitted with it
+    /// (the CAD model knows no gains).
+    fn without_tilts(&self) -> Variant {
+        Variant {
+            tilts: false,
+            ..*self
+        }
+    }
+
+    /// The model's readings of `row`.
+    fn q(&self, row: &HiltiRow) -> [f64; N] {
+        let q = row.q();
+        let mut out = q;
+        for (o, &j) in out.iter_mut().zip(&self.order) {
+            *o = q.get(j).copied().unwrap_or(0.0);
+            if (!self.tilts && j != 2) || self.unused.contains(&j) {
+                *o = 0.0;
+            }
+        }
+        out
+    }
+
+    /// The CAD model of this variant.
+    pub fn nominal(&self, dir: &Path) -> Result<Robot<N>, CliError> {
+        let desc = robot_with_order(&dir.join("data/trailblazer.urdf"), self.order)?;
+        match desc.robot {
+            AnyRobot::J11(r) => Ok(r),
+            _ => Err(CliError::input("hilti: expected the 11-joint model")),
+        }
+    }
+
+    /// Geometry plus the scales of the joints with a gain.
+    fn params(&self, robot: &Robot<N>) -> ParamSet {
+        let mut set = robot.geometric_param_set();
+        for &link in self.fixed_links {
+            for kind in [
+                LinkParam::Theta0,
+                LinkParam::D,
+                LinkParam::A,
+                LinkParam::Alpha,
+                LinkParam::Beta,
+            ] {
+                set.remove(ParamId::Link { link, kind }.index(N).0);
+            }
+        }
+        for (k, j) in self.order.iter().enumerate() {
+            if self.gains.contains(j) {
+                let _ = set.insert(ParamId::Scale(k).index(N).0);
+            }
+        }
+        set
+    }
+
+    /// The identified gains `1 + k` of the readings in `gains`, in that order.
+    #[must_use]
+    pub fn gains_of(&self, robot: &Robot<N>) -> Vec<f64> {
+        let k = robot.effect_params().scale;
+        self.gains
+            .iter()
+            .filter_map(|j| self.order.iter().position(|o| o == j))
+            .map(|m| 1.0 + k.get(m).copied().unwrap_or(0.0))
+            .collect()
+    }
+}
+
+/// The rows as the core's position measurements.
+fn measurements(rows: &[HiltiRow], v: &Variant) -> Vec<Measurement<N>> {
+    rows.iter()
+        .map(|r| {
+            let p = r.prism_m;
+            let pose = Transform::from_parts(
+                nalgebra::Translation3::new(p[0], p[1], p[2]),
+                nalgebra::Rotation3::identity(),
+            );
+            let mut m = Measurement::new(v.q(r), pose);
+            m.mask = ComponentMask::POSITION;
+            m
+        })
+        .collect()
+}
+
+fn study_err(e: kincal::Error) -> CliError {
+    CliError::input(format!("hilti study: {e}"))
+}
+
+/// The rigid transform that best maps `robot`'s prism positions onto the measured ones.
+fn rigid_frame(robot: &Robot<N>, rows: &[HiltiRow], v: &Variant) -> Result<Transform, CliError> {
+    let design = measurements(rows, v)
+        .iter()
+        .map(|m| {
+            let p = robot.fk(&m.state)?.translation.vector;
+            Ok([p.x, p.y, p.z])
+        })
+        .collect::<Result<Vec<_>, kincal::Error>>()
+        .map_err(study_err)?;
+    let measured: Vec<[f64; 3]> = rows.iter().map(|r| r.prism_m).collect();
+    weighted_rigid_fit(&design, &measured, &vec![1.0; design.len()], SIGMA_POS_M).map_err(study_err)
+}
+
+/// `robot` with the rigid base frame that best fits `rows`.
+fn with_rigid_base(robot: &Robot<N>, rows: &[HiltiRow], v: &Variant) -> Result<Robot<N>, CliError> {
+    let t = rigid_frame(robot, rows, v)?;
+    robot
+        .with_base(pose_to_vector6(&(t * robot.t_base_0())))
+        .map_err(study_err)
+}
+
+/// RMS [mm] of |Δp| of `robot` on `rows` with its own base frame (no refit).
+pub fn rms_mm(robot: &Robot<N>, rows: &[HiltiRow], v: &Variant) -> Result<f64, CliError> {
+    let ms = measurements(rows, v);
+    let mut sum = 0.0;
+    for m in &ms {
+        let d =
+            robot.fk(&m.state).map_err(study_err)?.translation.vector - m.pose.translation.vector;
+        sum += d.norm_squared();
+    }
+    Ok((sum / ms.len().max(1) as f64).sqrt() * 1e3)
+}
+
+/// RMS [mm] of |Δp| after the best rigid base frame for `rows` alone (a new stationing):
+/// the error a model leaves when only the base is fitted.
+pub fn new_base_rms_mm(robot: &Robot<N>, rows: &[HiltiRow], v: &Variant) -> Result<f64, CliError> {
+    rms_mm(&with_rigid_base(robot, rows, v)?, rows, v)
+}
+
+/// Identification options with the study's tolerances.
+fn options(set: ParamSet) -> IdentifyOptions<'static> {
+    let mut opts = IdentifyOptions::new(Algorithm::Ols, set);
+    opts.allow_data_deficiency = true;
+    opts.max_iterations = 2000;
+    opts.xtol = 1e-10;
+    opts.ftol = 1e-12;
+    opts
+}
+
+/// Calibrates `start` (its base frame already fitted to `rows`) on one session's rows:
+/// geometry, base, tool translation and the variant's gains; structurally redundant
+/// parameters are left out by the core's analysis.
+pub fn calibrate(start: &Robot<N>, rows: &[HiltiRow], v: &Variant) -> Result<Robot<N>, CliError> {
+    let ms = measurements(rows, v);
+    let mut ws = crate::calibration::new_workspace();
+    let a = analyze(start, &ms, &options(v.params(start)), &mut ws).map_err(study_err)?;
+    Ok(identify(start, &ms, &options(a.identifiable), &mut ws)
+        .map_err(study_err)?
+        .robot)
+}
+
+/// Calibrates `start` on several sessions, each in its own frame: the frames and the
+/// model alternate (kincal-io `session_frames::register_with`, the first frames fitted
+/// to `start`).
+pub fn calibrate_sessions(
+    start: &Robot<N>,
+    sessions: &[&[HiltiRow]],
+    v: &Variant,
+) -> Result<Robot<N>, CliError> {
+    let (mut data, mut index) = (Vec::new(), Vec::new());
+    for (k, rows) in sessions.iter().enumerate() {
+        data.extend(measurements(rows, v));
+        let k = u16::try_from(k).map_err(|_| CliError::input("hilti: too many sessions"))?;
+        index.extend(std::iter::repeat_n(k, rows.len()));
+    }
+    let mut ws = crate::calibration::new_workspace();
+    let a = analyze(start, &data, &options(v.params(start)), &mut ws).map_err(study_err)?;
+    let r = crate::session_frames::register_with(
+        start,
+        &data,
+        &index,
+        sessions.len(),
+        SIGMA_POS_M,
+        a.identifiable,
+    )
+    .map_err(study_err)?;
+    Ok(r.geometric)
+}
+
+/// One variant's figures [mm].
+#[derive(Debug, Clone, PartialEq)]
+pub struct VariantFigures {
+    pub variant: Variant,
+    /// `flat` in-sample.
+    pub flat_in_sample_mm: f64,
+    /// `flat` held out: 5 folds over its rows (row i in fold i mod 5), everything refitted
+    /// on the other four.
+    pub flat_held_out_mm: f64,
+    /// Per other session: trained on all of `flat`, new rigid base only.
+    pub transfer_mm: Vec<(String, f64)>,
+    /// The identified gains on all of `flat` (the variant's `gains` order).
+    pub gains: Vec<f64>,
+}
+
+/// The figures of `v` trained on `flat` (the first session).
+pub fn variant_figures(
+    dir: &Path,
+    sessions: &[crate::datasets_hilti::Session],
+    v: &Variant,
+    with_folds: bool,
+) -> Result<VariantFigures, CliError> {
+    let nominal = v.nominal(dir)?;
+    let flat = &sessions
+        .first()
+        .ok_or_else(|| CliError::input("hilti: no flat session"))?
+        .2;
+    let start = with_rigid_base(&nominal, flat, &v.without_tilts())?;
+    let model = calibrate(&start, flat, v)?;
+    let mut flat_held_out_mm = f64::NAN;
+    if with_folds {
+        let (mut sum, mut n) = (0.0, 0usize);
+        for fold in 0..5 {
+            let (mut train, mut test) = (Vec::new(), Vec::new());
+            for (i, r) in flat.iter().enumerate() {
+                if i % 5 == fold {
+                    test.push(r.clone());
+                } else {
+                    train.push(r.clone());
+                }
+            }
+            let b = calibrate(&start, &train, v)?;
+            sum += rms_mm(&b, &test, v)?.powi(2) * test.len() as f64;
+            n += test.len();
+        }
+        flat_held_out_mm = (sum / n.max(1) as f64).sqrt();
+    }
+    let mut transfer_mm = Vec::new();
+    for (s, _, rows) in sessions.iter().skip(1) {
+        transfer_mm.push(((*s).to_string(), new_base_rms_mm(&model, rows, v)?));
+    }
+    Ok(VariantFigures {
+        variant: *v,
+        flat_in_sample_mm: rms_mm(&model, flat, v)?,
+        flat_held_out_mm,
+        transfer_mm,
+        gains: v.gains_of(&model),
+    })
+}
+
+/// A held-out session's RMS [mm] and the gains identified without it.
+pub type Loso = (String, f64, Vec<f64>);
+
+/// Leave one session out: per session, `v` calibrated on all the others (each with its own
+/// base frame), the held-out session predicted with only a new rigid base frame [mm].
+pub fn leave_one_session_out(
+    dir: &Path,
+    sessions: &[crate::datasets_hilti::Session],
+    v: &Variant,
+) -> Result<Vec<Loso>, CliError> {
+    let nominal = v.nominal(dir)?;
+    let mut out = Vec::new();
+    for (k, (name, _, rows)) in sessions.iter().enumerate() {
+        let train: Vec<&[HiltiRow]> = sessions
+            .iter()
+            .enumerate()
+            .filter(|&(i, _)| i != k)
+            .map(|(_, s)| s.2.as_slice())
+            .collect();
+        let first = train.first().copied().unwrap_or_default();
+        let start = with_rigid_base(&nominal, first, &v.without_tilts())?;
+        let model = calibrate_sessions(&start, &train, v)?;
+        out.push((
+            (*name).to_string(),
+            new_base_rms_mm(&model, rows, v)?,
+            v.gains_of(&model),
+        ));
+    }
+    Ok(out)
+}
+
+/// The study's figures.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Study {
+    /// Per session: CAD model with a rigid base per session [mm].
+    pub cad_mm: Vec<(String, f64)>,
+    /// Geometry only, trained on `flat`.
+    pub geometry: VariantFigures,
+    /// The final model ([`FINAL`]) trained on `flat`.
+    pub final_model: VariantFigures,
+    /// Every variant of [`VARIANTS`] trained on `flat`.
+    pub variants: Vec<VariantFigures>,
+    /// Leave one session out with [`FINAL`].
+    pub loso_mm: Vec<Loso>,
+}
+
+/// Runs the study on the set in `dir`.
+pub fn study(dir: &Path) -> Result<Study, CliError> {
+    let sessions = read_all(dir)?;
+    let nominal = GEOMETRY.nominal(dir)?;
+    let mut cad_mm = Vec::new();
+    for (s, _, rows) in &sessions {
+        cad_mm.push((
+            (*s).to_string(),
+            new_base_rms_mm(&nominal, rows, &GEOMETRY)?,
+        ));
+    }
+    let geometry = variant_figures(dir, &sessions, &GEOMETRY, false)?;
+    let variants = VARIANTS
+        .iter()
+        .map(|v| variant_figures(dir, &sessions, v, true))
+        .collect::<Result<Vec<_>, _>>()?;
+    let final_model = variants
+        .iter()
+        .find(|f| f.variant == FINAL)
+        .cloned()
+        .ok_or_else(|| CliError::input("hilti: the final model is not among the variants"))?;
+    let loso_mm = leave_one_session_out(dir, &sessions, &FINAL)?;
+    Ok(Study {
+        cad_mm,
+        geometry,
+        final_model,
+        variants,
+        loso_mm,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dir() -> Option<std::path::PathBuf> {
+        let d = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../shared/realdata/hilti-jaibot-stationing");
+        d.is_dir().then_some(d)
+    }
+
+    /// Every variant's chain equals the URDF's at zero tilt (checked in
+    /// `robot_with_order`) and reproduces the import's model with the tilts set.
+    #[test]
+    fn variants_agree_at_zero_tilt() {
+        let Some(d) = dir() else { return };
+        for v in VARIANTS.iter().chain(&SLOW_VARIANTS) {
+            v.nominal(&d).unwrap();
+        }
+    }
+
+    /// The tilt joints' geometry against the test's own rotations: in the import's chain
+    /// the base tilt turns the whole zero-tilt robot about the base origin; with the
+    /// bending joints before the column (the order of a height-coupled gain) the bending
+    /// does the same, whatever the column's extension.
+    #[test]
+    fn tilt_joints_turn_about_their_pivots() {
+        let Some(d) = dir() else { return };
+        let rot = |axis: usize, t: f64| {
+            let a = if axis == 0 {
+                nalgebra::Vector3::x_axis()
+            } else {
+                nalgebra::Vector3::y_axis()
+            };
+            nalgebra::Rotation3::from_axis_angle(&a, t)
+        };
+        let arm = [0.3, -0.4, 0.5, 0.6, -0.7, 0.8];
+        let bend_first = SLOW_VARIANTS[0];
+        assert_eq!(bend_first.order, [0, 1, 3, 4, 2]);
+        for (v, tilt_at) in [(SENSORS, [0, 1]), (bend_first, [2, 3])] {
+            let r = v.nominal(&d).unwrap();
+            let column_at = v.order.iter().position(|&j| j == 2).unwrap();
+            for (axis, &k) in tilt_at.iter().enumerate() {
+                for column_m in [2.0, 3.8] {
+                    let mut q = [0.0; N];
+                    q[column_at] = column_m;
+                    q[5..].copy_from_slice(&arm);
+                    let flat = r.fk_q(&q).unwrap().translation.vector;
+                    q[k] = 0.02;
+                    let tilted = r.fk_q(&q).unwrap().translation.vector;
+                    let want = rot(axis, 0.02) * flat;
+                    assert!(
+                        (tilted - want).norm() < 1e-12,
+                        "{}: {tilted} vs {want}",
+                        v.name
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    #[ignore = "prints the variants (release: cargo test --release -p kincal-io --lib hilti_study -- --ignored --nocapture)"]
+    fn print_variants() {
+        let Some(d) = dir() else { return };
+        let sessions = read_all(&d).unwrap();
+        let slow = std::env::var_os("KINCAL_HILTI_SLOW").is_some();
+        let list = if slow {
+            &SLOW_VARIANTS[..]
+        } else {
+            &VARIANTS[..]
+        };
+        for v in list {
+            let t = std::time::Instant::now();
+            let f = variant_figures(&d, &sessions, v, true).unwrap();
+            println!(
+                "{}: in {:.3} held {:.3} gains {:?} ({:.1} s)",
+                v.name,
+                f.flat_in_sample_mm,
+                f.flat_held_out_mm,
+                f.gains,
+                t.elapsed().as_secs_f64()
+            );
+            for (s, x) in &f.transfer_mm {
+                println!("   {s:<16} {x:.3}");
+            }
+        }
+        let t = std::time::Instant::now();
+        let l = leave_one_session_out(&d, &sessions, &FINAL).unwrap();
+        println!("LOSO final {l:?} ({:.1} s)", t.elapsed().as_secs_f64());
+        if slow {
+            let l = leave_one_session_out(&d, &sessions, &SENSORS).unwrap();
+            println!("LOSO sensors {l:?}");
+        }
+        // The 4-gain fit through the CLI's effect selector (the path of the first study).
+        let nominal = SENSORS.nominal(&d).unwrap();
+        let flat = &sessions[0].2;
+        let start = with_rigid_base(&nominal, flat, &GEOMETRY).unwrap();
+        let names = crate::datasets_hilti::JOINT_NAMES.map(String::from);
+        let item = crate::effects_arg::parse_effect_item("joint_scale@sensor").unwrap();
+        let set = crate::effects_arg::resolve(&[item], &names, &start.joint_kinds())
+            .unwrap()
+            .param_set(&start);
+        let ms = measurements(flat, &SENSORS);
+        let mut ws = crate::calibration::new_workspace();
+        let a = analyze(&start, &ms, &options(set), &mut ws).unwrap();
+        let m = identify(&start, &ms, &options(a.identifiable), &mut ws)
+            .unwrap()
+            .robot;
+        println!(
+            "selector path: gains {:?}, in {:.3}",
+            SENSORS.gains_of(&m),
+            rms_mm(&m, flat, &SENSORS).unwrap()
+        );
+    }
+}
