@@ -671,8 +671,15 @@ fn thermal_fit_on_position_only_data_converges() {
         let mut ws = Box::<Workspace<64>>::default();
         let fit = identify(&nominal, &data, &opts, &mut ws).unwrap();
         let (got, want) = (fit.robot.param(kappa).unwrap(), truth.param(kappa).unwrap());
-        assert!(fit.iterations <= 12, "seed {seed}: {} iterations", fit.iterations);
-        assert!((got / want - 1.0).abs() < 0.25, "seed {seed}: κ {got} vs {want}");
+        assert!(
+            fit.iterations <= 12,
+            "seed {seed}: {} iterations",
+            fit.iterations
+        );
+        assert!(
+            (got / want - 1.0).abs() < 0.25,
+            "seed {seed}: κ {got} vs {want}"
+        );
         let cfg = Config {
             sigma_pos_m: Some(1e-4),
             ..Config::default()
