@@ -93,7 +93,7 @@ fn hilti_imports_sessions_with_sensor_joints() {
     import_hilti(&src, dir.path(), false);
 }
 
-/// The study takes about 40 s of one core in a release build and far longer unoptimised,
+/// The study took 63 s in a release build (load average 23 on 2 cores) and far longer unoptimised,
 /// so it is ignored in the debug test run; the project's test command runs it in release
 /// (`cargo test --release -p kincal-cli --test real_data_hilti -- --ignored`), and
 /// docs/real-data.sh reruns the same figures.
