@@ -575,12 +575,13 @@ fn cache_mean<const N: usize, const P: usize>(
     jbar: &[[f64; P]; 3],
     ws: &mut Workspace<P>,
 ) {
-    let named = data.distances.iter().any(|d| d.a == gi || d.b == gi);
-    if let Some(m) = ws.means.get_mut(gi % MEAN_CACHE).filter(|_| named) {
-        m.group = gi;
-        m.w = w;
-        m.p = p;
-        m.jbar = *jbar;
+    if data.distances.iter().any(|d| d.a == gi || d.b == gi) {
+        if let Some(m) = ws.means.get_mut(gi % MEAN_CACHE) {
+            m.group = gi;
+            m.w = w;
+            m.p = p;
+            m.jbar = *jbar;
+        }
     }
 }
 

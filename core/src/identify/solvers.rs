@@ -467,7 +467,7 @@ fn gauss_newton<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
             delta = delta.min(radius);
         }
         for _ in 0..30 {
-            if accepted.is_some() || delta.is_nan() || delta <= 0.0 {
+            if accepted.is_some() || !(delta > 0.0) {
                 break;
             }
             let cut = delta / full;
