@@ -230,19 +230,6 @@ fn bench(c: &mut Criterion) {
         .iter()
         .find(|r| r.name == "panda_2")
         .expect("panda_2");
-    // CPU time (not wall time: the machine may be shared), where the OS reports it.
-    if let Some(ms) = cpu_ms_per_call(40, || {
-        calibrate(&nominal, panda_2, &opts, &mut ws);
-    }) {
-        println!("panda_2: {ms:.2} ms CPU per calibration (mean of 40)");
-    }
-    if let Some(ms) = cpu_ms_per_call(20, || {
-        for r in &recordings {
-            calibrate(&nominal, r, &opts, &mut ws);
-        }
-    }) {
-        println!("all 11: {ms:.1} ms CPU per pass (mean of 20)");
-    }
     c.bench_function("mukca/panda_2_all_locations", |b| {
         b.iter(|| calibrate(black_box(&nominal), panda_2, &opts, &mut ws))
     });
@@ -257,27 +244,6 @@ fn bench(c: &mut Criterion) {
         })
     });
     group.finish();
-}
-
-/// Process CPU time \[s\] from `/proc/self/stat` (user + system, in ticks of 1/100 s);
-/// `None` where that file does not exist.
-fn cpu_seconds() -> Option<f64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // The fields after the command name (which may contain spaces) start after ") ".
-    let rest = stat.rsplit_once(") ")?.1;
-    let mut f = rest.split(' ');
-    let utime: f64 = f.nth(11)?.parse().ok()?;
-    let stime: f64 = f.next()?.parse().ok()?;
-    Some((utime + stime) / 100.0)
-}
-
-/// Mean CPU milliseconds of `f` over `reps` calls (10 ms resolution over all calls).
-fn cpu_ms_per_call(reps: u32, mut f: impl FnMut()) -> Option<f64> {
-    let t0 = cpu_seconds()?;
-    for _ in 0..reps {
-        f();
-    }
-    Some((cpu_seconds()? - t0) * 1e3 / f64::from(reps))
 }
 
 criterion_group!(benches, bench);

@@ -57,9 +57,8 @@ pub const MAX_MODEL_PARAMS: usize = crate::params::num_params(crate::any::MAX_JO
 /// The three algorithms of the paper (Section 4.1.3).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Algorithm {
-    /// Gauss–Newton with the minimum-norm least-squares step (Matlab `lsqminnorm`); when a
-    /// full step increases the cost, the better of the shortened Gauss–Newton step and a
-    /// damped (Marquardt) step of the same length, with a trust radius after such a step.
+    /// Gauss–Newton with the minimum-norm least-squares step (Matlab `lsqminnorm`), with
+    /// step halving when a full step increases the cost.
     Ols,
     /// Bounded fit inside prior intervals (Matlab `fmincon` in the paper): projected
     /// Levenberg–Marquardt with an active set; parameters ending on a bound are reported.

@@ -313,17 +313,20 @@ fn scaled_norm<const P: usize>(ws: &Workspace<P>, n: usize, v: &[f64; P]) -> f64
 enum GramSel {
     /// Columns `0..m`, unscaled, undamped.
     All,
+    /// Columns `0..m` scaled by `ws.colscale` (`D⁻¹·G·D⁻¹`).
+    AllScaled,
     /// Columns `ws.free[..m]`, damped by `λ·ws.row[f]²` (the scale of free column f).
     FreeDamped(f64),
 }
 
-/// Cholesky factor of the (optionally damped) Gram matrix of the
+/// Cholesky factor of the (optionally column-scaled, optionally damped) Gram matrix of the
 /// selected columns into `ws.mat` (`m` columns, see [`GramSel`]), zero below the diagonal.
 /// The selected matrix is built in `ws.mat` and factored there: no second p×p copy.
 fn factor_gram<const P: usize>(ws: &mut Workspace<P>, m: usize, how: GramSel) -> Result<()> {
     let Workspace {
         gram,
         free,
+        colscale,
         row,
         mat,
         ..
@@ -339,6 +342,7 @@ fn factor_gram<const P: usize>(ws: &mut Workspace<P>, m: usize, how: GramSel) ->
             let (i, j) = (col(a).min(col(b)), col(a).max(col(b)));
             let mut x = g[i][j];
             match how {
+                GramSel::AllScaled => x *= colscale[a] * colscale[b],
                 GramSel::FreeDamped(lambda) if a == b => x += lambda * row[a] * row[a],
                 _ => {}
             }
@@ -375,29 +379,10 @@ impl Finish {
 }
 
 /// OLS: Gauss–Newton with the minimum-norm least-squares step (as `lsqminnorm`) on
-/// unit-scaled columns. The step comes from the Cholesky factor of the scaled normal
-/// equations — for the full-rank identifiable set that is the unique, hence minimum-norm,
-/// solution — and from the SVD of the Givens factor when the normal equations are
-/// numerically singular at an iterate.
-///
-/// Step control: the full step is taken when it lowers the cost (and lies within the trust
-/// radius, see below). When it raises the cost, shorter steps are tried at scaled lengths
-/// `|D·δ|` halving from the full step's: at each length the better (lower cost) of the
-/// Gauss–Newton direction cut to that length and the damped step of that length
-/// (Marquardt: `λ` added to the unit diagonal of the scaled normal equations, `λ` found by
-/// bisection; [`step_of_length`]), each scored by a cost-only pass. After a shortened step
-/// the next iteration may move at most twice as far (trust radius) until a full step fits
-/// in it again. A rejected full step predicted to gain less than [`ROUNDING_GAIN`]·`ftol` of
-/// the cost ends the fit (at a minimum to rounding).
-///
-/// Why both candidates: halving alone keeps the Gauss–Newton direction, which far from the
-/// minimum can be dominated by a weakly determined combination of parameters — on MUKCa's
-/// `panda_6` (three plate placements, 10.7 mm RMS scatter at the nominal model) halving
-/// crawled about 175 iterations along it before the quadratic phase (186 in all); the
-/// damped step shortens that direction and reaches the same minimum in 8. Damping alone
-/// cuts across narrow curved valleys where the cut Gauss–Newton step follows them (MUKCa's
-/// `panda_3`: 34 iterations damped only, 16 with both). Data on which every full step lowers
-/// the cost are fitted exactly as before.
+/// unit-scaled columns, halving the step up to 30 times when the cost rises. The step comes
+/// from the Cholesky factor of the scaled normal equations — for the full-rank identifiable
+/// set that is the unique, hence minimum-norm, solution — and from the SVD of the Givens
+/// factor when the normal equations are numerically singular at an iterate.
 ///
 /// A trial point is evaluated by accumulating its normal equations (Jacobian and residual
 /// in one pass): an accepted trial's cost and normal equations are those the next
@@ -414,9 +399,6 @@ fn gauss_newton<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
     let mut trial = *robot;
     unit_scale(ws, n);
     let mut c = accumulate_gram(robot, data, opts, n, ws)?;
-    // Trust radius |D·δ| the next step may take (∞: the Gauss–Newton step, as long as no
-    // step was rejected since the last full step).
-    let mut radius = f64::INFINITY;
     for it in 0..opts.max_iterations {
         get_x(robot, n, ws)?;
         if c <= opts.abs_cost_tol {
@@ -427,201 +409,67 @@ fn gauss_newton<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
             ws.diag[k] = if d > 0.0 { d } else { 1.0 };
             ws.colscale[k] = 1.0 / ws.diag[k];
         }
-        keep_scaled_normal_equations(ws, n);
+        if factor_gram(ws, n, GramSel::AllScaled).is_ok() {
+            let Workspace {
+                gram,
+                colscale,
+                step,
+                mat,
+                ..
+            } = ws;
+            for k in 0..n {
+                step[k] = gram.atb()[k] * colscale[k];
+            }
+            solve_normal(mat, n, &mut step[..n])?;
+        } else {
+            accumulate(robot, data, opts, n, ws)?;
+            let Workspace { lsq, step, svd, .. } = ws;
+            min_norm_solve(lsq.r(), n, &lsq.qtb()[..n], None, &mut step[..n], svd)?;
+        }
+        for k in 0..n {
+            ws.step[k] *= ws.colscale[k];
+        }
+        let dx = scaled_norm(ws, n, &ws.step);
         let xn = scaled_norm(ws, n, &ws.x);
-        gauss_newton_step(robot, data, opts, n, ws)?;
-        let full = scaled_norm(ws, n, &ws.step);
-        // The reduction of the cost the linearised model predicts for the full step, `gᵀδ`.
-        let predicted: f64 = (0..n).map(|k| ws.gram.atb()[k] * ws.step[k]).sum();
         unit_scale(ws, n);
         // A full step this small ends the iteration once accepted: its cost suffices, its
         // normal equations would never be used.
-        let last = full <= opts.xtol * (xn + opts.xtol);
-        // The full step first (when inside the trust radius), then, at lengths halving
-        // from the radius or from the rejected full step, the better of the
-        // Gauss–Newton direction cut to that length and the damped step of that length.
-        ws.row[..n].copy_from_slice(&ws.step[..n]);
-        let mut delta = full;
+        let last = dx <= opts.xtol * (xn + opts.xtol);
         let mut accepted = None;
-        // Whether `ws.gram` still holds the normal equations at `robot`.
-        let mut gram_current = true;
-        if last || full <= radius {
+        for _ in 0..30 {
             apply(&mut trial, n, ws, None)?;
             let c2 = if last {
                 data.cost(&trial, opts)?
             } else {
-                gram_current = false;
                 accumulate_gram(&trial, data, opts, n, ws)?
             };
             if c2 <= c {
                 accepted = Some(c2);
-            } else if predicted <= ROUNDING_GAIN * opts.ftol * c {
-                // A step the model says gains nothing above rounding, and it does not.
-                return Ok(Finish {
-                    iterations: it,
-                    gram_current,
-                });
-            }
-            delta = 0.5 * full;
-        } else {
-            delta = delta.min(radius);
-        }
-        for _ in 0..30 {
-            if accepted.is_some() || !(delta > 0.0) {
                 break;
             }
-            let cut = delta / full;
             for k in 0..n {
-                ws.step[k] = ws.row[k] * cut;
+                ws.step[k] *= 0.5;
             }
-            apply(&mut trial, n, ws, None)?;
-            let c_cut = data.cost(&trial, opts)?;
-            step_of_length(ws, n, delta)?;
-            apply(&mut trial, n, ws, None)?;
-            let c_damped = data.cost(&trial, opts)?;
-            if c_cut.min(c_damped) <= c {
-                if c_cut < c_damped {
-                    for k in 0..n {
-                        ws.step[k] = ws.row[k] * cut;
-                    }
-                    apply(&mut trial, n, ws, None)?;
-                }
-                let c2 = if last {
-                    c_cut.min(c_damped)
-                } else {
-                    accumulate_gram(&trial, data, opts, n, ws)?
-                };
-                accepted = Some(c2);
-                break;
-            }
-            delta *= 0.5;
         }
         let Some(c2) = accepted else {
-            // No decrease even along a short damped step: at a minimum to rounding.
+            // No decrease along the Gauss–Newton direction: at a minimum to rounding.
             return Ok(Finish {
                 iterations: it,
-                gram_current,
+                gram_current: last,
             });
         };
         *robot = trial;
-        let dx = scaled_norm(ws, n, &ws.step);
         if dx <= opts.xtol * (xn + opts.xtol) || (c - c2) <= opts.ftol * c {
             return Ok(Finish {
                 iterations: it + 1,
                 gram_current: !last,
             });
         }
-        radius = if dx < 0.99 * full {
-            2.0 * dx
-        } else {
-            f64::INFINITY
-        };
         c = c2;
     }
     Err(Error::NotConverged {
         iterations: opts.max_iterations,
     })
-}
-
-/// The Gauss–Newton step (unscaled) into `ws.step`, from the scaled normal equations kept
-/// in `ws.v`, `ws.tmp` (Cholesky), or from the SVD of the Givens factor at `robot` when they
-/// are numerically singular.
-fn gauss_newton_step<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
-    robot: &Robot<N>,
-    data: &D,
-    opts: &IdentifyOptions<'_>,
-    n: usize,
-    ws: &mut Workspace<P>,
-) -> Result<()> {
-    if damped_step(ws, n, 0.0).is_ok() {
-        return Ok(());
-    }
-    accumulate(robot, data, opts, n, ws)?;
-    let Workspace {
-        lsq,
-        step,
-        svd,
-        colscale,
-        ..
-    } = ws;
-    min_norm_solve(lsq.r(), n, &lsq.qtb()[..n], None, &mut step[..n], svd)?;
-    for k in 0..n {
-        step[k] *= colscale[k];
-    }
-    Ok(())
-}
-
-/// A rejected full Gauss–Newton step whose predicted gain is below this many `ftol`
-/// (relative to the cost) ends [`gauss_newton`]: the cost cannot be lowered above its own
-/// rounding (sums of thousands of squares vary by some `1e-14` relative between
-/// evaluations), and searching shorter steps would cost up to 60 evaluations for nothing.
-const ROUNDING_GAIN: f64 = 100.0;
-
-/// The damped step ([`damped_step`]) whose scaled length `|D·δ|` is within 10 % of `delta`
-/// (bisection on `log λ`; the length falls as `λ` grows), or the nearest the bisection
-/// finds, into `ws.step`. Errors: no damped matrix could be factored.
-fn step_of_length<const P: usize>(ws: &mut Workspace<P>, n: usize, delta: f64) -> Result<()> {
-    let (mut lo, mut hi) = (-16.0f64, 16.0f64);
-    for _ in 0..60 {
-        let mid = 0.5 * (lo + hi);
-        damped_step(ws, n, libm::pow(10.0, mid))?;
-        let len = scaled_norm(ws, n, &ws.step);
-        if (len - delta).abs() <= 0.1 * delta {
-            break;
-        }
-        if len > delta {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    Ok(())
-}
-
-/// Copies the column-scaled normal equations `D⁻¹GD⁻¹` (upper triangle) into `ws.v` and
-/// `D⁻¹Jᵀe` into `ws.tmp` (`D = ws.diag`): a rejected trial overwrites `ws.gram`, and the
-/// damped steps that follow are solved from these.
-fn keep_scaled_normal_equations<const P: usize>(ws: &mut Workspace<P>, n: usize) {
-    let Workspace {
-        gram,
-        colscale,
-        v,
-        tmp,
-        ..
-    } = ws;
-    let g = gram.gram();
-    for a in 0..n {
-        for b in a..n {
-            v[a][b] = g[a][b] * colscale[a] * colscale[b];
-        }
-        tmp[a] = gram.atb()[a] * colscale[a];
-    }
-}
-
-/// The damped step `(D⁻¹GD⁻¹ + λI)⁻¹D⁻¹Jᵀe`, unscaled (`D⁻¹·`), into `ws.step`, from the
-/// matrices [`keep_scaled_normal_equations`] kept. Errors: the damped matrix is singular.
-fn damped_step<const P: usize>(ws: &mut Workspace<P>, n: usize, lambda: f64) -> Result<()> {
-    let Workspace {
-        v,
-        tmp,
-        mat,
-        step,
-        diag,
-        ..
-    } = ws;
-    for a in 0..n {
-        mat[a][..a].fill(0.0);
-        for b in a..n {
-            mat[a][b] = v[a][b] + if a == b { lambda } else { 0.0 };
-        }
-    }
-    crate::linalg::gram::cholesky_upper_in_place(mat, n, 1e-14)?;
-    step[..n].copy_from_slice(&tmp[..n]);
-    solve_normal(mat, n, &mut step[..n])?;
-    for k in 0..n {
-        step[k] /= diag[k];
-    }
-    Ok(())
 }
 
 /// OPT2: MINPACK `lmder` — trust region on the scaled step, λ from `lmpar` — on the
