@@ -689,7 +689,10 @@ fn thermal_fit_on_position_only_data_converges() {
         let (d, _) = run(&data, &groups, &cfg, &mut workspace());
         assert!(d.fit.iterations < 200, "seed {seed}: {}", d.fit.iterations);
         if d.fit.iterations >= 60 {
-            eprintln!("seed {seed}: the verdict's fit took {} iterations", d.fit.iterations);
+            eprintln!(
+                "seed {seed}: the verdict's fit took {} iterations",
+                d.fit.iterations
+            );
         }
     }
 }
