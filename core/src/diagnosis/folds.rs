@@ -88,34 +88,16 @@ pub(crate) fn assign(
 /// heapsort: O(n log n), no recursion, no memory).
 fn sort_rows<K: Ord>(rows: &mut [PoseDiagnosis], key: impl Fn(u32) -> K) {
     let n = rows.len();
-    let before = |rows: &[PoseDiagnosis], i: usize, j: usize| {
-        key(rows[i].sub_leader) < key(rows[j].sub_leader)
-    };
-    let sift_down = |rows: &mut [PoseDiagnosis], mut root: usize, end: usize| loop {
-        let mut child = 2 * root + 1;
-        if child >= end {
-            return;
-        }
-        if child + 1 < end && before(rows, child, child + 1) {
-            child += 1;
-        }
-        if !before(rows, root, child) {
-            return;
-        }
-        let (a, b) = (rows[root].sub_leader, rows[child].sub_leader);
-        rows[root].sub_leader = b;
-        rows[child].sub_leader = a;
-        root = child;
-    };
-    for root in (0..n / 2).rev() {
-        sift_down(rows, root, n);
-    }
-    for end in (1..n).rev() {
-        let (a, b) = (rows[0].sub_leader, rows[end].sub_leader);
-        rows[0].sub_leader = b;
-        rows[end].sub_leader = a;
-        sift_down(rows, 0, end);
-    }
+    super::rank::heapsort_by(
+        rows,
+        n,
+        |rows, i, j| key(rows[i].sub_leader) < key(rows[j].sub_leader),
+        |rows, i, j| {
+            let (a, b) = (rows[i].sub_leader, rows[j].sub_leader);
+            rows[i].sub_leader = b;
+            rows[j].sub_leader = a;
+        },
+    );
 }
 
 #[cfg(test)]

@@ -81,7 +81,18 @@ pub(crate) fn sort_by_value<D: RankValues + ?Sized>(d: &mut D) {
 /// In-place heapsort of `d` by the strict order `less(d, i, j)`.
 fn heapsort<D: RankValues + ?Sized>(d: &mut D, less: impl Fn(&D, usize, usize) -> bool) {
     let n = d.count();
-    let sift_down = |d: &mut D, mut root: usize, end: usize| loop {
+    heapsort_by(d, n, less, |d, i, j| d.swap_values(i, j));
+}
+
+/// In-place heapsort of the `n` items of `d` by the strict order `less(d, i, j)`, moved by
+/// `swap(d, i, j)`: O(n log n), no recursion, no memory (the one sort of the diagnosis).
+pub(crate) fn heapsort_by<T: ?Sized>(
+    d: &mut T,
+    n: usize,
+    less: impl Fn(&T, usize, usize) -> bool,
+    swap: impl Fn(&mut T, usize, usize),
+) {
+    let sift_down = |d: &mut T, mut root: usize, end: usize| loop {
         let mut child = 2 * root + 1;
         if child >= end {
             return;
@@ -92,14 +103,14 @@ fn heapsort<D: RankValues + ?Sized>(d: &mut D, less: impl Fn(&D, usize, usize) -
         if !less(d, root, child) {
             return;
         }
-        d.swap_values(root, child);
+        swap(d, root, child);
         root = child;
     };
     for root in (0..n / 2).rev() {
         sift_down(d, root, n);
     }
     for end in (1..n).rev() {
-        d.swap_values(0, end);
+        swap(d, 0, end);
         sift_down(d, 0, end);
     }
 }
