@@ -220,14 +220,22 @@ impl std::error::Error for InputError {}
 
 /// Reads and checks a measurement file.
 pub fn read_measurements(path: &Path, opts: &ReadOptions) -> Result<MeasurementSet, InputError> {
-    let name = path.display().to_string();
-    let file = File::open(path).map_err(|e| InputError {
-        path: name.clone(),
-        line: None,
-        column: None,
-        reason: format!("cannot open the file: {e}"),
-    })?;
+    let (file, name) = open(path)?;
     parse_measurements(file, &name, opts)
+}
+
+/// Opens a measurement file; its name for messages.
+fn open(path: &Path) -> Result<(File, String), InputError> {
+    let name = path.display().to_string();
+    match File::open(path) {
+        Ok(file) => Ok((file, name)),
+        Err(e) => Err(InputError {
+            path: name,
+            line: None,
+            column: None,
+            reason: format!("cannot open the file: {e}"),
+        }),
+    }
 }
 
 /// Reads and checks measurement CSV from any reader; `source_name` is used in messages.
@@ -248,13 +256,7 @@ pub fn stream_measurements<E>(
     opts: &ReadOptions,
     on_row: impl FnMut(&MeasurementSet, MeasurementRow) -> Result<(), E>,
 ) -> Result<MeasurementSet, StreamError<E>> {
-    let name = path.display().to_string();
-    let file = File::open(path).map_err(|e| InputError {
-        path: name.clone(),
-        line: None,
-        column: None,
-        reason: format!("cannot open the file: {e}"),
-    })?;
+    let (file, name) = open(path)?;
     Parser::new(&name, opts)?.run_with(file, on_row)
 }
 
