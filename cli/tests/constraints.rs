@@ -249,6 +249,23 @@ fn calibrate_and_validate_from_contacts_recover_the_targets() {
         text(&o)
     );
     assert!(text(&o).contains("held out by session"), "{}", text(&o));
+    // A prior has nothing to act on in the contact routes of crossval and diagnose: refused
+    // (exit 2) rather than silently ignored.
+    for (cmd, why) in [
+        (
+            "crossval",
+            "not implemented for data with target/plane rows",
+        ),
+        ("diagnose", "writes no model"),
+    ] {
+        let mut args = vec![cmd, "contacts.csv", "--robot", "aria", "--prior", "5,1"];
+        if cmd == "diagnose" {
+            args.extend(["--json", "p.json", "--out", "p_model.json"]);
+        }
+        let o = kincal(&args, dir);
+        assert_eq!(o.status.code(), Some(2), "{cmd}: {}", text(&o));
+        assert!(text(&o).contains(why), "{cmd}: {}", text(&o));
+    }
 }
 
 /// Rewrites line `line` (1-based) of `name` with `edit`.

@@ -635,9 +635,9 @@ fn crossval_contacts<const N: usize>(
     set: &MeasurementSet,
     choice: &EffectChoice,
 ) -> Result<(), CliError> {
-    if args.init_frames || args.plot.is_some() || args.robot_out.is_some() {
+    if args.init_frames || args.plot.is_some() || args.robot_out.is_some() || args.prior.is_some() {
         return Err(CliError::usage(
-            "--init-frames, --plot and --robot-out are not implemented for data with \
+            "--init-frames, --prior, --plot and --robot-out are not implemented for data with \
              target/plane rows",
         ));
     }

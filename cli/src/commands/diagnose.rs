@@ -172,6 +172,12 @@ fn contact_diagnosis<const N: usize>(
     if args.constraints.is_none() && !kincal_io::constraints::has_contacts(&set) {
         return Ok(None);
     }
+    if args.prior.is_some() {
+        return Err(CliError::usage(
+            "--prior: the contact-data diagnosis writes no model, so there is nothing to fit \
+             with a prior (calibrate contact data with `kincal calibrate --constraints`)",
+        ));
+    }
     if selectors {
         return Err(CliError::usage(
             "--candidates joint_scale@JOINT: the contact-data diagnosis tests whole effects only \
