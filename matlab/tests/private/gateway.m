@@ -2,9 +2,17 @@ function varargout = gateway(varargin)
 %GATEWAY  Calls the compiled MEX gateway directly, bypassing the M-side checks of the
 %   wrappers, so the tests can check that the gateway validates on its own. The gateway
 %   lives in matlab/private (callable only from matlab/); a copy named kincal_mex_direct in
-%   a temporary folder on the path is used instead.
-persistent ready
-if isempty(ready)
+%   a temporary folder on the path is used instead (copied again when that folder is gone).
+persistent copy_dir
+if isempty(copy_dir) || ~exist(fullfile(copy_dir, ['kincal_mex_direct.' mexext()]), 'file')
+    % First call, or the copy went with an earlier test's temporary folder (run_tests gives
+    % each test a fresh TMPDIR and removes it afterwards): copy it again for this test.
+    if ~isempty(copy_dir)
+        clear('kincal_mex_direct');
+        if any(strcmp(copy_dir, strsplit(path(), pathsep())))
+            rmpath(copy_dir);
+        end
+    end
     src = fullfile(repo_root(), 'matlab', 'private', ['kincal_mex.' mexext()]);
     if ~exist(src, 'file')
         error('test:noMex', 'the MEX gateway is not built: %s (run make_kincal)', src);
@@ -15,7 +23,7 @@ if isempty(ready)
     end
     copyfile(src, fullfile(dir, ['kincal_mex_direct.' mexext()]));
     addpath(dir);
-    ready = true;
+    copy_dir = dir;
 end
 [varargout{1:nargout}] = kincal_mex_direct(varargin{:});
 end
