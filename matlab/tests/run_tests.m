@@ -36,6 +36,11 @@ skipped = 0;
 failed = {};
 ci = strcmp(getenv('CI'), 'true');
 t_all = tic();
+% Fixtures that live for the whole run (GATEWAY's copy of the MEX) go in a folder outside
+% every test's sandbox, removed when the tests are done.
+fixtures = tempname(tempdir());
+mkdir(fixtures);
+setenv('KINCAL_TEST_FIXTURES', fixtures);
 for f = 1:numel(names)
     [~, fname] = fileparts(names{f});
     tests = feval(fname);
@@ -62,6 +67,7 @@ for f = 1:numel(names)
         end
     end
 end
+release_fixtures(fixtures);
 fprintf('\n%d passed, %d failed, %d skipped (%.1f s)\n', passed, failures, skipped, ...
     toc(t_all));
 for k = 1:numel(failed)
@@ -87,6 +93,24 @@ if ~isempty(left)
     error('test:tempFiles', 'the test left %d temporary file(s): %s', numel(left), ...
         strjoin(left, ', '));
 end
+end
+
+function release_fixtures(fixtures)
+% Unloads and removes the run's fixtures (their folders leave the path first).
+clear('kincal_mex_direct');
+entries = strsplit(path(), pathsep());
+for k = 1:numel(entries)
+    if strncmp(entries{k}, fixtures, numel(fixtures))
+        rmpath(entries{k});
+    end
+end
+if exist('OCTAVE_VERSION', 'builtin')
+    confirm_recursive_rmdir(false, 'local');
+end
+if exist(fixtures, 'dir')
+    rmdir(fixtures, 's');
+end
+setenv('KINCAL_TEST_FIXTURES', '');
 end
 
 function leave_sandbox(box, outer)

@@ -2,11 +2,11 @@ function varargout = gateway(varargin)
 %GATEWAY  Calls the compiled MEX gateway directly, bypassing the M-side checks of the
 %   wrappers, so the tests can check that the gateway validates on its own. The gateway
 %   lives in matlab/private (callable only from matlab/); a copy named kincal_mex_direct in
-%   a temporary folder on the path is used instead (copied again when that folder is gone).
+%   a folder on the path is used instead: run_tests' fixtures folder (outside the tests'
+%   sandboxes, removed after the run), else TEMPDIR.
 persistent copy_dir
 if isempty(copy_dir) || ~exist(fullfile(copy_dir, ['kincal_mex_direct.' mexext()]), 'file')
-    % First call, or the copy went with an earlier test's temporary folder (run_tests gives
-    % each test a fresh TMPDIR and removes it afterwards): copy it again for this test.
+    % First call, or the copy is gone (an earlier run removed its fixtures): copy it again.
     if ~isempty(copy_dir)
         clear('kincal_mex_direct');
         if any(strcmp(copy_dir, strsplit(path(), pathsep())))
@@ -17,7 +17,11 @@ if isempty(copy_dir) || ~exist(fullfile(copy_dir, ['kincal_mex_direct.' mexext()
     if ~exist(src, 'file')
         error('test:noMex', 'the MEX gateway is not built: %s (run make_kincal)', src);
     end
-    dir = fullfile(tempdir(), sprintf('kincal_mex_direct_%d', getpid_or_zero()));
+    base = getenv('KINCAL_TEST_FIXTURES');   % run_tests' folder for the whole run
+    if isempty(base)
+        base = tempdir();
+    end
+    dir = fullfile(base, sprintf('kincal_mex_direct_%d', getpid_or_zero()));
     if ~exist(dir, 'dir')
         mkdir(dir);
     end
