@@ -109,12 +109,8 @@ pub unsafe extern "C" fn kincal_ik_options_default(
     opts_out: *mut kincal_ik_options,
     err: *mut kincal_error,
 ) -> kincal_status {
-    ffi_boundary!(err = err; {
-        let out = arg_out1!(opts_out);
-        // SAFETY: checked by `arg_out1!`; writable by contract.
-        unsafe { out.put(IkOptions::default().into()) };
-        Ok(())
-    })
+    // SAFETY: forwarded from this function's contract.
+    unsafe { put_ik_options(opts_out, err, IkOptions::default()) }
 }
 
 /// Writes the control-loop IK options into `opts_out`: one descent of at most 50 iterations
@@ -130,12 +126,8 @@ pub unsafe extern "C" fn kincal_ik_options_control_loop(
     opts_out: *mut kincal_ik_options,
     err: *mut kincal_error,
 ) -> kincal_status {
-    ffi_boundary!(err = err; {
-        let out = arg_out1!(opts_out);
-        // SAFETY: checked by `arg_out1!`; writable by contract.
-        unsafe { out.put(IkOptions::control_loop().into()) };
-        Ok(())
-    })
+    // SAFETY: forwarded from this function's contract.
+    unsafe { put_ik_options(opts_out, err, IkOptions::control_loop()) }
 }
 
 /// Writes the global-search IK options into `opts_out`, for a target whose branch is unknown:
@@ -151,10 +143,23 @@ pub unsafe extern "C" fn kincal_ik_options_global_search(
     opts_out: *mut kincal_ik_options,
     err: *mut kincal_error,
 ) -> kincal_status {
+    // SAFETY: forwarded from this function's contract.
+    unsafe { put_ik_options(opts_out, err, IkOptions::global_search()) }
+}
+
+/// Writes `opts` into `opts_out` (the three option presets' one body).
+///
+/// # Safety
+/// `opts_out` must be NULL or writable; `err` NULL or writable.
+unsafe fn put_ik_options(
+    opts_out: *mut kincal_ik_options,
+    err: *mut kincal_error,
+    opts: IkOptions,
+) -> kincal_status {
     ffi_boundary!(err = err; {
         let out = arg_out1!(opts_out);
         // SAFETY: checked by `arg_out1!`; writable by contract.
-        unsafe { out.put(IkOptions::global_search().into()) };
+        unsafe { out.put(opts.into()) };
         Ok(())
     })
 }

@@ -467,24 +467,27 @@ fn overview_text<const N: usize>(
     };
     // A component type no row measures (and no σ stated) has no noise floor: say so
     // instead of the core's placeholder σ.
-    let pos = if n.measured_pos || n.stated_pos {
-        format!(
-            "{} mm ({})",
-            mm(n.sigma_pos_m),
-            src(n.stated_pos, n.dof_pos)
-        )
-    } else {
-        "position not measured".to_string()
+    let floor = |known: bool, value: String, stated: bool, dof: f64, kind: &str| {
+        if known {
+            format!("{value} ({})", src(stated, dof))
+        } else {
+            format!("{kind} not measured")
+        }
     };
-    let rot = if n.measured_rot || n.stated_rot {
-        format!(
-            "{}° ({})",
-            deg(n.sigma_rot_rad),
-            src(n.stated_rot, n.dof_rot)
-        )
-    } else {
-        "orientation not measured".to_string()
-    };
+    let pos = floor(
+        n.measured_pos || n.stated_pos,
+        format!("{} mm", mm(n.sigma_pos_m)),
+        n.stated_pos,
+        n.dof_pos,
+        "position",
+    );
+    let rot = floor(
+        n.measured_rot || n.stated_rot,
+        format!("{}°", deg(n.sigma_rot_rad)),
+        n.stated_rot,
+        n.dof_rot,
+        "orientation",
+    );
     let pure = match (
         n.measured_pos || n.stated_pos,
         n.measured_rot || n.stated_rot,
