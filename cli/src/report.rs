@@ -76,7 +76,9 @@ pub fn wrap_prose(text: &str, width: usize) -> std::borrow::Cow<'_, str> {
     std::borrow::Cow::Owned(out)
 }
 
-/// A plain text table: first column left-aligned, the others right-aligned.
+/// A plain text table: first column left-aligned, the others right-aligned. A header cell
+/// may span lines (`"e_p\nmedian\n[mm]"`): a narrow column under a long name keeps a wide
+/// table within [`TEXT_WIDTH`] (issue #19).
 #[derive(Debug, Clone, Default)]
 pub struct Table {
     pub header: Vec<String>,
@@ -105,20 +107,32 @@ impl Table {
     }
 }
 
-/// The width of each column (in characters) over the header and `rows`.
+/// The width of each column (in characters) over the header (its widest line) and `rows`.
 fn column_widths<'a>(header: &'a [String], rows: impl Iterator<Item = &'a [String]>) -> Vec<usize> {
-    let mut w = vec![0usize; header.len()];
-    for r in std::iter::once(header).chain(rows) {
+    let mut w: Vec<usize> = header.iter().map(|h| cell_width(h)).collect();
+    for r in rows {
         for (wk, c) in w.iter_mut().zip(r) {
-            *wk = (*wk).max(c.chars().count());
+            *wk = (*wk).max(cell_width(c));
         }
     }
     w
 }
 
-/// The header line and the rule under it.
+/// Width of a cell: its widest line (a header cell may span lines).
+fn cell_width(c: &str) -> usize {
+    c.lines().map(|l| l.chars().count()).max().unwrap_or(0)
+}
+
+/// The header lines (a cell spanning lines fills them from the top) and the rule under them.
 fn render_head(out: &mut String, header: &[String], w: &[usize], indent: &str) {
-    render_line(out, header, w, indent);
+    let depth = header.iter().map(|h| h.lines().count()).max().unwrap_or(1);
+    for k in 0..depth {
+        let line: Vec<String> = header
+            .iter()
+            .map(|h| h.lines().nth(k).unwrap_or("").to_string())
+            .collect();
+        render_line(out, &line, w, indent);
+    }
     let total: usize = w.iter().sum::<usize>() + 2 * w.len().saturating_sub(1);
     out.push_str(indent);
     out.push_str(&"-".repeat(total));
@@ -156,10 +170,10 @@ pub fn emit_streamed_table<I: Iterator<Item = Vec<String>>>(
 ) {
     use std::io::Write as _;
     let header: Vec<String> = header.iter().map(|s| s.to_string()).collect();
-    let mut w = vec![0usize; header.len()];
-    for r in std::iter::once(header.clone()).chain(rows()) {
+    let mut w: Vec<usize> = header.iter().map(|h| cell_width(h)).collect();
+    for r in rows() {
         for (wk, c) in w.iter_mut().zip(&r) {
-            *wk = (*wk).max(c.chars().count());
+            *wk = (*wk).max(cell_width(c));
         }
     }
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
@@ -713,5 +727,31 @@ mod wrap_tests {
         let long = "x".repeat(50);
         assert_eq!(wrap_prose(&long, 40), long);
         assert_eq!(wrap_prose("a b\n", 40), "a b\n");
+    }
+}
+
+#[cfg(test)]
+mod table_tests {
+    use super::Table;
+
+    /// A header cell spanning lines fills the header from the top; the column is as wide as
+    /// its widest line or cell, not as the joined name.
+    #[test]
+    fn header_cells_may_span_lines() {
+        let mut t = Table::new(&["design", "e_p\nmedian\n[mm]", "runs"]);
+        t.row(vec!["table2".into(), "0.123".into(), "20".into()]);
+        let text = t.render("  ");
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(
+            lines,
+            [
+                "  design     e_p  runs",
+                "          median",
+                "            [mm]",
+                "  --------------------",
+                "  table2   0.123    20",
+            ],
+            "{text}"
+        );
     }
 }

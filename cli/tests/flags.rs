@@ -144,3 +144,66 @@ fn design_commands_take_only_the_flags_they_use() {
         assert!(err.contains(flag), "{args:?}: {err}");
     }
 }
+
+/// The commands `kincal --help` lists (its `Commands:` section, `help` aside).
+fn commands() -> Vec<String> {
+    let o = kincal(&["--help"]);
+    stdout(&o)
+        .lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .filter_map(|l| l.split_whitespace().next().map(str::to_string))
+        .filter(|c| c != "help")
+        .collect()
+}
+
+/// Issue #19: every help text fits 100 columns: the top-level help in its three spellings
+/// and every command's short (`-h`) and long (`--help`) help, also when `COLUMNS` claims a
+/// wider screen (clap wraps to it without a terminal; the cap holds).
+#[test]
+fn every_help_fits_100_columns() {
+    let commands = commands();
+    assert!(commands.len() >= 14, "commands found: {commands:?}");
+    let mut runs: Vec<Vec<String>> = vec![
+        vec!["--help".into()],
+        vec!["-h".into()],
+        vec!["help".into()],
+    ];
+    for c in &commands {
+        runs.push(vec![c.clone(), "--help".into()]);
+        runs.push(vec![c.clone(), "-h".into()]);
+        runs.push(vec!["help".into(), c.clone()]);
+    }
+    let mut widest = (0, String::new());
+    for columns in [None, Some("250")] {
+        for args in &runs {
+            let mut cmd = Command::new(env!("CARGO_BIN_EXE_kincal"));
+            cmd.args(args);
+            match columns {
+                Some(c) => cmd.env("COLUMNS", c),
+                None => cmd.env_remove("COLUMNS"),
+            };
+            let o = cmd.output().expect("run kincal");
+            assert_eq!(o.status.code(), Some(0), "{args:?}");
+            let help = stdout(&o);
+            assert!(help.lines().count() > 3, "{args:?}: {help}");
+            for line in help.lines() {
+                let n = line.chars().count();
+                assert!(
+                    n <= 100,
+                    "{args:?} (COLUMNS {columns:?}): a line of {n} columns:\n{line}"
+                );
+                if n > widest.0 {
+                    widest = (n, format!("{args:?}"));
+                }
+            }
+        }
+    }
+    eprintln!(
+        "{} help texts, widest line {} columns ({})",
+        runs.len() * 2,
+        widest.0,
+        widest.1
+    );
+}

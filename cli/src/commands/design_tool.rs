@@ -124,6 +124,16 @@ impl ObjectiveArg {
             ObjectiveArg::Dopt => ("D-optimal", 1.0, Objective::Index(Index::DOpt)),
         }
     }
+
+    /// The `--objectives` name: the screening table's short column.
+    fn flag(self) -> &'static str {
+        match self {
+            ObjectiveArg::Pv => "pv",
+            ObjectiveArg::Pv01 => "pv01",
+            ObjectiveArg::O => "o",
+            ObjectiveArg::Dopt => "dopt",
+        }
+    }
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
@@ -237,6 +247,8 @@ struct Candidate<const N: usize> {
     design: Design<N>,
     z: f64,
     objective: String,
+    /// `objective`'s `--objectives` name (the screening table's column).
+    objective_flag: &'static str,
 }
 
 fn design<const N: usize>(
@@ -297,8 +309,14 @@ fn design<const N: usize>(
         sizes.min_dexterity,
         sizes.robust_robots
     );
-    let objectives: Vec<(&str, f64, Objective)> =
-        args.objectives.iter().map(|o| o.spec()).collect();
+    let objectives: Vec<(&str, f64, Objective, &'static str)> = args
+        .objectives
+        .iter()
+        .map(|o| {
+            let (label, w, objective) = o.spec();
+            (label, w, objective, o.flag())
+        })
+        .collect();
     let pb = crate::progress::counter(0, "tool candidates");
     let mut candidates: Vec<Candidate<N>> = Vec::new();
     for &z in &heights {
@@ -313,7 +331,7 @@ fn design<const N: usize>(
         if q.len() < m {
             continue;
         }
-        for &(label, w, objective) in &objectives {
+        for &(label, w, objective, flag) in &objectives {
             pb.set_message(format!("z = {:.0} mm: selecting by {label}", z * 1e3));
             let mut obs = ObservabilityOptions::new(ctx.params);
             obs.rot_weight = w;
@@ -368,6 +386,7 @@ fn design<const N: usize>(
                 },
                 z,
                 objective: label.to_string(),
+                objective_flag: flag,
             });
         }
     }
@@ -390,20 +409,27 @@ fn design<const N: usize>(
     )?;
     let _ = writeln!(
         log,
-        "\nScreening ({} runs each, seed {}; score = largest ratio to {} of median/p95 e_p, e_φ):",
+        "\nScreening ({} runs each, seed {}; score = largest ratio to {} of median/p95 e_p, e_φ; objective as --objectives: {}):",
         args.screen_runs,
         ctx.seed.wrapping_add(1),
-        baseline.name
+        baseline.name,
+        args.objectives
+            .iter()
+            .map(|o| format!("{} = {}", o.flag(), o.spec().0))
+            .collect::<Vec<_>>()
+            .join(", ")
     );
+    // Headers on two lines and the objective by its flag name: the table fits 100 columns
+    // (issue #19; the full names are in the heading above).
     let mut t = crate::report::Table::new(&[
         "tool",
-        "plate z [mm]",
+        "plate z\n[mm]",
         "objective",
-        "O (eq. 17)",
-        "e_p med",
-        "e_p p95 [mm]",
-        "e_φ med",
-        "e_φ p95 [deg]",
+        "O\n(eq. 17)",
+        "e_p med\n[mm]",
+        "e_p p95\n[mm]",
+        "e_φ med\n[deg]",
+        "e_φ p95\n[deg]",
         "failed",
         "score",
     ]);
@@ -418,7 +444,7 @@ fn design<const N: usize>(
         t.row(vec![
             cand.design.name.clone(),
             format!("{:.0}", cand.z * 1e3),
-            cand.objective.clone(),
+            cand.objective_flag.to_string(),
             format!("{:.4}", r.o),
             format!("{:.3}", p.median),
             format!("{:.3}", p.p95),
