@@ -2220,23 +2220,28 @@ typedef struct kincal_smooth_check {
 } kincal_smooth_check;
 
 /*
- The noise floor used (REPORT.json `noise_floor`).
+ The noise floor used (REPORT.json `noise_floor`). A component type no row measures and
+ whose σ was not stated (position-only data: the orientation) has no noise floor:
+ `measured_*` and `stated_*` are both 0 and its σ and degrees of freedom are 0 (REPORT.json
+ `"not_measured"`, null), never a placeholder.
  */
 typedef struct kincal_noise_floor {
     /*
-     Position noise, 1σ per axis [m].
+     Position noise, 1σ per axis [m]; 0 when not measured (see `measured_pos`).
      */
     double sigma_pos_m;
     /*
-     Rotation noise, 1σ per axis [rad].
+     Rotation noise, 1σ per axis [rad]; 0 when not measured (see `measured_rot`).
      */
     double sigma_rot_rad;
     /*
-     Degrees of freedom of the position estimate (infinity when stated).
+     Degrees of freedom of the position estimate (infinity when stated, 0 when not
+     measured).
      */
     double dof_pos;
     /*
-     Degrees of freedom of the rotation estimate (infinity when stated).
+     Degrees of freedom of the rotation estimate (infinity when stated, 0 when not
+     measured).
      */
     double dof_rot;
     /*
@@ -2251,6 +2256,17 @@ typedef struct kincal_noise_floor {
      Non-zero: σ_rot was stated.
      */
     uint32_t stated_rot;
+    /*
+     Non-zero: some row measures a position component. 0 with `stated_pos` 0: position
+     not measured, no position noise floor.
+     */
+    uint32_t measured_pos;
+    /*
+     Non-zero: some row measures an orientation component. 0 with `stated_rot` 0:
+     orientation not measured (position-only data), no orientation noise floor; the
+     report's rotation RMS values are then 0.
+     */
+    uint32_t measured_rot;
     /*
      σ per axis the repeats alone give [m] (NaN without repeats).
      */
@@ -2463,7 +2479,8 @@ typedef struct kincal_diagnosis_report {
      */
     double heldout_rms_pos_m;
     /*
-     Held-out RMS rotation angle of the verdict's model [rad].
+     Held-out RMS rotation angle of the verdict's model [rad]; 0 (like every rotation
+     RMS of the report) when no row measures the orientation (`noise.measured_rot` 0).
      */
     double heldout_rms_rot_rad;
     /*
@@ -2570,7 +2587,8 @@ typedef struct kincal_pose_diagnosis {
      */
     uint32_t reserved;
     /*
-     Residual of the geometric calibration on all rows `[Δp (m); Δφ (rad)]`.
+     Residual of the geometric calibration on all rows `[Δp (m); Δφ (rad)]`; 0 in the
+     components the pose does not measure (its `masks` bits).
      */
     double residual[6];
     /*

@@ -26,7 +26,10 @@ function [model, report, geometric] = kincal_diagnose(robot, varargin)
 %   remaining_gap_z[_pos|_rot], remaining_gap_significant, remaining_rms_axis),
 %   explainable and remaining_structure (the library-free smooth check), groups, folds.
 %   REPORT.json's where, per-pose rows, reason_text, parameters and files are not here
-%   (the identified effect parameters are in MODEL).
+%   (the identified effect parameters are in MODEL). REPORT.json's null is NaN: a component
+%   type no pose measures and whose sigma was not stated (position-only data: orientation)
+%   has noise_floor.rot_source (pos_source) 'not_measured' and rot_deg, rms_rot_deg, dof_rot
+%   NaN; its residual RMS values are 0.
 %
 %   Example:
 %       [model, rep] = kincal_diagnose(kincal_robot('aria'), q, T, 'groups', ids, ...

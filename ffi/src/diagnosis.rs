@@ -259,18 +259,23 @@ pub struct kincal_smooth_check {
     pub z: f64,
 }
 
-/// The noise floor used (REPORT.json `noise_floor`).
+/// The noise floor used (REPORT.json `noise_floor`). A component type no row measures and
+/// whose σ was not stated (position-only data: the orientation) has no noise floor:
+/// `measured_*` and `stated_*` are both 0 and its σ and degrees of freedom are 0 (REPORT.json
+/// `"not_measured"`, null), never a placeholder.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[allow(non_camel_case_types)]
 pub struct kincal_noise_floor {
-    /// Position noise, 1σ per axis [m].
+    /// Position noise, 1σ per axis [m]; 0 when not measured (see `measured_pos`).
     pub sigma_pos_m: f64,
-    /// Rotation noise, 1σ per axis [rad].
+    /// Rotation noise, 1σ per axis [rad]; 0 when not measured (see `measured_rot`).
     pub sigma_rot_rad: f64,
-    /// Degrees of freedom of the position estimate (infinity when stated).
+    /// Degrees of freedom of the position estimate (infinity when stated, 0 when not
+    /// measured).
     pub dof_pos: f64,
-    /// Degrees of freedom of the rotation estimate (infinity when stated).
+    /// Degrees of freedom of the rotation estimate (infinity when stated, 0 when not
+    /// measured).
     pub dof_rot: f64,
     /// Repeat subgroups in the data.
     pub repeat_subgroups: usize,
@@ -278,6 +283,13 @@ pub struct kincal_noise_floor {
     pub stated_pos: u32,
     /// Non-zero: σ_rot was stated.
     pub stated_rot: u32,
+    /// Non-zero: some row measures a position component. 0 with `stated_pos` 0: position
+    /// not measured, no position noise floor.
+    pub measured_pos: u32,
+    /// Non-zero: some row measures an orientation component. 0 with `stated_rot` 0:
+    /// orientation not measured (position-only data), no orientation noise floor; the
+    /// report's rotation RMS values are then 0.
+    pub measured_rot: u32,
     /// σ per axis the repeats alone give [m] (NaN without repeats).
     pub repeats_pos_m: f64,
     /// Its degrees of freedom (0 without).
@@ -356,7 +368,8 @@ pub struct kincal_diagnosis_report {
     pub gap_closed_total_fraction: f64,
     /// Held-out RMS position error of the verdict's model [m].
     pub heldout_rms_pos_m: f64,
-    /// Held-out RMS rotation angle of the verdict's model [rad].
+    /// Held-out RMS rotation angle of the verdict's model [rad]; 0 (like every rotation
+    /// RMS of the report) when no row measures the orientation (`noise.measured_rot` 0).
     pub heldout_rms_rot_rad: f64,
     /// The gap test of what remains (z, z_pos, z_rot).
     pub remaining: kincal_gap_test,
@@ -414,7 +427,8 @@ pub struct kincal_pose_diagnosis {
     pub suspect: u32,
     /// Reserved, 0.
     pub reserved: u32,
-    /// Residual of the geometric calibration on all rows `[Δp (m); Δφ (rad)]`.
+    /// Residual of the geometric calibration on all rows `[Δp (m); Δφ (rad)]`; 0 in the
+    /// components the pose does not measure (its `masks` bits).
     pub residual: [f64; 6],
     /// Held-out residual of the geometric model.
     pub heldout_baseline: [f64; 6],
@@ -695,6 +709,13 @@ fn report_of<const N: usize>(d: &Diagnosis<N>, cfg: &Config) -> kincal_diagnosis
         BeyondLibrary::NotAFunctionOfQ => (kincal_beyond_library::NotAFunctionOfQ, f64::NAN),
     };
     let n = &d.noise;
+    // A component type no row measures, with no σ stated, has only the core's placeholder
+    // σ (it weighs nothing): the report says 0 and `measured_*` = 0 instead.
+    let (known_pos, known_rot) = (
+        n.measured_pos || n.stated_pos,
+        n.measured_rot || n.stated_rot,
+    );
+    let known = |v: f64, known: bool| if known { v } else { 0.0 };
     let mut out = kincal_diagnosis_report {
         status: match v.status {
             Status::NoGap => kincal_diagnosis_status::NoGap,
@@ -728,13 +749,15 @@ fn report_of<const N: usize>(d: &Diagnosis<N>, cfg: &Config) -> kincal_diagnosis
         explainable: smooth(&d.explainable),
         remaining_structure: smooth(&d.remaining_structure),
         noise: kincal_noise_floor {
-            sigma_pos_m: n.sigma_pos_m,
-            sigma_rot_rad: n.sigma_rot_rad,
-            dof_pos: n.dof_pos,
-            dof_rot: n.dof_rot,
+            sigma_pos_m: known(n.sigma_pos_m, known_pos),
+            sigma_rot_rad: known(n.sigma_rot_rad, known_rot),
+            dof_pos: known(n.dof_pos, known_pos),
+            dof_rot: known(n.dof_rot, known_rot),
             repeat_subgroups: n.repeat_subgroups,
             stated_pos: u32::from(n.stated_pos),
             stated_rot: u32::from(n.stated_rot),
+            measured_pos: u32::from(n.measured_pos),
+            measured_rot: u32::from(n.measured_rot),
             repeats_pos_m: n.repeat_pos.map_or(f64::NAN, |r| r.0),
             repeats_pos_dof: n.repeat_pos.map_or(0.0, |r| r.1),
             repeats_rot_rad: n.repeat_rot.map_or(f64::NAN, |r| r.0),

@@ -541,18 +541,35 @@ static const char *const NOISE_FIELDS[] = {
     "overruled_pos", "overruled_rot", "overruled_pos_mm", "overruled_rot_deg", NULL,
 };
 
+/* Where a noise sigma came from (REPORT.json's pos_source/rot_source): "not_measured" when
+ * no row measures that component type and no sigma was stated (position-only data: the
+ * orientation). */
+static const char *noise_source(uint32_t stated, uint32_t measured)
+{
+    return stated ? "stated" : measured ? "repeats" : "not_measured";
+}
+
+/* A noise-floor value, NaN (REPORT.json's null) when the component type is not measured. */
+static double known_or_nan(double v, uint32_t stated, uint32_t measured)
+{
+    return stated || measured ? v : mxGetNaN();
+}
+
 static mxArray *noise_struct(const kincal_noise_floor *n)
 {
     mxArray *s = kc_struct1(NOISE_FIELDS);
-    set_num(s, 0, "pos_mm", KC_MM(n->sigma_pos_m));
-    set_num(s, 0, "rot_deg", KC_DEG(n->sigma_rot_rad));
-    mxSetField(s, 0, "pos_source", mxCreateString(n->stated_pos ? "stated" : "repeats"));
-    mxSetField(s, 0, "rot_source", mxCreateString(n->stated_rot ? "stated" : "repeats"));
-    set_num(s, 0, "dof_pos", finite_or_nan(n->dof_pos));
-    set_num(s, 0, "dof_rot", finite_or_nan(n->dof_rot));
+    const uint32_t sp = n->stated_pos, mp = n->measured_pos;
+    const uint32_t sr = n->stated_rot, mr = n->measured_rot;
+    set_num(s, 0, "pos_mm", known_or_nan(KC_MM(n->sigma_pos_m), sp, mp));
+    set_num(s, 0, "rot_deg", known_or_nan(KC_DEG(n->sigma_rot_rad), sr, mr));
+    mxSetField(s, 0, "pos_source", mxCreateString(noise_source(sp, mp)));
+    mxSetField(s, 0, "rot_source", mxCreateString(noise_source(sr, mr)));
+    set_num(s, 0, "dof_pos", known_or_nan(finite_or_nan(n->dof_pos), sp, mp));
+    set_num(s, 0, "dof_rot", known_or_nan(finite_or_nan(n->dof_rot), sr, mr));
     set_num(s, 0, "repeat_subgroups", (double)n->repeat_subgroups);
-    set_num(s, 0, "rms_pos_mm", KC_MM(1.7320508075688772 * n->sigma_pos_m));
-    set_num(s, 0, "rms_rot_deg", KC_DEG(1.7320508075688772 * n->sigma_rot_rad));
+    set_num(s, 0, "rms_pos_mm", known_or_nan(KC_MM(1.7320508075688772 * n->sigma_pos_m), sp, mp));
+    set_num(s, 0, "rms_rot_deg",
+            known_or_nan(KC_DEG(1.7320508075688772 * n->sigma_rot_rad), sr, mr));
     set_num(s, 0, "repeats_pos_mm", KC_MM(n->repeats_pos_m));
     set_num(s, 0, "repeats_rot_deg", KC_DEG(n->repeats_rot_rad));
     set_bool(s, 0, "overruled_pos", (int)n->overruled_pos);

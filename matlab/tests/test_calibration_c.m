@@ -2,12 +2,14 @@ function tests = test_calibration_c()
 %TEST_CALIBRATION_C  Instrument-free calibration (kincal_identify_constraints) and the
 %   diagnosis (kincal_diagnose) through the gateway: contacts made by IK on a perturbed
 %   ARIA recover its parameters and targets to 1e-9, the gauge is named, bad rows are
-%   named; a planted joint compliance is diagnosed 'explained' with REPORT.json's fields.
+%   named; a planted joint compliance is diagnosed 'explained' with REPORT.json's fields;
+%   position-only data report the orientation noise floor as not measured.
 tests = {
     'constraints_recover_geometry', @constraints_recover
     'constraints_gauge_without_reference', @constraints_gauge
     'constraints_bad_rows', @constraints_bad_rows
     'diagnose_planted_compliance', @diagnose_compliance
+    'diagnose_position_only', @diagnose_position_only
     'diagnose_bad_inputs', @diagnose_bad_inputs
     };
 end
@@ -210,6 +212,37 @@ for f = {'effects', 'status', 'confounded_with', 'gap_closed_fraction', ...
         'remaining_gap_z', 'remaining_gap_significant', 'remaining_rms_axis'}
     expect_true(isfield(v, f{1}), 'REPORT.json verdict field %s', f{1});
 end
+end
+
+function diagnose_position_only()
+% Issue #14: without orientation rows there is no orientation noise floor: REPORT.json's
+% "not_measured" and null (NaN here), not a 1 rad placeholder; the position floor is real.
+require_calibration();
+[q, T] = compliance_session();
+nominal = kincal_robot('aria');
+% The 60 distinct poses (each its own group) and one candidate keep the test short. (With
+% the 20 repeats as well, position only, the diagnosis stops with kincal:notConverged,
+% iteration limit 200, where kincal_identify on the same rows converges: a known gap.)
+opts = {'sigma_pos_m', 1e-4, 'components', 'position', 'candidates', {'joint_compliance'}, ...
+    'pairs', false};
+q = q(:, 1:60);
+T = T(:, :, 1:60);
+[~, rep] = kincal_diagnose(nominal, q, T, opts{:});
+n = rep.noise_floor;
+expect_true(strcmp(n.rot_source, 'not_measured'), 'rot_source %s', n.rot_source);
+expect_true(isnan(n.rot_deg) && isnan(n.rms_rot_deg) && isnan(n.dof_rot), ...
+    'orientation floor %g deg, rms %g deg, dof %g', n.rot_deg, n.rms_rot_deg, n.dof_rot);
+expect_true(strcmp(n.pos_source, 'stated'), 'pos_source %s', n.pos_source);
+expect_near(n.pos_mm, 0.1, 1e-12, 'stated sigma in mm');
+expect_near(n.rms_pos_mm, sqrt(3) * 0.1, 1e-12, 'position noise RMS in mm');
+expect_near(rep.baseline.heldout_rms_rot_deg, 0, 0, 'no orientation residual');
+expect_near(rep.baseline.expected_rms_rot_deg, 0, 0, 'no orientation floor');
+expect_true(rep.baseline.heldout_rms_pos_mm > 0, 'position residual');
+% A stated sigma_rot stays stated without orientation rows.
+[~, rep] = kincal_diagnose(nominal, q, T, opts{:}, 'sigma_rot_rad', 0.02 * pi / 180);
+expect_true(strcmp(rep.noise_floor.rot_source, 'stated'), 'stated rot_source %s', ...
+    rep.noise_floor.rot_source);
+expect_near(rep.noise_floor.rot_deg, 0.02, 1e-12, 'stated sigma_rot in degrees');
 end
 
 function diagnose_bad_inputs()

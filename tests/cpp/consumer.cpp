@@ -1181,6 +1181,28 @@ void test_diagnosis() {
                 "compliance_2 %.3g (planted 8e-4)\n",
                 report->status, report->effects, report->gap.z, report->gap_closed_fraction,
                 report->remaining.z, c2);
+    CHECK(report->noise.measured_pos == 1 && report->noise.measured_rot == 1);
+
+    // The same poses, position only (issue #14): no orientation noise floor. The report
+    // says "not measured" (measured_rot 0, sigma and dof 0, rotation RMS 0), no placeholder.
+    std::vector<uint8_t> masks(groups.size(), 0x07);
+    data.masks = masks.data();
+    data.masks_len = masks.size();
+    opts.sigma_rot_rad = std::nan("");
+    CHECK_STATUS(kincal_diagnose(&nominal, &data, groups.data(), groups.size(), &opts, ws.data(),
+                                 size, &model, &geometric, report.get(), per_pose.data(),
+                                 per_pose.size(), &err),
+                 KINCAL_STATUS_OK, err, nullptr);
+    const kincal_noise_floor &n = report->noise;
+    CHECK(n.measured_pos == 1 && n.stated_pos == 1 && n.sigma_pos_m == sigma_pos);
+    CHECK(n.measured_rot == 0 && n.stated_rot == 0);
+    CHECK(n.sigma_rot_rad == 0.0 && n.dof_rot == 0.0);
+    CHECK(report->heldout_rms_rot_rad == 0.0 && report->gap.expected_rms_rot_rad == 0.0);
+    CHECK(report->heldout_rms_pos_m > 0.0 && std::isfinite(report->gap.z));
+    for (const auto &p : per_pose) CHECK(p.residual[3] == 0.0 && p.residual[5] == 0.0);
+    std::printf("diagnosis, position only: orientation not measured (sigma_rot %g, dof %g), "
+                "held-out %.3f mm\n",
+                n.sigma_rot_rad, n.dof_rot, report->heldout_rms_pos_m * 1e3);
 }
 
 }  // namespace

@@ -26,6 +26,8 @@ struct Set {
     poses: Vec<f64>,
     aux: Vec<kincal_joint_aux>,
     weights: Vec<f64>,
+    /// Measured components per pose (`data->masks`); empty: full poses (NULL).
+    masks: Vec<u8>,
 }
 
 impl Set {
@@ -36,8 +38,12 @@ impl Set {
             q_len: self.q.len(),
             poses: self.poses.as_ptr(),
             poses_len: self.poses.len(),
-            masks: null(),
-            masks_len: 0,
+            masks: if self.masks.is_empty() {
+                null()
+            } else {
+                self.masks.as_ptr()
+            },
+            masks_len: self.masks.len(),
             aux: self.aux.as_ptr(),
             aux_len: self.aux.len(),
             weights: if self.weights.is_empty() {
@@ -100,6 +106,7 @@ fn compliance_session(seed: u64) -> Set {
         poses: Vec::new(),
         aux: Vec::new(),
         weights: Vec::new(),
+        masks: Vec::new(),
     };
     for m in &meas {
         s.q.extend_from_slice(&m.state.q);
@@ -231,6 +238,7 @@ fn planted_compliance_is_explained_and_the_report_equals_the_core() {
     assert_eq!(r.method, kincal_diagnosis_method::CrossValidation as u32);
     assert_eq!(r.remaining_gap_significant, 0);
     assert_eq!(r.noise.stated_pos, 1);
+    assert_eq!((r.noise.measured_pos, r.noise.measured_rot), (1, 1));
 
     // The core on the same bits.
     let cfg = Config {
@@ -281,6 +289,60 @@ fn planted_compliance_is_explained_and_the_report_equals_the_core() {
     }
 }
 
+/// Issue #14: position-only data have no orientation noise floor. The report says so
+/// (`measured_rot` 0, σ_rot and its degrees of freedom 0, every rotation RMS 0) instead of
+/// the core's 1 rad placeholder; a stated σ_rot is kept as stated. Every value is finite.
+#[test]
+fn position_only_data_report_the_orientation_as_not_measured() {
+    let mut set = compliance_session(51);
+    // Position only (x, y, z): the core reads the rotation rows as not measured.
+    set.masks = vec![0x07; set.meas.len()];
+    let mut o = options();
+    o.sigma_pos_m = 1e-4;
+    let out = run(&set, Some(&set.groups), &o);
+    assert_eq!(out.status, kincal_status::Ok, "{:?}", out.err);
+    let r = &*out.report;
+    let n = &r.noise;
+    println!("position-only noise floor: {n:?}");
+    assert_eq!((n.measured_pos, n.measured_rot), (1, 0));
+    assert_eq!((n.stated_pos, n.stated_rot), (1, 0));
+    assert_eq!(n.sigma_pos_m, 1e-4);
+    assert_eq!((n.sigma_rot_rad, n.dof_rot), (0.0, 0.0));
+    for (what, v) in [
+        ("heldout_rms_rot_rad", r.heldout_rms_rot_rad),
+        ("insample_rms_rot_rad", r.insample_rms_rot_rad),
+        (
+            "baseline.heldout_rms_rot_rad",
+            r.baseline.heldout_rms_rot_rad,
+        ),
+        ("gap.expected_rms_rot_rad", r.gap.expected_rms_rot_rad),
+        (
+            "remaining.expected_rms_rot_rad",
+            r.remaining.expected_rms_rot_rad,
+        ),
+    ] {
+        assert_eq!(v, 0.0, "{what}");
+    }
+    // The position side is a real floor: stated σ (infinite degrees of freedom), finite RMS.
+    assert_eq!(n.dof_pos, f64::INFINITY);
+    for v in [r.heldout_rms_pos_m, r.gap.expected_rms_pos_m, r.gap.z] {
+        assert!(v.is_finite(), "{v}");
+    }
+    assert!(r.heldout_rms_pos_m > 0.0 && r.gap.expected_rms_pos_m > 0.0);
+    for p in &out.poses {
+        assert_eq!(p.residual[3..], [0.0; 3]);
+        assert!(p.residual[..3].iter().any(|v| *v != 0.0));
+    }
+
+    // A stated σ_rot is reported as stated, also without orientation rows.
+    o.sigma_rot_rad = 0.02f64.to_radians();
+    let out = run(&set, Some(&set.groups), &o);
+    assert_eq!(out.status, kincal_status::Ok, "{:?}", out.err);
+    let n = &out.report.noise;
+    assert_eq!((n.measured_rot, n.stated_rot), (0, 1));
+    assert_eq!(n.sigma_rot_rad, 0.02f64.to_radians());
+}
+
 #[test]
 fn few_groups_use_the_in_sample_nested_test_and_errors_name_the_problem() {
     let full = compliance_session(61);
@@ -293,6 +355,7 @@ fn few_groups_use_the_in_sample_nested_test_and_errors_name_the_problem() {
         poses: full.poses[..16 * n].to_vec(),
         aux: full.aux[..n].to_vec(),
         weights: Vec::new(),
+        masks: Vec::new(),
     };
     let mut o = options();
     o.sigma_pos_m = 1e-4;
