@@ -26,10 +26,15 @@
 //! them), which makes the objective a proper least-squares problem in the robot
 //! parameters alone, consistent, and exact on noise-free data.
 //!
-//! **Memory.** No heap: each group is streamed twice (forward kinematics for `p̄` and the
-//! scatter, then the Jacobian rows), so memory does not grow with the number of contacts
-//! or groups. On the normal-equation path the uncentred rows are folded and the Gram matrix
-//! downdated by `W·J̄ᵀJ̄` afterwards (`Σ w (J_i − J̄)ᵀ(J_i − J̄) = Σ w J_iᵀJ_i − W J̄ᵀJ̄`); the
+//! **Memory.** No heap: each group is streamed (a plane twice: forward kinematics for `p̄`
+//! and the scatter, then the Jacobian rows), so memory does not grow with the number of
+//! contacts or groups. On the normal-equation path the uncentred rows are folded and the
+//! Gram matrix downdated by `W·J̄ᵀJ̄` afterwards (`Σ w (J_i − J̄)ᵀ(J_i − J̄) = Σ w J_iᵀJ_i −
+//! W J̄ᵀJ̄`); an unknown target's rows are folded with residuals `ō − p_i` (`ō` its first
+//! contact's point) in the same single pass and centred by the same downdate with a
+//! right-hand side, so it costs one Jacobian pass and no forward-kinematics pass. A cost
+//! alone (a solver's trial point) is one forward-kinematics pass, from each group's
+//! moments (`tr S` for a target, `nᵀSn` for a plane). The
 //! Givens path (analysis, singular fallback) needs `J̄` first and pays a second Jacobian
 //! pass. A distance needs `J̄` of two groups: the means of the last [`MEAN_CACHE`] groups
 //! are kept in the workspace and a distance is folded right after the later of its two
@@ -459,6 +464,9 @@ fn fold_group<const N: usize, const P: usize>(
         .get(gi)
         .copied()
         .ok_or(Error::BadGroup { group: gi })?;
+    if ws.to_gram && g.kind == GroupKind::Target {
+        return fold_target_once(robot, data, gi, with_rhs, opts, n_cols, ws);
+    }
     let contacts = data.group_contacts(&g);
     let (w_sum, pbar, scatter) = point_moments(robot, contacts)?;
     let centred = matches!(g.kind, GroupKind::Target | GroupKind::Plane);
@@ -552,16 +560,96 @@ fn fold_group<const N: usize, const P: usize>(
             }
         }
     }
-    if g.kind.is_target() && data.distances.iter().any(|d| d.a == gi || d.b == gi) {
-        let slot = gi % MEAN_CACHE;
-        if let Some(m) = ws.means.get_mut(slot) {
-            m.group = gi;
-            m.w = w_sum;
-            m.p = pbar;
-            m.jbar = jbar;
-        }
+    if g.kind.is_target() {
+        cache_mean(data, gi, w_sum, pbar, &jbar, ws);
     }
     Ok(cost)
+}
+
+/// Keeps target `gi`'s mean for the distances that name it (see [`MEAN_CACHE`]).
+fn cache_mean<const N: usize, const P: usize>(
+    data: &ConstraintData<'_, N>,
+    gi: usize,
+    w: f64,
+    p: [f64; 3],
+    jbar: &[[f64; P]; 3],
+    ws: &mut Workspace<P>,
+) {
+    let named = data.distances.iter().any(|d| d.a == gi || d.b == gi);
+    if let Some(m) = ws.means.get_mut(gi % MEAN_CACHE).filter(|_| named) {
+        m.group = gi;
+        m.w = w;
+        m.p = p;
+        m.jbar = *jbar;
+    }
+}
+
+/// [`fold_group`] of an unknown target on the normal-equation path in one pass (Jacobian
+/// and tool point of each contact; no separate forward-kinematics pass for `p̄`): the rows
+/// `(J_i, ō − p_i)` are folded with `ō` the first contact's point, and the Gram matrix,
+/// right-hand side and cost are then centred by [`GramAccumulator::downdate_with_rhs`]
+/// (`Σ w(J_i − J̄)ᵀ(p̄ − p_i) = Σ wJ_iᵀ(ō − p_i) + W·J̄ᵀ(p̄ − ō)`, and likewise for the cost).
+///
+/// [`GramAccumulator::downdate_with_rhs`]: crate::linalg::gram::GramAccumulator::downdate_with_rhs
+fn fold_target_once<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &ConstraintData<'_, N>,
+    gi: usize,
+    with_rhs: bool,
+    opts: &IdentifyOptions<'_>,
+    n_cols: usize,
+    ws: &mut Workspace<P>,
+) -> Result<f64> {
+    let g = data
+        .groups
+        .get(gi)
+        .copied()
+        .ok_or(Error::BadGroup { group: gi })?;
+    let mut rows = [[0.0; P]; 6];
+    let mut jsum = [[0.0; P]; 3];
+    let mut origin: Option<[f64; 3]> = None;
+    let (mut w_sum, mut s1, mut s2) = (0.0, [0.0; 3], 0.0);
+    for c in data.group_contacts(&g).iter().filter(|c| c.weight > 0.0) {
+        let p = contact_rows(robot, c, n_cols, ws, &mut rows)?;
+        let o = *origin.get_or_insert(p);
+        for (js, r) in jsum.iter_mut().zip(rows.iter()) {
+            for (x, y) in js.iter_mut().zip(r.iter()).take(n_cols) {
+                *x += c.weight * y;
+            }
+        }
+        let d = [p[0] - o[0], p[1] - o[1], p[2] - o[2]];
+        w_sum += c.weight;
+        for k in 0..3 {
+            s1[k] += c.weight * d[k];
+        }
+        s2 += c.weight * dot3(&d, &d);
+        let wp = c.weight * opts.weight_pos;
+        let e = if with_rhs {
+            [-d[0], -d[1], -d[2], 0.0, 0.0, 0.0]
+        } else {
+            [0.0; 6]
+        };
+        fold6(ws, &rows, &e, &[wp, wp, wp, 0.0, 0.0, 0.0])?;
+    }
+    let Some(o) = origin else {
+        return Ok(0.0);
+    };
+    let dbar = [s1[0] / w_sum, s1[1] / w_sum, s1[2] / w_sum];
+    let mut jbar = [[0.0; P]; 3];
+    for (jb, js) in jbar.iter_mut().zip(jsum.iter()) {
+        for (x, y) in jb.iter_mut().zip(js.iter()).take(n_cols) {
+            *x = y / w_sum;
+        }
+    }
+    let wd = w_sum * opts.weight_pos;
+    for (jb, &db) in jbar.iter().zip(dbar.iter()) {
+        let b = if with_rhs { -db } else { 0.0 };
+        ws.gram
+            .downdate_with_rhs(jb.get(..n_cols).unwrap_or(&[]), b, wd)?;
+    }
+    let pbar = [o[0] + dbar[0], o[1] + dbar[1], o[2] + dbar[2]];
+    cache_mean(data, gi, w_sum, pbar, &jbar, ws);
+    Ok(opts.weight_pos * (s2 - w_sum * dot3(&dbar, &dbar)))
 }
 
 /// The mean of group `gi` from the cache, or computed (one Jacobian pass).
@@ -925,8 +1013,13 @@ impl<const N: usize> RowSource<N> for ConstraintData<'_, N> {
         Ok(c)
     }
 
+    /// MUKCa: the damped fallback takes `panda_6` from 186 to 10 iterations, every
+    /// recording to OPT2's minimum (`core/tests/mukca_convergence.rs`).
+    fn damped_fallback(&self) -> bool {
+        true
+    }
     fn cost(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<f64> {
-        Ok(self.cost_and_sums(robot, opts)?.0)
+        self.cost_from_moments(robot, opts)
     }
 
     fn stats(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<ResidualStats> {
@@ -946,6 +1039,62 @@ impl<const N: usize> RowSource<N> for ConstraintData<'_, N> {
 }
 
 impl<const N: usize> ConstraintData<'_, N> {
+    /// The cost from each group's moments, one forward-kinematics pass over the contacts
+    /// (the solvers' trial evaluations): with `S = Σ w(p − p̄)(p − p̄)ᵀ` and `W = Σ w`, a
+    /// target costs `tr S`, a known target `tr S + W|x − p̄|²`, a plane `nᵀSn` (`n` its
+    /// normal), a known plane `nᵀSn + W(c − n·p̄)²` — the sums of squared residuals of
+    /// [`Self::cost_and_sums`], which [`RowSource::stats`] keeps for the RMS and maximum. A
+    /// distance takes its targets' means from the last [`MEAN_CACHE`] groups, or
+    /// recomputes them.
+    fn cost_from_moments(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<f64> {
+        let mut cost = super::data::cost(robot, self.instrument, opts)?;
+        let mut means = [(usize::MAX, 0.0, [0.0; 3]); MEAN_CACHE];
+        for (gi, g) in self.groups.iter().enumerate() {
+            let (w, pbar, s) = point_moments(robot, self.group_contacts(g))?;
+            if let Some(m) = means.get_mut(gi % MEAN_CACHE) {
+                *m = (gi, w, pbar);
+            }
+            if w > 0.0 {
+                let spread = |n: &[f64; 3]| {
+                    (0..3)
+                        .map(|a| n[a] * (0..3).map(|b| s[a][b] * n[b]).sum::<f64>())
+                        .sum::<f64>()
+                };
+                let sq = match g.kind {
+                    GroupKind::Target => s[0][0] + s[1][1] + s[2][2],
+                    GroupKind::KnownTarget(x) => {
+                        let d = [x[0] - pbar[0], x[1] - pbar[1], x[2] - pbar[2]];
+                        s[0][0] + s[1][1] + s[2][2] + w * dot3(&d, &d)
+                    }
+                    GroupKind::Plane => spread(&plane_normal(s, gi)?),
+                    GroupKind::KnownPlane { normal, offset_m } => {
+                        let n = unit_normal(normal);
+                        let e = offset_m - dot3(&n, &pbar);
+                        spread(&n) + w * e * e
+                    }
+                };
+                cost += opts.weight_pos * sq;
+            }
+            for d in self.distances.iter().filter(|d| d.a.max(d.b) == gi) {
+                let mean = |k: usize| -> Result<(f64, [f64; 3])> {
+                    if let Some(&(_, w, p)) = means.iter().find(|m| m.0 == k) {
+                        return Ok((w, p));
+                    }
+                    let grp = self.groups.get(k).ok_or(Error::BadGroup { group: k })?;
+                    let (w, p, _) = point_moments(robot, self.group_contacts(grp))?;
+                    Ok((w, p))
+                };
+                let ((wa, pa), (wb, pb)) = (mean(d.a)?, mean(d.b)?);
+                if wa > 0.0 && wb > 0.0 {
+                    let diff = [pa[0] - pb[0], pa[1] - pb[1], pa[2] - pb[2]];
+                    let e = d.m - sqrt(dot3(&diff, &diff));
+                    cost += opts.weight_pos * d.weight * e * e;
+                }
+            }
+        }
+        Ok(cost)
+    }
+
     /// Cost, Σ|e|² and max |e| over the active contacts (3-D for targets, 1-D for planes),
     /// number of active contacts.
     fn cost_and_sums(
@@ -1315,6 +1464,11 @@ mod tests {
         let opts = IdentifyOptions::new(Algorithm::Ols, params());
         let cost = fold_all(&robot, &d, true, &mut ws);
         assert!((cost - d.cost(&robot, &opts).unwrap()).abs() <= 1e-12 * cost);
+        // The cost from the groups' moments against the sum of every residual's square,
+        // and the one-pass target fold's centred bᵀWb against both.
+        let summed = d.cost_and_sums(&robot, &opts).unwrap().0;
+        assert!((cost - summed).abs() <= 1e-12 * cost, "{cost} vs {summed}");
+        assert!((ws.gram.btb() - summed).abs() <= 1e-12 * cost);
         assert!(cost > 1e-4, "residuals must not vanish: {cost}");
         for (k, i) in params().iter().enumerate() {
             let h = 1e-6;

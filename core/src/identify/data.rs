@@ -297,6 +297,12 @@ pub(crate) trait RowSource<const N: usize> {
     fn prior(&self) -> Option<&super::Prior> {
         None
     }
+    /// Whether OLS may take a damped step after many halvings of a rejected Gauss–Newton
+    /// step (see `gauss_newton` in `solvers.rs`): only where that was checked to reach the
+    /// same minima (contact data).
+    fn damped_fallback(&self) -> bool {
+        false
+    }
 }
 
 impl<const N: usize> RowSource<N> for [Measurement<N>] {

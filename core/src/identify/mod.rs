@@ -58,7 +58,8 @@ pub const MAX_MODEL_PARAMS: usize = crate::params::num_params(crate::any::MAX_JO
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Algorithm {
     /// Gauss–Newton with the minimum-norm least-squares step (Matlab `lsqminnorm`), with
-    /// step halving when a full step increases the cost.
+    /// step halving when a full step increases the cost (on contact data, after six
+    /// halvings, also a damped step of the same length).
     Ols,
     /// Bounded fit inside prior intervals (Matlab `fmincon` in the paper): projected
     /// Levenberg–Marquardt with an active set; parameters ending on a bound are reported.

@@ -267,6 +267,9 @@ impl<const N: usize, D: RowSource<N> + ?Sized> RowSource<N> for WithPrior<'_, D>
     fn prior(&self) -> Option<&Prior> {
         Some(self.prior)
     }
+    fn damped_fallback(&self) -> bool {
+        self.data.damped_fallback()
+    }
     /// The data's statistics only: residuals are the data's, the prior is not a pose.
     fn stats(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<ResidualStats> {
         self.data.stats(robot, opts)

@@ -194,6 +194,24 @@ impl<const P: usize> GramAccumulator<P> {
         }
         Ok(())
     }
+    /// Removes a row `(a, b)` of weight `w >= 0` folded earlier: `AᵀWA −= w·a·aᵀ`,
+    /// `AᵀWb −= w·a·b`, `bᵀWb −= w·b²`. With `a = J̄` row by row, `b = ō − p̄` and `w = Σ w_i`
+    /// it turns rows `(J_i, ō − p_i)` folded in one pass (`ō` any fixed point, e.g. the
+    /// first `p_i`, while `p̄` is not yet known) into the centred `(J_i − J̄, p̄ − p_i)`.
+    pub fn downdate_with_rhs(&mut self, a: &[f64], b: f64, w: f64) -> Result<()> {
+        if !b.is_finite() {
+            return Err(Error::NonFinite {
+                what: crate::error::Quantity::Parameter,
+                index: self.n,
+            });
+        }
+        self.downdate(a, w)?;
+        for (atb, &ai) in self.atb.iter_mut().zip(a.iter()) {
+            *atb -= w * ai * b;
+        }
+        self.btb -= w * b * b;
+        Ok(())
+    }
     /// Number of unknowns.
     #[must_use]
     pub fn n(&self) -> usize {
