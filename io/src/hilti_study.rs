@@ -106,19 +106,16 @@ pub const BENDING_AT_TOP: Variant = Variant {
     bending: Bending::Recorded,
 };
 
-/// [`Bending::TopDisplacement`]'s `c` of the final model, chosen on `flat` alone: the
-/// minimum of its in-sample RMS over `c` (a golden-section scan on [−0.5, 1]; the
-/// `explore` test with `KINCAL_HILTI_EXPLORE=scan` reruns it, the study checks that `c`
-/// ± [`C_CHECK_STEP`] fit flat worse).
+/// [`Bending::TopDisplacement`]'s `c` chosen on `flat` alone: the minimum of its in-sample
+/// RMS over `c` (a golden-section scan on [−0.5, 1]; the `explore` test with
+/// `KINCAL_HILTI_EXPLORE=scan` reruns it).
 pub const TOP_DISPLACEMENT_C: f64 = -0.344;
 
-/// Step of the study's check that [`TOP_DISPLACEMENT_C`] is flat's minimum.
-pub const C_CHECK_STEP: f64 = 0.1;
-
-/// The final model: [`BENDING_AT_TOP`] with the bending also read by the base tilt joints
-/// (`φ + c·b`, `c` = [`TOP_DISPLACEMENT_C`]): the bending turns the arm by `(1 + k + c)·b`
-/// about a point above the column top instead of about the top itself.
-pub const FINAL: Variant = Variant {
+/// [`BENDING_AT_TOP`] with the bending also read by the base tilt joints (`φ + c·b`,
+/// `c` = [`TOP_DISPLACEMENT_C`]): the bending turns the arm by `(1 + k + c)·b` about a
+/// point above the column top instead of the top itself. Not in the study: its leave one
+/// session out stopped at 2000 iterations without converging (docs/real-data.md).
+pub const BENDING_IN_BASE_TILT: Variant = Variant {
     name: "base tilt at gain 1, 2 bending gains, bending in the base tilt (c = -0.344)",
     bending: Bending::TopDisplacement {
         c: TOP_DISPLACEMENT_C,
@@ -126,11 +123,13 @@ pub const FINAL: Variant = Variant {
     ..BENDING_AT_TOP
 };
 
+/// The final model: [`BENDING_AT_TOP`].
+pub const FINAL: Variant = BENDING_AT_TOP;
+
 /// The variants the study reports (docs/real-data.md's table of variants), trained on
 /// `flat`; the release test checks their figures.
-pub const VARIANTS: [Variant; 5] = [
+pub const VARIANTS: [Variant; 4] = [
     SENSORS,
-    BENDING_AT_TOP,
     FINAL,
     Variant {
         name: "base tilt at gain 1, its links held at CAD, 2 bending gains",
@@ -607,22 +606,6 @@ pub struct Study {
     pub variants: Vec<VariantFigures>,
     /// Leave one session out with [`FINAL`].
     pub loso_mm: Vec<Loso>,
-    /// [`FINAL`] trained on `flat`, every session with a least-squares and a robust new
-    /// base frame.
-    pub robust: Vec<(String, RobustTransfer)>,
-    /// `flat` in-sample [mm] of [`FINAL`] with `c` at [`TOP_DISPLACEMENT_C`] − step, at it,
-    /// and + step ([`C_CHECK_STEP`]): the middle is the smallest when `c` is flat's choice.
-    pub c_check_mm: [f64; 3],
-}
-
-/// [`FINAL`] with `c` = [`TOP_DISPLACEMENT_C`] + `dc`.
-fn final_with(dc: f64) -> Variant {
-    Variant {
-        bending: Bending::TopDisplacement {
-            c: TOP_DISPLACEMENT_C + dc,
-        },
-        ..FINAL
-    }
 }
 
 /// Runs the study on the set in `dir`.
@@ -647,28 +630,12 @@ pub fn study(dir: &Path) -> Result<Study, CliError> {
         .cloned()
         .ok_or_else(|| CliError::input("hilti: the final model is not among the variants"))?;
     let loso_mm = leave_one_session_out(dir, &sessions, &FINAL)?;
-    let model = train_on_flat(dir, &sessions, &FINAL)?;
-    let robust = sessions
-        .iter()
-        .map(|(s, _, rows)| Ok(((*s).to_string(), robust_transfer(&model, rows, &FINAL)?)))
-        .collect::<Result<Vec<_>, CliError>>()?;
-    let flat = flat_rows(&sessions)?;
-    let mut c_check_mm = [0.0; 3];
-    for (out, dc) in c_check_mm
-        .iter_mut()
-        .zip([-C_CHECK_STEP, 0.0, C_CHECK_STEP])
-    {
-        let v = final_with(dc);
-        *out = rms_mm(&train_on_flat(dir, &sessions, &v)?, flat, &v)?;
-    }
     Ok(Study {
         cad_mm,
         geometry,
         final_model,
         variants,
         loso_mm,
-        robust,
-        c_check_mm,
     })
 }
 

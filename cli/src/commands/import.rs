@@ -221,24 +221,6 @@ fn study_text(st: &kincal_io::hilti_study::Study) -> String {
             )),
         }
     }
-    s.push_str(&format!(
-        "c of the final model: flat in-sample {:.4} / {:.4} / {:.4} at c - {step}, c, c + {step}\n",
-        st.c_check_mm[0],
-        st.c_check_mm[1],
-        st.c_check_mm[2],
-        step = kincal_io::hilti_study::C_CHECK_STEP,
-    ));
-    s.push_str(&format!(
-        "robust new base (final model; Huber weights; gross rows: |dp| > {:.2} mm after it)\n\
-         session            least squares   robust, all rows   robust, without gross   gross rows\n",
-        kincal_io::hilti_study::GROSS_FLOOR_MULTIPLE * floor,
-    ));
-    for (name, r) in &st.robust {
-        s.push_str(&format!(
-            "robust {name:<18} {:>10.2} {:>18.2} {:>23.2} {:>8} of {}\n",
-            r.least_squares_mm, r.robust_all_mm, r.robust_kept_mm, r.gross, r.rows
-        ));
-    }
     s.push_str(
         "variants trained on flat: in-sample, held out (5 folds), then each other floor with a \
          new base only | the variant, its gains 1+k\n",
