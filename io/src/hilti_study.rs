@@ -113,8 +113,8 @@ pub const TOP_DISPLACEMENT_C: f64 = -0.344;
 
 /// [`BENDING_AT_TOP`] with the bending also read by the base tilt joints (`φ + c·b`,
 /// `c` = [`TOP_DISPLACEMENT_C`]): the bending turns the arm by `(1 + k + c)·b` about a
-/// point above the column top instead of the top itself. Not in the study: its leave one
-/// session out stopped at 2000 iterations without converging (docs/real-data.md).
+/// point above the column top instead of the top itself. Not in the study: as the final
+/// model one of the study's fits stopped at 2000 iterations unconverged (docs/real-data.md).
 pub const BENDING_IN_BASE_TILT: Variant = Variant {
     name: "base tilt at gain 1, 2 bending gains, bending in the base tilt (c = -0.344)",
     bending: Bending::TopDisplacement {
