@@ -29,7 +29,7 @@ const BEND_X: usize = 3;
 const BEND_Y: usize = 4;
 
 /// One model of the tilts.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Variant {
     /// Short name (the study's table).
     pub name: &'static str,
@@ -44,7 +44,32 @@ pub struct Variant {
     /// Chain links (model order) whose parameters stay at the CAD values: a tilt joint
     /// that turns about the base origin, not an identified pivot.
     pub fixed_links: &'static [usize],
+    /// What the bending joints read: the recorded bending or a reading derived from it.
+    pub bending: Bending,
 }
+
+/// The bending joints' reading (the column tip's tilt relative to the base, `b`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Bending {
+    /// `b` as recorded.
+    Recorded,
+    /// `b · h / H_REF_M` (`h` the column [m]): a bending whose turn at the column top grows
+    /// with the extension for the same reading.
+    TimesExtension,
+    /// `b + c · φ · h` (`φ` the base's tilt about the same axis [rad], `h` the column [m],
+    /// `c` [1/m]): the bending moment of the cantilever column under the gravity component
+    /// across it, which the base tilt and the extension set. `c` is not a parameter of the
+    /// chain: [`variant_figures`] chooses it on `flat` (the in-sample RMS, a scan).
+    GravityAcross { c_per_m: f64 },
+    /// The base tilt joints (before the column, turning about its foot) read `φ + c · b`:
+    /// the bending also displaces the column top by `c · h · b`, as a cantilever's tip
+    /// moves `δ = c·h·θ` (`c` = 1/2 under a tip moment, 2/3 under a tip force, 3/4 under
+    /// its own weight); the bending joints at the top keep `b` with their gain.
+    TopDisplacement { c: f64 },
+}
+
+/// Reference column extension of [`Bending::TimesExtension`] [m] (mid-range of 1.98–3.87).
+pub const H_REF_M: f64 = 3.0;
 
 /// Geometry only (tilts ignored), the import's chain.
 pub const GEOMETRY: Variant = Variant {
@@ -54,6 +79,7 @@ pub const GEOMETRY: Variant = Variant {
     tilts: false,
     unused: &[],
     fixed_links: &[],
+    bending: Bending::Recorded,
 };
 
 /// The import's chain with all four gains: base tilt before the column, bending after it.
@@ -64,18 +90,41 @@ pub const SENSORS: Variant = Variant {
     tilts: true,
     unused: &[],
     fixed_links: &[],
+    bending: Bending::Recorded,
 };
 
-/// The final model: the base's tilt enters at gain 1 (a rigid rotation of the whole
-/// robot, as the base accelerometer reads it), the column's bending with a gain per axis.
-pub const FINAL: Variant = Variant {
+/// The previous final model: the base's tilt enters at gain 1 (a rigid rotation of the
+/// whole robot, as the base accelerometer reads it), the column's bending with a gain per
+/// axis, turning about the column top.
+pub const BENDING_AT_TOP: Variant = Variant {
     name: "base tilt at gain 1, 2 bending gains",
     order: [0, 1, 2, 3, 4],
     gains: &[BEND_X, BEND_Y],
     tilts: true,
     unused: &[],
     fixed_links: &[],
+    bending: Bending::Recorded,
 };
+
+/// [`Bending::TopDisplacement`]'s `c` chosen on `flat` alone: the minimum of its in-sample
+/// RMS over `c` (a golden-section scan on [−0.5, 1]; the `explore` test with
+/// `KINCAL_HILTI_EXPLORE=scan` reruns it).
+pub const TOP_DISPLACEMENT_C: f64 = -0.344;
+
+/// [`BENDING_AT_TOP`] with the bending also read by the base tilt joints (`φ + c·b`,
+/// `c` = [`TOP_DISPLACEMENT_C`]): the bending turns the arm by `(1 + k + c)·b` about a
+/// point above the column top instead of the top itself. Not in the study: as the final
+/// model one of the study's fits stopped at 2000 iterations unconverged (docs/real-data.md).
+pub const BENDING_IN_BASE_TILT: Variant = Variant {
+    name: "base tilt at gain 1, 2 bending gains, bending in the base tilt (c = -0.344)",
+    bending: Bending::TopDisplacement {
+        c: TOP_DISPLACEMENT_C,
+    },
+    ..BENDING_AT_TOP
+};
+
+/// The final model: [`BENDING_AT_TOP`].
+pub const FINAL: Variant = BENDING_AT_TOP;
 
 /// The variants the study reports (docs/real-data.md's table of variants), trained on
 /// `flat`; the release test checks their figures.
@@ -89,6 +138,7 @@ pub const VARIANTS: [Variant; 4] = [
         tilts: true,
         unused: &[],
         fixed_links: &[0, 1],
+        bending: Bending::Recorded,
     },
     Variant {
         name: "base tilt unused, 2 bending gains",
@@ -97,6 +147,7 @@ pub const VARIANTS: [Variant; 4] = [
         tilts: true,
         unused: &[BASE_X, BASE_Y],
         fixed_links: &[],
+        bending: Bending::Recorded,
     },
 ];
 
@@ -111,6 +162,7 @@ pub const SLOW_VARIANTS: [Variant; 4] = [
         tilts: true,
         unused: &[],
         fixed_links: &[],
+        bending: Bending::Recorded,
     },
     Variant {
         name: "bending before the column, 4 gains",
@@ -119,6 +171,7 @@ pub const SLOW_VARIANTS: [Variant; 4] = [
         tilts: true,
         unused: &[],
         fixed_links: &[],
+        bending: Bending::Recorded,
     },
     Variant {
         name: "base tilt after the column, 4 gains",
@@ -127,6 +180,7 @@ pub const SLOW_VARIANTS: [Variant; 4] = [
         tilts: true,
         unused: &[],
         fixed_links: &[],
+        bending: Bending::Recorded,
     },
     Variant {
         name: "all tilts before the column, 4 gains",
@@ -135,6 +189,7 @@ pub const SLOW_VARIANTS: [Variant; 4] = [
         tilts: true,
         unused: &[],
         fixed_links: &[],
+        bending: Bending::Recorded,
     },
 ];
 
@@ -150,7 +205,16 @@ impl Variant {
 
     /// The model's readings of `row`.
     fn q(&self, row: &HiltiRow) -> [f64; N] {
-        let q = row.q();
+        let mut q = row.q();
+        let h = q[2];
+        for (bend, tilt) in [(BEND_X, BASE_X), (BEND_Y, BASE_Y)] {
+            match self.bending {
+                Bending::Recorded => {}
+                Bending::TimesExtension => q[bend] *= h / H_REF_M,
+                Bending::GravityAcross { c_per_m } => q[bend] += c_per_m * q[tilt] * h,
+                Bending::TopDisplacement { c } => q[tilt] += c * q[bend],
+            }
+        }
         let mut out = q;
         for (o, &j) in out.iter_mut().zip(&self.order) {
             *o = q.get(j).copied().unwrap_or(0.0);
@@ -264,6 +328,111 @@ pub fn new_base_rms_mm(robot: &Robot<N>, rows: &[HiltiRow], v: &Variant) -> Resu
     rms_mm(&with_rigid_base(robot, rows, v)?, rows, v)
 }
 
+/// A row is gross when its |Δp| after the robust base frame exceeds this many times the
+/// noise floor `√3 · SIGMA_POS_M` (1.30 mm): 6.50 mm, which the stated noise alone
+/// exceeds with probability ~1e-15. A rule of the instrument, not of the evaluation.
+pub const GROSS_FLOOR_MULTIPLE: f64 = 5.0;
+
+/// Huber's threshold of the robust base frame, in noise floors (2.60 mm): rows below keep
+/// weight 1, rows above get `threshold / |Δp|`.
+const HUBER_FLOOR_MULTIPLE: f64 = 2.0;
+
+/// Reweighting rounds of the robust base frame (the weights settle in a few).
+const HUBER_ROUNDS: usize = 30;
+
+/// A held-out floor predicted with a new base frame fitted robustly.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RobustTransfer {
+    /// RMS [mm] over all rows, base frame by least squares (the study's figure).
+    pub least_squares_mm: f64,
+    /// RMS [mm] over all rows, base frame by Huber's weights.
+    pub robust_all_mm: f64,
+    /// RMS [mm] over the rows that are not gross, the same robust frame.
+    pub robust_kept_mm: f64,
+    /// Rows over [`GROSS_FLOOR_MULTIPLE`] noise floors after the robust frame.
+    pub gross: usize,
+    /// All rows.
+    pub rows: usize,
+}
+
+fn noise_floor_m() -> f64 {
+    3f64.sqrt() * SIGMA_POS_M
+}
+
+/// |Δp| [m] per row of `robot` (its own base frame) on `rows`.
+fn errors_m(robot: &Robot<N>, rows: &[HiltiRow], v: &Variant) -> Result<Vec<f64>, CliError> {
+    measurements(rows, v)
+        .iter()
+        .map(|m| {
+            let p = robot.fk(&m.state).map_err(study_err)?.translation.vector;
+            Ok((p - m.pose.translation.vector).norm())
+        })
+        .collect()
+}
+
+fn rms_of_mm(e: impl Iterator<Item = f64>) -> f64 {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for x in e {
+        sum += x * x;
+        n += 1;
+    }
+    (sum / n.max(1) as f64).sqrt() * 1e3
+}
+
+/// The rigid base frame for `rows` by iteratively reweighted least squares with Huber's
+/// weights (threshold [`HUBER_FLOOR_MULTIPLE`] noise floors): a few gross rows cannot tilt
+/// the frame for all the others.
+fn robust_rigid_frame(
+    robot: &Robot<N>,
+    rows: &[HiltiRow],
+    v: &Variant,
+) -> Result<Transform, CliError> {
+    let ms = measurements(rows, v);
+    let design = ms
+        .iter()
+        .map(|m| {
+            let p = robot.fk(&m.state)?.translation.vector;
+            Ok([p.x, p.y, p.z])
+        })
+        .collect::<Result<Vec<_>, kincal::Error>>()
+        .map_err(study_err)?;
+    let measured: Vec<[f64; 3]> = rows.iter().map(|r| r.prism_m).collect();
+    let threshold = HUBER_FLOOR_MULTIPLE * noise_floor_m();
+    let mut w = vec![1.0; design.len()];
+    let mut t = weighted_rigid_fit(&design, &measured, &w, SIGMA_POS_M).map_err(study_err)?;
+    for _ in 0..HUBER_ROUNDS {
+        for ((wi, d), m) in w.iter_mut().zip(&design).zip(&measured) {
+            let p = t * nalgebra::Point3::new(d[0], d[1], d[2]);
+            let r = (p - nalgebra::Point3::new(m[0], m[1], m[2])).norm();
+            *wi = if r <= threshold { 1.0 } else { threshold / r };
+        }
+        t = weighted_rigid_fit(&design, &measured, &w, SIGMA_POS_M).map_err(study_err)?;
+    }
+    Ok(t)
+}
+
+/// `robot` on a held-out floor with a least-squares and with a robust new base frame; the
+/// gross rows (rule: [`GROSS_FLOOR_MULTIPLE`]) are counted and reported apart, not dropped.
+pub fn robust_transfer(
+    robot: &Robot<N>,
+    rows: &[HiltiRow],
+    v: &Variant,
+) -> Result<RobustTransfer, CliError> {
+    let t = robust_rigid_frame(robot, rows, v)?;
+    let robust = robot
+        .with_base(pose_to_vector6(&(t * robot.t_base_0())))
+        .map_err(study_err)?;
+    let e = errors_m(&robust, rows, v)?;
+    let limit = GROSS_FLOOR_MULTIPLE * noise_floor_m();
+    Ok(RobustTransfer {
+        least_squares_mm: new_base_rms_mm(robot, rows, v)?,
+        robust_all_mm: rms_of_mm(e.iter().copied()),
+        robust_kept_mm: rms_of_mm(e.iter().copied().filter(|&x| x <= limit)),
+        gross: e.iter().filter(|&&x| x > limit).count(),
+        rows: e.len(),
+    })
+}
+
 /// Identification options with the study's tolerances.
 fn options(set: ParamSet) -> IdentifyOptions<'static> {
     let mut opts = IdentifyOptions::new(Algorithm::Ols, set);
@@ -329,6 +498,29 @@ pub struct VariantFigures {
     pub gains: Vec<f64>,
 }
 
+/// The rows of `flat`, the first session.
+fn flat_rows(sessions: &[crate::datasets_hilti::Session]) -> Result<&[HiltiRow], CliError> {
+    sessions
+        .first()
+        .map(|s| s.2.as_slice())
+        .ok_or_else(|| CliError::input("hilti: no flat session"))
+}
+
+/// The CAD model of `v` with the base frame that best fits `flat`: the calibration's start.
+fn flat_start(dir: &Path, flat: &[HiltiRow], v: &Variant) -> Result<Robot<N>, CliError> {
+    with_rigid_base(&v.nominal(dir)?, flat, &v.without_tilts())
+}
+
+/// `v` calibrated on all of `flat`.
+pub fn train_on_flat(
+    dir: &Path,
+    sessions: &[crate::datasets_hilti::Session],
+    v: &Variant,
+) -> Result<Robot<N>, CliError> {
+    let flat = flat_rows(sessions)?;
+    calibrate(&flat_start(dir, flat, v)?, flat, v)
+}
+
 /// The figures of `v` trained on `flat` (the first session).
 pub fn variant_figures(
     dir: &Path,
@@ -336,12 +528,8 @@ pub fn variant_figures(
     v: &Variant,
     with_folds: bool,
 ) -> Result<VariantFigures, CliError> {
-    let nominal = v.nominal(dir)?;
-    let flat = &sessions
-        .first()
-        .ok_or_else(|| CliError::input("hilti: no flat session"))?
-        .2;
-    let start = with_rigid_base(&nominal, flat, &v.without_tilts())?;
+    let flat = flat_rows(sessions)?;
+    let start = flat_start(dir, flat, v)?;
     let model = calibrate(&start, flat, v)?;
     let mut flat_held_out_mm = f64::NAN;
     if with_folds {
@@ -507,6 +695,208 @@ mod tests {
                         v.name
                     );
                 }
+            }
+        }
+    }
+
+    /// Exploration of the variants of issue 14's tilted floors (prints; release).
+    #[test]
+    #[ignore = "exploration: KINCAL_HILTI_EXPLORE=scan,disp,grav,ext,floorfit,where,robust,d23"]
+    fn explore() {
+        let Some(d) = dir() else { return };
+        let sessions = read_all(&d).unwrap();
+        let what = std::env::var("KINCAL_HILTI_EXPLORE").unwrap_or_default();
+        let flat = &sessions[0].2;
+        let fit = |v: &Variant| train_on_flat(&d, &sessions, v).unwrap();
+        if what.contains("robust") {
+            let t = std::time::Instant::now();
+            let m = fit(&BENDING_AT_TOP);
+            for (s, _, rows) in &sessions {
+                let r = robust_transfer(&m, rows, &BENDING_AT_TOP).unwrap();
+                println!("robust {s:<16} {r:?}");
+                let b = with_rigid_base(&m, rows, &BENDING_AT_TOP).unwrap();
+                let e = errors_m(&b, rows, &BENDING_AT_TOP).unwrap();
+                let mut groups: Vec<(String, f64, usize)> = Vec::new();
+                for (row, x) in rows.iter().zip(&e) {
+                    for key in [
+                        format!("h{:.2}", row.height_m),
+                        format!("space{}", row.solution_space),
+                    ] {
+                        match groups.iter_mut().find(|g| g.0 == key) {
+                            Some(g) => {
+                                g.1 += x * x;
+                                g.2 += 1;
+                            }
+                            None => groups.push((key, x * x, 1)),
+                        }
+                    }
+                }
+                let txt: Vec<String> = groups
+                    .iter()
+                    .map(|g| format!("{} {:.2} ({})", g.0, (g.1 / g.2 as f64).sqrt() * 1e3, g.2))
+                    .collect();
+                println!("   {}", txt.join(", "));
+            }
+            println!("({:.1} s)", t.elapsed().as_secs_f64());
+        }
+        let show = |v: &Variant| {
+            let t = std::time::Instant::now();
+            let m = fit(v);
+            let tr: Vec<String> = sessions
+                .iter()
+                .skip(1)
+                .map(|(_, _, rows)| format!("{:.3}", new_base_rms_mm(&m, rows, v).unwrap()))
+                .collect();
+            println!(
+                "{:?}: flat {:.3} | {} | gains {:?} ({:.1} s)",
+                v.bending,
+                rms_mm(&m, flat, v).unwrap(),
+                tr.join(" "),
+                v.gains_of(&m),
+                t.elapsed().as_secs_f64()
+            );
+        };
+        if what.contains("ext") {
+            show(&Variant {
+                bending: Bending::TimesExtension,
+                ..FINAL
+            });
+        }
+        if what.contains("grav") {
+            for c in [-0.3, -0.1, -0.03, 0.0, 0.03, 0.1, 0.3] {
+                show(&Variant {
+                    bending: Bending::GravityAcross { c_per_m: c },
+                    ..FINAL
+                });
+            }
+        }
+        if what.contains("where") {
+            let m = fit(&BENDING_AT_TOP);
+            for (s, _, rows) in &sessions {
+                let t = rigid_frame(&m, rows, &BENDING_AT_TOP).unwrap();
+                let (mut tx, mut ty) = (0.0, 0.0);
+                let mut by_h: Vec<(f64, nalgebra::Vector3<f64>, usize)> = Vec::new();
+                for (r, ms) in rows.iter().zip(measurements(rows, &BENDING_AT_TOP)) {
+                    let q = r.q();
+                    tx += q[0];
+                    ty += q[1];
+                    let p = m.fk(&ms.state).unwrap().translation.vector;
+                    let meas = t.inverse() * nalgebra::Point3::from(ms.pose.translation.vector);
+                    let d = meas.coords - p;
+                    match by_h.iter_mut().find(|g| (g.0 - r.height_m).abs() < 1e-3) {
+                        Some(g) => {
+                            g.1 += d;
+                            g.2 += 1;
+                        }
+                        None => by_h.push((r.height_m, d, 1)),
+                    }
+                }
+                let n = rows.len() as f64;
+                let txt: Vec<String> = by_h
+                    .iter()
+                    .map(|g| {
+                        let v = g.1 / g.2 as f64 * 1e3;
+                        format!("h{:.2} ({:+.2} {:+.2} {:+.2})", g.0, v.x, v.y, v.z)
+                    })
+                    .collect();
+                println!(
+                    "{s:<16} tilt ({:+.4} {:+.4}) | {}",
+                    tx / n,
+                    ty / n,
+                    txt.join(" ")
+                );
+            }
+        }
+        if what.contains("floorfit") {
+            let m = fit(&BENDING_AT_TOP);
+            use kincal::params::FrameParam as F;
+            let base: Vec<usize> = [F::Px, F::Py, F::Pz, F::Rx, F::Ry, F::Rz]
+                .iter()
+                .map(|&f| ParamId::Base(f).index(N).0)
+                .collect();
+            for (name, extra) in [
+                ("column scale", vec![ParamId::Scale(2)]),
+                ("bending gains", vec![ParamId::Scale(3), ParamId::Scale(4)]),
+            ] {
+                for (s, _, rows) in sessions.iter().skip(1) {
+                    let start = with_rigid_base(&m, rows, &BENDING_AT_TOP).unwrap();
+                    let mut set = ParamSet::new();
+                    for &i in &base {
+                        set.insert(i).unwrap();
+                    }
+                    for e in &extra {
+                        set.insert(e.index(N).0).unwrap();
+                    }
+                    let ms = measurements(rows, &BENDING_AT_TOP);
+                    let mut ws = crate::calibration::new_workspace();
+                    let r = identify(&start, &ms, &options(set), &mut ws).unwrap().robot;
+                    let k = r.effect_params().scale;
+                    println!(
+                        "floor fit {name}: {s:<16} {:.3} mm, k {:?}",
+                        rms_mm(&r, rows, &BENDING_AT_TOP).unwrap(),
+                        &k[2..5]
+                    );
+                }
+            }
+        }
+        if what.contains("scan") {
+            // Golden section on flat's in-sample RMS.
+            let mk_g = |c: f64| Variant {
+                bending: Bending::GravityAcross { c_per_m: c },
+                ..FINAL
+            };
+            let mk_d = |c: f64| Variant {
+                bending: Bending::TopDisplacement { c },
+                ..FINAL
+            };
+            for (label, lo, hi, mk) in [
+                ("grav", -0.1, 0.1, &mk_g as &dyn Fn(f64) -> Variant),
+                ("disp", -0.5, 1.0, &mk_d as &dyn Fn(f64) -> Variant),
+            ] {
+                let f = |c: f64| rms_mm(&fit(&mk(c)), flat, &mk(c)).unwrap();
+                let r = (5f64.sqrt() - 1.0) / 2.0;
+                let (mut a, mut b) = (lo, hi);
+                let (mut x1, mut x2) = (b - r * (b - a), a + r * (b - a));
+                let (mut f1, mut f2) = (f(x1), f(x2));
+                for _ in 0..14 {
+                    if f1 < f2 {
+                        b = x2;
+                        x2 = x1;
+                        f2 = f1;
+                        x1 = b - r * (b - a);
+                        f1 = f(x1);
+                    } else {
+                        a = x1;
+                        x1 = x2;
+                        f1 = f2;
+                        x2 = a + r * (b - a);
+                        f2 = f(x2);
+                    }
+                }
+                let c = 0.5 * (a + b);
+                println!("scan {label}: c = {c:.4}");
+                show(&mk(c));
+            }
+        }
+        if what.contains("d23") {
+            let v = Variant {
+                bending: Bending::TopDisplacement { c: 2.0 / 3.0 },
+                ..FINAL
+            };
+            let f = variant_figures(&d, &sessions, &v, true).unwrap();
+            println!("d23 {f:?}");
+            let m = fit(&v);
+            for (s, _, rows) in &sessions {
+                let r = robust_transfer(&m, rows, &v).unwrap();
+                println!("robust d23 {s:<16} {r:?}");
+            }
+        }
+        if what.contains("disp") {
+            for c in [0.25, 0.5, 0.67, 0.75, 1.0] {
+                show(&Variant {
+                    bending: Bending::TopDisplacement { c },
+                    ..FINAL
+                });
             }
         }
     }
