@@ -606,7 +606,7 @@ pub fn consensus_json<const N: usize>(c: &Consensus) -> ConsensusJson {
     }
 }
 
-fn robust_run_json(r: &RobustRun, labels: &[PoseLabel]) -> RobustRunJson {
+fn robust_run_json(r: &RobustRun, labels: &dyn Fn(usize) -> Option<PoseLabel>) -> RobustRunJson {
     let orientation = r.poses.iter().any(|p| p.components > 3);
     RobustRunJson {
         reweights: r.reweights,
@@ -617,10 +617,10 @@ fn robust_run_json(r: &RobustRun, labels: &[PoseLabel]) -> RobustRunJson {
             .into_iter()
             .map(|i| {
                 let p = &r.poses[i];
-                let label = labels.get(i);
+                let label = labels(i);
                 SuspectJson {
-                    line: label.map_or(0, |l| l.line),
-                    pose_id: label.and_then(|l| l.pose_id.clone()),
+                    line: label.as_ref().map_or(0, |l| l.line),
+                    pose_id: label.and_then(|l| l.pose_id),
                     distance: p.distance,
                     pos_mm: p.pos_m * 1e3,
                     rot_deg: (p.components > 3).then(|| p.rot_rad.to_degrees()),
@@ -753,13 +753,13 @@ impl ModelFile {
 
     /// Records the robust fits of `cal` (runs with `Calibration::runs[k].robust`): each
     /// result's scales and suspects, and under `calibration.robust` the loss, thresholds and
-    /// run `primary`'s (the model's). `labels[i]` places pose `i` in DATA. Nothing is
+    /// run `primary`'s (the model's). `labels(i)` places pose `i` in DATA. Nothing is
     /// recorded without a robust fit.
     pub fn record_robust<const N: usize>(
         &mut self,
         cal: &Calibration<N>,
         primary: usize,
-        labels: &[PoseLabel],
+        labels: &dyn Fn(usize) -> Option<PoseLabel>,
     ) {
         let (Some(c), Some(opts)) = (self.calibration.as_mut(), cal.settings.robust) else {
             return;

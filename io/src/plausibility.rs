@@ -68,7 +68,8 @@ pub fn check_data<const N: usize>(
         .iter()
         .filter(|&&d| d > OUT_OF_REACH_FACTOR * reach)
         .count();
-    let (Some(med), true) = (median(dist.clone()), reach > 0.0) else {
+    let measured = dist.len();
+    let (Some(med), true) = (median(dist), reach > 0.0) else {
         return f;
     };
     if med > IMPOSSIBLE_REACH_FACTOR * reach {
@@ -83,8 +84,7 @@ pub fn check_data<const N: usize>(
         }
     } else if far > 0 {
         f.warnings.push(format!(
-            "{source}: {far} of {} measured positions lie more than {OUT_OF_REACH_FACTOR}× the robot's reach ({reach:.3} m) from the base: out of reach{}",
-            dist.len(),
+            "{source}: {far} of {measured} measured positions lie more than {OUT_OF_REACH_FACTOR}× the robot's reach ({reach:.3} m) from the base: out of reach{}",
             if frames_unknown {
                 " (expected if the instrument frame is far from the base)"
             } else {

@@ -31,16 +31,26 @@ pub fn pose_data<const N: usize>(
     frames_unknown: bool,
 ) -> Result<PoseData<N>, Error> {
     let meas = data::measurements::<N>(set)?;
-    let findings = plausibility::check_data(start, &meas, &set.source, frames_unknown);
+    Ok(pose_data_of(meas, &set.source, start, frames_unknown))
+}
+
+/// [`pose_data`] of measurements already read (`data::read_poses`) from `source`.
+pub fn pose_data_of<const N: usize>(
+    meas: Vec<Measurement<N>>,
+    source: &str,
+    start: &Robot<N>,
+    frames_unknown: bool,
+) -> PoseData<N> {
+    let findings = plausibility::check_data(start, &meas, source, frames_unknown);
     let rows = meas
         .iter()
         .map(|m| (0..6).filter(|&k| m.mask.has(k)).count())
         .sum();
-    Ok(PoseData {
+    PoseData {
         meas,
         rows,
         findings,
-    })
+    }
 }
 
 /// Each row's file line and `pose_id` (how reports and model files name a row).
@@ -65,14 +75,33 @@ pub fn model_file<const N: usize>(
     data: &PoseData<N>,
     allow_out_of_limits: bool,
 ) -> (ModelFile, Vec<String>) {
+    let label = |i: usize| {
+        set.rows.get(i).map(|r| PoseLabel {
+            line: r.line,
+            pose_id: r.pose_id.clone(),
+        })
+    };
     let data_json = DataJson {
         path: data_path.to_string(),
         sha256: set.sha256.clone(),
         poses: data.meas.len(),
         rows: data.rows,
     };
+    model_file_of(name, cal, data_json, data, &label, allow_out_of_limits)
+}
+
+/// [`model_file`] with the data's reference (`data_json`) and each row's label (`label`:
+/// line and `pose_id` of row `i`, e.g. `data::RowLabels::label`) given.
+pub fn model_file_of<const N: usize>(
+    name: &str,
+    cal: &Calibration<N>,
+    data_json: DataJson,
+    data: &PoseData<N>,
+    label: &dyn Fn(usize) -> Option<PoseLabel>,
+    allow_out_of_limits: bool,
+) -> (ModelFile, Vec<String>) {
     let mut file = ModelFile::from_calibration(name, cal, 0, data_json, allow_out_of_limits);
-    file.record_robust(cal, 0, &pose_labels(set));
+    file.record_robust(cal, 0, label);
     let result_warnings = plausibility::check_result(&file);
     let warnings = data
         .findings

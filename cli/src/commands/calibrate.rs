@@ -255,7 +255,7 @@ fn calibrate<const N: usize>(
         ));
     }
     let settings = args.settings(choice);
-    let set = data::read(
+    let loaded = data::read_poses::<N>(
         &args.data,
         start,
         settings.effects,
@@ -263,11 +263,14 @@ fn calibrate<const N: usize>(
             require_pose: true,
             allow_out_of_limits: args.allow_out_of_limits,
         },
+        args.constraints.is_some(),
     )?;
-    if args.constraints.is_some() || kincal_io::constraints::has_contacts(&set) {
-        return calibrate_contacts(start, name, args, &settings, &set);
-    }
-    let pose_data = kincal_io::pose_calibration::pose_data::<N>(&set, start, args.init_frames)?;
+    let (set, meas, labels) = match loaded {
+        data::PoseFile::Rows(set) => return calibrate_contacts(start, name, args, &settings, &set),
+        data::PoseFile::Poses { set, meas, labels } => (set, meas, labels),
+    };
+    let pose_data =
+        kincal_io::pose_calibration::pose_data_of::<N>(meas, &set.source, start, args.init_frames);
     let findings = &pose_data.findings;
     if let (Some(e), false) = (findings.errors.first(), args.allow_implausible) {
         return Err(CliError::input(format!(
@@ -300,22 +303,28 @@ fn calibrate<const N: usize>(
     pb.finish_and_clear();
     let cal = result.map_err(|f| {
         failure_error::<N>(f, &settings, &set.source, meas.len(), rows, |i| {
-            data::line_of(&set, i)
+            labels.line(i)
         })
     })?;
 
-    let (file, result_warnings) = kincal_io::pose_calibration::model_file(
+    let data_json = DataJson {
+        path: args.data.display().to_string(),
+        sha256: set.sha256.clone(),
+        poses: meas.len(),
+        rows,
+    };
+    let label = |i: usize| labels.label(i);
+    let (file, result_warnings) = kincal_io::pose_calibration::model_file_of(
         name,
         &cal,
-        &set,
-        &args.data.display().to_string(),
+        data_json,
         &pose_data,
+        &label,
         args.allow_out_of_limits,
     );
     for w in &result_warnings {
         eprintln!("kincal: warning: {w}");
     }
-    let labels = kincal_io::pose_calibration::pose_labels(&set);
     let text = file.to_json();
     let mut inputs: Vec<&Path> = vec![&args.data];
     let robot_path = Path::new(&args.robot);
@@ -325,7 +334,7 @@ fn calibrate<const N: usize>(
     kincal_io::files::write_atomic(&args.out, &inputs, |w| w.write_all(text.as_bytes()))?;
 
     let mut out = summary(&cal, name, &set.source, meas.len(), rows);
-    out.push_str(&robust_report(&cal, &labels));
+    out.push_str(&robust_report(&cal, &label));
     out.push_str(&format!(
         "Model written to {} ({} model).\n",
         args.out.display(),
@@ -446,7 +455,7 @@ pub fn summary<const N: usize>(
 /// model's run (the first), and for every other run the suspects that differ from it.
 pub fn robust_report<const N: usize>(
     cal: &calibration::Calibration<N>,
-    labels: &[PoseLabel],
+    labels: &dyn Fn(usize) -> Option<PoseLabel>,
 ) -> String {
     let mut s = String::new();
     let Some(opts) = cal.settings.robust else {
@@ -460,7 +469,7 @@ pub fn robust_report<const N: usize>(
     };
     let orientation = r.poses.iter().any(|p| p.components > 3);
     let where_ = |i: usize| {
-        labels.get(i).map_or_else(
+        labels(i).map_or_else(
             || format!("row {}", i + 1),
             |l| {
                 format!(
@@ -516,11 +525,11 @@ pub fn robust_report<const N: usize>(
         ]);
         for &i in &suspects {
             let p = &r.poses[i];
-            let l = labels.get(i);
+            let l = labels(i);
             t.row(vec![
-                l.map_or_else(|| "-".into(), |l| l.line.to_string()),
-                l.and_then(|l| l.pose_id.clone())
-                    .unwrap_or_else(|| "-".into()),
+                l.as_ref()
+                    .map_or_else(|| "-".into(), |l| l.line.to_string()),
+                l.and_then(|l| l.pose_id).unwrap_or_else(|| "-".into()),
                 format!("{:.2}", p.distance),
                 format!("{:.4}", p.pos_m * 1e3),
                 if p.components > 3 {
@@ -677,7 +686,8 @@ fn calibrate_contacts<const N: usize>(
             pose_id: r.pose_id.clone(),
         })
         .collect();
-    file.record_robust(&cal, 0, &labels);
+    let label = |i: usize| labels.get(i).cloned();
+    file.record_robust(&cal, 0, &label);
     if let Some(c) = file.calibration.as_mut() {
         c.constraints = Some(cons_json.clone());
     }
@@ -692,7 +702,7 @@ fn calibrate_contacts<const N: usize>(
     }
     kincal_io::files::write_atomic(&args.out, &inputs, |w| w.write_all(text.as_bytes()))?;
     let mut out = summary(&cal, name, &set.source, cd.rows(), rows);
-    out.push_str(&robust_report(&cal, &labels));
+    out.push_str(&robust_report(&cal, &label));
     out.push_str(&kincal_io::constraints::reference_note(&view));
     out.push_str(&kincal_io::constraints::report_text(&cons_json));
     out.push_str(&format!(

@@ -725,7 +725,11 @@ impl Study<'_> {
             text,
             "\nValidation on the {n_val} region poses (targets per pose: e_p < 1 mm, e_φ < 0.66°):"
         );
-        text.push_str(&summary_table(&evals, Targets::default(), true));
+        text.push_str(&summary_table(
+            evals.iter().map(|e| (e.name.as_str(), &e.summary)),
+            Targets::default(),
+            true,
+        ));
         let svg = self.out_dir.join(format!(
             "errors_{}.svg",
             file.trim_start_matches("model_").trim_end_matches(".json")

@@ -12,7 +12,7 @@ use crate::args::{non_negative, positive};
 use crate::error::{CliError, core_error};
 use crate::plots::pose_errors::{self, Series};
 use crate::report::{Table, Targets, fmt_err};
-use kincal_io::data::{self, DataOptions};
+use kincal_io::data::{self, DataOptions, RowLabels};
 use kincal_io::robot_arg;
 
 pub const LONG_ABOUT: &str = "\
@@ -97,23 +97,17 @@ pub struct Evaluation {
 
 /// Refuses errors that overflowed (no table, JSON or figure may carry them), naming the
 /// first row.
-fn refuse_non_finite(
-    e: &Evaluation,
-    set: &kincal_io::measurements::MeasurementSet,
+fn refuse_non_finite<const N: usize>(
+    e: &Scored<'_, N>,
+    source: &str,
+    labels: &RowLabels,
 ) -> Result<(), CliError> {
-    let bad = e.errors.iter().position(|p| {
-        !p.pos_m
-            .iter()
-            .chain(&p.rot_rad)
-            .chain([&p.pos_norm_m, &p.rot_norm_rad])
-            .all(|v| v.is_finite())
-    });
-    match bad {
+    match e.first_non_finite {
         None => Ok(()),
         Some(i) => Err(CliError::numeric(format!(
             "{}:{}: the error of model {} overflowed (not a finite number): the model or the data hold implausibly large numbers",
-            set.source,
-            data::line_of(set, i).unwrap_or(0),
+            source,
+            labels.line(i).unwrap_or(0),
             e.name
         ))),
     }
@@ -144,6 +138,61 @@ pub fn evaluate<const N: usize>(
     })
 }
 
+/// One model's summary on a data set, its per-pose errors not kept: they are computed again
+/// when a table, report or figure needs them ([`Scored::errors`]), so a million-row file is
+/// held once, as its measurements (issue #16 item 6).
+#[derive(Debug)]
+pub struct Scored<'r, const N: usize> {
+    pub name: String,
+    pub robot: &'r Robot<N>,
+    pub summary: ErrorSummary,
+    /// The first row whose errors are not finite (refused before any output).
+    pub first_non_finite: Option<usize>,
+}
+
+/// The summary of `robot` on `meas` ([`evaluate`] without keeping the errors).
+pub fn score<'r, const N: usize>(
+    name: &str,
+    robot: &'r Robot<N>,
+    meas: &[Measurement<N>],
+) -> Result<Scored<'r, N>, (usize, kincal::Error)> {
+    let mut summary = ErrorSummary::default();
+    let mut first_non_finite = None;
+    for (i, m) in meas.iter().enumerate() {
+        let e = PoseErrors::of_measurement(robot, m).map_err(|e| (i, e))?;
+        summary.add_measured(&e, m.mask);
+        if first_non_finite.is_none() && !errors_finite(&e) {
+            first_non_finite = Some(i);
+        }
+    }
+    Ok(Scored {
+        name: name.to_string(),
+        robot,
+        summary,
+        first_non_finite,
+    })
+}
+
+fn errors_finite(p: &PoseErrors) -> bool {
+    p.pos_m
+        .iter()
+        .chain(&p.rot_rad)
+        .chain([&p.pos_norm_m, &p.rot_norm_rad])
+        .all(|v| v.is_finite())
+}
+
+impl<const N: usize> Scored<'_, N> {
+    /// The per-pose errors again, in row order. [`score`] computed each of them without
+    /// error (the computation is deterministic: the same bits), so none is missing here.
+    pub fn errors<'a>(
+        &'a self,
+        meas: &'a [Measurement<N>],
+    ) -> impl Iterator<Item = PoseErrors> + 'a {
+        meas.iter()
+            .map(|m| PoseErrors::of_measurement(self.robot, m).unwrap_or_default())
+    }
+}
+
 fn verdict_text(v: &Verdict, has_rot: bool) -> String {
     match (v.pos_ok, v.rot_ok || !has_rot) {
         (true, true) => "PASS".into(),
@@ -153,8 +202,12 @@ fn verdict_text(v: &Verdict, has_rot: bool) -> String {
     }
 }
 
-/// Summary table of several evaluations against the targets.
-pub fn summary_table(evals: &[Evaluation], targets: Targets, has_rot: bool) -> String {
+/// Summary table of several models' errors (name, summary) against the targets.
+pub fn summary_table<'a>(
+    models: impl IntoIterator<Item = (&'a str, &'a ErrorSummary)>,
+    targets: Targets,
+    has_rot: bool,
+) -> String {
     let mut t = Table::new(&[
         "model",
         "max e_p [mm]",
@@ -163,8 +216,7 @@ pub fn summary_table(evals: &[Evaluation], targets: Targets, has_rot: bool) -> S
         "RMS e_φ [deg]",
         "verdict",
     ]);
-    for e in evals {
-        let s = &e.summary;
+    for (name, s) in models {
         let v = Verdict::judge(s, targets.pos_m, targets.rot_rad);
         let rot = |x: f64| {
             if has_rot {
@@ -174,7 +226,7 @@ pub fn summary_table(evals: &[Evaluation], targets: Targets, has_rot: bool) -> S
             }
         };
         t.row(vec![
-            e.name.clone(),
+            name.to_string(),
             fmt_err(s.max_pos_m * 1e3),
             fmt_err(s.rms_pos_m() * 1e3),
             rot(s.max_rot_rad),
@@ -194,17 +246,18 @@ pub fn pose_table_header(has_rot: bool) -> Vec<&'static str> {
     header
 }
 
-/// Per-pose table rows of one evaluation, made on demand (a file of a million rows is
-/// printed without holding its table): `id(i)` names pose `i`; a component `mask(i)` does
-/// not measure prints a dash (a row giving only `x` has no e_y, e_z; a position-only row no
-/// orientation error), not a zero one; |e_p| and |e_φ| run over the measured components.
+/// Per-pose table rows of one model's `errors` (in row order), made on demand (a file of a
+/// million rows is printed without holding its table): `id(i)` names pose `i`; a component
+/// `mask(i)` does not measure prints a dash (a row giving only `x` has no e_y, e_z; a
+/// position-only row no orientation error), not a zero one; |e_p| and |e_φ| run over the
+/// measured components.
 pub fn pose_table_rows<'a>(
-    e: &'a Evaluation,
+    errors: impl Iterator<Item = PoseErrors> + 'a,
     id: impl Fn(usize) -> String + 'a,
     has_rot: bool,
     mask: impl Fn(usize) -> ComponentMask + 'a,
 ) -> impl Iterator<Item = Vec<String>> + 'a {
-    e.errors.iter().enumerate().map(move |(i, p)| {
+    errors.enumerate().map(move |(i, p)| {
         let mask = mask(i);
         let cell = |k: usize, v: String| if mask.has(k) { v } else { "-".to_string() };
         let any = |mut ks: core::ops::Range<usize>| ks.any(|k| mask.has(k));
@@ -230,9 +283,9 @@ pub fn pose_table_rows<'a>(
 }
 
 /// "10 poses (46 rows)" when rows share pose ids, else "46 poses".
-pub fn poses_text(set: &kincal_io::measurements::MeasurementSet) -> String {
-    let poses = set.pose_count();
-    let rows = set.rows.len();
+pub fn poses_text(labels: &RowLabels) -> String {
+    let poses = labels.pose_count();
+    let rows = labels.len();
     if poses == rows {
         format!("{rows} poses")
     } else {
@@ -287,14 +340,32 @@ struct SummaryJson {
 }
 
 #[derive(Serialize)]
-struct ReportJson<'a> {
+struct ReportJson<'a, const N: usize> {
     model: &'a str,
     data: DataRef<'a>,
     targets: TargetsJson,
     eq3: Option<Eq3Json>,
     summary: SummaryJson,
     variants: Vec<SummaryJson>,
-    poses: Vec<PoseJson<'a>>,
+    poses: PosesJson<'a, N>,
+}
+
+/// The main model's per-pose errors in `--json`, computed while they are serialised.
+struct PosesJson<'a, const N: usize>(&'a Judged<'a, N>);
+
+impl<const N: usize> Serialize for PosesJson<'_, N> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let j = self.0;
+        s.collect_seq(j.main.errors(j.meas).enumerate().map(|(i, e)| PoseJson {
+            index: i + 1,
+            pose_id: j.labels.pose_id(i),
+            line: j.labels.line(i).unwrap_or(0),
+            e_pos_m: e.pos_m,
+            e_pos_norm_m: e.pos_norm_m,
+            e_rot_rad: j.has_rot.then_some(e.rot_rad),
+            e_rot_norm_rad: j.has_rot.then_some(e.rot_norm_rad),
+        }))
+    }
 }
 
 #[derive(Serialize)]
@@ -318,7 +389,7 @@ struct Eq3Json {
     rot_ok: Option<bool>,
 }
 
-fn summary_json(e: &Evaluation, t: Targets, has_rot: bool) -> SummaryJson {
+fn summary_json<const N: usize>(e: &Scored<'_, N>, t: Targets, has_rot: bool) -> SummaryJson {
     let v = Verdict::judge(&e.summary, t.pos_m, t.rot_rad);
     SummaryJson {
         name: e.name.clone(),
@@ -360,7 +431,7 @@ fn validate<const N: usize>(
         .iter()
         .chain(robot.active_effects().iter())
         .fold(kincal::EffectSet::NONE, kincal::EffectSet::with);
-    let set = data::read(
+    let loaded = data::read_poses::<N>(
         &args.data,
         robot,
         needed,
@@ -368,15 +439,15 @@ fn validate<const N: usize>(
             require_pose: true,
             allow_out_of_limits: args.allow_out_of_limits,
         },
+        args.constraints.is_some(),
     )?;
-    if args.constraints.is_some() || kincal_io::constraints::has_contacts(&set) {
-        return validate_contacts(robot, name, file, args, &set);
-    }
-    let meas = data::measurements::<N>(&set)?;
+    let (set, meas, labels) = match loaded {
+        data::PoseFile::Rows(set) => return validate_contacts(robot, name, file, args, &set),
+        data::PoseFile::Poses { set, meas, labels } => (set, meas, labels),
+    };
     let has_rot = meas.iter().any(|m| m.mask.has_orientation());
-    let fail =
-        |(i, e): (usize, kincal::Error)| core_error(e, &set.source, |_| data::line_of(&set, i));
-    let main = evaluate(name, robot, &meas).map_err(fail)?;
+    let fail = |(i, e): (usize, kincal::Error)| core_error(e, &set.source, |_| labels.line(i));
+    let main = score(name, robot, &meas).map_err(fail)?;
     let variants: Vec<(String, Robot<N>)> = file
         .variants::<N>()
         .map_err(|m| CliError::input(format!("{}: {m}", args.model)))?;
@@ -384,18 +455,18 @@ fn validate<const N: usize>(
     let bare = name.split(" + ").next().unwrap_or(name);
     let evals = variants
         .iter()
-        .map(|(n, r)| evaluate(if n == bare { name } else { n }, r, &meas))
+        .map(|(n, r)| score(if n == bare { name } else { n }, r, &meas))
         .collect::<Result<Vec<_>, _>>()
         .map_err(fail)?;
     for e in std::iter::once(&main).chain(&evals) {
-        refuse_non_finite(e, &set)?;
+        refuse_non_finite(e, &set.source, &labels)?;
     }
     let targets = Targets {
         pos_m: args.target_pos_mm * 1e-3,
         rot_rad: args.target_rot_deg.to_radians(),
     };
-    let id = |i: usize| match set.rows.get(i).and_then(|r| r.pose_id.as_ref()) {
-        Some(p) => p.clone(),
+    let id = |i: usize| match labels.pose_id(i) {
+        Some(p) => p.to_string(),
         None => (i + 1).to_string(),
     };
 
@@ -411,7 +482,9 @@ fn validate<const N: usize>(
         let judged = Judged {
             main: &main,
             evals: &evals,
-            set: &set,
+            meas: &meas,
+            sha256: &set.sha256,
+            labels: &labels,
             targets,
             has_rot,
         };
@@ -422,7 +495,7 @@ fn validate<const N: usize>(
             .iter()
             .map(|e| Series {
                 name: e.name.clone(),
-                errors: e.errors.clone(),
+                errors: e.errors(&meas).collect(),
             })
             .collect();
         let title = format!("{} on {}", args.model, args.data.display());
@@ -436,7 +509,7 @@ fn validate<const N: usize>(
         args.model,
         file.robot.name,
         set.source,
-        poses_text(&set),
+        poses_text(&labels),
         if has_rot { "" } else { " (position only)" }
     );
     if calibrated_on(file, &set.sha256) {
@@ -452,7 +525,7 @@ fn validate<const N: usize>(
         let mask = |i: usize| meas.get(i).map_or(ComponentMask::ALL, |m| m.mask);
         crate::report::emit_streamed_table(
             &pose_table_header(has_rot),
-            || pose_table_rows(&main, id, has_rot, mask),
+            || pose_table_rows(main.errors(&meas), id, has_rot, mask),
             "  ",
         );
     }
@@ -484,7 +557,7 @@ struct Biopsy {
 }
 
 impl Biopsy {
-    fn of(args: &Args, main: &Evaluation) -> Self {
+    fn of<const N: usize>(args: &Args, main: &Scored<'_, N>) -> Self {
         let d_m = args
             .biopsy_d_mm
             .map_or(main.summary.max_pos_m, |d| d * 1e-3);
@@ -500,28 +573,31 @@ impl Biopsy {
 }
 
 /// A model's errors on the data, and what they are judged against.
-struct Judged<'a> {
-    main: &'a Evaluation,
-    evals: &'a [Evaluation],
-    set: &'a kincal_io::measurements::MeasurementSet,
+struct Judged<'a, const N: usize> {
+    main: &'a Scored<'a, N>,
+    evals: &'a [Scored<'a, N>],
+    meas: &'a [Measurement<N>],
+    /// SHA-256 of DATA.
+    sha256: &'a str,
+    labels: &'a RowLabels,
     targets: Targets,
     has_rot: bool,
 }
 
 /// Writes `--json`: summaries of the model and of every variant, eq. (3), per-pose errors.
-fn write_json(
+fn write_json<const N: usize>(
     path: &Path,
     inputs: &[&Path],
     args: &Args,
-    j: &Judged<'_>,
+    j: &Judged<'_, N>,
     biopsy: &Biopsy,
 ) -> Result<(), CliError> {
-    let (main, set, targets, has_rot) = (j.main, j.set, j.targets, j.has_rot);
+    let (main, targets, has_rot) = (j.main, j.targets, j.has_rot);
     let report = ReportJson {
         model: &args.model,
         data: DataRef {
             path: args.data.display().to_string(),
-            sha256: &set.sha256,
+            sha256: j.sha256,
         },
         targets: TargetsJson {
             pos_m: targets.pos_m,
@@ -540,37 +616,23 @@ fn write_json(
             .iter()
             .map(|e| summary_json(e, targets, has_rot))
             .collect(),
-        poses: main
-            .errors
-            .iter()
-            .enumerate()
-            .map(|(i, e)| PoseJson {
-                index: i + 1,
-                pose_id: set.rows[i].pose_id.as_deref(),
-                line: set.rows[i].line,
-                e_pos_m: e.pos_m,
-                e_pos_norm_m: e.pos_norm_m,
-                e_rot_rad: has_rot.then_some(e.rot_rad),
-                e_rot_norm_rad: has_rot.then_some(e.rot_norm_rad),
-            })
-            .collect(),
+        poses: PosesJson(j),
     };
-    let text = serde_json::to_string_pretty(&report)
-        .map_err(|e| CliError::io(format!("{}: {e}", path.display())))?;
+    // Written as it is serialised: the per-pose part of a million rows is never held.
     kincal_io::files::write_atomic(path, inputs, |w| {
-        w.write_all(text.as_bytes())?;
+        serde_json::to_writer_pretty(&mut *w, &report)?;
         w.write_all(b"\n")
     })?;
     Ok(())
 }
 
 /// The summary against the targets, and of every model in the file when it has several.
-fn summary_section(
+fn summary_section<const N: usize>(
     args: &Args,
     file: &kincal_io::model_file::ModelFile,
     name: &str,
-    main: &Evaluation,
-    evals: &[Evaluation],
+    main: &Scored<'_, N>,
+    evals: &[Scored<'_, N>],
     targets: Targets,
     has_rot: bool,
 ) -> String {
@@ -588,10 +650,18 @@ fn summary_section(
         "\nSummary (per pose: e_p < {} mm, e_φ < {}°; {whose}):",
         args.target_pos_mm, args.target_rot_deg
     );
-    out.push_str(&summary_table(std::slice::from_ref(main), targets, has_rot));
+    out.push_str(&summary_table(
+        [(main.name.as_str(), &main.summary)],
+        targets,
+        has_rot,
+    ));
     if evals.len() > 1 || evals.first().is_some_and(|e| e.name != name) {
         let _ = writeln!(out, "\nAll models in {}:", args.model);
-        out.push_str(&summary_table(evals, targets, has_rot));
+        out.push_str(&summary_table(
+            evals.iter().map(|e| (e.name.as_str(), &e.summary)),
+            targets,
+            has_rot,
+        ));
         out.push_str(&bounded_runs_note(file));
     }
     out
@@ -599,7 +669,12 @@ fn summary_section(
 
 /// Eq. (3): the orientation error a biopsy allows at the model's worst position error, and
 /// whether the worst orientation error is within it.
-fn eq3_text(args: &Args, biopsy: &Biopsy, main: &Evaluation, has_rot: bool) -> String {
+fn eq3_text<const N: usize>(
+    args: &Args,
+    biopsy: &Biopsy,
+    main: &Scored<'_, N>,
+    has_rot: bool,
+) -> String {
     let d_m = biopsy.d_m;
     match biopsy.allowed_rot_rad {
         Some(a) => format!(
