@@ -103,3 +103,33 @@ fn emit(line: &str) {
     let mut e = std::io::stderr().lock();
     let _ = writeln!(e, "[progress] {line}");
 }
+
+/// A bar as kincal-io's [`Progress`](kincal_io::design::Progress) of a design run.
+#[derive(Debug)]
+pub struct Bar<'a>(pub &'a ProgressBar);
+
+impl kincal_io::design::Progress for Bar<'_> {
+    fn stage(&self, len: u64, message: &str) {
+        phase(self.0, len, message);
+    }
+    fn message(&self, message: &str) {
+        self.0.set_message(message.to_string());
+    }
+    fn inc(&self, n: u64) {
+        self.0.inc(n);
+    }
+}
+
+/// A bar counting the calibrations of a Monte-Carlo study, with their rate.
+pub fn calibrations(len: u64, message: impl Into<String>) -> ProgressBar {
+    let pb = ProgressBar::new(len);
+    pb.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{msg} [{bar:32}] {pos}/{len} calibrations, {per_sec}, eta {eta}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    pb.set_message(message.into());
+    pb
+}

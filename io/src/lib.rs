@@ -21,6 +21,7 @@ pub mod datasets;
 pub mod datasets_contact;
 pub mod datasets_hilti;
 pub mod datasets_tiago;
+pub mod design;
 pub mod diagnose;
 pub mod diagnose_contacts;
 pub mod diagnose_sessions;

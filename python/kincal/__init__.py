@@ -18,9 +18,12 @@ from ._kincal import (
     aria,
     calibrate,
     crossval,
+    design_tool,
     diagnose,
+    evaluate_designs,
     load_robot,
     read_measurements,
+    select_poses,
 )
 
 __all__ = [
@@ -35,7 +38,10 @@ __all__ = [
     "aria",
     "calibrate",
     "crossval",
+    "design_tool",
     "diagnose",
+    "evaluate_designs",
     "load_robot",
     "read_measurements",
+    "select_poses",
 ]

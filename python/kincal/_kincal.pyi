@@ -178,3 +178,109 @@ def diagnose(
     CLI's). Target/plane rows (or a ``constraints`` TOML file): leave-one-session-out, as
     ``kincal diagnose --constraints`` (its REPORT.json: ``method``
     ``"leave_one_group_out_contacts"``; ``sigma_pos_mm`` states the floor)."""
+
+_Box = Tuple[float, float, float, float, float, float]
+
+def select_poses(
+    robot: Robot,
+    *,
+    design: str = "standard",
+    m: int = 10,
+    index: str = "o",
+    pool: int = 2000,
+    starts: int = 8,
+    refine: int = 200,
+    workspace: _Box = (-1.0, -1.0, 0.05, 1.0, 1.0, 1.5),
+    cube_mm: float = 100.0,
+    tolerance: float = 0.1,
+    min_dexterity: float = 0.08,
+    robust_robots: int = 32,
+    compare_random: int = 1000,
+    length_error_mm: float = 5.0,
+    angle_error_deg: float = 5.0,
+    region: Optional[_Box] = None,
+    working_rpy_deg: Optional[Sequence[Tuple[float, float, float]]] = None,
+    cone_deg: float = 20.0,
+    grid: Tuple[int, int, int] = (4, 4, 2),
+    margin_deg: float = 5.0,
+    seed: int = 1,
+    out: Optional[_Path] = None,
+) -> Dict[str, Any]:
+    """m observability-optimal poses, as ``kincal select-poses``: ``design`` ``"standard"``
+    (end effector in ``workspace`` [m]), ``"region"`` (working ``region`` [m], cone
+    ``cone_deg`` about ``working_rpy_deg`` [deg], reachable by ``robust_robots`` random
+    robots off by ``length_error_mm``/``angle_error_deg``) or ``"clustering"`` (cubes of
+    ``cube_mm``). Returns ``q`` (m, N) [rad], ``poses`` (m, 4, 4) [m], ``indices``,
+    ``random_indices`` (arrays over ``compare_random`` random sets), ``pool_size``,
+    ``admitted``, ``min_margin_deg``, ``name``, ``note``. ``out``: the command's pose CSV."""
+
+def design_tool(
+    robot: Robot,
+    *,
+    m: int = 10,
+    starts: int = 8,
+    min_dexterity: float = 0.08,
+    robust_robots: int = 32,
+    plate_z_mm: Optional[Sequence[float]] = None,
+    grid_mm: float = 25.0,
+    rolls_deg: Sequence[float] = (-150.0, -160.0),
+    yaws_deg: Sequence[float] = (-90.0, 0.0, 90.0, 180.0),
+    min_separation_mm: float = 60.0,
+    objectives: Sequence[str] = ("pv", "pv01", "o", "dopt"),
+    baseline: Optional[Tuple[str, _Path]] = None,
+    screen_runs: int = 1000,
+    runs: int = 10000,
+    length_error_mm: float = 5.0,
+    angle_error_deg: float = 5.0,
+    noise_pos_mm: float = 0.05,
+    noise_rot_deg: float = 0.02,
+    tool_tol_mm: float = 0.05,
+    tool_tol_deg: float = 0.02,
+    region: Optional[_Box] = None,
+    working_rpy_deg: Optional[Sequence[Tuple[float, float, float]]] = None,
+    cone_deg: float = 20.0,
+    grid: Tuple[int, int, int] = (4, 4, 2),
+    margin_deg: float = 5.0,
+    seed: int = 1,
+    out: Optional[_Path] = None,
+) -> Dict[str, Any]:
+    """A calibration tool that beats ``baseline`` (``(name, tool file)``; ARIA: Table 2), as
+    ``kincal design-tool``: sockets on a plate at ``plate_z_mm`` [mm], grid ``grid_mm``
+    [mm], orientations from ``rolls_deg`` × ``yaws_deg`` [deg], ``min_separation_mm`` apart.
+    Returns ``kincal design-tool --json``'s dict (``plate_z_m`` [m], ``objective``,
+    ``screening_score``, ``beats_baseline``, ``designs`` in mm and degrees) plus ``tool``
+    (``q`` [rad], ``poses`` [m]) and ``plate_sockets``. ``out``: the command's tool file."""
+
+def evaluate_designs(
+    robot: Robot,
+    *,
+    designs: Sequence[str] = ("standard", "clustering", "table2"),
+    tools: Sequence[Tuple[str, _Path]] = (),
+    commanded: Sequence[Tuple[str, _Path]] = (),
+    runs: int = 10000,
+    m: int = 10,
+    index: str = "o",
+    pool: int = 2000,
+    starts: int = 8,
+    refine: int = 200,
+    workspace: _Box = (-1.0, -1.0, 0.05, 1.0, 1.0, 1.5),
+    cube_mm: float = 100.0,
+    tolerance: float = 0.1,
+    min_dexterity: float = 0.08,
+    robust_robots: int = 32,
+    length_error_mm: float = 5.0,
+    angle_error_deg: float = 5.0,
+    noise_pos_mm: float = 0.05,
+    noise_rot_deg: float = 0.02,
+    tool_tol_mm: float = 0.05,
+    tool_tol_deg: float = 0.02,
+    region: Optional[_Box] = None,
+    working_rpy_deg: Optional[Sequence[Tuple[float, float, float]]] = None,
+    cone_deg: float = 20.0,
+    grid: Tuple[int, int, int] = (4, 4, 2),
+    margin_deg: float = 5.0,
+    seed: int = 1,
+) -> Dict[str, Any]:
+    """Monte-Carlo comparison of designs on the same random robots, as ``kincal
+    evaluate-designs`` without socket plates: returns its ``--json`` dict (per design the
+    worst-pose e_p [mm] and e_φ [deg] median, p95, max, mean; scenario in m and rad)."""

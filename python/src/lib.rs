@@ -4,6 +4,7 @@
 //! errors into the exceptions of `kincal/_errors.py`.
 
 mod calibrate;
+mod design;
 mod errors;
 mod json;
 mod measurements;
@@ -23,6 +24,9 @@ fn _kincal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(calibrate::calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(studies::crossval, m)?)?;
     m.add_function(wrap_pyfunction!(studies::diagnose, m)?)?;
+    m.add_function(wrap_pyfunction!(design::select_poses, m)?)?;
+    m.add_function(wrap_pyfunction!(design::design_tool, m)?)?;
+    m.add_function(wrap_pyfunction!(design::evaluate_designs, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

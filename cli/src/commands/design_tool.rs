@@ -6,18 +6,14 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use kincal::montecarlo::{Acquisition, robustly_reachable};
-use kincal::observability::{Index, ObservabilityOptions, PoseBlock, pose_block};
-use kincal::pose::{Transform, rpy_to_matrix, transform};
-use kincal::selection::{Constraints, Objective, SelectOptions};
-use nalgebra::Vector3;
-use rayon::prelude::*;
-
-use crate::commands::design::args::{Context, DesignSizeArgs, P, ScenarioArgs, SetupArgs, finite};
-use crate::commands::design::designs::{self, Design, OwnedPool};
-use crate::commands::design::study::{self, DesignResult};
-use crate::error::CliError;
+use kincal_io::design::context::Context;
+use kincal_io::design::study::DesignResult;
+use kincal_io::design::tool_design::{self as td, ToolDesign, ToolObjective, ToolOptions, score};
 use kincal_io::robot_arg::resolve_robot;
+
+use crate::commands::design::args::{DesignSizeArgs, ScenarioArgs, SetupArgs, finite};
+use crate::commands::design::study;
+use crate::error::CliError;
 
 pub const LONG_ABOUT: &str = "\
 Designs a calibration tool that beats a baseline tool (ARIA: the paper's Table 2) on the
@@ -107,21 +103,12 @@ pub enum ObjectiveArg {
 }
 
 impl ObjectiveArg {
-    /// (label, orientation-row weight [m/rad], objective).
-    fn spec(self) -> (&'static str, f64, Objective) {
+    fn io(self) -> ToolObjective {
         match self {
-            ObjectiveArg::Pv => (
-                "prediction variance (w 1)",
-                1.0,
-                Objective::PredictionVariance,
-            ),
-            ObjectiveArg::Pv01 => (
-                "prediction variance (w 0.1)",
-                0.1,
-                Objective::PredictionVariance,
-            ),
-            ObjectiveArg::O => ("O (eq. 17)", 1.0, Objective::Index(Index::O)),
-            ObjectiveArg::Dopt => ("D-optimal", 1.0, Objective::Index(Index::DOpt)),
+            ObjectiveArg::Pv => ToolObjective::Pv,
+            ObjectiveArg::Pv01 => ToolObjective::Pv01,
+            ObjectiveArg::O => ToolObjective::O,
+            ObjectiveArg::Dopt => ToolObjective::Dopt,
         }
     }
 
@@ -134,100 +121,43 @@ impl ObjectiveArg {
             ObjectiveArg::Dopt => "dopt",
         }
     }
+
+    /// The `--objectives` name of an objective's label (the label itself if none matches).
+    fn flag_of_label(label: &str) -> &str {
+        [Self::Pv, Self::Pv01, Self::O, Self::Dopt]
+            .into_iter()
+            .find(|o| o.io().spec().0 == label)
+            .map_or(label, |o| o.flag())
+    }
+}
+
+impl Args {
+    /// The search's options as kincal-io takes them.
+    fn options(&self) -> ToolOptions {
+        let sizes = &self.selection;
+        ToolOptions {
+            m: sizes.poses,
+            starts: sizes.starts,
+            min_dexterity: sizes.min_dexterity,
+            robust_robots: sizes.robust_robots,
+            plate_z_mm: self.plate_z_mm.clone(),
+            grid_mm: self.grid_mm,
+            rolls_deg: self.rolls_deg.clone(),
+            yaws_deg: self.yaws_deg.clone(),
+            min_separation_mm: self.min_separation_mm,
+            objectives: self.objectives.iter().map(|o| o.io()).collect(),
+            screen_runs: self.screen_runs,
+            runs: self.runs,
+            scenario: self.scenario.spec(),
+        }
+    }
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
-    if args.objectives.is_empty() {
-        return Err(CliError::usage("--objectives: expected at least one"));
-    }
-    if args.runs == 0 || args.screen_runs == 0 {
-        return Err(CliError::usage(
-            "--runs and --screen-runs: expected at least 1",
-        ));
-    }
-    if args.rolls_deg.is_empty() || args.yaws_deg.is_empty() {
-        return Err(CliError::usage(
-            "--rolls-deg and --yaws-deg: expected at least one angle",
-        ));
-    }
+    args.options()
+        .check(|flag| format!("--{}", flag.replace('_', "-")))?;
     let spec = resolve_robot(&args.setup.robot, &args.setup.chain)?;
     kincal::with_any_robot!(&spec.robot, r => design(*r, &spec.name, args))
-}
-
-/// Candidate sockets of one plate: admissible, robustly reachable configurations.
-fn plate_candidates<const N: usize>(
-    ctx: &Context<N>,
-    args: &Args,
-    z: f64,
-    c: &Constraints,
-    robots: u64,
-    pb: &indicatif::ProgressBar,
-) -> Result<(Vec<[f64; N]>, Vec<Transform>), CliError> {
-    let r = ctx.region;
-    let step = args.grid_mm * 1e-3;
-    let nx = ((r.max_m[0] - r.min_m[0]) / step + 1e-9).floor() as usize + 1;
-    let ny = ((r.max_m[1] - r.min_m[1]) / step + 1e-9).floor() as usize + 1;
-    let mut targets = Vec::new();
-    for ix in 0..nx {
-        for iy in 0..ny {
-            let p = Vector3::new(
-                r.min_m[0] + ix as f64 * step,
-                r.min_m[1] + iy as f64 * step,
-                z,
-            );
-            for &roll in &args.rolls_deg {
-                for &yaw in &args.yaws_deg {
-                    targets.push(transform(
-                        rpy_to_matrix(roll.to_radians(), 0.0, yaw.to_radians()),
-                        p,
-                    ));
-                }
-            }
-        }
-    }
-    pb.set_length(targets.len() as u64);
-    pb.set_position(0);
-    let study = ctx.study(args.scenario.scenario(), ctx.seed);
-    type Found<const N: usize> = Result<Option<([f64; N], Transform)>, kincal::Error>;
-    let found: Vec<Found<N>> = targets
-        .par_iter()
-        .map(|t| {
-            pb.inc(1);
-            let Some(q) = ctx.quick_ik(t, c) else {
-                return Ok(None);
-            };
-            if robots > 0 && !robustly_reachable(&study, t, &q, robots)? {
-                return Ok(None);
-            }
-            Ok(Some((q, *t)))
-        })
-        .collect();
-    let mut q = Vec::new();
-    let mut poses = Vec::new();
-    for f in found {
-        if let Some((a, b)) = f.map_err(|e| CliError::numeric(format!("tool candidates: {e}")))? {
-            q.push(a);
-            poses.push(b);
-        }
-    }
-    Ok((q, poses))
-}
-
-/// `[median, p95]` of e_p and e_φ against the baseline: the largest ratio (< 1 beats it on
-/// all four); infinite with failed runs.
-fn score(r: &DesignResult, base: &DesignResult) -> f64 {
-    if r.failed > 0 || r.max_pos_mm.is_empty() {
-        return f64::INFINITY;
-    }
-    let (p, a, bp, ba) = (r.pos(), r.rot(), base.pos(), base.rot());
-    [
-        p.median / bp.median,
-        p.p95 / bp.p95,
-        a.median / ba.median,
-        a.p95 / ba.p95,
-    ]
-    .into_iter()
-    .fold(0.0, f64::max)
 }
 
 /// The score as printed: an infinite one says why (failed runs are disqualifying).
@@ -243,58 +173,9 @@ fn score_text(s: f64, r: &DesignResult) -> String {
     }
 }
 
-struct Candidate<const N: usize> {
-    design: Design<N>,
-    z: f64,
-    objective: String,
-    /// `objective`'s `--objectives` name (the screening table's column).
-    objective_flag: &'static str,
-}
-
-fn design<const N: usize>(
-    robot: kincal::Robot<N>,
-    name: &str,
-    args: &Args,
-) -> Result<(), CliError> {
-    let ctx = Context::new(robot, name, &args.setup)?;
+/// The header: the setting and, per plate, its sockets and failed selections.
+fn sockets_text<const N: usize>(ctx: &Context<N>, args: &Args, d: &ToolDesign<N>) -> String {
     let sizes = &args.selection;
-    let m = sizes.m()?;
-    let scenario = args.scenario.scenario();
-    let baseline = match (&args.baseline, ctx.is_aria) {
-        (Some(b), _) => {
-            let (n, f) = b
-                .split_once('=')
-                .ok_or_else(|| CliError::usage(format!("--baseline '{b}': expected NAME=FILE")))?;
-            designs::tool_from_file(&ctx, n, std::path::Path::new(f))?
-        }
-        (None, true) => designs::table2_design(&ctx)?,
-        (None, false) => {
-            return Err(CliError::usage(format!(
-                "robot '{name}' has no built-in tool to beat: give --baseline NAME=FILE.csv"
-            )));
-        }
-    };
-    let heights: Vec<f64> = match &args.plate_z_mm {
-        Some(v) => v.iter().map(|z| z * 1e-3).collect(),
-        None => {
-            let r = ctx.region;
-            vec![r.min_m[2], 0.5 * (r.min_m[2] + r.max_m[2]), r.max_m[2]]
-        }
-    };
-    for &z in &heights {
-        if z < ctx.region.min_m[2] - 1e-12 || z > ctx.region.max_m[2] + 1e-12 {
-            return Err(CliError::usage(format!(
-                "--plate-z-mm {}: outside the working region's z range",
-                z * 1e3
-            )));
-        }
-    }
-    let c = Constraints {
-        region: Some(ctx.region),
-        cone: None,
-        joint_margin_rad: ctx.margin_rad,
-        min_dexterity: sizes.min_dexterity,
-    };
     let mut log = String::new();
     let _ = writeln!(log, "Tool design: {}", ctx.describe());
     let _ = writeln!(log, "Scenario: {}", args.scenario.describe());
@@ -309,113 +190,58 @@ fn design<const N: usize>(
         sizes.min_dexterity,
         sizes.robust_robots
     );
-    let objectives: Vec<(&str, f64, Objective, &'static str)> = args
-        .objectives
-        .iter()
-        .map(|o| {
-            let (label, w, objective) = o.spec();
-            (label, w, objective, o.flag())
-        })
-        .collect();
-    let pb = crate::progress::counter(0, "tool candidates");
-    let mut candidates: Vec<Candidate<N>> = Vec::new();
-    for &z in &heights {
-        pb.set_message(format!("sockets on the plate at z = {:.0} mm", z * 1e3));
-        let (q, poses) = plate_candidates(&ctx, args, z, &c, sizes.robust_robots, &pb)?;
+    for p in &d.plates {
         let _ = writeln!(
             log,
             "  plate z = {:.0} mm: {} admissible sockets",
-            z * 1e3,
-            q.len()
+            p.z_m * 1e3,
+            p.sockets
         );
-        if q.len() < m {
-            continue;
-        }
-        for &(label, w, objective, flag) in &objectives {
-            pb.set_message(format!("z = {:.0} mm: selecting by {label}", z * 1e3));
-            let mut obs = ObservabilityOptions::new(ctx.params);
-            obs.rot_weight = w;
-            let pool = OwnedPool::new(&ctx, &obs, q.clone())?;
-            let reference: Vec<PoseBlock<P>> = {
-                let mut ws = Box::<kincal::identify::Workspace<P>>::default();
-                ctx.validation_q
-                    .iter()
-                    .map(|vq| {
-                        let mut b = [[0.0; P]; 6];
-                        pose_block(&ctx.robot, vq, &obs, &mut ws, &mut b).map(|_| b)
-                    })
-                    .collect::<Result<_, _>>()
-                    .map_err(|e| CliError::numeric(format!("validation blocks: {e}")))?
-            };
-            let mut opts = SelectOptions::new(objective, ctx.seed);
-            opts.starts = sizes.starts.max(1);
-            opts.refine_trials = 0;
-            opts.min_separation_m = args.min_separation_mm * 1e-3;
-            let sel = designs::select_best(
-                &ctx,
-                &pool,
-                m,
-                &obs,
-                &c,
-                &opts,
-                Some(&reference),
-                &indicatif::ProgressBar::hidden(),
-            );
-            let Ok((sq, _)) = sel else {
-                let _ = writeln!(
-                    log,
-                    "    {label}: no selection ({})",
-                    sel.err().map_or(String::new(), |e| e.message)
-                );
-                continue;
-            };
-            let reference_poses: Vec<Transform> = sq
-                .iter()
-                .map(|qq| {
-                    let i = pool.q.iter().position(|p| p == qq).unwrap_or(0);
-                    poses[i]
-                })
-                .collect();
-            candidates.push(Candidate {
-                design: Design {
-                    name: format!("z{:.0}-{}", z * 1e3, candidates.len() + 1),
-                    acquisition: Acquisition::Tool,
-                    q: sq,
-                    reference: reference_poses,
-                    note: String::new(),
-                },
-                z,
-                objective: label.to_string(),
-                objective_flag: flag,
-            });
+        for (label, why) in &p.failures {
+            let _ = writeln!(log, "    {label}: no selection ({why})");
         }
     }
-    pb.finish_and_clear();
-    if candidates.is_empty() {
-        return Err(CliError::numeric(
-            "no candidate tool: too few admissible sockets (loosen --grid-mm, --min-dexterity, --margin-deg or --min-separation-mm)",
-        ));
-    }
-    // Screening on robots of their own.
-    let mut screen: Vec<Design<N>> = vec![baseline.clone()];
-    screen.extend(candidates.iter().map(|c| c.design.clone()));
-    let (sres, _) = study::run_study(
-        &ctx,
-        &screen,
-        scenario,
-        args.screen_runs,
-        ctx.seed.wrapping_add(1),
-        "screening candidate tools",
-    )?;
+    log
+}
+
+/// One row of the screening table.
+fn screening_row(
+    name: &str,
+    z: &str,
+    objective: &str,
+    r: &DesignResult,
+    score: String,
+) -> Vec<String> {
+    let (p, a) = (r.pos(), r.rot());
+    vec![
+        name.to_string(),
+        z.to_string(),
+        objective.to_string(),
+        format!("{:.4}", r.o),
+        format!("{:.3}", p.median),
+        format!("{:.3}", p.p95),
+        format!("{:.3}", a.median),
+        format!("{:.3}", a.p95),
+        r.failed.to_string(),
+        score,
+    ]
+}
+
+/// The screening: every candidate's score against the baseline, and the choice.
+fn screening_text<const N: usize>(ctx: &Context<N>, args: &Args, d: &ToolDesign<N>) -> String {
+    let mut log = String::new();
+    let Some((base, rest)) = d.screening.split_first() else {
+        return log;
+    };
     let _ = writeln!(
         log,
         "\nScreening ({} runs each, seed {}; score = largest ratio to {} of median/p95 e_p, e_φ; objective as --objectives: {}):",
         args.screen_runs,
         ctx.seed.wrapping_add(1),
-        baseline.name,
+        base.name,
         args.objectives
             .iter()
-            .map(|o| format!("{} = {}", o.flag(), o.spec().0))
+            .map(|o| format!("{} = {}", o.flag(), o.io().spec().0))
             .collect::<Vec<_>>()
             .join(", ")
     );
@@ -433,93 +259,51 @@ fn design<const N: usize>(
         "failed",
         "score",
     ]);
-    let base = &sres[0];
-    let mut best: Option<(f64, usize)> = None;
-    for (k, (cand, r)) in candidates.iter().zip(&sres[1..]).enumerate() {
+    for (cand, r) in d.candidates.iter().zip(rest) {
         let s = score(r, base);
-        if best.is_none_or(|(b, _)| s < b) {
-            best = Some((s, k));
-        }
-        let (p, a) = (r.pos(), r.rot());
-        t.row(vec![
-            cand.design.name.clone(),
-            format!("{:.0}", cand.z * 1e3),
-            cand.objective_flag.to_string(),
-            format!("{:.4}", r.o),
-            format!("{:.3}", p.median),
-            format!("{:.3}", p.p95),
-            format!("{:.3}", a.median),
-            format!("{:.3}", a.p95),
-            r.failed.to_string(),
+        let z = format!("{:.0}", cand.z_m * 1e3);
+        t.row(screening_row(
+            &cand.design.name,
+            &z,
+            ObjectiveArg::flag_of_label(&cand.objective),
+            r,
             score_text(s, r),
-        ]);
+        ));
     }
-    let (p, a) = (base.pos(), base.rot());
-    t.row(vec![
-        base.name.clone(),
-        "-".into(),
-        "baseline".into(),
-        format!("{:.4}", base.o),
-        format!("{:.3}", p.median),
-        format!("{:.3}", p.p95),
-        format!("{:.3}", a.median),
-        format!("{:.3}", a.p95),
-        base.failed.to_string(),
-        "1".into(),
-    ]);
+    t.row(screening_row(&base.name, "-", "baseline", base, "1".into()));
     log.push_str(&t.render("  "));
-    if candidates
-        .iter()
-        .zip(&sres[1..])
-        .any(|(_, r)| !score(r, base).is_finite())
-    {
+    if rest.iter().any(|r| !score(r, base).is_finite()) {
         let _ = writeln!(
             log,
             "  (score inf: the candidate failed in some runs (IK or identification), or had none; it is never chosen)"
         );
     }
-    let Some((best_score, k)) = best else {
-        return Err(CliError::numeric("no candidate tool"));
+    if let Some(chosen) = d.chosen() {
+        let _ = writeln!(
+            log,
+            "\nChosen: {} ({}), screening score {:.3}",
+            chosen.design.name, d.tool.note, d.score
+        );
+    }
+    log
+}
+
+/// The final comparison and the verdict.
+fn final_text<const N: usize>(ctx: &Context<N>, args: &Args, d: &ToolDesign<N>) -> String {
+    let mut log = String::new();
+    let [b, o] = d.results.as_slice() else {
+        return log;
     };
-    let chosen = &candidates[k];
-    let mut tool = chosen.design.clone();
-    tool.name = "optimised".into();
-    tool.note = format!(
-        "optimised tool: plate z = {:.0} mm, {} sockets chosen by {}",
-        chosen.z * 1e3,
-        tool.q.len(),
-        chosen.objective
-    );
-    let _ = writeln!(
-        log,
-        "\nChosen: {} ({}), screening score {best_score:.3}",
-        chosen.design.name, tool.note
-    );
-    // Final comparison on the main seed's robots.
-    let (fres, timing) = study::run_study(
-        &ctx,
-        &[baseline.clone(), tool.clone()],
-        scenario,
-        args.runs,
-        ctx.seed,
-        "final comparison",
-    )?;
     let _ = writeln!(
         log,
         "\nFinal comparison, {} runs on the same random robots (seed {}):",
         args.runs, ctx.seed
     );
-    log.push_str(&study::table(&fres));
-    let (b, o) = (&fres[0], &fres[1]);
-    let beats = o.failed == 0
-        && o.pos().median < b.pos().median
-        && o.pos().p95 < b.pos().p95
-        && o.rot().median < b.rot().median
-        && o.rot().p95 < b.rot().p95;
+    log.push_str(&study::table(&d.results));
     let _ = writeln!(
         log,
         "\nVerdict: the optimised tool {} {} on median and p95 of e_p and e_φ (e_p {:.3}/{:.3} mm vs {:.3}/{:.3} mm; e_φ {:.3}/{:.3}° vs {:.3}/{:.3}°)",
-        if beats { "beats" } else { "does NOT beat" },
+        if d.beats { "beats" } else { "does NOT beat" },
         b.name,
         o.pos().median,
         o.pos().p95,
@@ -530,46 +314,38 @@ fn design<const N: usize>(
         b.rot().median,
         b.rot().p95
     );
-    let _ = writeln!(log, "Timing: {}", study::timing_line(&timing));
-    // Tool specification.
-    let mut comments = vec![
-        "kincal calibration-tool specification (design-tool)".to_string(),
-        format!("robot: {}", ctx.robot_name),
-        format!(
-            "plate height z = {:.1} mm in the robot base frame; R = Rz(yaw)·Ry(pitch)·Rx(roll)",
-            chosen.z * 1e3
-        ),
-        format!(
-            "sockets at least {} mm apart; joint margin {}°; reached by {} random robots (±{} mm, ±{}°)",
-            args.min_separation_mm,
-            args.setup.margin_deg,
-            sizes.robust_robots,
-            args.scenario.errors.length_error_mm,
-            args.scenario.errors.angle_error_deg
-        ),
-        format!("chosen by {}; seed {}", chosen.objective, ctx.seed),
-        format!(
-            "Monte-Carlo ({} runs, {}): worst validation pose e_p median {:.3} mm, p95 {:.3} mm; e_phi median {:.3} deg, p95 {:.3} deg ({}: {:.3}, {:.3} mm; {:.3}, {:.3} deg)",
-            args.runs,
-            args.scenario.describe(),
-            o.pos().median,
-            o.pos().p95,
-            o.rot().median,
-            o.rot().p95,
-            b.name,
-            b.pos().median,
-            b.pos().p95,
-            b.rot().median,
-            b.rot().p95
-        ),
-        "extra_q*_rad: the nominal robot's configuration at each pose (for programming the approach)".into(),
-    ];
-    comments.retain(|c| !c.is_empty());
+    let _ = writeln!(log, "Timing: {}", study::timing_line(&d.timing));
+    log
+}
+
+/// `NAME=FILE` of --baseline.
+fn baseline_arg(b: &str) -> Result<(&str, &std::path::Path), CliError> {
+    b.split_once('=')
+        .map(|(n, f)| (n, std::path::Path::new(f)))
+        .ok_or_else(|| CliError::usage(format!("--baseline '{b}': expected NAME=FILE")))
+}
+
+fn design<const N: usize>(
+    robot: kincal::Robot<N>,
+    name: &str,
+    args: &Args,
+) -> Result<(), CliError> {
+    let options = args.options();
+    let ctx = Context::new(robot, name, &args.setup.setup())?;
+    let given = args.baseline.as_deref().map(baseline_arg).transpose()?;
+    let baseline = td::baseline(&ctx, given, "--baseline")?;
+    let pb = crate::progress::counter(0, "tool candidates");
+    let d = td::design_tool(&ctx, &baseline, &options, &crate::progress::Bar(&pb))?;
+    pb.finish_and_clear();
+    let mut log = sockets_text(&ctx, args, &d);
+    log.push_str(&screening_text(&ctx, args, &d));
+    log.push_str(&final_text(&ctx, args, &d));
+    let comments = td::tool_comments(&ctx, &d, &options, args.setup.margin_deg);
     kincal_io::files::write_atomic(&args.out, &[], |w| {
-        kincal_io::tool_file::write_tool(w, &comments, &tool.reference, &tool.q)
+        kincal_io::tool_file::write_tool(w, &comments, &d.tool.reference, &d.tool.q)
     })?;
     let _ = writeln!(log, "Wrote {}", args.out.display());
-    if let Some(pth) = &args.plot {
+    if let (Some(pth), Some(b)) = (&args.plot, d.results.first()) {
         crate::plots::study::write_comparison(
             pth,
             &[],
@@ -580,19 +356,11 @@ fn design<const N: usize>(
                 ctx.seed,
                 args.scenario.describe()
             ),
-            &fres,
+            &d.results,
         )?;
     }
     if let Some(pth) = &args.json {
-        let json = serde_json::json!({
-            "robot": ctx.robot_name,
-            "seed": ctx.seed,
-            "plate_z_m": chosen.z,
-            "objective": chosen.objective,
-            "screening_score": best_score,
-            "beats_baseline": beats,
-            "designs": study::results_json(&fres),
-        });
+        let json = td::json(&ctx, &d);
         kincal_io::files::write_atomic(pth, &[], |w| {
             serde_json::to_writer_pretty(&mut *w, &json).map_err(std::io::Error::other)?;
             w.write_all(b"\n")

@@ -5,12 +5,16 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use kincal::montecarlo::Acquisition;
-
-use crate::commands::design::args::{Context, ScenarioArgs, SelectionArgs, SetupArgs};
-use crate::commands::design::designs::{self, Design};
-use crate::commands::design::study::{self, DesignResult, Timing};
-use crate::error::CliError;
+use kincal_io::design::context::{Context, SelectionSettings};
+use kincal_io::design::designs::Design;
+use kincal_io::design::evaluation::{self as ev, Built, DesignChoice};
+use kincal_io::design::pose_selection::Search;
+use kincal_io::design::study::{self as io_study, DesignResult};
 use kincal_io::robot_arg::resolve_robot;
+
+use crate::commands::design::args::{ScenarioArgs, SelectionArgs, SetupArgs};
+use crate::commands::design::{plate, study};
+use crate::error::CliError;
 
 pub const LONG_ABOUT: &str = "\
 Monte-Carlo evaluation of data-acquisition designs (the paper's Section 4.4 and Fig. 7, as a
@@ -108,6 +112,16 @@ pub struct Args {
     pub json: Option<PathBuf>,
 }
 
+impl BuiltIn {
+    fn io(self) -> ev::BuiltIn {
+        match self {
+            BuiltIn::Standard => ev::BuiltIn::Standard,
+            BuiltIn::Clustering => ev::BuiltIn::Clustering,
+            BuiltIn::Table2 => ev::BuiltIn::Table2,
+        }
+    }
+}
+
 fn named(arg: &str, flag: &str) -> Result<(String, PathBuf), CliError> {
     match arg.split_once('=') {
         Some((n, f)) if !n.trim().is_empty() && !f.is_empty() => {
@@ -130,7 +144,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         named(c, "--commanded")?;
     }
     for p in &args.plates {
-        crate::commands::design::plate::parse_plate(p)?;
+        plate::parse_plate(p)?;
     }
     if args.plate_plot.is_some() && args.plates.is_empty() {
         return Err(CliError::usage("--plate-plot: give at least one --plate"));
@@ -139,86 +153,70 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     kincal::with_any_robot!(&spec.robot, r => evaluate(*r, &spec.name, args))
 }
 
-/// Builds the requested designs (built-in ones from the seed, then the files).
+/// The designs of the arguments (built-in ones from the seed, then the files), and the
+/// lines saying how the selected ones were found.
 pub fn build_designs<const N: usize>(
     ctx: &Context<N>,
-    builtin: &[BuiltIn],
-    tools: &[String],
-    commanded: &[String],
-    sel: &SelectionArgs,
-    scenario: &ScenarioArgs,
+    args: &Args,
+    settings: &SelectionSettings,
     log: &mut String,
 ) -> Result<Vec<Design<N>>, CliError> {
-    let settings = sel.settings()?;
     // Arguments first: a typo should not wait for the built-in designs.
-    let tools: Vec<(String, PathBuf)> = tools
-        .iter()
-        .map(|t| named(t, "--tool"))
-        .collect::<Result<_, _>>()?;
-    let commanded: Vec<(String, PathBuf)> = commanded
-        .iter()
-        .map(|c| named(c, "--commanded"))
-        .collect::<Result<_, _>>()?;
-    let mut from_files = Vec::new();
-    for (name, path) in &tools {
-        from_files.push(designs::tool_from_file(ctx, name, path)?);
+    let choice = DesignChoice {
+        builtin: args.designs.iter().map(|b| b.io()).collect(),
+        tools: args
+            .tools
+            .iter()
+            .map(|t| named(t, "--tool"))
+            .collect::<Result<_, _>>()?,
+        commanded: args
+            .commanded
+            .iter()
+            .map(|c| named(c, "--commanded"))
+            .collect::<Result<_, _>>()?,
+    };
+    let pb = crate::progress::counter(settings.pool as u64, "designs");
+    let built = ev::build_designs(
+        ctx,
+        &choice,
+        settings,
+        &args.scenario.spec(),
+        &crate::progress::Bar(&pb),
+    );
+    pb.finish_and_clear();
+    let built = built?;
+    for b in &built {
+        search_line(b, settings, log);
     }
-    for (name, path) in &commanded {
-        from_files.push(designs::commanded_from_file(ctx, name, path)?);
+    Ok(built.into_iter().map(|b| b.design).collect())
+}
+
+/// How a selected design was found (nothing for the others).
+fn search_line<const N: usize>(b: &Built<N>, settings: &SelectionSettings, log: &mut String) {
+    match &b.search {
+        Some(Search::Exchange(s)) => {
+            let _ = writeln!(
+                log,
+                "  standard: {} = {:.4} ({} evaluations, {} exchanges, {} refinements)",
+                settings.index.name(),
+                s.value,
+                s.evaluations,
+                s.exchanges,
+                s.refinements
+            );
+        }
+        Some(Search::Clustering(c)) => {
+            let _ = writeln!(
+                log,
+                "  clustering: spread {:.3} (ln ratio), {} = {:.4}, {} occupied cubes",
+                c.spread,
+                settings.index.name(),
+                c.value,
+                c.occupied_cubes
+            );
+        }
+        None => {}
     }
-    let mut out = Vec::new();
-    for b in builtin {
-        let d = match b {
-            BuiltIn::Standard => {
-                let pb = crate::progress::counter(
-                    settings.pool as u64,
-                    "standard design: sampling the workspace",
-                );
-                let (d, s, _) = designs::standard_design(ctx, &settings, &pb)?;
-                pb.finish_and_clear();
-                let _ = writeln!(
-                    log,
-                    "  standard: {} = {:.4} ({} evaluations, {} exchanges, {} refinements)",
-                    settings.index.name(),
-                    s.value,
-                    s.evaluations,
-                    s.exchanges,
-                    s.refinements
-                );
-                d
-            }
-            BuiltIn::Clustering => {
-                let pb = crate::progress::counter(
-                    settings.pool as u64,
-                    "clustering design: robust poses of the working region",
-                );
-                let study = ctx.study(scenario.scenario(), ctx.seed);
-                let (d, c, _) = designs::clustering_design(ctx, &settings, &study, &pb)?;
-                pb.finish_and_clear();
-                let _ = writeln!(
-                    log,
-                    "  clustering: spread {:.3} (ln ratio), {} = {:.4}, {} occupied cubes",
-                    c.spread,
-                    settings.index.name(),
-                    c.value,
-                    c.occupied_cubes
-                );
-                d
-            }
-            BuiltIn::Table2 => designs::table2_design(ctx)?,
-        };
-        out.push(d);
-    }
-    out.extend(from_files);
-    let mut names: Vec<&str> = out.iter().map(|d| d.name.as_str()).collect();
-    names.sort_unstable();
-    if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
-        return Err(CliError::usage(format!("two designs are named '{}'", w[0])));
-    }
-    if out.is_empty() {
-        return Err(CliError::usage("no design to evaluate"));
-    }
-    Ok(out)
 }
 
 fn verdicts(results: &[DesignResult]) -> String {
@@ -281,23 +279,13 @@ fn verdicts(results: &[DesignResult]) -> String {
     s
 }
 
-fn evaluate<const N: usize>(
-    robot: kincal::Robot<N>,
-    name: &str,
+/// The socket plates of the arguments, their names distinct from the designs'.
+fn build_plates<const N: usize>(
+    ctx: &Context<N>,
     args: &Args,
-) -> Result<(), CliError> {
-    let ctx = Context::new(robot, name, &args.setup)?;
-    let mut log = String::new();
-    let designs = build_designs(
-        &ctx,
-        &args.designs,
-        &args.tools,
-        &args.commanded,
-        &args.selection,
-        &args.scenario,
-        &mut log,
-    )?;
-    let robust = args.selection.settings()?.robust_robots;
+    designs: &[Design<N>],
+    robust: u64,
+) -> Result<Vec<plate::Plate<N>>, CliError> {
     let probe = ctx.study(args.scenario.scenario(), ctx.seed);
     // Robustly reachable contacts take a while for large plates: a bar per plate.
     let pb = crate::progress::counter(
@@ -308,12 +296,7 @@ fn evaluate<const N: usize>(
         .plates
         .iter()
         .map(|p| {
-            let plate = crate::commands::design::plate::build_plate(
-                &ctx,
-                &crate::commands::design::plate::parse_plate(p)?,
-                &probe,
-                robust,
-            );
+            let plate = plate::build_plate(ctx, &plate::parse_plate(p)?, &probe, robust);
             pb.inc(1);
             plate
         })
@@ -329,6 +312,51 @@ fn evaluate<const N: usize>(
             )));
         }
     }
+    Ok(plates)
+}
+
+/// The plates' comparison with the designs, appended to `out`.
+fn compare_plates<const N: usize>(
+    ctx: &Context<N>,
+    args: &Args,
+    designs: &[Design<N>],
+    plates: &[plate::Plate<N>],
+    out: &mut String,
+) -> Result<Vec<plate::Row>, CliError> {
+    let (rows, wall_s) = plate::compare(ctx, designs, plates, args.scenario.scenario(), args.runs)?;
+    let reference = args.plate_match.clone().unwrap_or_else(|| {
+        if designs.iter().any(|d| d.name == "optimised") {
+            "optimised".into()
+        } else {
+            "table2".into()
+        }
+    });
+    let _ = writeln!(
+        out,
+        "\nSocket plates vs the designs above, on the same {} robots: worst validation pose per run, absolute (base frame) and registered (after the best rigid base registration):",
+        args.runs
+    );
+    out.push_str(&plate::table(&rows));
+    let _ = writeln!(out, "\nPlate verdicts:");
+    out.push_str(&plate::verdicts(&rows, &reference));
+    let _ = writeln!(
+        out,
+        "  ({} calibrations in {wall_s:.2} s)",
+        rows.len() as u64 * args.runs
+    );
+    Ok(rows)
+}
+
+fn evaluate<const N: usize>(
+    robot: kincal::Robot<N>,
+    name: &str,
+    args: &Args,
+) -> Result<(), CliError> {
+    let ctx = Context::new(robot, name, &args.setup.setup())?;
+    let settings = args.selection.settings()?;
+    let mut log = String::new();
+    let designs = build_designs(&ctx, args, &settings, &mut log)?;
+    let plates = build_plates(&ctx, args, &designs, settings.robust_robots)?;
     let mut out = String::new();
     let _ = writeln!(out, "Design evaluation: {}", ctx.describe());
     let _ = writeln!(out, "Scenario: {}", args.scenario.describe());
@@ -340,14 +368,17 @@ fn evaluate<const N: usize>(
         let _ = writeln!(out, "  {}: {}", p.spec.name, p.note);
     }
     out.push_str(&log);
-    let (results, timing) = study::run_study(
+    let pb = crate::progress::calibrations(args.runs * designs.len() as u64, "Monte-Carlo");
+    let (results, timing) = io_study::run_study(
         &ctx,
         &designs,
         args.scenario.scenario(),
         args.runs,
         ctx.seed,
         "Monte-Carlo",
+        &crate::progress::Bar(&pb),
     )?;
+    pb.finish_and_clear();
     let _ = writeln!(
         out,
         "\nWorst validation pose per run, over {} runs per design (same robots for every design):",
@@ -360,68 +391,32 @@ fn evaluate<const N: usize>(
     let plate_rows = if plates.is_empty() {
         None
     } else {
-        let (rows, wall_s) = crate::commands::design::plate::compare(
-            &ctx,
-            &designs,
-            &plates,
-            args.scenario.scenario(),
-            args.runs,
-        )?;
-        let reference = args.plate_match.clone().unwrap_or_else(|| {
-            if designs.iter().any(|d| d.name == "optimised") {
-                "optimised".into()
-            } else {
-                "table2".into()
-            }
-        });
-        let _ = writeln!(
-            out,
-            "\nSocket plates vs the designs above, on the same {} robots: worst validation pose per run, absolute (base frame) and registered (after the best rigid base registration):",
-            args.runs
-        );
-        out.push_str(&crate::commands::design::plate::table(&rows));
-        let _ = writeln!(out, "\nPlate verdicts:");
-        out.push_str(&crate::commands::design::plate::verdicts(&rows, &reference));
-        let _ = writeln!(
-            out,
-            "  ({} calibrations in {wall_s:.2} s)",
-            rows.len() as u64 * args.runs
-        );
-        Some(rows)
+        Some(compare_plates(&ctx, args, &designs, &plates, &mut out)?)
     };
     crate::report::emit(&out);
     let inputs: Vec<&Path> = Vec::new();
+    let subtitle = format!(
+        "{} runs per design, seed {}; {}",
+        args.runs,
+        ctx.seed,
+        args.scenario.describe()
+    );
     if let (Some(p), Some(rows)) = (&args.plate_plot, &plate_rows) {
-        crate::commands::design::plate::write_plot(
-            p,
-            &inputs,
-            &format!(
-                "{} runs per design, seed {}; {}",
-                args.runs,
-                ctx.seed,
-                args.scenario.describe()
-            ),
-            rows,
-        )?;
+        plate::write_plot(p, &inputs, &subtitle, rows)?;
     }
     if let Some(p) = &args.plot {
         crate::plots::study::write_comparison(
             p,
             &inputs,
             "Design comparison: errors after calibration inside the working region",
-            &format!(
-                "{} runs per design, seed {}; {}",
-                args.runs,
-                ctx.seed,
-                args.scenario.describe()
-            ),
+            &subtitle,
             &results,
         )?;
     }
     if let Some(p) = &args.json {
-        let mut json = report_json(&ctx, args, &results, &timing);
+        let mut json = ev::json(&ctx, args.runs, &args.scenario.spec(), &results, &timing);
         if let Some(rows) = &plate_rows {
-            json["plates"] = crate::commands::design::plate::json(rows);
+            json["plates"] = plate::json(rows);
         }
         kincal_io::files::write_atomic(p, &inputs, |w| {
             serde_json::to_writer_pretty(&mut *w, &json).map_err(std::io::Error::other)?;
@@ -429,28 +424,4 @@ fn evaluate<const N: usize>(
         })?;
     }
     Ok(())
-}
-
-fn report_json<const N: usize>(
-    ctx: &Context<N>,
-    args: &Args,
-    results: &[DesignResult],
-    t: &Timing,
-) -> serde_json::Value {
-    let s = args.scenario.scenario();
-    serde_json::json!({
-        "robot": ctx.robot_name,
-        "seed": ctx.seed,
-        "runs": args.runs,
-        "validation_poses": ctx.validation_q.len(),
-        "scenario": {
-            "length_error_m": s.length_error_m, "angle_error_rad": s.angle_error_rad,
-            "noise_pos_m": s.noise_pos_m, "noise_rot_rad": s.noise_rot_rad,
-            "tool_tol_pos_m": s.tool_tol_pos_m, "tool_tol_rot_rad": s.tool_tol_rot_rad,
-        },
-        "designs": study::results_json(results),
-        // Run times and the thread count are on the screen only (the Timing line): the
-        // file is byte-for-byte reproducible whatever the machine.
-        "calibrations": t.calibrations,
-    })
 }

@@ -5,13 +5,13 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use kincal::observability::{Index, Indices};
-use kincal::selection::Constraints;
-
-use crate::commands::design::args::{Context, RobotErrorArgs, SelectionArgs, SetupArgs};
-use crate::commands::design::designs::{self, Design, OwnedPool};
-use crate::error::CliError;
-use kincal_io::measurements::{PoseRow, write_poses_csv};
+use kincal_io::design::context::{Context, SelectionSettings};
+use kincal_io::design::pose_selection::{self as ps, PoseSelection, Search};
+use kincal_io::measurements::write_poses_csv;
 use kincal_io::robot_arg::resolve_robot;
+
+use crate::commands::design::args::{RobotErrorArgs, SelectionArgs, SetupArgs};
+use crate::error::CliError;
 
 pub const LONG_ABOUT: &str = "\
 Selects m calibration poses (eq. 18: maximise an observability index of the stacked,
@@ -75,6 +75,16 @@ pub struct Args {
     pub out: PathBuf,
 }
 
+impl Which {
+    fn io(self) -> ps::Which {
+        match self {
+            Which::Standard => ps::Which::Standard,
+            Which::Region => ps::Which::Region,
+            Which::Clustering => ps::Which::Clustering,
+        }
+    }
+}
+
 pub fn run(args: &Args) -> Result<(), CliError> {
     let spec = resolve_robot(&args.setup.robot, &args.setup.chain)?;
     kincal::with_any_robot!(&spec.robot, r => select(*r, &spec.name, args))
@@ -130,23 +140,61 @@ pub fn index_table(sel: &Indices, random: &[Indices]) -> String {
     t.render("  ")
 }
 
-/// Constraint check of a design: joint margin, region and cone (local designs).
-fn constraint_report<const N: usize>(ctx: &Context<N>, d: &Design<N>, c: &Constraints) -> String {
-    let mut min_margin = f64::INFINITY;
-    let mut ok = 0;
-    for q in &d.q {
-        for (v, l) in q.iter().zip(ctx.robot.limits().iter()) {
-            min_margin = min_margin.min((v - l.lower).min(l.upper - v));
-        }
-        if c.admits(&ctx.robot, q).unwrap_or(false) {
-            ok += 1;
-        }
+/// The search line: the exchange's counts, or the clustering's spread.
+fn search_line(which: Which, search: &Search, settings: &SelectionSettings) -> String {
+    match (which, search) {
+        (Which::Standard, Search::Exchange(s)) => format!(
+            "Exchange: {} evaluations, {} exchanges, {} refinements; {} from {:.4e} (greedy start) to {:.4e}\n",
+            s.evaluations,
+            s.exchanges,
+            s.refinements,
+            settings.index.name(),
+            s.initial_value,
+            s.value
+        ),
+        (_, Search::Exchange(s)) => format!(
+            "Exchange: {} evaluations, {} exchanges; {} from {:.4e} to {:.4e}\n",
+            s.evaluations,
+            s.exchanges,
+            settings.index.name(),
+            s.initial_value,
+            s.value
+        ),
+        (_, Search::Clustering(c)) => format!(
+            "Clustering: spread of the per-pose index {:.3} (ln ratio; tolerance {}), {} occupied cubes\n",
+            c.spread, settings.tolerance, c.occupied_cubes
+        ),
     }
-    format!(
-        "{ok} of {} poses satisfy the constraints; smallest distance to a joint limit {:.1}°",
-        d.q.len(),
-        min_margin.to_degrees()
-    )
+}
+
+/// The report: the design, its search, the index table and the constraint check.
+fn report<const N: usize>(
+    ctx: &Context<N>,
+    args: &Args,
+    settings: &SelectionSettings,
+    sel: &PoseSelection<N>,
+) -> String {
+    let mut head = String::new();
+    let _ = writeln!(head, "Pose selection: {}", ctx.describe());
+    let _ = writeln!(head, "{}", sel.design.note);
+    head.push_str(&search_line(args.design, &sel.search, settings));
+    let _ = writeln!(
+        head,
+        "\nIndices of the selection and of {} random {}-pose sets from the same pool ({} candidates):",
+        sel.random.len(),
+        settings.m,
+        sel.pool_size
+    );
+    head.push_str(&index_table(&sel.indices, &sel.random));
+    let _ = writeln!(
+        head,
+        "\nConstraints: {} of {} poses satisfy the constraints; smallest distance to a joint limit {:.1}°",
+        sel.admitted,
+        sel.design.q.len(),
+        sel.min_margin_rad.to_degrees()
+    );
+    let _ = writeln!(head, "Wrote {}", args.out.display());
+    head
 }
 
 fn select<const N: usize>(
@@ -154,95 +202,20 @@ fn select<const N: usize>(
     name: &str,
     args: &Args,
 ) -> Result<(), CliError> {
-    let ctx = Context::new(robot, name, &args.setup)?;
+    let ctx = Context::new(robot, name, &args.setup.setup())?;
     let settings = args.selection.settings()?;
-    let study = ctx.study(args.scenario.scenario(), ctx.seed);
     let pb = crate::progress::counter(settings.pool as u64, "candidate pool");
-    let mut out = String::new();
-    let (design, pool, constraints): (Design<N>, OwnedPool<N>, Constraints) = match args.design {
-        Which::Standard => {
-            let (d, s, p) = designs::standard_design(&ctx, &settings, &pb)?;
-            let _ = writeln!(
-                out,
-                "Exchange: {} evaluations, {} exchanges, {} refinements; {} from {:.4e} (greedy start) to {:.4e}",
-                s.evaluations,
-                s.exchanges,
-                s.refinements,
-                settings.index.name(),
-                s.initial_value,
-                s.value
-            );
-            let c = Constraints {
-                region: Some(settings.workspace),
-                cone: None,
-                joint_margin_rad: ctx.margin_rad,
-                min_dexterity: 0.0,
-            };
-            (d, p, c)
-        }
-        Which::Region => {
-            let (d, s, p) = designs::region_design(&ctx, &settings, &study, &pb)?;
-            let _ = writeln!(
-                out,
-                "Exchange: {} evaluations, {} exchanges; {} from {:.4e} to {:.4e}",
-                s.evaluations,
-                s.exchanges,
-                settings.index.name(),
-                s.initial_value,
-                s.value
-            );
-            (d, p, ctx.local_constraints(settings.min_dexterity))
-        }
-        Which::Clustering => {
-            let (d, c, p) = designs::clustering_design(&ctx, &settings, &study, &pb)?;
-            let _ = writeln!(
-                out,
-                "Clustering: spread of the per-pose index {:.3} (ln ratio; tolerance {}), {} occupied cubes",
-                c.spread, settings.tolerance, c.occupied_cubes
-            );
-            (d, p, ctx.local_constraints(settings.min_dexterity))
-        }
-    };
-    pb.finish_and_clear();
-    let sel = design.indices(&ctx)?;
-    let random = designs::random_subsets(
+    let sel = ps::select_poses(
         &ctx,
-        &pool,
-        settings.m,
+        &settings,
+        args.design.io(),
+        args.scenario.scenario(),
         args.compare_random,
-        ctx.seed ^ 0xAB,
+        &crate::progress::Bar(&pb),
     )?;
-    let mut head = String::new();
-    let _ = writeln!(head, "Pose selection: {}", ctx.describe());
-    let _ = writeln!(head, "{}", design.note);
-    head.push_str(&out);
-    let _ = writeln!(
-        head,
-        "\nIndices of the selection and of {} random {}-pose sets from the same pool ({} candidates):",
-        random.len(),
-        settings.m,
-        pool.q.len()
-    );
-    head.push_str(&index_table(&sel, &random));
-    let _ = writeln!(
-        head,
-        "\nConstraints: {}",
-        constraint_report(&ctx, &design, &constraints)
-    );
-    let _ = writeln!(head, "Wrote {}", args.out.display());
-    let rows: Vec<PoseRow> = design
-        .q
-        .iter()
-        .zip(&design.reference)
-        .enumerate()
-        .map(|(l, (q, t))| PoseRow {
-            pose_id: Some((l + 1).to_string()),
-            q_rad: q.to_vec(),
-            position_m: [t.translation.x, t.translation.y, t.translation.z],
-            quaternion_wxyz: kincal_io::tool_file::quaternion(t),
-        })
-        .collect();
+    pb.finish_and_clear();
+    let rows = ps::pose_rows(&sel.design);
     kincal_io::files::write_atomic(&args.out, &[], |w| write_poses_csv(w, N, true, &rows))?;
-    crate::report::emit(&head);
+    crate::report::emit(&report(&ctx, args, &settings, &sel));
     Ok(())
 }

@@ -9,8 +9,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use crate::commands::design::study::DesignResult;
 use crate::error::CliError;
+use kincal_io::design::study::DesignResult;
 
 type Res<T> = Result<T, Box<dyn std::error::Error>>;
 

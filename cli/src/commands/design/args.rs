@@ -1,21 +1,12 @@
-//! What the design commands (`select-poses`, `design-tool`, `evaluate-designs`) share: the
-//! robot, the working region and its orientations, the validation grid, the Monte-Carlo
-//! scenario, and the resolved context built from them.
+//! The arguments the design commands (`select-poses`, `design-tool`, `evaluate-designs`)
+//! share: the robot, the working region and its orientations, the validation grid, the
+//! Monte-Carlo scenario and the selection sizes, each turned into kincal-io's
+//! [`kincal_io::design`] settings, which run the designs.
 
-use kincal::aria;
-use kincal::ik::{IkOptions, solve_ik};
 use kincal::montecarlo::Scenario;
-use kincal::pose::{Transform, rpy_to_matrix, transform};
-use kincal::selection::{Cone, Constraints, Region, reach};
-use kincal::{JointState, ParamSet, Robot};
-use nalgebra::{Matrix3, Vector3};
-use rayon::prelude::*;
+use kincal_io::design::context::{ScenarioSpec, SelectionSettings, Setup, pose_count, region};
 
 use crate::error::CliError;
-
-/// Workspace capacity of the design commands: 4 geometric parameters per joint for up to
-/// eight joints.
-pub const P: usize = 4 * kincal::any::MAX_JOINTS;
 
 /// Parses `a,b,c` (finite numbers).
 pub fn parse_triple(s: &str) -> Result<[f64; 3], String> {
@@ -110,6 +101,20 @@ pub struct SetupArgs {
     pub seed: u64,
 }
 
+impl SetupArgs {
+    /// The setting as kincal-io takes it.
+    pub fn setup(&self) -> Setup {
+        Setup {
+            region: self.region,
+            working_rpy_deg: self.working_rpy_deg.clone(),
+            cone_deg: self.cone_deg,
+            grid: self.grid,
+            margin_deg: self.margin_deg,
+            seed: self.seed,
+        }
+    }
+}
+
 /// The Monte-Carlo scenario (defaults: [`Scenario::paper`]): the random robots' errors and
 /// the measurement and tool noise. `select-poses` takes only [`RobotErrorArgs`] (its random
 /// robots test reachability; it simulates no measurement).
@@ -135,11 +140,12 @@ pub struct RobotErrorArgs {
 impl RobotErrorArgs {
     /// The paper's scenario with these robot errors (its noise unused by the caller).
     pub fn scenario(&self) -> Scenario {
-        Scenario {
-            length_error_m: self.length_error_mm * 1e-3,
-            angle_error_rad: self.angle_error_deg.to_radians(),
-            ..Scenario::paper()
+        ScenarioSpec {
+            length_error_mm: self.length_error_mm,
+            angle_error_deg: self.angle_error_deg,
+            ..ScenarioSpec::default()
         }
+        .robot_errors()
     }
 }
 
@@ -162,42 +168,30 @@ pub struct NoiseArgs {
 }
 
 impl ScenarioArgs {
-    pub fn scenario(&self) -> Scenario {
-        let n = &self.noise;
-        Scenario {
-            noise_pos_m: n.noise_pos_mm * 1e-3,
-            noise_rot_rad: n.noise_rot_deg.to_radians(),
-            tool_tol_pos_m: n.tool_tol_mm * 1e-3,
-            tool_tol_rot_rad: n.tool_tol_deg.to_radians(),
-            ..self.errors.scenario()
+    /// The scenario in the user's units, as kincal-io takes it.
+    pub fn spec(&self) -> ScenarioSpec {
+        let (e, n) = (&self.errors, &self.noise);
+        ScenarioSpec {
+            length_error_mm: e.length_error_mm,
+            angle_error_deg: e.angle_error_deg,
+            noise_pos_mm: n.noise_pos_mm,
+            noise_rot_deg: n.noise_rot_deg,
+            tool_tol_mm: n.tool_tol_mm,
+            tool_tol_deg: n.tool_tol_deg,
         }
+    }
+    pub fn scenario(&self) -> Scenario {
+        self.spec().scenario()
     }
     /// One line for reports.
     pub fn describe(&self) -> String {
-        let (e, n) = (&self.errors, &self.noise);
-        format!(
-            "random robots ±{} mm / ±{}° per identified parameter; noise σ {} mm / {}° per axis; \
-             tool tolerance ±{} mm / ±{}° per axis",
-            e.length_error_mm,
-            e.angle_error_deg,
-            n.noise_pos_mm,
-            n.noise_rot_deg,
-            n.tool_tol_mm,
-            n.tool_tol_deg
-        )
+        self.spec().describe()
     }
 }
 
 /// Parses an observability index name.
 pub fn parse_index(s: &str) -> Result<kincal::observability::Index, String> {
-    kincal::observability::Index::parse(s.trim()).ok_or_else(|| {
-        format!(
-            "unknown index '{s}': expected one of {}",
-            kincal::observability::Index::ALL
-                .map(|i| i.name())
-                .join(", ")
-        )
-    })
+    kincal_io::design::context::parse_index(s)
 }
 
 /// How the selection-based designs are built: the sizes every design command uses
@@ -233,10 +227,7 @@ pub struct DesignSizeArgs {
 impl DesignSizeArgs {
     /// The number of poses m, checked (1..=48).
     pub fn m(&self) -> Result<usize, CliError> {
-        if self.poses == 0 || self.poses > 48 {
-            return Err(CliError::usage("--poses: expected 1..=48"));
-        }
-        Ok(self.poses)
+        pose_count(self.poses, "--poses")
     }
 }
 
@@ -268,241 +259,19 @@ impl SelectionArgs {
     pub fn settings(&self) -> Result<SelectionSettings, CliError> {
         let (size, pool) = (&self.size, &self.pool);
         let m = size.m()?;
-        let w = pool.workspace;
-        Ok(SelectionSettings {
+        SelectionSettings {
             m,
             index: pool.index,
-            pool: pool.pool.max(m),
-            starts: size.starts.max(1),
+            pool: pool.pool,
+            starts: size.starts,
             refine_trials: pool.refine,
-            workspace: Region::new([w[0], w[1], w[2]], [w[3], w[4], w[5]])
-                .map_err(|e| CliError::usage(format!("--workspace: {e}")))?,
+            workspace: region(pool.workspace, "--workspace")?,
             cube_m: pool.cube_mm * 1e-3,
             tolerance: pool.tolerance,
             min_dexterity: size.min_dexterity,
             robust_robots: size.robust_robots,
-        })
-    }
-}
-
-/// Settings of the selection-based designs.
-#[derive(Debug, Clone)]
-pub struct SelectionSettings {
-    pub m: usize,
-    pub index: kincal::observability::Index,
-    pub pool: usize,
-    pub starts: usize,
-    pub refine_trials: usize,
-    /// The standard design's whole-workspace box (above the base plate).
-    pub workspace: Region,
-    pub cube_m: f64,
-    pub tolerance: f64,
-    pub min_dexterity: f64,
-    pub robust_robots: u64,
-}
-
-/// The resolved setting of a design command.
-#[derive(Debug, Clone)]
-pub struct Context<const N: usize> {
-    pub robot_name: String,
-    pub robot: Robot<N>,
-    pub params: ParamSet,
-    pub region: Region,
-    /// Working orientations.
-    pub working: Vec<Matrix3<f64>>,
-    /// Mean working approach axis and the cone of the local designs.
-    pub cone: Cone,
-    pub margin_rad: f64,
-    /// Inverse-kinematics seed (ARIA: the Table 2 branch).
-    pub seed_q: [f64; N],
-    pub validation_q: Vec<[f64; N]>,
-    pub validation_sincos: Vec<[[f64; 2]; N]>,
-    pub validation_nominal: Vec<Transform>,
-    /// Grid poses skipped as unreachable.
-    pub validation_skipped: usize,
-    pub seed: u64,
-    pub is_aria: bool,
-}
-
-impl<const N: usize> Context<N> {
-    /// Resolves the arguments for `robot` (named `name`).
-    pub fn new(robot: Robot<N>, name: &str, a: &SetupArgs) -> Result<Self, CliError> {
-        let is_aria = name == "aria";
-        let region = match (a.region, is_aria) {
-            (Some(b), _) => Region::new([b[0], b[1], b[2]], [b[3], b[4], b[5]]),
-            (None, true) => Region::new(aria::WORKING_REGION_MIN_M, aria::WORKING_REGION_MAX_M),
-            (None, false) => {
-                return Err(CliError::usage(format!(
-                    "robot '{name}' has no built-in working region: give --region X0,Y0,Z0,X1,Y1,Z1"
-                )));
-            }
         }
-        .map_err(|e| CliError::usage(format!("--region: {e}")))?;
-        let rpy: Vec<[f64; 3]> = match (a.working_rpy_deg.is_empty(), is_aria) {
-            (false, _) => a.working_rpy_deg.clone(),
-            (true, true) => vec![[-150.0, 0.0, 0.0], [-160.0, 0.0, 0.0]],
-            (true, false) => {
-                return Err(CliError::usage(format!(
-                    "robot '{name}' has no built-in working orientations: give --working-rpy-deg R,P,Y"
-                )));
-            }
-        };
-        let working: Vec<Matrix3<f64>> = rpy
-            .iter()
-            .map(|r| rpy_to_matrix(r[0].to_radians(), r[1].to_radians(), r[2].to_radians()))
-            .collect();
-        let mean: Vector3<f64> = working.iter().map(|r| r.column(2).into_owned()).sum();
-        if mean.norm() < 1e-9 {
-            return Err(CliError::usage(
-                "--working-rpy-deg: the working orientations have no common approach axis",
-            ));
-        }
-        let cone = Cone::new([mean.x, mean.y, mean.z], a.cone_deg.min(180.0).to_radians())
-            .map_err(|e| CliError::usage(format!("--cone-deg: {e}")))?;
-        let seed_q = if is_aria && N == 6 {
-            let mut q = [0.0; N];
-            q.copy_from_slice(&aria::TOOL_SEED_Q);
-            q
-        } else {
-            [0.0; N]
-        };
-        let mut ctx = Context {
-            robot_name: name.to_string(),
-            params: robot.geometric_param_set(),
-            robot,
-            region,
-            working,
-            cone,
-            margin_rad: a.margin_deg.to_radians(),
-            seed_q,
-            validation_q: Vec::new(),
-            validation_sincos: Vec::new(),
-            validation_nominal: Vec::new(),
-            validation_skipped: 0,
-            seed: a.seed,
-            is_aria,
-        };
-        ctx.build_validation(a.grid);
-        if ctx.validation_q.is_empty() {
-            return Err(CliError::numeric(
-                "no validation pose of the working region is reachable: check --region and \
-                 --working-rpy-deg",
-            ));
-        }
-        Ok(ctx)
-    }
-
-    /// The grid poses of the region with every working orientation, solved by IK.
-    fn build_validation(&mut self, grid: [usize; 3]) {
-        let lin = |k: usize, n: usize, lo: f64, hi: f64| {
-            if n <= 1 {
-                0.5 * (lo + hi)
-            } else {
-                lo + (hi - lo) * k as f64 / (n - 1) as f64
-            }
-        };
-        let r = self.region;
-        let mut targets = Vec::new();
-        for ix in 0..grid[0] {
-            for iy in 0..grid[1] {
-                for iz in 0..grid[2] {
-                    let p = Vector3::new(
-                        lin(ix, grid[0], r.min_m[0], r.max_m[0]),
-                        lin(iy, grid[1], r.min_m[1], r.max_m[1]),
-                        lin(iz, grid[2], r.min_m[2], r.max_m[2]),
-                    );
-                    for rot in &self.working {
-                        targets.push(transform(*rot, p));
-                    }
-                }
-            }
-        }
-        let solved: Vec<Option<[f64; N]>> = targets
-            .par_iter()
-            .map(|t| self.nominal_ik(t, &Constraints::none()))
-            .collect();
-        for (t, q) in targets.iter().zip(solved) {
-            match q {
-                Some(q) => {
-                    self.validation_q.push(q);
-                    self.validation_sincos
-                        .push(kincal::montecarlo::joint_sincos(&q));
-                    self.validation_nominal.push(*t);
-                }
-                None => self.validation_skipped += 1,
-            }
-        }
-    }
-
-    /// The nominal robot's configuration for `target` nearest the seed (the working
-    /// branch: of all converging IK seeds, the solution nearest [`Context::seed_q`]),
-    /// admissible under `c` (joint limits always), or `None`.
-    pub fn nominal_ik(&self, target: &Transform, c: &Constraints) -> Option<[f64; N]> {
-        self.nominal_ik_from(target, None, c)
-    }
-
-    /// As [`Context::nominal_ik`] from `seed` instead of [`Context::seed_q`] when given.
-    pub fn nominal_ik_from(
-        &self,
-        target: &Transform,
-        seed: Option<&[f64; N]>,
-        c: &Constraints,
-    ) -> Option<[f64; N]> {
-        let sol = solve_ik(
-            &self.robot,
-            target,
-            &JointState::new(*seed.unwrap_or(&self.seed_q)),
-            &IkOptions::default(),
-        )
-        .ok()?;
-        c.admits(&self.robot, &sol.q)
-            .ok()
-            .and_then(|ok| ok.then_some(sol.q))
-    }
-
-    /// As [`Context::nominal_ik`] but the first converging seed (faster, for pools).
-    pub fn quick_ik(&self, target: &Transform, c: &Constraints) -> Option<[f64; N]> {
-        reach(&self.robot, target, &self.seed_q, c).ok().flatten()
-    }
-
-    /// Constraints of the local designs: region, cone, joint margin, dexterity.
-    pub fn local_constraints(&self, min_dexterity: f64) -> Constraints {
-        Constraints {
-            region: Some(self.region),
-            cone: Some(self.cone),
-            joint_margin_rad: self.margin_rad,
-            min_dexterity,
-        }
-    }
-
-    /// The Monte-Carlo study of this context (with the errors before calibration).
-    pub fn study(&self, scenario: Scenario, seed: u64) -> kincal::montecarlo::Study<'_, N> {
-        kincal::montecarlo::Study {
-            nominal: self.robot,
-            params: self.params,
-            validation_q: &self.validation_q,
-            validation_sincos: &self.validation_sincos,
-            validation_nominal: &self.validation_nominal,
-            scenario,
-            seed,
-        }
-    }
-
-    /// One line for reports.
-    pub fn describe(&self) -> String {
-        let r = self.region;
-        format!(
-            "robot {}; working region x {:.3}..{:.3}, y {:.3}..{:.3}, z {:.3}..{:.3} m; {} validation poses ({} unreachable skipped)",
-            self.robot_name,
-            r.min_m[0],
-            r.max_m[0],
-            r.min_m[1],
-            r.max_m[1],
-            r.min_m[2],
-            r.max_m[2],
-            self.validation_q.len(),
-            self.validation_skipped
-        )
+        .checked("--poses")
     }
 }
 

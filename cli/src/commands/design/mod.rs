@@ -1,9 +1,8 @@
-//! What the design commands (`select-poses`, `design-tool`, `evaluate-designs`) share:
-//! their arguments and resolved context (`args`), the data-acquisition designs (`designs`),
-//! the Monte-Carlo study that compares them (`study`) and the socket-plate comparison
-//! (`plate`).
+//! What the design commands (`select-poses`, `design-tool`, `evaluate-designs`) share: their
+//! arguments (`args`), the tables of a Monte-Carlo comparison (`study`) and the socket-plate
+//! comparison (`plate`). The designs and studies themselves are kincal-io's
+//! [`kincal_io::design`].
 
 pub mod args;
-pub mod designs;
 pub mod plate;
 pub mod study;

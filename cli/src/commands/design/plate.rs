@@ -29,10 +29,10 @@ use kincal::rng::SplitMix64;
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
-use crate::commands::design::args::{Context, P};
-use crate::commands::design::designs::Design;
-use crate::commands::design::study::{DesignResult, Summary};
 use crate::error::CliError;
+use kincal_io::design::context::{Context, P};
+use kincal_io::design::designs::Design;
+use kincal_io::design::study::{DesignResult, Summary};
 
 /// Workspace of the plate identification: the design capacity plus the tool translation
 /// and the base frame the analysis sets aside.

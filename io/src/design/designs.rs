@@ -4,7 +4,6 @@
 //! tool, or a user's tool file), and commanded pose files. Candidate pools and the starts of
 //! the selection run in parallel; every result depends only on the seed.
 
-use indicatif::ProgressBar;
 use kincal::aria;
 use kincal::identify::Workspace;
 use kincal::montecarlo::{Acquisition, Design as CoreDesign, Study, robustly_reachable};
@@ -19,8 +18,9 @@ use kincal::selection::{
 };
 use rayon::prelude::*;
 
-use crate::commands::design::args::{Context, P, SelectionSettings};
-use crate::error::CliError;
+use crate::design::Progress;
+use crate::design::context::{Context, P, SelectionSettings};
+use crate::error::Error;
 
 /// A design: its poses and how they are measured.
 #[derive(Debug, Clone)]
@@ -43,12 +43,12 @@ impl<const N: usize> Design<N> {
         acquisition: Acquisition,
         q: Vec<[f64; N]>,
         note: String,
-    ) -> Result<Self, CliError> {
+    ) -> Result<Self, Error> {
         let reference = q
             .iter()
             .map(|q| ctx.robot.fk_q(q))
             .collect::<Result<Vec<_>, _>>()
-            .map_err(|e| CliError::numeric(format!("design {name}: {e}")))?;
+            .map_err(|e| Error::numeric(format!("design {name}: {e}")))?;
         Ok(Design {
             name: name.to_string(),
             acquisition,
@@ -66,7 +66,7 @@ impl<const N: usize> Design<N> {
         }
     }
     /// The observability indices of the design (nominal model, unit-column scaling).
-    pub fn indices(&self, ctx: &Context<N>) -> Result<Indices, CliError> {
+    pub fn indices(&self, ctx: &Context<N>) -> Result<Indices, Error> {
         let obs = ObservabilityOptions::new(ctx.params);
         observability(
             &ctx.robot,
@@ -74,7 +74,7 @@ impl<const N: usize> Design<N> {
             &obs,
             &mut Box::<Workspace<P>>::default(),
         )
-        .map_err(|e| CliError::numeric(format!("design {}: {e}", self.name)))
+        .map_err(|e| Error::numeric(format!("design {}: {e}", self.name)))
     }
 }
 
@@ -92,7 +92,7 @@ impl<const N: usize> OwnedPool<N> {
         ctx: &Context<N>,
         obs: &ObservabilityOptions,
         q: Vec<[f64; N]>,
-    ) -> Result<Self, CliError> {
+    ) -> Result<Self, Error> {
         type Chunk = Result<(Vec<PoseBlock<P>>, Vec<[f64; 3]>), kincal::Error>;
         let chunks: Vec<Chunk> = q
             .par_chunks(64)
@@ -107,7 +107,7 @@ impl<const N: usize> OwnedPool<N> {
         let mut blocks = Vec::with_capacity(q.len());
         let mut pos = Vec::with_capacity(q.len());
         for c in chunks {
-            let (b, p) = c.map_err(|e| CliError::numeric(format!("candidate pool: {e}")))?;
+            let (b, p) = c.map_err(|e| Error::numeric(format!("candidate pool: {e}")))?;
             blocks.extend(b);
             pos.extend(p);
         }
@@ -131,8 +131,8 @@ pub fn sample_joint_pool<const N: usize>(
     c: &Constraints,
     k: usize,
     seed: u64,
-    pb: &ProgressBar,
-) -> Result<Vec<[f64; N]>, CliError> {
+    pb: &dyn Progress,
+) -> Result<Vec<[f64; N]>, Error> {
     let n_chunks = k.div_ceil(CHUNK);
     let parts: Vec<Result<Vec<[f64; N]>, kincal::Error>> = (0..n_chunks)
         .into_par_iter()
@@ -158,8 +158,8 @@ pub fn sample_region_pool<const N: usize>(
     k: usize,
     seed: u64,
     robust: Option<(&Study<'_, N>, u64)>,
-    pb: &ProgressBar,
-) -> Result<Vec<[f64; N]>, CliError> {
+    pb: &dyn Progress,
+) -> Result<Vec<[f64; N]>, Error> {
     let n_chunks = k.div_ceil(CHUNK);
     let parts: Vec<Result<Vec<[f64; N]>, kincal::Error>> = (0..n_chunks)
         .into_par_iter()
@@ -194,10 +194,10 @@ pub fn sample_region_pool<const N: usize>(
 fn collect_pool<const N: usize>(
     parts: Vec<Result<Vec<[f64; N]>, kincal::Error>>,
     k: usize,
-) -> Result<Vec<[f64; N]>, CliError> {
+) -> Result<Vec<[f64; N]>, Error> {
     let mut out = Vec::with_capacity(k);
     for p in parts {
-        out.extend(p.map_err(|e| CliError::numeric(format!("candidate pool: {e}")))?);
+        out.extend(p.map_err(|e| Error::numeric(format!("candidate pool: {e}")))?);
     }
     out.truncate(k);
     Ok(out)
@@ -215,8 +215,8 @@ pub fn select_best<const N: usize>(
     c: &Constraints,
     opts: &SelectOptions,
     reference: Option<&[PoseBlock<P>]>,
-    pb: &ProgressBar,
-) -> Result<(Vec<[f64; N]>, Selection), CliError> {
+    pb: &dyn Progress,
+) -> Result<(Vec<[f64; N]>, Selection), Error> {
     let n = obs.params.len();
     type Start<const N: usize> = Result<(Vec<[f64; N]>, Selection), kincal::Error>;
     let results: Vec<Start<N>> = (0..opts.starts.max(1))
@@ -247,13 +247,13 @@ pub fn select_best<const N: usize>(
     let mut best: Option<(Vec<[f64; N]>, Selection)> = None;
     let mut evaluations = 0;
     for r in results {
-        let (q, sel) = r.map_err(|e| CliError::numeric(format!("pose selection: {e}")))?;
+        let (q, sel) = r.map_err(|e| Error::numeric(format!("pose selection: {e}")))?;
         evaluations += sel.evaluations;
         if best.as_ref().is_none_or(|(_, b)| sel.value > b.value) {
             best = Some((q, sel));
         }
     }
-    let (q, sel) = best.ok_or_else(|| CliError::numeric("pose selection: no start"))?;
+    let (q, sel) = best.ok_or_else(|| Error::numeric("pose selection: no start"))?;
     Ok((q, Selection { evaluations, ..sel }))
 }
 
@@ -263,8 +263,8 @@ pub fn select_best<const N: usize>(
 pub fn standard_design<const N: usize>(
     ctx: &Context<N>,
     s: &SelectionSettings,
-    pb: &ProgressBar,
-) -> Result<(Design<N>, Selection, OwnedPool<N>), CliError> {
+    pb: &dyn Progress,
+) -> Result<(Design<N>, Selection, OwnedPool<N>), Error> {
     let c = Constraints {
         region: Some(s.workspace),
         cone: None,
@@ -274,7 +274,7 @@ pub fn standard_design<const N: usize>(
     let obs = ObservabilityOptions::new(ctx.params);
     let q = sample_joint_pool(ctx, &c, s.pool, ctx.seed, pb)?;
     if q.len() < s.m {
-        return Err(CliError::numeric(format!(
+        return Err(Error::numeric(format!(
             "standard design: only {} admissible configurations found in the workspace box",
             q.len()
         )));
@@ -283,10 +283,9 @@ pub fn standard_design<const N: usize>(
     let mut opts = SelectOptions::new(Objective::Index(s.index), ctx.seed);
     opts.starts = s.starts;
     opts.refine_trials = s.refine_trials;
-    crate::progress::phase(
-        pb,
+    pb.stage(
         opts.starts.max(1) as u64,
-        format!("exchange ({} starts)", opts.starts.max(1)),
+        &format!("exchange ({} starts)", opts.starts.max(1)),
     );
     let (q, sel) = select_best(ctx, &pool, s.m, &obs, &c, &opts, None, pb)?;
     let note = format!(
@@ -309,8 +308,8 @@ pub fn clustering_design<const N: usize>(
     ctx: &Context<N>,
     s: &SelectionSettings,
     study: &Study<'_, N>,
-    pb: &ProgressBar,
-) -> Result<(Design<N>, ClusterSelection, OwnedPool<N>), CliError> {
+    pb: &dyn Progress,
+) -> Result<(Design<N>, ClusterSelection, OwnedPool<N>), Error> {
     let c = ctx.local_constraints(s.min_dexterity);
     let obs = ObservabilityOptions::new(ctx.params);
     let robust = (s.robust_robots > 0).then_some((study, s.robust_robots));
@@ -323,7 +322,7 @@ pub fn clustering_design<const N: usize>(
             pose_singular_values(&ctx.robot, q, &obs, ws)
         })
         .collect::<Result<_, _>>()
-        .map_err(|e| CliError::numeric(format!("per-pose index: {e}")))?;
+        .map_err(|e| Error::numeric(format!("per-pose index: {e}")))?;
     let copts = ClusterOptions {
         region: ctx.region,
         cube_m: s.cube_m,
@@ -345,7 +344,7 @@ pub fn clustering_design<const N: usize>(
         &mut chosen,
     )
     .map_err(|e| {
-        CliError::numeric(format!(
+        Error::numeric(format!(
             "workspace clustering: {e} (cubes of {} mm: {}×{}×{}; pool {})",
             s.cube_m * 1e3,
             counts[0],
@@ -377,9 +376,9 @@ pub fn clustering_design<const N: usize>(
 }
 
 /// The arbitrary-choice design of the paper: the Table 2 calibration tool (ARIA only).
-pub fn table2_design<const N: usize>(ctx: &Context<N>) -> Result<Design<N>, CliError> {
+pub fn table2_design<const N: usize>(ctx: &Context<N>) -> Result<Design<N>, Error> {
     if !ctx.is_aria || N != 6 {
-        return Err(CliError::usage(format!(
+        return Err(Error::usage(format!(
             "the Table 2 tool belongs to the built-in aria, not to robot '{}': give the tool as a file",
             ctx.robot_name
         )));
@@ -387,11 +386,11 @@ pub fn table2_design<const N: usize>(ctx: &Context<N>) -> Result<Design<N>, CliE
     let mut q = Vec::new();
     let mut reference = Vec::new();
     for l in 0..aria::TOOL_POSES.len() {
-        let t = aria::tool_pose(l).ok_or_else(|| CliError::numeric("Table 2 pose missing"))?;
+        let t = aria::tool_pose(l).ok_or_else(|| Error::numeric("Table 2 pose missing"))?;
         let c = Constraints::none();
         let ql = ctx
             .nominal_ik(&t, &c)
-            .ok_or_else(|| CliError::numeric(format!("Table 2 pose {} is unreachable", l + 1)))?;
+            .ok_or_else(|| Error::numeric(format!("Table 2 pose {} is unreachable", l + 1)))?;
         q.push(ql);
         reference.push(t);
     }
@@ -409,8 +408,8 @@ pub fn tool_from_file<const N: usize>(
     ctx: &Context<N>,
     name: &str,
     path: &std::path::Path,
-) -> Result<Design<N>, CliError> {
-    let poses = kincal_io::tool_file::read_tool(path)?;
+) -> Result<Design<N>, Error> {
+    let poses = crate::tool_file::read_tool(path)?;
     let mut q = Vec::with_capacity(poses.len());
     for p in &poses {
         // The file's nominal configuration (if any) chooses the branch.
@@ -422,7 +421,7 @@ pub fn tool_from_file<const N: usize>(
             None
         };
         let ql = ctx.nominal_ik_from(&p.pose, seed.as_ref(), &Constraints::none()).ok_or_else(|| {
-            CliError::numeric(format!(
+            Error::numeric(format!(
                 "{}:{}: the nominal robot cannot reach this reference pose within its joint limits",
                 path.display(),
                 p.line
@@ -445,8 +444,8 @@ pub fn commanded_from_file<const N: usize>(
     ctx: &Context<N>,
     name: &str,
     path: &std::path::Path,
-) -> Result<Design<N>, CliError> {
-    let mut opts = kincal_io::measurements::ReadOptions::new(N);
+) -> Result<Design<N>, Error> {
+    let mut opts = crate::measurements::ReadOptions::new(N);
     opts.joint_limits = Some(
         ctx.robot
             .limits()
@@ -454,7 +453,7 @@ pub fn commanded_from_file<const N: usize>(
             .map(|l| (l.lower, l.upper))
             .collect(),
     );
-    let set = kincal_io::measurements::read_measurements(path, &opts)?;
+    let set = crate::measurements::read_measurements(path, &opts)?;
     let q: Vec<[f64; N]> = set
         .rows
         .iter()
@@ -475,14 +474,14 @@ pub fn region_design<const N: usize>(
     ctx: &Context<N>,
     s: &SelectionSettings,
     study: &Study<'_, N>,
-    pb: &ProgressBar,
-) -> Result<(Design<N>, Selection, OwnedPool<N>), CliError> {
+    pb: &dyn Progress,
+) -> Result<(Design<N>, Selection, OwnedPool<N>), Error> {
     let c = ctx.local_constraints(s.min_dexterity);
     let obs = ObservabilityOptions::new(ctx.params);
     let robust = (s.robust_robots > 0).then_some((study, s.robust_robots));
     let q = sample_region_pool(ctx, &c, s.pool, ctx.seed ^ 0xC1u64, robust, pb)?;
     if q.len() < s.m {
-        return Err(CliError::numeric(format!(
+        return Err(Error::numeric(format!(
             "region design: only {} admissible poses found in the working region",
             q.len()
         )));
@@ -491,10 +490,9 @@ pub fn region_design<const N: usize>(
     let mut opts = SelectOptions::new(Objective::Index(s.index), ctx.seed);
     opts.starts = s.starts;
     opts.refine_trials = 0;
-    crate::progress::phase(
-        pb,
+    pb.stage(
         opts.starts.max(1) as u64,
-        format!("exchange ({} starts)", opts.starts.max(1)),
+        &format!("exchange ({} starts)", opts.starts.max(1)),
     );
     let (q, sel) = select_best(ctx, &pool, s.m, &obs, &c, &opts, None, pb)?;
     let note = format!(
@@ -517,7 +515,7 @@ pub fn random_subsets<const N: usize>(
     m: usize,
     trials: usize,
     seed: u64,
-) -> Result<Vec<Indices>, CliError> {
+) -> Result<Vec<Indices>, Error> {
     let obs = ObservabilityOptions::new(ctx.params);
     (0..trials)
         .into_par_iter()
@@ -534,5 +532,5 @@ pub fn random_subsets<const N: usize>(
             observability(&ctx.robot, &qs, &obs, ws)
         })
         .collect::<Result<Vec<_>, _>>()
-        .map_err(|e| CliError::numeric(format!("random subsets: {e}")))
+        .map_err(|e| Error::numeric(format!("random subsets: {e}")))
 }
