@@ -174,6 +174,7 @@ impl Recording {
             contacts: &self.contacts,
             groups: &self.groups,
             distances: &self.distances,
+            sessions: &[],
         }
     }
 }

@@ -417,12 +417,13 @@ pub fn calibrate_constrained<const N: usize>(
     data: &ConstraintData<'_, N>,
     settings: &Settings,
 ) -> Result<Calibration<N>, Failure> {
-    run_all(
-        start,
-        Rows::Contacts(data),
-        contact_params(start, settings),
-        settings,
-    )
+    // Instrument rows alone (in several sessions' frames) request what instrument data do.
+    let requested = if data.contacts.is_empty() {
+        settings.param_set(start)
+    } else {
+        contact_params(start, settings)
+    };
+    run_all(start, Rows::Contacts(data), requested, settings)
 }
 
 /// Two algorithms disagree on a parameter when the difference exceeds

@@ -194,6 +194,23 @@ impl<const P: usize> GramAccumulator<P> {
         }
         Ok(())
     }
+    /// Removes the row `a·x ≈ b` with weight `w >= 0` (subtracts `w·a·aᵀ`, `w·a·b`, `w·b²`):
+    /// the Schur complement of eliminated nuisance parameters, folded as rows `L⁻¹C` with
+    /// right-hand sides `L⁻¹g` (see `identify::instrument_sessions`).
+    pub fn downdate_row(&mut self, a: &[f64], b: f64, w: f64) -> Result<()> {
+        self.downdate(a, w)?;
+        if !b.is_finite() {
+            return Err(Error::NonFinite {
+                what: crate::error::Quantity::Parameter,
+                index: self.n,
+            });
+        }
+        for (v, &ai) in self.atb.iter_mut().zip(a.iter()) {
+            *v -= w * ai * b;
+        }
+        self.btb -= w * b * b;
+        Ok(())
+    }
     /// Number of unknowns.
     #[must_use]
     pub fn n(&self) -> usize {
