@@ -132,6 +132,17 @@ impl Settings {
         o
     }
 
+    /// The weighting and orientation error of these settings (what the fit weighs rows
+    /// by, e.g. for the frame of an instrument session fitted as the fit eliminates it).
+    pub fn row_options(&self) -> IdentifyOptions<'static> {
+        self.options(
+            self.algorithms.first().copied().unwrap_or(Algorithm::Ols),
+            ParamSet::new(),
+            None,
+            None,
+        )
+    }
+
     /// The prior of these settings around `start` (rows whitened: data variance 1).
     pub fn prior_around<const N: usize>(&self, start: &Robot<N>) -> Option<Box<Prior>> {
         self.prior

@@ -873,6 +873,37 @@ pub fn report_text(c: &ConstraintsJson) -> String {
     s
 }
 
+/// The fitted frame of every instrument session after the first (robot base → its
+/// measuring frame: translation in mm, rotation vector in degrees); empty without.
+pub fn session_frames_text(base: Option<&str>, frames: &[SessionFrame]) -> String {
+    use std::fmt::Write as _;
+    let Some(base) = base else {
+        return String::new();
+    };
+    let mut s = format!(
+        "\nSession frames: instrument rows of session {base:?} are in the robot's base frame; \
+         each later session's frame is fitted to its rows (6 parameters each, eliminated):\n  \
+         {:<24} {:>6} {:>34} {:>30}\n",
+        "session", "rows", "translation [mm]", "rotation vector [deg]"
+    );
+    for f in frames {
+        let v = kincal::pose::pose_to_vector6(&f.frame);
+        let _ = writeln!(
+            s,
+            "  {:<24} {:>6} {:>10.3} {:>11.3} {:>11.3} {:>9.4} {:>9.4} {:>9.4}",
+            f.session,
+            f.rows,
+            v[0] * 1e3,
+            v[1] * 1e3,
+            v[2] * 1e3,
+            v[3].to_degrees(),
+            v[4].to_degrees(),
+            v[5].to_degrees()
+        );
+    }
+    s
+}
+
 /// What fixes the frame and the scale of contact data (the identifiability report names
 /// the parameters held; this says why, also when the base frame was not requested).
 pub fn reference_note<const N: usize>(d: &ConstraintData<'_, N>) -> String {
