@@ -370,23 +370,23 @@ fn bad_contact_input_exits_3_naming_file_line_and_column() {
     )
     .unwrap();
     assert_refused(f.dir.path(), &cal, "constraints.toml:7");
-    // Instrument rows in two sessions: one base frame per session is not implemented.
+    // A session after the first with instrument rows gets a frame of its own and needs
+    // three of them: "s1" has two (and two contacts of a target, so it is not too small).
     let f = fixture(6, 1, 4);
     let truth = aria::virtual_truth();
-    let mut csv = String::from("q1,q2,q3,q4,q5,q6,x,y,z,session\n");
-    for k in 0..8 {
+    let mut csv = String::from("q1,q2,q3,q4,q5,q6,x,y,z,target,session\n");
+    for k in 0..7 {
         let mut q = aria::TOOL_SEED_Q;
         q[0] += 0.05 * k as f64;
+        q[2] += 0.03 * k as f64;
         let p = truth.fk(&JointState::new(q)).unwrap().translation.vector;
         let cells: Vec<String> = q.iter().map(|v| format!("{v}")).collect();
-        csv.push_str(&format!(
-            "{},{},{},{},s{}\n",
-            cells.join(","),
-            p.x,
-            p.y,
-            p.z,
-            k / 4
-        ));
+        let (xyz, target, s) = match k {
+            0..3 => (format!("{},{},{}", p.x, p.y, p.z), "", "s0"),
+            3 | 6 => (format!("{},{},{}", p.x + 1.0, p.y, p.z), "", "s1"),
+            _ => (",,".to_string(), "t9", "s1"),
+        };
+        csv.push_str(&format!("{},{xyz},{target},{s}\n", cells.join(",")));
     }
     fs::write(f.dir.path().join("inst.csv"), csv).unwrap();
     assert_refused(
@@ -399,8 +399,8 @@ fn bad_contact_input_exits_3_naming_file_line_and_column() {
             "--out",
             "m.json",
         ],
-        "inst.csv:6: column 'session': instrument rows (x, y, z) in two sessions, \"s0\" \
-         (from line 2) and \"s1\" (this row)",
+        "inst.csv:5: column 'session': session \"s1\" has 2 instrument row(s) (x, y, z): \
+         expected at least 3",
     );
     // Collinear plane contacts: plane "edge" touched at five points along a line.
     let f = fixture(6, 1, 4);

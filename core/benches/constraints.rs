@@ -93,6 +93,7 @@ fn bench(c: &mut Criterion) {
         contacts: &d.contacts,
         groups: &d.groups,
         distances: &d.distances,
+        sessions: &[],
     };
     let mut ws = Box::<Workspace<48>>::default();
     // The geometry and the ball offset (tool translation), as `kincal calibrate` asks.

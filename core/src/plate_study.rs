@@ -230,6 +230,7 @@ pub fn plate_data<'a, const N: usize>(
         contacts: contacts.get(..design.q.len()).unwrap_or(contacts),
         groups: design.groups,
         distances: design.distances,
+        sessions: &[],
     }
 }
 

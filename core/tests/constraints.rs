@@ -187,6 +187,7 @@ fn data(s: &Set) -> ConstraintData<'_, 7> {
         contacts: &s.contacts,
         groups: &s.groups,
         distances: &s.distances,
+        sessions: &[],
     }
 }
 
@@ -463,6 +464,7 @@ fn known_targets_known_plane_and_partial_coordinates_make_the_base_observable() 
         contacts: &set.contacts,
         groups: &set.groups,
         distances: &[],
+        sessions: &[],
     };
     let mut ws = workspace();
     let opts = IdentifyOptions::new(Algorithm::Ols, geometric());

@@ -621,6 +621,7 @@ fn a_moving_slide_fixes_the_scale_of_constraint_data() {
             contacts: c,
             groups: &[],
             distances: &[],
+            sessions: &[],
         }
         .prismatic_fixes_scale(&robot, &set)
     };
@@ -633,6 +634,7 @@ fn a_moving_slide_fixes_the_scale_of_constraint_data() {
         contacts: &moving,
         groups: &[],
         distances: &[],
+        sessions: &[],
     };
     assert!(!data.prismatic_fixes_scale(&robot, &with_scale));
 }

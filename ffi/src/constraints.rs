@@ -8,8 +8,8 @@
 //!
 //! Sessions: one set-up of the robot (a placement of the plate). Each target and plane
 //! belongs to one session, a session holds at least `KINCAL_MIN_SESSION_ROWS` rows, and
-//! instrument rows lie in one session (one base frame per session is not implemented in the
-//! core); sessions change nothing else. These rules are the core's
+//! instrument rows lie in one session (a frame per session, `kincal::identify::InstrumentSession`,
+//! is not in the C ABI yet); sessions change nothing else. These rules are the core's
 //! (`kincal::identify::check_sessions`), the same the CSV reader applies.
 
 use core::ffi::{CStr, c_void};
@@ -686,6 +686,17 @@ fn session_fault(f: SessionFault, v: &View<'_>) -> kincal_error {
                 .value(f64::from(v.session_of(row))),
             row,
         ),
+        SessionFault::FrameTooSmall {
+            session,
+            rows,
+            first,
+        } => at_row(
+            kincal_error::new(kincal_status::TooFewData)
+                .arg(c"data->session")
+                .at(session)
+                .counts(kincal::identify::MIN_FRAME_ROWS, rows),
+            first,
+        ),
         SessionFault::SessionTooSmall {
             session,
             rows,
@@ -756,6 +767,8 @@ fn build<'w, const N: usize, const P: usize>(
         n_groups: v.n_groups(),
         n_sessions: v.n_sessions,
         sessions_given: v.session.is_some(),
+        // One base frame for every instrument row: a frame per session is not in the C ABI.
+        instrument_frames: false,
     };
     let scratch = SessionScratch {
         group_rows: group_count,
@@ -886,6 +899,7 @@ fn build<'w, const N: usize, const P: usize>(
         contacts: contacts.get(..n_contacts).unwrap_or(&[]),
         groups,
         distances,
+        sessions: &[],
     };
     Ok((
         Built {

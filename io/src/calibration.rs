@@ -132,6 +132,17 @@ impl Settings {
         o
     }
 
+    /// The weighting and orientation error of these settings (what the fit weighs rows
+    /// by, e.g. for the frame of an instrument session fitted as the fit eliminates it).
+    pub fn row_options(&self) -> IdentifyOptions<'static> {
+        self.options(
+            self.algorithms.first().copied().unwrap_or(Algorithm::Ols),
+            ParamSet::new(),
+            None,
+            None,
+        )
+    }
+
     /// The prior of these settings around `start` (rows whitened: data variance 1).
     pub fn prior_around<const N: usize>(&self, start: &Robot<N>) -> Option<Box<Prior>> {
         self.prior
@@ -417,12 +428,13 @@ pub fn calibrate_constrained<const N: usize>(
     data: &ConstraintData<'_, N>,
     settings: &Settings,
 ) -> Result<Calibration<N>, Failure> {
-    run_all(
-        start,
-        Rows::Contacts(data),
-        contact_params(start, settings),
-        settings,
-    )
+    // Instrument rows alone (in several sessions' frames) request what instrument data do.
+    let requested = if data.contacts.is_empty() {
+        settings.param_set(start)
+    } else {
+        contact_params(start, settings)
+    };
+    run_all(start, Rows::Contacts(data), requested, settings)
 }
 
 /// Two algorithms disagree on a parameter when the difference exceeds

@@ -6,9 +6,11 @@
 use std::collections::HashMap;
 use std::path::Path;
 
+use kincal::Transform;
 use kincal::identify::{
-    ConstraintData, Contact, Distance, Group, GroupKind, Measurement, RowRole, SessionFault,
-    SessionLayout, SessionScratch, check_sessions, group_estimate,
+    ConstraintData, Contact, Distance, Group, GroupKind, IdentifyOptions, InstrumentSession,
+    MIN_FRAME_ROWS, Measurement, RowRole, SessionFault, SessionLayout, SessionScratch,
+    check_sessions, group_estimate,
 };
 use kincal::{Error, Robot};
 use serde::Deserialize;
@@ -286,6 +288,26 @@ pub struct ContactData<const N: usize> {
     pub distance_specs: Vec<DistanceSpec>,
     /// The constraints file (path, sha256), if any.
     pub file: Option<(String, String)>,
+    /// Instrument rows measured in a frame of their own, one run per session after the
+    /// first with instrument rows (docs/constraints.md, "Sessions with instrument rows");
+    /// the instrument rows are ordered by session for this.
+    pub sessions: Vec<InstrumentSession>,
+    /// The session id of each of `sessions`.
+    pub session_names: Vec<String>,
+    /// The session whose instrument rows are in the robot's base frame (the first with
+    /// instrument rows), when instrument rows span several sessions.
+    pub base_session: Option<String>,
+}
+
+/// A fitted frame of an instrument session, for reports and the model file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SessionFrame {
+    /// The session id.
+    pub session: String,
+    /// Its instrument rows with a positive weight.
+    pub rows: usize,
+    /// Robot base → the session's measuring frame.
+    pub frame: Transform,
 }
 
 impl<const N: usize> ContactData<N> {
@@ -296,7 +318,31 @@ impl<const N: usize> ContactData<N> {
             contacts: &self.contacts,
             groups: &self.groups,
             distances: &self.distances,
+            sessions: &self.sessions,
         }
+    }
+
+    /// The fitted frame of every instrument session with active rows at `robot`, as the
+    /// calibration eliminates it (position and orientation rows weighted by `opts`).
+    pub fn session_frames(
+        &self,
+        robot: &Robot<N>,
+        opts: &IdentifyOptions<'_>,
+    ) -> Result<Vec<SessionFrame>, Error> {
+        let d = self.view();
+        let mut out = Vec::new();
+        for (s, name) in self.session_names.iter().enumerate() {
+            let rows = d.session_rows(s).iter().filter(|m| m.weight > 0.0).count();
+            if rows == 0 {
+                continue;
+            }
+            out.push(SessionFrame {
+                session: name.clone(),
+                rows,
+                frame: d.session_frame(robot, s, opts)?,
+            });
+        }
+        Ok(out)
     }
 
     /// Row (index into the set) of the core's row index (instrument, then contacts).
@@ -370,17 +416,16 @@ pub fn has_contacts(set: &MeasurementSet) -> bool {
     set.rows.iter().any(MeasurementRow::is_constraint)
 }
 
-/// Why instrument rows in a second session are refused (the one wording for the contact
-/// reader and the instrument-only reader): session `first` began at line `first_line`, the
-/// refused row is in `other`.
+/// Why instrument rows in a second session are refused by the commands with one base frame
+/// for all instrument rows (the one wording for every reader that refuses them): session
+/// `first` began at line `first_line`, the refused row is in `other`.
 pub(crate) fn instrument_sessions_refused(first: &str, first_line: u64, other: &str) -> String {
     format!(
         "instrument rows (x, y, z) in two sessions, {first:?} (from line {first_line}) and \
-         {other:?} (this row): all instrument rows share the robot's one base frame, and a \
-         base frame per session for instrument rows is not implemented \
-         (docs/constraints.md); expected instrument rows in one session (target/plane rows \
-         may span sessions): give rows from one instrument set-up one session id, or \
-         calibrate each set-up's rows separately"
+         {other:?} (this row): this command has one base frame for all instrument rows; \
+         calibrate, validate, crossval and predict fit a frame per session \
+         (docs/constraints.md); expected instrument rows in one session: give rows from one \
+         instrument set-up one session id, or use those commands"
     )
 }
 
@@ -407,6 +452,7 @@ fn check_layout(
             n_groups: g,
             n_sessions: s,
             sessions_given: set.has_session,
+            instrument_frames: true,
         },
         SessionScratch {
             group_rows: &mut gr,
@@ -445,6 +491,22 @@ fn check_layout(
                 ),
             )
         }
+        SessionFault::FrameTooSmall {
+            session,
+            rows,
+            first,
+        } => input(
+            set,
+            row(first).line,
+            "session",
+            format!(
+                "session {:?} has {rows} instrument row(s) (x, y, z): expected at least \
+                 {MIN_FRAME_ROWS}, not on a line, in a session measured in a frame of its own \
+                 (every session after the first with instrument rows gets one, \
+                 docs/constraints.md)",
+                sessions[session].0.unwrap_or("")
+            ),
+        ),
         SessionFault::InstrumentInTwoSessions { row: r, first } => input(
             set,
             row(r).line,
@@ -486,13 +548,62 @@ fn check_layout(
     })
 }
 
+/// Orders the instrument rows by session (the first session with instrument rows first: its
+/// rows stay in the robot's base frame) and gives every later session a frame of its own.
+fn order_instrument_sessions<const N: usize>(
+    out: &mut ContactData<N>,
+    inst_session: &[usize],
+    sessions: &[(Option<&str>, u64)],
+) {
+    let Some(&base) = inst_session.first() else {
+        return;
+    };
+    if inst_session.iter().all(|&s| s == base) {
+        return;
+    }
+    let mut idx: Vec<usize> = (0..inst_session.len()).collect();
+    idx.sort_by_key(|&i| (inst_session[i] != base, inst_session[i]));
+    out.instrument = idx.iter().map(|&i| out.instrument[i]).collect();
+    out.instrument_rows = idx.iter().map(|&i| out.instrument_rows[i]).collect();
+    let name = |s: usize| sessions[s].0.unwrap_or("").to_string();
+    out.base_session = Some(name(base));
+    let mut k = 0;
+    while k < idx.len() {
+        let s = inst_session[idx[k]];
+        let len = idx[k..]
+            .iter()
+            .take_while(|&&i| inst_session[i] == s)
+            .count();
+        if s != base {
+            out.sessions.push(InstrumentSession { start: k, len });
+            out.session_names.push(name(s));
+        }
+        k += len;
+    }
+}
+
+/// Whether instrument rows (x, y, z) of `set` span more than one session: they are then
+/// calibrated with a frame per session ([`build`]), through the contact-data path.
+pub fn has_instrument_sessions(set: &MeasurementSet) -> bool {
+    let mut first: Option<Option<&str>> = None;
+    for row in set.rows.iter().filter(|r| !r.is_constraint()) {
+        match first {
+            None => first = Some(row.session.as_deref()),
+            Some(s) if s != row.session.as_deref() => return true,
+            Some(_) => {}
+        }
+    }
+    false
+}
+
 /// Builds the core's data from `set` and the constraints file: rows grouped by target or
 /// plane (in order of first appearance), instrument rows as measurements, known targets
 /// and planes from the file, distances weighted by `sigma_m` (`1/(σ²·weight_pos)` relative
 /// to a position row; 1 without). Refuses, naming file, line and column: a target with one
 /// row (unless known), a plane with fewer than [`MIN_PLANE_CONTACTS`] rows (unless known),
 /// a target or plane in two sessions, a session with fewer than [`MIN_SESSION_ROWS`] rows,
-/// instrument rows in several sessions (one base frame per session is not implemented), a
+/// a session after the first with instrument rows holding fewer than [`MIN_FRAME_ROWS`] of
+/// them (it gets a frame of its own, [`order_instrument_sessions`]), a
 /// row that measures nothing, a distance or known id that no row names, and plane contacts
 /// that are collinear at `start`.
 // Long by design: the contact rules of docs/constraints.md in order (sessions, groups, known ids, distances, collinear planes).
@@ -514,7 +625,11 @@ pub fn build<const N: usize>(
         distances: Vec::new(),
         distance_specs: cons.distances.clone(),
         file: (!cons.path.is_empty()).then(|| (cons.path.clone(), cons.sha256.clone())),
+        sessions: Vec::new(),
+        session_names: Vec::new(),
+        base_session: None,
     };
+    let mut inst_session: Vec<usize> = Vec::new();
     // Sessions and groups (targets, planes) in order of first appearance; each row's role.
     let mut sessions: Vec<(Option<&str>, u64)> = Vec::new();
     let mut order: Vec<(String, bool)> = Vec::new();
@@ -555,6 +670,7 @@ pub fn build<const N: usize>(
             ));
         };
         roles.push((RowRole::Instrument, s));
+        inst_session.push(s);
         out.instrument.push(Measurement {
             state: crate::data::joint_state::<N>(row),
             pose,
@@ -598,6 +714,7 @@ pub fn build<const N: usize>(
         });
     }
     check_layout(set, &roles, &kinds, &order, &sessions)?;
+    order_instrument_sessions(&mut out, &inst_session, &sessions);
     for ((key, rows), &kind) in order.iter().zip(&members).zip(&kinds) {
         let first = &set.rows[rows[0]];
         let (id, plane) = (key.0.as_str(), key.1);
@@ -752,6 +869,37 @@ pub fn report_text(c: &ConstraintsJson) -> String {
                 d.error_mm.map_or("–".into(), |e| format!("{e:+.4}"))
             );
         }
+    }
+    s
+}
+
+/// The fitted frame of every instrument session after the first (robot base → its
+/// measuring frame: translation in mm, rotation vector in degrees); empty without.
+pub fn session_frames_text(base: Option<&str>, frames: &[SessionFrame]) -> String {
+    use std::fmt::Write as _;
+    let Some(base) = base else {
+        return String::new();
+    };
+    let mut s = format!(
+        "\nSession frames: instrument rows of session {base:?} are in the robot's base frame; \
+         each later session's frame is fitted to its rows (6 parameters each, eliminated):\n  \
+         {:<24} {:>6} {:>34} {:>30}\n",
+        "session", "rows", "translation [mm]", "rotation vector [deg]"
+    );
+    for f in frames {
+        let v = kincal::pose::pose_to_vector6(&f.frame);
+        let _ = writeln!(
+            s,
+            "  {:<24} {:>6} {:>10.3} {:>11.3} {:>11.3} {:>9.4} {:>9.4} {:>9.4}",
+            f.session,
+            f.rows,
+            v[0] * 1e3,
+            v[1] * 1e3,
+            v[2] * 1e3,
+            v[3].to_degrees(),
+            v[4].to_degrees(),
+            v[5].to_degrees()
+        );
     }
     s
 }

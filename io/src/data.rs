@@ -356,8 +356,8 @@ pub enum PoseFile<const N: usize> {
         meas: Vec<Measurement<N>>,
         labels: RowLabels,
     },
-    /// Contact (target/plane) rows, or every row when the caller asked to keep them: the
-    /// whole file.
+    /// Contact (target/plane) rows, instrument rows in several sessions (one frame each), or
+    /// every row when the caller asked to keep them: the whole file.
     Rows(MeasurementSet),
 }
 
@@ -384,7 +384,7 @@ pub fn read_poses<const N: usize>(
         path,
         &read_options(robot, opts),
         |set, row| -> Result<(), std::convert::Infallible> {
-            if keep_rows || set.has_target || set.has_plane {
+            if keep_rows || set.has_target || set.has_plane || set.has_session {
                 kept.push(row);
                 return Ok(());
             }
@@ -412,11 +412,15 @@ pub fn read_poses<const N: usize>(
     if let Some(e) = refused {
         return Err(e);
     }
-    if keep_rows || crate::constraints::has_contacts(&set) {
+    if keep_rows
+        || crate::constraints::has_contacts(&set)
+        || crate::constraints::has_instrument_sessions(&set)
+    {
         return Ok(PoseFile::Rows(set));
     }
     if !set.rows.is_empty() {
-        // Target/plane columns without a contact row: poses after all.
+        // Target/plane or session columns without a contact row or a second session:
+        // poses after all.
         meas = measurements::<N>(&set)?;
         labels = RowLabels::of_set(&set);
         set.rows = Vec::new();

@@ -639,6 +639,59 @@ pub fn study(dir: &Path) -> Result<Study, CliError> {
     })
 }
 
+/// All sessions at once, two ways, for `v`: (a) the alternation of rigid frames and
+/// calibration ([`calibrate_sessions`], [`crate::session_frames::ROUNDS`] rounds), (b) the
+/// core's per-session frames eliminated in the fit (`identify::InstrumentSession`, the
+/// first session in the base frame). Per way: RMS [mm] of |Δp| over every row with each
+/// session's frame refitted to the final model, outer iterations, seconds.
+pub fn sessions_both_ways(dir: &Path, v: &Variant) -> Result<[(f64, u32, f64); 2], CliError> {
+    use kincal::identify::{ConstraintData, InstrumentSession, identify_constrained};
+    let sessions = read_all(dir)?;
+    let nominal = v.nominal(dir)?;
+    let all: Vec<&[HiltiRow]> = sessions.iter().map(|s| s.2.as_slice()).collect();
+    let first = all.first().copied().unwrap_or_default();
+    let start = with_rigid_base(&nominal, first, &v.without_tilts())?;
+    let rms_all = |model: &Robot<N>| -> Result<f64, CliError> {
+        let (mut sum, mut n) = (0.0, 0usize);
+        for rows in &all {
+            let r = new_base_rms_mm(model, rows, v)?;
+            sum += r * r * rows.len() as f64;
+            n += rows.len();
+        }
+        Ok((sum / n.max(1) as f64).sqrt())
+    };
+    let t0 = std::time::Instant::now();
+    let alternated = calibrate_sessions(&start, &all, v)?;
+    let t_alt = t0.elapsed().as_secs_f64();
+    let rms_alt = rms_all(&alternated)?;
+    let mut data = Vec::new();
+    let mut runs = Vec::new();
+    for rows in &all {
+        let m = measurements(rows, v);
+        if !data.is_empty() {
+            runs.push(InstrumentSession {
+                start: data.len(),
+                len: m.len(),
+            });
+        }
+        data.extend(m);
+    }
+    let d = ConstraintData {
+        instrument: &data,
+        contacts: &[],
+        groups: &[],
+        distances: &[],
+        sessions: &runs,
+    };
+    let t0 = std::time::Instant::now();
+    let mut ws = crate::calibration::new_workspace();
+    let fit =
+        identify_constrained(&start, &d, &options(v.params(&start)), &mut ws).map_err(study_err)?;
+    let t_new = t0.elapsed().as_secs_f64();
+    let rms_new = rms_all(&fit.robot)?;
+    Ok([(rms_alt, 0, t_alt), (rms_new, fit.iterations, t_new)])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -647,6 +700,25 @@ mod tests {
         let d = Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../shared/realdata/hilti-jaibot-stationing");
         d.is_dir().then_some(d)
+    }
+
+    /// The per-session frames of the core against the alternation, on all seven sessions
+    /// (figures for docs/constraints.md): `cargo test --release -p kincal-io --lib
+    /// sessions_both_ways -- --ignored --nocapture`.
+    #[test]
+    #[ignore = "real data, tens of seconds"]
+    fn sessions_both_ways_on_all_floors() {
+        let Some(d) = dir() else { return };
+        for v in [GEOMETRY, FINAL] {
+            let [(ra, _, ta), (rn, it, tn)] = sessions_both_ways(&d, &v).unwrap();
+            eprintln!(
+                "{}: alternation RMS {ra:.4} mm in {ta:.2} s; eliminated frames RMS {rn:.4} mm, \
+                 {it} iterations, {tn:.2} s",
+                v.name
+            );
+            // The joint optimum is at least as good as three rounds of alternation.
+            assert!(rn <= ra * (1.0 + 1e-6), "{rn} vs {ra}");
+        }
     }
 
     /// Every variant's chain equals the URDF's at zero tilt (checked in

@@ -659,6 +659,9 @@ fn calibrate_contacts<const N: usize>(
         start,
         settings.weighting.weights().0,
     )?;
+    if settings.robust.is_some() && !cd.sessions.is_empty() {
+        return Err(CliError::usage(super::crossval::ROBUST_SESSIONS));
+    }
     let view = cd.view();
     let rows = kincal_rows(&cd);
     let pb = crate::progress::spinner("identifying from contacts".to_string());
@@ -704,6 +707,13 @@ fn calibrate_contacts<const N: usize>(
     let mut out = summary(&cal, name, &set.source, cd.rows(), rows);
     out.push_str(&robust_report(&cal, &label));
     out.push_str(&kincal_io::constraints::reference_note(&view));
+    let frames = cd
+        .session_frames(robot, &settings.row_options())
+        .map_err(|e| core_error(e, &set.source, line_of))?;
+    out.push_str(&kincal_io::constraints::session_frames_text(
+        cd.base_session.as_deref(),
+        &frames,
+    ));
     out.push_str(&kincal_io::constraints::report_text(&cons_json));
     out.push_str(&format!(
         "Model written to {} ({} model).\n",

@@ -629,6 +629,11 @@ fn outlier_loss(args: &Args) -> Loss {
 }
 
 /// Cross-validation of contact data by whole groups (see [`kincal_io::crossval_contacts`]).
+/// Why `--robust` is refused with instrument rows in several sessions.
+pub(crate) const ROBUST_SESSIONS: &str = "--robust is not implemented for instrument rows in \
+     several sessions (the robust fit has one base frame; each later session's frame is \
+     fitted only by the plain fit): drop --robust, or give one session's instrument rows";
+
 fn crossval_contacts<const N: usize>(
     nominal: &Robot<N>,
     args: &Args,
@@ -640,6 +645,9 @@ fn crossval_contacts<const N: usize>(
             "--init-frames, --prior, --plot and --robot-out are not implemented for data with \
              target/plane rows",
         ));
+    }
+    if args.robust.is_some() && kincal_io::constraints::has_instrument_sessions(set) {
+        return Err(CliError::usage(ROBUST_SESSIONS));
     }
     let cons = args
         .constraints

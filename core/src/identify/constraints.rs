@@ -52,10 +52,9 @@
 //! ([`ConstraintData::prismatic_fixes_scale`]). These are named, never silently fixed; the rest is the usual greedy rank test on
 //! the reduced Jacobian.
 
-use super::data::{
-    Measurement, RowSource, add_rows, residual_stats, validate as validate_instrument,
-};
+use super::data::{Measurement, RowSource, add_rows, validate as validate_instrument};
 use super::identifiability::{StructuralSel, data_step, structural_step_with};
+use super::instrument_sessions::{InstrumentSession, fold_session};
 use super::{
     ComponentMask, Identifiability, Identification, IdentifyOptions, ResidualStats, Workspace,
 };
@@ -191,6 +190,9 @@ pub struct ConstraintData<'a, const N: usize> {
     pub groups: &'a [Group],
     /// Known distances between target groups.
     pub distances: &'a [Distance],
+    /// Runs of instrument rows measured in a frame of their own, one per set-up
+    /// ([`super::instrument_sessions`]); empty: every instrument row is in the base frame.
+    pub sessions: &'a [InstrumentSession],
 }
 
 /// Number of group means kept for distances (see the module doc).
@@ -221,11 +223,16 @@ impl<'a, const N: usize> ConstraintData<'a, N> {
         self.contacts.get(g.start..g.start + g.len).unwrap_or(&[])
     }
 
+    /// Whether an active instrument row is in the base frame (outside every session).
     fn active_instrument(&self) -> bool {
-        self.instrument.iter().any(|m| m.weight > 0.0)
+        self.instrument
+            .iter()
+            .enumerate()
+            .any(|(l, m)| m.weight > 0.0 && !self.in_session(l))
     }
 
-    /// Whether some row refers to the base frame: instrument rows or known groups.
+    /// Whether some row refers to the base frame: instrument rows outside every session of
+    /// its own frame, or known groups.
     #[must_use]
     pub fn has_external_reference(&self) -> bool {
         self.active_instrument()
@@ -235,10 +242,17 @@ impl<'a, const N: usize> ConstraintData<'a, N> {
                 .any(|g| g.kind.is_known() && self.group_contacts(g).iter().any(|c| c.weight > 0.0))
     }
 
-    /// Whether some row fixes the scale: a known distance or an external reference.
+    /// Whether some row fixes the scale: a known distance, an external reference, or an
+    /// instrument row measuring a position (in any frame).
     #[must_use]
     pub fn has_length_reference(&self) -> bool {
-        !self.distances.is_empty() || self.has_external_reference()
+        // Instrument rows in a session's own frame still measure lengths (a rigid frame
+        // does not absorb a scaling).
+        let measured_lengths = self
+            .instrument
+            .iter()
+            .any(|m| m.weight > 0.0 && (0..3).any(|k| m.mask.has(k)));
+        !self.distances.is_empty() || self.has_external_reference() || measured_lengths
     }
 
     /// Whether the readings of a prismatic joint fix the scale: a slide is a length the
@@ -897,6 +911,7 @@ pub fn distance_estimate<const N: usize>(
 impl<const N: usize> RowSource<N> for ConstraintData<'_, N> {
     fn validate(&self) -> Result<()> {
         validate_instrument(self.instrument)?;
+        self.validate_sessions()?;
         let base = self.instrument.len();
         for (i, c) in self.contacts.iter().enumerate() {
             let index = base + i;
@@ -971,7 +986,11 @@ impl<const N: usize> RowSource<N> for ConstraintData<'_, N> {
     /// plane with an active contact): the degrees of freedom σ² divides by.
     fn row_count(&self, opts: &IdentifyOptions<'_>) -> usize {
         let mut rows = self.instrument.row_count(opts);
-        let mut nuisance = 0;
+        // 6 per instrument session with an active row (its frame).
+        let mut nuisance = 6
+            * (0..self.sessions.len())
+                .filter(|&s| self.session_rows(s).iter().any(|m| m.weight > 0.0))
+                .count();
         for g in self.groups {
             let n = self
                 .group_contacts(g)
@@ -996,8 +1015,14 @@ impl<const N: usize> RowSource<N> for ConstraintData<'_, N> {
         ws: &mut Workspace<P>,
     ) -> Result<f64> {
         let mut c = 0.0;
-        for m in self.instrument.iter().filter(|m| m.weight > 0.0) {
-            c += add_rows(robot, m, with_rhs, opts, n_cols, ws)?;
+        for (l, m) in self.instrument.iter().enumerate() {
+            if m.weight > 0.0 && !self.in_session(l) {
+                c += add_rows(robot, m, with_rhs, opts, n_cols, ws)?;
+            }
+        }
+        for s in 0..self.sessions.len() {
+            let rows = self.session_rows(s);
+            c += fold_session(robot, rows, with_rhs, opts, n_cols, ws)?;
         }
         for m in ws.means.iter_mut() {
             m.group = usize::MAX;
@@ -1023,7 +1048,7 @@ impl<const N: usize> RowSource<N> for ConstraintData<'_, N> {
     }
 
     fn stats(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<ResidualStats> {
-        let mut s = residual_stats(robot, self.instrument, opts)?;
+        let mut s = self.instrument_stats(robot, opts)?;
         let n_inst = s.pos_poses;
         let (cost, sum2, max, n) = self.cost_and_sums(robot, opts)?;
         let sp = s.rms_pos_m * s.rms_pos_m * n_inst as f64 + sum2;
@@ -1102,7 +1127,11 @@ impl<const N: usize> ConstraintData<'_, N> {
         robot: &Robot<N>,
         opts: &IdentifyOptions<'_>,
     ) -> Result<(f64, f64, f64, usize)> {
-        let mut cost = super::data::cost(robot, self.instrument, opts)?;
+        let mut cost = if self.sessions.is_empty() {
+            super::data::cost(robot, self.instrument, opts)?
+        } else {
+            self.instrument_stats(robot, opts)?.cost
+        };
         let (mut s2, mut max, mut n) = (0.0, 0.0f64, 0);
         for (gi, g) in self.groups.iter().enumerate() {
             let contacts = self.group_contacts(g);
@@ -1424,6 +1453,7 @@ mod tests {
             contacts: &c.contacts,
             groups: &c.groups,
             distances: &c.distances,
+            sessions: &[],
         }
     }
 
@@ -1499,6 +1529,7 @@ mod tests {
             contacts: &c.contacts[..9],
             groups: &groups,
             distances: &[],
+            sessions: &[],
         };
         let mut ws = ws();
         fold_all(&robot, &d, true, &mut ws);
@@ -1609,6 +1640,7 @@ mod tests {
             contacts: &line,
             groups: &groups,
             distances: &[],
+            sessions: &[],
         };
         assert_eq!(
             group_estimate(&aria::nominal(), &d, 0),

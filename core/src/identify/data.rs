@@ -443,19 +443,39 @@ pub fn residual_stats<const N: usize>(
     data: &[Measurement<N>],
     opts: &IdentifyOptions<'_>,
 ) -> Result<ResidualStats> {
-    let mut s = ResidualStats {
-        poses: active_rows(data, opts).count(),
-        ..ResidualStats::default()
-    };
-    let (mut np, mut nr, mut sp, mut sr) = (0usize, 0usize, 0.0, 0.0);
+    let mut acc = StatsAcc::default();
     for m in active_rows(data, opts) {
-        let t = m.model_pose(robot)?;
-        let ex = pose_error(&m.pose, &t, OrientationError::Exact);
+        acc.add(m, &m.model_pose(robot)?, opts);
+    }
+    Ok(acc.finish())
+}
+
+/// Running sums of [`ResidualStats`], one row at a time (the model pose given, so rows
+/// compared in a frame of their own, e.g. a session's, share the statistics).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct StatsAcc {
+    s: ResidualStats,
+    sum_pos2: f64,
+    sum_rot2: f64,
+}
+
+impl StatsAcc {
+    /// Adds measurement `m` against the model pose `t` (its weight and `opts` decide the
+    /// cost; the angle statistics use the exact orientation error, unweighted).
+    pub(crate) fn add<const N: usize>(
+        &mut self,
+        m: &Measurement<N>,
+        t: &Transform,
+        opts: &IdentifyOptions<'_>,
+    ) {
+        let s = &mut self.s;
+        s.poses += 1;
+        let ex = pose_error(&m.pose, t, OrientationError::Exact);
         // The cost's form is usually the exact one too: one rotation log then.
         let e = if opts.orientation == OrientationError::Exact {
             ex
         } else {
-            pose_error(&m.pose, &t, opts.orientation)
+            pose_error(&m.pose, t, opts.orientation)
         };
         for k in 0..6 {
             if m.mask.has(k) {
@@ -472,26 +492,29 @@ pub fn residual_stats<const N: usize>(
         };
         if (0..3).any(|k| m.mask.has(k)) {
             let p2 = sq(0..3);
-            sp += p2;
-            np += 1;
+            self.sum_pos2 += p2;
+            s.pos_poses += 1;
             s.max_pos_m = s.max_pos_m.max(crate::math::sqrt(p2));
         }
         if (3..6).any(|k| m.mask.has(k)) {
             let r2 = sq(3..6);
-            sr += r2;
-            nr += 1;
+            self.sum_rot2 += r2;
+            s.rot_poses += 1;
             s.max_rot_rad = s.max_rot_rad.max(crate::math::sqrt(r2));
         }
     }
-    s.pos_poses = np;
-    s.rot_poses = nr;
-    if np > 0 {
-        s.rms_pos_m = crate::math::sqrt(sp / np as f64);
+
+    /// The statistics of the rows added.
+    pub(crate) fn finish(self) -> ResidualStats {
+        let mut s = self.s;
+        if s.pos_poses > 0 {
+            s.rms_pos_m = crate::math::sqrt(self.sum_pos2 / s.pos_poses as f64);
+        }
+        if s.rot_poses > 0 {
+            s.rms_rot_rad = crate::math::sqrt(self.sum_rot2 / s.rot_poses as f64);
+        }
+        s
     }
-    if nr > 0 {
-        s.rms_rot_rad = crate::math::sqrt(sr / nr as f64);
-    }
-    Ok(s)
 }
 
 #[cfg(test)]

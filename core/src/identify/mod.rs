@@ -20,6 +20,7 @@
 pub mod constraints;
 mod data;
 mod identifiability;
+pub mod instrument_sessions;
 mod memo;
 mod prior;
 pub mod robust;
@@ -36,12 +37,15 @@ pub use data::{ComponentMask, Measurement, ResidualStats, residual_stats};
 pub(crate) use data::{distinct_points, validate as validate_data};
 pub(crate) use identifiability::structural_step;
 pub use identifiability::{Identifiability, Partner, analyze};
+pub use instrument_sessions::{InstrumentSession, fit_session_frame};
 pub use prior::{DEFAULT_PRIOR_ANGLE_RAD, DEFAULT_PRIOR_LENGTH_M, Prior, PriorSizes};
 pub use robust::{
     Loss, PoseResidual, RobustIdentification, RobustOptions, identify_constrained_robust,
     identify_robust, residual_test,
 };
-pub use sessions::{NO_ROW, RowRole, SessionFault, SessionLayout, SessionScratch, check_sessions};
+pub use sessions::{
+    MIN_FRAME_ROWS, NO_ROW, RowRole, SessionFault, SessionLayout, SessionScratch, check_sessions,
+};
 pub use solvers::{identify, identify_with_analysis};
 pub(crate) use solvers::{identify_in_place, identify_into};
 pub use workspace::Workspace;

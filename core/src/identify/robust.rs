@@ -644,6 +644,7 @@ impl<const N: usize> ContactRows<'_, N> {
             contacts: self.contacts,
             groups: self.groups,
             distances: self.distances,
+            sessions: &[],
         }
     }
 

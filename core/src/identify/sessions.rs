@@ -1,8 +1,10 @@
 //! The rules that tie rows, groups (targets, planes) and sessions (set-ups) of contact data
 //! together, checked once here for every front end (the measurement reader of `kincal-io`
 //! and the C ABI): a target or plane is a fixed point of one set-up, so all its rows lie in
-//! one session; instrument rows share one base frame, so they lie in one session; a session
-//! holds at least [`MIN_SESSION_ROWS`] rows; a group holds at least the contacts its kind
+//! one session; instrument rows lie in one session, or — when the caller gives each session
+//! a frame of its own ([`SessionLayout::instrument_frames`]) — every session but the first
+//! with instrument rows holds at least [`MIN_FRAME_ROWS`] of them; a session holds at least
+//! [`MIN_SESSION_ROWS`] rows; a group holds at least the contacts its kind
 //! needs ([`GroupKind::min_contacts`]). No heap: the caller lends the counters.
 //!
 //! The front ends word the refusal ([`SessionFault`] names the row and the group or session
@@ -12,6 +14,11 @@ use super::constraints::{GroupKind, MIN_SESSION_ROWS};
 
 /// "No row" in [`SessionFault`] (a group no row names).
 pub const NO_ROW: usize = usize::MAX;
+
+/// Instrument rows a session with a frame of its own needs: three positions not on a line
+/// fix a rigid frame (fewer leave it undetermined; the core then fails with
+/// `Error::RankDeficient`).
+pub const MIN_FRAME_ROWS: usize = 3;
 
 /// What one row of contact data is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -50,12 +57,23 @@ pub enum SessionFault {
         /// The group's first row.
         first: usize,
     },
-    /// An instrument row lies in another session than the first instrument row (the core
-    /// has one base frame for all instrument rows).
+    /// An instrument row lies in another session than the first instrument row, and the
+    /// caller has one base frame for all instrument rows (no
+    /// [`SessionLayout::instrument_frames`]).
     InstrumentInTwoSessions {
         /// The row in the other session.
         row: usize,
         /// The first instrument row.
+        first: usize,
+    },
+    /// A session with a frame of its own holds fewer than [`MIN_FRAME_ROWS`] instrument
+    /// rows (with [`SessionLayout::instrument_frames`]).
+    FrameTooSmall {
+        /// The session.
+        session: usize,
+        /// Its instrument rows.
+        rows: usize,
+        /// Its first instrument row.
         first: usize,
     },
     /// A session has fewer than [`MIN_SESSION_ROWS`] rows.
@@ -108,17 +126,29 @@ pub struct SessionLayout {
     /// Whether the data names sessions at all: without, all rows are one set-up and its
     /// size is not checked (a data set without sessions is not refused for being small).
     pub sessions_given: bool,
+    /// Whether the caller fits a frame per session for instrument rows (the first session
+    /// with instrument rows in the robot's base frame, each later one in a frame of its own,
+    /// `identify::InstrumentSession`): instrument rows may then span sessions, and each
+    /// later session needs [`MIN_FRAME_ROWS`] of them. Without, instrument rows in two
+    /// sessions are refused.
+    pub instrument_frames: bool,
 }
 
 /// Checks the rows (`(role, session)` in row order) against the session and group rules;
 /// `kind_of(g)` is the kind of group `g`. Errors: the first [`SessionFault`] in the order
 /// documented there.
-pub fn check_sessions(
-    rows: impl IntoIterator<Item = (RowRole, usize)>,
+pub fn check_sessions<I>(
+    rows: I,
     kind_of: impl Fn(usize) -> GroupKind,
     layout: &SessionLayout,
     scratch: SessionScratch<'_>,
-) -> Result<(), SessionFault> {
+) -> Result<(), SessionFault>
+where
+    I: IntoIterator<Item = (RowRole, usize)>,
+    I::IntoIter: Clone,
+{
+    let rows = rows.into_iter();
+    let again = rows.clone();
     let SessionScratch {
         group_rows,
         group_first,
@@ -185,7 +215,9 @@ pub fn check_sessions(
             }
             RowRole::Instrument => match instrument {
                 None => instrument = Some((row, session)),
-                Some((first, s)) if s != session && row_fault.is_none() => {
+                Some((first, s))
+                    if s != session && row_fault.is_none() && !layout.instrument_frames =>
+                {
                     row_fault = Some(SessionFault::InstrumentInTwoSessions { row, first });
                 }
                 Some(_) => {}
@@ -207,6 +239,33 @@ pub fn check_sessions(
     }
     if let Some(fault) = row_fault {
         return Err(fault);
+    }
+    if let (true, Some((_, base))) = (layout.instrument_frames, instrument) {
+        // The session counters are free again: instrument rows per session.
+        session_rows.fill(0);
+        session_first.fill(NO_ROW);
+        for (row, (role, session)) in again.enumerate() {
+            if let (RowRole::Instrument, Some(n), Some(f)) = (
+                role,
+                session_rows.get_mut(session),
+                session_first.get_mut(session),
+            ) {
+                *n += 1;
+                if *f == NO_ROW {
+                    *f = row;
+                }
+            }
+        }
+        let counts = session_rows.iter().zip(session_first.iter()).enumerate();
+        for (session, (&rows, &first)) in counts {
+            if session != base && rows > 0 && rows < MIN_FRAME_ROWS {
+                return Err(SessionFault::FrameTooSmall {
+                    session,
+                    rows,
+                    first,
+                });
+            }
+        }
     }
     let groups = group_rows.iter().zip(group_first.iter()).enumerate();
     for (group, (&rows, &first)) in groups {
@@ -247,6 +306,7 @@ mod tests {
                 n_groups: kinds.len(),
                 n_sessions: sessions,
                 sessions_given: true,
+                instrument_frames: false,
             },
             SessionScratch {
                 group_rows: &mut a,
@@ -351,6 +411,55 @@ mod tests {
     }
 
     #[test]
+    fn with_a_frame_per_session_instrument_rows_span_sessions_but_each_needs_three() {
+        let mut z = [[0usize; 4]; 5];
+        let [a, b, c, d, e] = &mut z;
+        let mut run = |rows: &[(RowRole, usize)]| {
+            check_sessions(
+                rows.iter().copied(),
+                |_| T,
+                &SessionLayout {
+                    n_groups: 1,
+                    n_sessions: 3,
+                    sessions_given: true,
+                    instrument_frames: true,
+                },
+                SessionScratch {
+                    group_rows: &mut *a,
+                    group_first: &mut *b,
+                    group_session: &mut *c,
+                    session_rows: &mut *d,
+                    session_first: &mut *e,
+                },
+            )
+        };
+        // The first session's frame is the base: two instrument rows are enough there.
+        let good = [
+            (I, 0),
+            (I, 0),
+            (C(0), 0),
+            (C(0), 0),
+            (I, 1),
+            (I, 1),
+            (I, 1),
+            (I, 2),
+            (I, 2),
+            (I, 2),
+        ];
+        assert_eq!(run(&good), Ok(()));
+        // Session 2 has two instrument rows and a contact: its frame is undetermined.
+        let few = [(I, 0), (I, 0), (I, 0), (I, 2), (C(0), 2), (C(0), 2), (I, 2)];
+        assert_eq!(
+            run(&few),
+            Err(SessionFault::FrameTooSmall {
+                session: 2,
+                rows: 2,
+                first: 3
+            })
+        );
+    }
+
+    #[test]
     fn without_sessions_a_small_set_is_not_refused() {
         let mut z = [[0usize; 2]; 5];
         let [a, b, c, d, e] = &mut z;
@@ -361,6 +470,7 @@ mod tests {
                 n_groups: 0,
                 n_sessions: 1,
                 sessions_given: false,
+                instrument_frames: false,
             },
             SessionScratch {
                 group_rows: a,

@@ -198,6 +198,8 @@ impl<const P: usize> GramAccumulator<P> {
     /// `AᵀWb −= w·a·b`, `bᵀWb −= w·b²`. With `a = J̄` row by row, `b = ō − p̄` and `w = Σ w_i`
     /// it turns rows `(J_i, ō − p_i)` folded in one pass (`ō` any fixed point, e.g. the
     /// first `p_i`, while `p̄` is not yet known) into the centred `(J_i − J̄, p̄ − p_i)`.
+    /// It also folds the Schur complement of eliminated session frames, as rows `L⁻¹C` with
+    /// right-hand sides `L⁻¹g` (see `identify::instrument_sessions`).
     pub fn downdate_with_rhs(&mut self, a: &[f64], b: f64, w: f64) -> Result<()> {
         if !b.is_finite() {
             return Err(Error::NonFinite {

@@ -159,6 +159,7 @@ impl Recording {
             contacts: &self.contacts,
             groups: &self.groups,
             distances: &self.distances,
+            sessions: &[],
         }
     }
 }

@@ -454,6 +454,7 @@ fn equals_the_core_on_the_same_data() {
         contacts: &contacts,
         groups: &groups,
         distances: &distances,
+        sessions: &[],
     };
     let mut set = ParamSet::new();
     for (i, &m) in opts.requested.iter().enumerate() {
