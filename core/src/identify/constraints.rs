@@ -1064,6 +1064,16 @@ impl<const N: usize> RowSource<N> for ConstraintData<'_, N> {
 }
 
 impl<const N: usize> ConstraintData<'_, N> {
+    /// The instrument rows' cost: in the base frame, or each session's rows in its own
+    /// fitted frame when there are sessions.
+    fn instrument_cost(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<f64> {
+        if self.sessions.is_empty() {
+            super::data::cost(robot, self.instrument, opts)
+        } else {
+            Ok(self.instrument_stats(robot, opts)?.cost)
+        }
+    }
+
     /// The cost from each group's moments, one forward-kinematics pass over the contacts
     /// (the solvers' trial evaluations): with `S = Σ w(p − p̄)(p − p̄)ᵀ` and `W = Σ w`, a
     /// target costs `tr S`, a known target `tr S + W|x − p̄|²`, a plane `nᵀSn` (`n` its
@@ -1072,7 +1082,7 @@ impl<const N: usize> ConstraintData<'_, N> {
     /// distance takes its targets' means from the last [`MEAN_CACHE`] groups, or
     /// recomputes them.
     fn cost_from_moments(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<f64> {
-        let mut cost = super::data::cost(robot, self.instrument, opts)?;
+        let mut cost = self.instrument_cost(robot, opts)?;
         let mut means = [(usize::MAX, 0.0, [0.0; 3]); MEAN_CACHE];
         for (gi, g) in self.groups.iter().enumerate() {
             let (w, pbar, s) = point_moments(robot, self.group_contacts(g))?;
@@ -1127,11 +1137,7 @@ impl<const N: usize> ConstraintData<'_, N> {
         robot: &Robot<N>,
         opts: &IdentifyOptions<'_>,
     ) -> Result<(f64, f64, f64, usize)> {
-        let mut cost = if self.sessions.is_empty() {
-            super::data::cost(robot, self.instrument, opts)?
-        } else {
-            self.instrument_stats(robot, opts)?.cost
-        };
+        let mut cost = self.instrument_cost(robot, opts)?;
         let (mut s2, mut max, mut n) = (0.0, 0.0f64, 0);
         for (gi, g) in self.groups.iter().enumerate() {
             let contacts = self.group_contacts(g);
