@@ -53,17 +53,6 @@ pub fn pose_data_of<const N: usize>(
     }
 }
 
-/// Each row's file line and `pose_id` (how reports and model files name a row).
-pub fn pose_labels(set: &MeasurementSet) -> Vec<PoseLabel> {
-    set.rows
-        .iter()
-        .map(|r| PoseLabel {
-            line: r.line,
-            pose_id: r.pose_id.clone(),
-        })
-        .collect()
-}
-
 /// The model file of calibration `cal` of `set` (read from `data_path`): the first run's
 /// model, every run, the robust fit's suspects, and the data's and result's warnings. Also
 /// returns the warnings about the result alone (the data's were known before the fit).

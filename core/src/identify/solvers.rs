@@ -392,7 +392,7 @@ impl Finish {
 /// 5–350 in scaled length against a parameter norm of 25, almost all of it along link 6's
 /// θ0, d, a, α and link 7's d; halving alone accepted 1/4096–1/16384 of it per iteration and
 /// crawled 175 iterations before the quadratic phase (186 in all, each with some 13 Jacobian
-/// passes). With the damped fallback: 10, at the minimum OPT2 finds.
+/// passes). With the damped fallback: 11, at the minimum OPT2 finds.
 ///
 /// Why only there: the first version (commit ebc842f, reverted) used the damped step on
 /// every fit and broke instrument fits. Its persistent trust radius skipped the full step

@@ -99,6 +99,28 @@ pub fn cpu_seconds() -> Option<f64> {
     Some(ticks / 100.0)
 }
 
+/// The analysis every simulated calibration of design `d` in `study` shares; refused,
+/// naming the design, when its poses do not determine the parameters.
+pub fn prepare_design<const N: usize>(
+    study: &kincal::montecarlo::Study<'_, N>,
+    d: &Design<N>,
+) -> Result<kincal::identify::Identifiability, Error> {
+    let empty = Measurement::new([0.0; N], Transform::identity());
+    let mut data = vec![empty; d.q.len()];
+    prepare(
+        study,
+        &d.core(),
+        &mut Box::<Workspace<P>>::default(),
+        &mut data,
+    )
+    .map_err(|e| {
+        Error::numeric(format!(
+            "design {}: the poses do not determine the parameters: {e}",
+            d.name
+        ))
+    })
+}
+
 /// Runs `runs` calibrations of every design on the same random robots (`label` names the
 /// progress stage).
 pub fn run_study<const N: usize>(
@@ -124,19 +146,7 @@ pub fn run_study<const N: usize>(
         let m = d.q.len();
         let core = d.core();
         let empty = Measurement::new([0.0; N], Transform::identity());
-        let mut data = vec![empty; m];
-        let analysis = prepare(
-            &study,
-            &core,
-            &mut Box::<Workspace<P>>::default(),
-            &mut data,
-        )
-        .map_err(|e| {
-            Error::numeric(format!(
-                "design {}: the poses do not determine the parameters: {e}",
-                d.name
-            ))
-        })?;
+        let analysis = prepare_design(&study, d)?;
         let o = d.indices(ctx)?.o;
         let t = Instant::now();
         let results: Vec<Result<RunResult, kincal::Error>> = (0..runs as usize)

@@ -20,7 +20,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use kincal::identify::{Contact, Distance, Group, GroupKind, Measurement, Workspace};
-use kincal::montecarlo::{Acquisition, Scenario, prepare};
+use kincal::montecarlo::{Acquisition, Scenario};
 use kincal::plate_study::{
     BothErrors, PlateDesign, RegistrationScratch, check_design, plate_run, tool_run_both,
 };
@@ -32,7 +32,7 @@ use rayon::prelude::*;
 use crate::error::CliError;
 use kincal_io::design::context::{Context, P};
 use kincal_io::design::designs::Design;
-use kincal_io::design::study::{DesignResult, Summary};
+use kincal_io::design::study::{DesignResult, Summary, prepare_design};
 
 /// Workspace of the plate identification: the design capacity plus the tool translation
 /// and the base frame the analysis sets aside.
@@ -398,19 +398,7 @@ pub fn compare<const N: usize>(
     for d in designs {
         let core = d.core();
         let empty = Measurement::new([0.0; N], Transform::identity());
-        let mut data = vec![empty; d.q.len()];
-        let analysis = prepare(
-            &study,
-            &core,
-            &mut Box::<Workspace<P>>::default(),
-            &mut data,
-        )
-        .map_err(|e| {
-            CliError::numeric(format!(
-                "design {}: the poses do not determine the parameters: {e}",
-                d.name
-            ))
-        })?;
+        let analysis = prepare_design(&study, d)?;
         let results: Vec<_> = (0..runs as usize)
             .into_par_iter()
             .with_min_len(8)
