@@ -301,6 +301,10 @@ fn contact_rows<const N: usize, const P: usize>(
     ws: &mut Workspace<P>,
     rows: &mut [[f64; P]; 6],
 ) -> Result<[f64; 3]> {
+    if ws.cost_only {
+        // The same point as `model_jacobian`'s: both run the one `chain` of `fk`.
+        return c.tool_point(robot);
+    }
     let Workspace {
         jac,
         cols,
@@ -455,7 +459,9 @@ fn fold6<const P: usize>(
     e: &[f64; 6],
     w: &[f64; 6],
 ) -> Result<()> {
-    if ws.to_gram {
+    if ws.cost_only {
+        Ok(())
+    } else if ws.to_gram {
         ws.gram.add_rows6(rows, e, w)
     } else {
         ws.lsq.add_rows6(rows, e, w)
@@ -559,7 +565,7 @@ fn fold_group<const N: usize, const P: usize>(
                 *x = y / w_sum;
             }
         }
-        if centred {
+        if centred && !ws.cost_only {
             let wd = w_sum * opts.weight_pos;
             if g.kind == GroupKind::Target {
                 for jb in &jbar {
@@ -626,7 +632,8 @@ fn fold_target_once<const N: usize, const P: usize>(
     for c in data.group_contacts(&g).iter().filter(|c| c.weight > 0.0) {
         let p = contact_rows(robot, c, n_cols, ws, &mut rows)?;
         let o = *origin.get_or_insert(p);
-        for (js, r) in jsum.iter_mut().zip(rows.iter()) {
+        let fold_rows = !ws.cost_only;
+        for (js, r) in jsum.iter_mut().zip(rows.iter()).filter(|_| fold_rows) {
             for (x, y) in js.iter_mut().zip(r.iter()).take(n_cols) {
                 *x += c.weight * y;
             }
@@ -657,6 +664,9 @@ fn fold_target_once<const N: usize, const P: usize>(
     }
     let wd = w_sum * opts.weight_pos;
     for (jb, &db) in jbar.iter().zip(dbar.iter()) {
+        if ws.cost_only {
+            break;
+        }
         let b = if with_rhs { -db } else { 0.0 };
         ws.gram
             .downdate_with_rhs(jb.get(..n_cols).unwrap_or(&[]), b, wd)?;
@@ -744,7 +754,9 @@ fn fold_distance<const N: usize, const P: usize>(
     let w = opts.weight_pos * d.weight;
     let b = if with_rhs { e } else { 0.0 };
     let a = row.get(..n_cols).unwrap_or(&[]);
-    if ws.to_gram {
+    if ws.cost_only {
+        // A cost-only pass (`RowSource::fold_cost`) folds nothing.
+    } else if ws.to_gram {
         ws.gram.add_row_weighted(a, b, w)?;
     } else {
         ws.lsq.add_row_weighted(a, b, w)?;
@@ -1045,6 +1057,28 @@ impl<const N: usize> RowSource<N> for ConstraintData<'_, N> {
     }
     fn cost(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<f64> {
         self.cost_from_moments(robot, opts)
+    }
+    /// The normal-equation fold itself with `ws.cost_only` set: the same code and the same
+    /// tool points (forward kinematics is the Jacobian's chain), so the same cost bit for
+    /// bit, without Jacobians or folding. Not with instrument rows (their fold has no such
+    /// mode).
+    fn fold_cost<const P: usize>(
+        &self,
+        robot: &Robot<N>,
+        opts: &IdentifyOptions<'_>,
+        n_cols: usize,
+        ws: &mut Workspace<P>,
+    ) -> Result<Option<f64>> {
+        if !self.instrument.is_empty() || !self.sessions.is_empty() {
+            return Ok(None);
+        }
+        // `to_gram` selects the normal-equation path (its cost arithmetic) of each group.
+        let to_gram = core::mem::replace(&mut ws.to_gram, true);
+        ws.cost_only = true;
+        let c = self.fold(robot, true, opts, n_cols, ws);
+        ws.cost_only = false;
+        ws.to_gram = to_gram;
+        c.map(Some)
     }
 
     fn stats(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<ResidualStats> {
@@ -1682,5 +1716,147 @@ mod tests {
         let want = [r[0][2], r[1][2], r[2][2]];
         let dot = (n[0] * want[0] + n[1] * want[1] + n[2] * want[2]).abs();
         assert!((dot - 1.0).abs() < 1e-12, "{n:?} vs {want:?}");
+    }
+
+    /// Every contact group kind and a distance, without instrument rows (whose fold has no
+    /// cost-only mode).
+    fn contact_data(c: &Case) -> ConstraintData<'_, 6> {
+        ConstraintData {
+            instrument: &[],
+            ..data(c)
+        }
+    }
+
+    /// Models around the nominal one: each geometric parameter moved by a different amount.
+    fn moved(k: usize) -> Robot<6> {
+        let mut r = aria::nominal();
+        for i in params().iter() {
+            let v = r.param(ParamIndex(i)).unwrap();
+            let dv = 1e-3 * libm::sin(0.7 * i as f64 + 1.9 * k as f64);
+            r.set_param(ParamIndex(i), v + dv).unwrap();
+        }
+        r
+    }
+
+    #[test]
+    fn fold_cost_is_the_normal_equation_folds_cost_bit_for_bit() {
+        let c = case();
+        let d = contact_data(&c);
+        d.validate().unwrap();
+        let opts = IdentifyOptions::new(Algorithm::Ols, params());
+        let n = params().len();
+        let mut ws = ws();
+        for k in 0..5 {
+            let robot = moved(k);
+            let folded = fold_all(&robot, &d, true, &mut ws);
+            let gram = ws.gram.clone();
+            // At another model: the cost-only pass leaves the normal equations alone.
+            let other = d.fold_cost(&moved(k + 7), &opts, n, &mut ws).unwrap();
+            assert!(other.is_some_and(|o| o.to_bits() != folded.to_bits()));
+            let cost = d.fold_cost(&robot, &opts, n, &mut ws).unwrap().unwrap();
+            assert_eq!(cost.to_bits(), folded.to_bits(), "model {k}: {cost} vs {folded}");
+            assert!(!ws.to_gram && !ws.cost_only);
+            assert_eq!(ws.gram.gram(), gram.gram());
+            assert_eq!(ws.gram.atb(), gram.atb());
+            assert_eq!(ws.gram.btb().to_bits(), gram.btb().to_bits());
+            // The moment-based cost is the same sum, to rounding only.
+            let moments = d.cost(&robot, &opts).unwrap();
+            assert!((moments - cost).abs() <= 1e-12 * cost, "{moments} vs {cost}");
+        }
+        // With instrument rows there is no cost-only pass.
+        assert!(data(&c).fold_cost(&moved(0), &opts, n, &mut ws).unwrap().is_none());
+    }
+
+    /// `d`'s rows, counting the Jacobian passes; with `cost_pass` false it hides
+    /// [`RowSource::fold_cost`] (every trial then pays a Jacobian pass, as before it existed).
+    struct Counted<'a, 'b> {
+        d: &'a ConstraintData<'b, 6>,
+        cost_pass: bool,
+        folds: core::cell::Cell<usize>,
+    }
+
+    impl RowSource<6> for Counted<'_, '_> {
+        fn validate(&self) -> Result<()> {
+            self.d.validate()
+        }
+        fn check_inputs(&self, opts: &IdentifyOptions<'_>) -> Result<()> {
+            RowSource::check_inputs(self.d, opts)
+        }
+        fn row_count(&self, opts: &IdentifyOptions<'_>) -> usize {
+            self.d.row_count(opts)
+        }
+        fn fold<const P: usize>(
+            &self,
+            robot: &Robot<6>,
+            with_rhs: bool,
+            opts: &IdentifyOptions<'_>,
+            n_cols: usize,
+            ws: &mut Workspace<P>,
+        ) -> Result<f64> {
+            if !ws.cost_only {
+                self.folds.set(self.folds.get() + 1);
+            }
+            self.d.fold(robot, with_rhs, opts, n_cols, ws)
+        }
+        fn cost(&self, robot: &Robot<6>, opts: &IdentifyOptions<'_>) -> Result<f64> {
+            self.d.cost(robot, opts)
+        }
+        fn fold_cost<const P: usize>(
+            &self,
+            robot: &Robot<6>,
+            opts: &IdentifyOptions<'_>,
+            n_cols: usize,
+            ws: &mut Workspace<P>,
+        ) -> Result<Option<f64>> {
+            if self.cost_pass {
+                self.d.fold_cost(robot, opts, n_cols, ws)
+            } else {
+                Ok(None)
+            }
+        }
+        fn stats(&self, robot: &Robot<6>, opts: &IdentifyOptions<'_>) -> Result<ResidualStats> {
+            self.d.stats(robot, opts)
+        }
+        fn damped_fallback(&self) -> bool {
+            self.d.damped_fallback()
+        }
+    }
+
+    #[test]
+    fn costing_trials_first_leaves_the_fit_bit_for_bit() {
+        let c = case();
+        let d = contact_data(&c);
+        // These readings hold nothing (no minimum at zero cost): stop at a relative gain
+        // of 1e-4, after a few iterations with rejected trials.
+        let opts = IdentifyOptions {
+            ftol: 1e-4,
+            ..IdentifyOptions::new(Algorithm::Ols, params())
+        };
+        let mut ws = ws();
+        let start = moved(3);
+        let mut analysis = Identifiability::empty(ParamSet::new());
+        analyze_constrained_into(&start, &d, &opts, &mut ws, &mut analysis).unwrap();
+        let fit = |cost_pass: bool, ws: &mut Ws| {
+            let src = Counted {
+                d: &d,
+                cost_pass,
+                folds: core::cell::Cell::new(0),
+            };
+            let mut out = Identification::start(&start, opts.algorithm, Some(&analysis));
+            super::super::solvers::identify_into(&src, &opts, ws, &mut out).unwrap();
+            (out, src.folds.get())
+        };
+        let (new, new_folds) = fit(true, &mut ws);
+        let (old, old_folds) = fit(false, &mut ws);
+        assert!(new.iterations >= 2, "{} iterations", new.iterations);
+        assert_eq!(new.iterations, old.iterations);
+        for i in 0..Robot::<6>::NUM_PARAMS {
+            let (a, b) = (new.robot.param(ParamIndex(i)), old.robot.param(ParamIndex(i)));
+            assert_eq!(a.unwrap().to_bits(), b.unwrap().to_bits(), "parameter {i}");
+        }
+        assert_eq!(new.fitted, old.fitted);
+        assert_eq!(new.std_errors.map(f64::to_bits), old.std_errors.map(f64::to_bits));
+        // The saving is real: rejected trials cost no Jacobian pass.
+        assert!(new_folds < old_folds, "{new_folds} vs {old_folds} Jacobian passes");
     }
 }

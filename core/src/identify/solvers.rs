@@ -1,7 +1,7 @@
 //! The three identification algorithms on the identifiable parameter set, and the
 //! parameter covariance of the result.
 
-use super::data::{ResidualStats, RowSource, accumulate, accumulate_gram};
+use super::data::{ResidualStats, RowSource, accumulate, accumulate_gram, accumulate_trial_gram};
 use super::identifiability::analyze_into;
 use super::{
     Algorithm, CORRELATION_REPORT_THRESHOLD, Correlation, Identification, IdentifyOptions,
@@ -411,7 +411,9 @@ impl Finish {
 ///
 /// A trial full step is evaluated by accumulating its normal equations (Jacobian and
 /// residual in one pass): an accepted trial's cost and normal equations are those the next
-/// iteration needs.
+/// iteration needs. Where the data have a Jacobian-free pass giving the same cost bit for bit
+/// (contact data), a trial is first costed by it and folded only if accepted
+/// ([`accumulate_trial_gram`]): same steps, same iterates.
 fn gauss_newton<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
     robot: &mut Robot<N>,
     data: &D,
@@ -453,7 +455,7 @@ fn gauss_newton<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
                 data.cost(&trial, opts)?
             } else {
                 gram_current = false;
-                accumulate_gram(&trial, data, opts, n, ws)?
+                accumulate_trial_gram(&trial, data, opts, n, c, ws)?
             };
             if c2 <= c {
                 accepted = Some(c2);

@@ -17,6 +17,9 @@ pub struct Workspace<const P: usize> {
     pub(crate) gram: GramAccumulator<P>,
     /// Whether rows go to `gram` (iterations) or `lsq` (analysis, covariance).
     pub(crate) to_gram: bool,
+    /// Whether a fold computes its cost only (no Jacobian, nothing folded): see
+    /// [`super::data::RowSource::fold_cost`].
+    pub(crate) cost_only: bool,
     pub(crate) damped: DampedScratch<P>,
     pub(crate) svd: SvdScratch<P>,
     /// Scratch matrix (orthonormal basis, covariance).
@@ -54,6 +57,7 @@ impl<const P: usize> Workspace<P> {
             lsq: LsqAccumulator::new(),
             gram: GramAccumulator::new(),
             to_gram: false,
+            cost_only: false,
             damped: DampedScratch::new(),
             svd: SvdScratch::new(),
             mat: [[0.0; P]; P],
