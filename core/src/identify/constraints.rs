@@ -462,7 +462,9 @@ fn fold6<const P: usize>(
     if ws.cost_only {
         Ok(())
     } else if ws.to_gram {
-        ws.gram.add_rows6(rows, e, w)
+        // Contact rows are position rows: rows 3–5 are never written, their weights are 0.
+        ws.gram
+            .add_rows3(rows, &[e[0], e[1], e[2]], &[w[0], w[1], w[2]])
     } else {
         ws.lsq.add_rows6(rows, e, w)
     }
@@ -1754,17 +1756,29 @@ mod tests {
             let other = d.fold_cost(&moved(k + 7), &opts, n, &mut ws).unwrap();
             assert!(other.is_some_and(|o| o.to_bits() != folded.to_bits()));
             let cost = d.fold_cost(&robot, &opts, n, &mut ws).unwrap().unwrap();
-            assert_eq!(cost.to_bits(), folded.to_bits(), "model {k}: {cost} vs {folded}");
+            assert_eq!(
+                cost.to_bits(),
+                folded.to_bits(),
+                "model {k}: {cost} vs {folded}"
+            );
             assert!(!ws.to_gram && !ws.cost_only);
             assert_eq!(ws.gram.gram(), gram.gram());
             assert_eq!(ws.gram.atb(), gram.atb());
             assert_eq!(ws.gram.btb().to_bits(), gram.btb().to_bits());
             // The moment-based cost is the same sum, to rounding only.
             let moments = d.cost(&robot, &opts).unwrap();
-            assert!((moments - cost).abs() <= 1e-12 * cost, "{moments} vs {cost}");
+            assert!(
+                (moments - cost).abs() <= 1e-12 * cost,
+                "{moments} vs {cost}"
+            );
         }
         // With instrument rows there is no cost-only pass.
-        assert!(data(&c).fold_cost(&moved(0), &opts, n, &mut ws).unwrap().is_none());
+        assert!(
+            data(&c)
+                .fold_cost(&moved(0), &opts, n, &mut ws)
+                .unwrap()
+                .is_none()
+        );
     }
 
     /// `d`'s rows, counting the Jacobian passes; with `cost_pass` false it hides
@@ -1851,12 +1865,21 @@ mod tests {
         assert!(new.iterations >= 2, "{} iterations", new.iterations);
         assert_eq!(new.iterations, old.iterations);
         for i in 0..Robot::<6>::NUM_PARAMS {
-            let (a, b) = (new.robot.param(ParamIndex(i)), old.robot.param(ParamIndex(i)));
+            let (a, b) = (
+                new.robot.param(ParamIndex(i)),
+                old.robot.param(ParamIndex(i)),
+            );
             assert_eq!(a.unwrap().to_bits(), b.unwrap().to_bits(), "parameter {i}");
         }
         assert_eq!(new.fitted, old.fitted);
-        assert_eq!(new.std_errors.map(f64::to_bits), old.std_errors.map(f64::to_bits));
+        assert_eq!(
+            new.std_errors.map(f64::to_bits),
+            old.std_errors.map(f64::to_bits)
+        );
         // The saving is real: rejected trials cost no Jacobian pass.
-        assert!(new_folds < old_folds, "{new_folds} vs {old_folds} Jacobian passes");
+        assert!(
+            new_folds < old_folds,
+            "{new_folds} vs {old_folds} Jacobian passes"
+        );
     }
 }

@@ -118,6 +118,41 @@ impl<const P: usize> GramAccumulator<P> {
         self.btb += (0..6).map(|r| w[r] * b[r] * b[r]).sum::<f64>();
         Ok(())
     }
+    /// [`add_rows6`](Self::add_rows6) of a position-only row block: rows 3–5 zero with
+    /// weight and right-hand side 0 (contact data), reading only `a[..3]`. The same sums,
+    /// bit for bit: each entry adds the same three products in the same order (the three
+    /// zero rows add exact zeros there, and `x + 0 = x` for every sum that is not −0, which
+    /// neither accumulator ever holds), with half the finiteness checks and none of the
+    /// rotation rows' arithmetic. Errors as `add_rows6`.
+    pub fn add_rows3(&mut self, a: &[[f64; P]; 6], b: &[f64; 3], w: &[f64; 3]) -> Result<()> {
+        let n = self.n.min(P);
+        let [a0, a1, a2, ..] = a;
+        let (a0, a1, a2) = (&a0[..n], &a1[..n], &a2[..n]);
+        let finite = super::util::all_finite(a0.iter())
+            && super::util::all_finite(a1.iter())
+            && super::util::all_finite(a2.iter())
+            && super::util::all_finite(b.iter().chain(w.iter()));
+        if !finite || w.iter().any(|&v| v < 0.0) {
+            for r in [a0, a1, a2] {
+                check_finite(r)?;
+            }
+            return Err(Error::NonFinite {
+                what: crate::error::Quantity::Parameter,
+                index: n,
+            });
+        }
+        let rows = self.g.iter_mut().zip(self.atb.iter_mut()).take(n);
+        for (i, (grow, atb)) in rows.enumerate() {
+            let c = [w[0] * a0[i], w[1] * a1[i], w[2] * a2[i], 0.0, 0.0, 0.0];
+            *atb += c[0] * b[0] + c[1] * b[1] + c[2] * b[2];
+            if c[0] == 0.0 && c[1] == 0.0 && c[2] == 0.0 {
+                continue;
+            }
+            fold3(&mut grow[i..n], &c, [&a0[i..], &a1[i..], &a2[i..]]);
+        }
+        self.btb += w[0] * b[0] * b[0] + w[1] * b[1] * b[1] + w[2] * b[2] * b[2];
+        Ok(())
+    }
     /// Folds the six unit-weight equations `a[r]·x ≈ b[r]` with the same sums, added in
     /// the same order, as six [`add_row_weighted`](Self::add_row_weighted) calls with
     /// `w = 1` (bit-identical results: each entry adds its six products one after the
@@ -347,6 +382,66 @@ mod tests {
     extern crate std;
     use super::*;
     use crate::linalg::lsq::LsqAccumulator;
+
+    #[test]
+    #[allow(clippy::unwrap_used)]
+    fn add_rows3_is_add_rows6_of_position_rows_bit_for_bit() {
+        const P: usize = 12;
+        let n = 11;
+        let (mut g6, mut g3) = (GramAccumulator::<P>::new(), GramAccumulator::<P>::new());
+        g6.reset(n).unwrap();
+        g3.reset(n).unwrap();
+        for k in 0..40 {
+            let x = |r: usize, j: usize| libm::sin(0.37 * (k * 31 + r * 7 + j) as f64 + 1.3);
+            let mut a = [[0.0; P]; 6];
+            for (r, row) in a.iter_mut().enumerate().take(3) {
+                for (j, v) in row.iter_mut().enumerate().take(n) {
+                    // Negative values, exact zeros (column 4 always, some entries sometimes)
+                    // and a value beyond n that must not be read.
+                    *v = if j == 4 || (k + r + j) % 9 == 0 {
+                        0.0
+                    } else {
+                        x(r, j)
+                    };
+                }
+                row[n] = f64::NAN;
+            }
+            let b = [
+                x(5, 0) * 1e-3,
+                -x(6, 1),
+                if k % 5 == 0 { 0.0 } else { x(7, 2) },
+            ];
+            let w = [0.5 + x(8, 0).abs(), if k % 7 == 0 { 0.0 } else { 2.0 }, 1.0];
+            g6.add_rows6(
+                &a,
+                &[b[0], b[1], b[2], 0.0, 0.0, 0.0],
+                &[w[0], w[1], w[2], 0.0, 0.0, 0.0],
+            )
+            .unwrap();
+            g3.add_rows3(&a, &b, &w).unwrap();
+        }
+        for i in 0..n {
+            for j in i..n {
+                assert_eq!(
+                    g3.gram()[i][j].to_bits(),
+                    g6.gram()[i][j].to_bits(),
+                    "{i},{j}"
+                );
+            }
+            assert_eq!(g3.atb()[i].to_bits(), g6.atb()[i].to_bits(), "{i}");
+        }
+        assert_eq!(g3.btb().to_bits(), g6.btb().to_bits());
+        assert!(g3.gram()[0][0] > 1.0 && g3.gram()[4][4] == 0.0);
+        // Non-finite input fails as add_rows6 does.
+        let mut a = [[0.0; P]; 6];
+        a[1][3] = f64::INFINITY;
+        let err = g3.add_rows3(&a, &[0.0; 3], &[1.0; 3]).unwrap_err();
+        assert_eq!(err, g6.add_rows6(&a, &[0.0; 6], &[1.0; 6]).unwrap_err());
+        assert!(
+            g3.add_rows3(&[[0.0; P]; 6], &[0.0; 3], &[-1.0, 1.0, 1.0])
+                .is_err()
+        );
+    }
 
     #[test]
     #[allow(clippy::unwrap_used)]
