@@ -279,6 +279,71 @@ fn validate_judges_each_later_session_after_fitting_only_its_frame() {
     let norm = |i: usize| poses[i]["e_pos_norm_m"].as_f64().unwrap();
     assert!((norm(0) - errs[0]).abs() < 1e-12);
     assert!((12..36).all(|i| norm(i) < 1e-9), "{}", poses[20]);
+
+    // The nominal model: the first session's error is |p_true − p_nominal| per row; each
+    // later session's the residual of the best rigid fit of the nominal's markers to the
+    // measured ones, by Horn's quaternion method (the test's own, not the core's
+    // Kabsch/Gauss–Newton).
+    let nominal = aria::nominal();
+    let (v, _) = validate_json(dir.path(), &nominal, "nominal");
+    let sessions = v["sessions"].as_array().expect("sessions");
+    let s0: Vec<f64> = (0..12)
+        .map(|k| (marker(&truth, k, 0) - marker(&nominal, k, 0)).norm())
+        .collect();
+    let want0 = (s0.iter().map(|e| e * e).sum::<f64>() / 12.0).sqrt();
+    let got0 = sessions[0]["rms_pos_m"].as_f64().unwrap();
+    assert!((got0 - want0).abs() < 1e-12, "s0: {got0} vs {want0}");
+    for (s, x) in sessions.iter().enumerate().skip(1) {
+        let frame = pose_from_vector6(&FRAMES[s]);
+        let a: Vec<_> = (0..12).map(|k| marker(&nominal, k, s)).collect();
+        let b: Vec<_> = (0..12)
+            .map(|k| (frame * nalgebra::Point3::from(marker(&truth, k, s))).coords)
+            .collect();
+        let want = horn_rms(&a, &b);
+        let got = x["rms_pos_m"].as_f64().unwrap();
+        assert!(
+            want > 1e-4,
+            "the nominal must differ after the fit: {want} m"
+        );
+        assert!((got - want).abs() < 1e-9 * want, "s{s}: {got} vs {want}");
+        eprintln!(
+            "validate nominal, s{s}: RMS {} mm (Horn: {} mm)",
+            got * 1e3,
+            want * 1e3
+        );
+    }
+}
+
+/// RMS [m] of the residuals of the best rigid motion taking points `a` onto `b` (least
+/// squares), by Horn's closed-form unit quaternion (1987): the eigenvector of the largest
+/// eigenvalue of the 4×4 matrix of the cross-covariance.
+fn horn_rms(a: &[nalgebra::Vector3<f64>], b: &[nalgebra::Vector3<f64>]) -> f64 {
+    let n = a.len() as f64;
+    let ca = a.iter().sum::<nalgebra::Vector3<f64>>() / n;
+    let cb = b.iter().sum::<nalgebra::Vector3<f64>>() / n;
+    let mut m = nalgebra::Matrix3::zeros();
+    for (x, y) in a.iter().zip(b) {
+        m += (x - ca) * (y - cb).transpose();
+    }
+    let s = |i: usize, j: usize| m[(i, j)];
+    #[rustfmt::skip]
+    let k = nalgebra::Matrix4::new(
+        s(0, 0) + s(1, 1) + s(2, 2), s(1, 2) - s(2, 1), s(2, 0) - s(0, 2), s(0, 1) - s(1, 0),
+        s(1, 2) - s(2, 1), s(0, 0) - s(1, 1) - s(2, 2), s(0, 1) + s(1, 0), s(2, 0) + s(0, 2),
+        s(2, 0) - s(0, 2), s(0, 1) + s(1, 0), -s(0, 0) + s(1, 1) - s(2, 2), s(1, 2) + s(2, 1),
+        s(0, 1) - s(1, 0), s(2, 0) + s(0, 2), s(1, 2) + s(2, 1), -s(0, 0) - s(1, 1) + s(2, 2),
+    );
+    let e = k.symmetric_eigen();
+    let q = e.eigenvectors.column(e.eigenvalues.imax()).into_owned();
+    let r = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+        q[0], q[1], q[2], q[3],
+    ));
+    let sum: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| ((y - cb) - r * (x - ca)).norm_squared())
+        .sum();
+    (sum / n).sqrt()
 }
 
 #[test]
