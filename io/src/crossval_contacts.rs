@@ -336,7 +336,11 @@ pub fn run<const N: usize>(
             "--group-by {}: {} has instrument rows in several sessions, each later session in \
              a frame of its own: expected --group-by session (a held-out session is scored \
              after fitting only its frame; a held-out row has no frame to be scored in)",
-            plan.group_by.json_name(),
+            match plan.group_by {
+                GroupBy::Target => "target",
+                GroupBy::Session => "session",
+                GroupBy::PoseId => "pose-id",
+            },
             set.source
         )));
     }
