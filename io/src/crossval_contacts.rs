@@ -11,6 +11,13 @@
 //! to the held-out contacts). Groups with fewer than 2 held-out contacts (targets) or 4
 //! (planes) say nothing and are not scored. A known distance is scored when both its
 //! targets have held-out contacts.
+//!
+//! Instrument rows in several sessions (each later session in a frame of its own, calibrate's
+//! session-frame path): with `--group-by session` every held-out session is scored after
+//! fitting only its frame ([`crate::session_scores`], the function `kincal validate` uses),
+//! one scored group per session (mean, RMS, max of |e_p| over its rows). Other groupings of
+//! such data without contact rows are refused: a held-out row of a framed session has no
+//! frame to be scored in.
 
 use kincal::identify::{
     Algorithm, IdentifyOptions, Loss, PoseResidual, RobustOptions, distance_estimate,
@@ -102,8 +109,13 @@ impl Score {
     }
 }
 
-/// Scores `robot` on the rows of `cd` with a positive weight (the held-out rows).
-fn score<const N: usize>(robot: &Robot<N>, cd: &ContactData<N>) -> Result<Score, kincal::Error> {
+/// Scores `robot` on the rows of `cd` with a positive weight (the held-out rows); with
+/// `sessions`, each held-out instrument session too, after fitting only its frame.
+fn score<const N: usize>(
+    robot: &Robot<N>,
+    cd: &ContactData<N>,
+    sessions: bool,
+) -> Result<Score, kincal::Error> {
     let d = cd.view();
     let mut s = Score::default();
     for (g, info) in cd.info.iter().enumerate() {
@@ -120,6 +132,22 @@ fn score<const N: usize>(robot: &Robot<N>, cd: &ContactData<N>) -> Result<Score,
     for (k, spec) in cd.distance_specs.iter().enumerate() {
         if let Some(p) = distance_estimate(robot, &d, k)? {
             s.distances.push((p - spec.m).abs());
+        }
+    }
+    if sessions {
+        let scored = crate::session_scores::score_sessions(
+            robot,
+            cd,
+            crate::session_scores::BaseSession::FitFrame,
+        )
+        .map_err(|(_, e)| e)?;
+        for x in scored.iter().filter(|x| x.summary.count_pos() > 0) {
+            s.groups.push((
+                x.mean_pos_m,
+                x.summary.rms_pos_m(),
+                x.summary.max_pos_m,
+                x.summary.count_pos(),
+            ));
         }
     }
     Ok(s)
@@ -265,8 +293,11 @@ pub struct Report {
     pub groups: usize,
     pub robust: Option<Loss>,
     pub folds: Vec<FoldReport>,
-    /// Scored groups over all folds.
+    /// Scored groups over all folds (held-out instrument sessions included).
     pub scored_groups: usize,
+    /// Held-out instrument sessions were scored after fitting their frames (instrument rows
+    /// in several sessions, `--group-by session`).
+    pub instrument_sessions: bool,
     /// Held out, all folds.
     pub nominal: Summary,
     pub calibrated: Summary,
@@ -299,6 +330,21 @@ pub fn run<const N: usize>(
     plan: &Plan<'_>,
 ) -> Result<Report, Error> {
     let base = crate::constraints::build::<N>(set, plan.constraints, nominal, plan.weight_pos)?;
+    let sessions = base.base_session.is_some();
+    if sessions && base.contacts.is_empty() && plan.group_by != GroupBy::Session {
+        return Err(Error::usage(format!(
+            "--group-by {}: {} has instrument rows in several sessions, each later session in \
+             a frame of its own: expected --group-by session (a held-out session is scored \
+             after fitting only its frame; a held-out row has no frame to be scored in)",
+            match plan.group_by {
+                GroupBy::Target => "target",
+                GroupBy::Session => "session",
+                GroupBy::PoseId => "pose-id",
+            },
+            set.source
+        )));
+    }
+    let sessions = sessions && plan.group_by == GroupBy::Session;
     let (group_of, labels) = groups_of(set, plan.group_by)?;
     let k = plan.folds.min(labels.len());
     if k < 2 {
@@ -330,8 +376,8 @@ pub fn run<const N: usize>(
         .map_err(|e| Error::numeric(format!("{}: fold {}: {e}", set.source, f + 1)))?;
         let fail =
             |e: kincal::Error| Error::numeric(format!("{}: fold {}: {e}", set.source, f + 1));
-        let s_nom = score(nominal, &test).map_err(fail)?;
-        let s_cal = score(&cal, &test).map_err(fail)?;
+        let s_nom = score(nominal, &test, sessions).map_err(fail)?;
+        let s_cal = score(&cal, &test, sessions).map_err(fail)?;
         let held_out = labels
             .iter()
             .zip(&fold_of_group)
@@ -355,6 +401,7 @@ pub fn run<const N: usize>(
         robust: plan.robust,
         folds,
         scored_groups: total_cal.groups.len(),
+        instrument_sessions: sessions,
         nominal: total_nom.summary(),
         calibrated: total_cal.summary(),
     })
@@ -377,7 +424,7 @@ pub fn json(report: &Report) -> Value {
         })
         .collect();
     let all = |s: &Summary| json!({"mean_mm": s.mean_mm, "rms_mm": s.rms_mm, "max_mm": s.max_mm, "distance_error_mm": s.distance_error_mm});
-    json!({
+    let mut v = json!({
         "group_by": report.group_by.json_name(),
         "robust_loss": report.robust.map(Loss::name),
         "folds": folds,
@@ -386,5 +433,20 @@ pub fn json(report: &Report) -> Value {
             "nominal": all(&report.nominal),
             "calibrated": all(&report.calibrated),
         },
-    })
+    });
+    // Only with instrument sessions, so the reports of other data keep their bytes.
+    if report.instrument_sessions {
+        v["instrument_sessions"] =
+            json!("each held-out session scored after fitting only its frame");
+    }
+    v
+}
+
+/// Whether a cross-validation of `set` takes this module's route: a constraints file given,
+/// target/plane rows, or instrument rows in several sessions (frames eliminated as calibrate
+/// does; the pose path has one base frame).
+pub fn takes_this_route(set: &MeasurementSet, constraints_given: bool) -> bool {
+    constraints_given
+        || crate::constraints::has_contacts(set)
+        || crate::constraints::has_instrument_sessions(set)
 }

@@ -40,6 +40,7 @@ pub mod robot_arg;
 pub mod robot_file;
 pub mod rosbag;
 pub mod session_frames;
+pub mod session_scores;
 pub mod tool_file;
 pub mod units;
 pub mod urdf;

@@ -84,9 +84,10 @@ fn study_rows(
     Ok(set)
 }
 
-/// Whether the study takes the contact route: a constraints file, or target/plane rows.
+/// Whether the study takes the contact route: a constraints file, target/plane rows, or
+/// instrument rows in several sessions (io's `crossval_contacts::takes_this_route`).
 fn is_contact_study(set: &MeasurementSet, constraints: Option<&Path>) -> bool {
-    constraints.is_some() || kincal_io::constraints::has_contacts(set)
+    ccv::takes_this_route(set, constraints.is_some())
 }
 
 /// `group_by` of a contact cross-validation (`None`: by session when the data have one).

@@ -222,7 +222,7 @@ fn crossval<const N: usize>(
             allow_out_of_limits: args.allow_out_of_limits,
         },
     )?;
-    if args.constraints.is_some() || kincal_io::constraints::has_contacts(&set) {
+    if ccv::takes_this_route(&set, args.constraints.is_some()) {
         return crossval_contacts(nominal, args, &set, choice);
     }
     if args.group_by.is_some() {

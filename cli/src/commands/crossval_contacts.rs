@@ -29,6 +29,14 @@ pub fn text(report: &Report) -> String {
                 l.name()
             ))
     );
+    if report.instrument_sessions {
+        let _ = writeln!(
+            text,
+            "  (instrument rows in several sessions: each fold fits the model with a frame per \
+             training session, and each held-out session is scored after fitting only its frame, \
+             6 parameters, no model parameter: one scored group per session, |e_p| [mm])"
+        );
+    }
     let _ = writeln!(
         text,
         "  fold  held-out groups  nominal mean|e| [mm]  calibrated mean|e| [mm]  nominal |dist err| [mm]  calibrated |dist err| [mm]  fit"

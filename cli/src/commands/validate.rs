@@ -14,6 +14,9 @@ use crate::plots::pose_errors::{self, Series};
 use crate::report::{Table, Targets, fmt_err};
 use kincal_io::data::{self, DataOptions, RowLabels};
 use kincal_io::robot_arg;
+use kincal_io::session_scores::{
+    BaseSession, SessionScore, pose_errors, score_sessions, session_of_instrument_rows,
+};
 
 pub const LONG_ABOUT: &str = "\
 Compares the model's poses with the measured poses of DATA (measured minus model, in the base
@@ -38,7 +41,15 @@ number (SI units, full precision).
 Data with target/plane rows (docs/constraints.md; --constraints FILE for known distances,
 targets, planes): reports instead the consistency per target and plane — the scatter of the
 predicted tool points about the target (plane) each model estimates from them: mean RMS and
-max [mm] — and the error of every known distance [mm], for the model and its variants.";
+max [mm] — and the error of every known distance [mm], for the model and its variants.
+
+Instrument rows in several sessions (a `session` column, docs/constraints.md): the rows of the
+first session are in the robot's base frame and are judged there; every later session was
+measured in a frame of its own that nothing in DATA fixes, so its rows are judged after
+fitting that session's rigid frame only (6 parameters, no model parameter; as calibrate
+eliminates it), per model. Its per-pose errors are measured − frame·model, in the session's
+frame; a table (and `sessions` in --json) gives per session the fitted frame and the RMS and
+max errors.";
 
 pub const EXAMPLE: &str = "\
 Example:
@@ -148,18 +159,66 @@ pub struct Scored<'r, const N: usize> {
     pub summary: ErrorSummary,
     /// The first row whose errors are not finite (refused before any output).
     pub first_non_finite: Option<usize>,
+    /// With instrument rows in several sessions: each session's fitted frame and errors.
+    pub sessions: Option<Vec<SessionScore>>,
 }
 
-/// The summary of `robot` on `meas` ([`evaluate`] without keeping the errors).
+/// Instrument rows in several sessions, each later session in a frame of its own: the core
+/// data (rows ordered by session) and, per row of DATA, its session (an index into
+/// [`score_sessions`]'s result).
+#[derive(Debug)]
+pub struct SessionSplit<const N: usize> {
+    pub cd: kincal_io::constraints::ContactData<N>,
+    pub session_of_row: Vec<usize>,
+}
+
+impl<const N: usize> SessionSplit<N> {
+    /// The split of `set` (instrument rows only) and its rows as measurements in file order.
+    fn of(
+        set: &kincal_io::measurements::MeasurementSet,
+        robot: &Robot<N>,
+    ) -> Result<(Self, Vec<Measurement<N>>), CliError> {
+        let cd = kincal_io::constraints::build::<N>(set, None, robot, 1.0)?;
+        let of_instrument = session_of_instrument_rows(&cd);
+        let mut meas = vec![None; set.rows.len()];
+        let mut session_of_row = vec![0; set.rows.len()];
+        for (l, &r) in cd.instrument_rows.iter().enumerate() {
+            meas[r] = Some(cd.instrument[l]);
+            session_of_row[r] = of_instrument[l];
+        }
+        // Every row is an instrument row here (contact rows take validate_contacts).
+        let meas = meas.into_iter().flatten().collect::<Vec<_>>();
+        if meas.len() != set.rows.len() {
+            return Err(CliError::input(format!(
+                "{}: internal error: rows without a measured pose among instrument sessions",
+                set.source
+            )));
+        }
+        Ok((SessionSplit { cd, session_of_row }, meas))
+    }
+}
+
+/// The summary of `robot` on `meas` ([`evaluate`] without keeping the errors); with
+/// `split`, each later session's rows after fitting its frame ([`score_sessions`]).
+/// Errors: a row index of `meas` with core's error, or a session's fault as [`CliError`].
 pub fn score<'r, const N: usize>(
     name: &str,
     robot: &'r Robot<N>,
     meas: &[Measurement<N>],
+    split: Option<&SessionSplit<N>>,
 ) -> Result<Scored<'r, N>, (usize, kincal::Error)> {
+    let sessions = match split {
+        None => None,
+        Some(sp) => Some(
+            score_sessions(robot, &sp.cd, BaseSession::InBaseFrame)
+                .map_err(|(l, e)| (sp.cd.instrument_rows.get(l).copied().unwrap_or(0), e))?,
+        ),
+    };
     let mut summary = ErrorSummary::default();
     let mut first_non_finite = None;
     for (i, m) in meas.iter().enumerate() {
-        let e = PoseErrors::of_measurement(robot, m).map_err(|e| (i, e))?;
+        let frame = frame_of(sessions.as_deref(), split, i);
+        let e = pose_errors(robot, m, frame).map_err(|e| (i, e))?;
         summary.add_measured(&e, m.mask);
         if first_non_finite.is_none() && !errors_finite(&e) {
             first_non_finite = Some(i);
@@ -170,7 +229,18 @@ pub fn score<'r, const N: usize>(
         robot,
         summary,
         first_non_finite,
+        sessions,
     })
+}
+
+/// The fitted frame row `i` is judged in (`None`: the robot's base frame).
+fn frame_of<'a, const N: usize>(
+    sessions: Option<&'a [SessionScore]>,
+    split: Option<&SessionSplit<N>>,
+    i: usize,
+) -> Option<&'a kincal::Transform> {
+    let s = split?.session_of_row.get(i)?;
+    sessions?.get(*s)?.frame.as_ref()
 }
 
 fn errors_finite(p: &PoseErrors) -> bool {
@@ -187,9 +257,12 @@ impl<const N: usize> Scored<'_, N> {
     pub fn errors<'a>(
         &'a self,
         meas: &'a [Measurement<N>],
+        split: Option<&'a SessionSplit<N>>,
     ) -> impl Iterator<Item = PoseErrors> + 'a {
-        meas.iter()
-            .map(|m| PoseErrors::of_measurement(self.robot, m).unwrap_or_default())
+        meas.iter().enumerate().map(move |(i, m)| {
+            let frame = frame_of(self.sessions.as_deref(), split, i);
+            pose_errors(self.robot, m, frame).unwrap_or_default()
+        })
     }
 }
 
@@ -347,7 +420,93 @@ struct ReportJson<'a, const N: usize> {
     eq3: Option<Eq3Json>,
     summary: SummaryJson,
     variants: Vec<SummaryJson>,
+    /// Only with instrument rows in several sessions (one-session reports keep their bytes).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    sessions: Option<Vec<SessionJson>>,
     poses: PosesJson<'a, N>,
+}
+
+/// One session's fitted frame and the main model's errors on it (SI units).
+#[derive(Serialize)]
+struct SessionJson {
+    session: String,
+    rows: usize,
+    /// Robot base → the session's measuring frame, `[px, py, pz, rx, ry, rz]` (m, rotation
+    /// vector in rad); `None` for the first session (the robot's base frame).
+    frame: Option<[f64; 6]>,
+    max_pos_m: f64,
+    rms_pos_m: f64,
+    max_rot_rad: Option<f64>,
+    rms_rot_rad: Option<f64>,
+}
+
+fn sessions_json(scores: &[SessionScore], has_rot: bool) -> Vec<SessionJson> {
+    scores
+        .iter()
+        .map(|x| SessionJson {
+            session: x.session.clone(),
+            rows: x.rows,
+            frame: x.frame.as_ref().map(kincal::pose::pose_to_vector6),
+            max_pos_m: x.summary.max_pos_m,
+            rms_pos_m: x.summary.rms_pos_m(),
+            max_rot_rad: (has_rot && x.summary.count_rot() > 0).then_some(x.summary.max_rot_rad),
+            rms_rot_rad: (has_rot && x.summary.count_rot() > 0).then(|| x.summary.rms_rot_rad()),
+        })
+        .collect()
+}
+
+/// The per-session table of the main model (instrument rows in several sessions).
+fn sessions_text(scores: &[SessionScore], name: &str, has_rot: bool) -> String {
+    let mut t = Table::new(&[
+        "session",
+        "rows",
+        "frame translation [mm]",
+        "frame rotation vector [deg]",
+        "RMS e_p [mm]",
+        "max e_p [mm]",
+        "RMS e_φ [deg]",
+        "max e_φ [deg]",
+    ]);
+    for x in scores {
+        let (tr, rot) = match &x.frame {
+            None => ("base frame".to_string(), "base frame".to_string()),
+            Some(f) => {
+                let v = kincal::pose::pose_to_vector6(f);
+                (
+                    format!("{:.3} {:.3} {:.3}", v[0] * 1e3, v[1] * 1e3, v[2] * 1e3),
+                    format!(
+                        "{:.4} {:.4} {:.4}",
+                        v[3].to_degrees(),
+                        v[4].to_degrees(),
+                        v[5].to_degrees()
+                    ),
+                )
+            }
+        };
+        let rot_cell = |v: f64| {
+            if has_rot && x.summary.count_rot() > 0 {
+                fmt_err(v.to_degrees())
+            } else {
+                "n/a".to_string()
+            }
+        };
+        t.row(vec![
+            x.session.clone(),
+            x.rows.to_string(),
+            tr,
+            rot,
+            fmt_err(x.summary.rms_pos_m() * 1e3),
+            fmt_err(x.summary.max_pos_m * 1e3),
+            rot_cell(x.summary.rms_rot_rad()),
+            rot_cell(x.summary.max_rot_rad),
+        ]);
+    }
+    format!(
+        "\nSessions ({name}): the first session's rows are judged in the robot's base frame; \
+         each later session's after fitting only its frame (6 parameters, no model \
+         parameter):\n{}",
+        t.render("  ")
+    )
 }
 
 /// The main model's per-pose errors in `--json`, computed while they are serialised.
@@ -356,15 +515,20 @@ struct PosesJson<'a, const N: usize>(&'a Judged<'a, N>);
 impl<const N: usize> Serialize for PosesJson<'_, N> {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         let j = self.0;
-        s.collect_seq(j.main.errors(j.meas).enumerate().map(|(i, e)| PoseJson {
-            index: i + 1,
-            pose_id: j.labels.pose_id(i),
-            line: j.labels.line(i).unwrap_or(0),
-            e_pos_m: e.pos_m,
-            e_pos_norm_m: e.pos_norm_m,
-            e_rot_rad: j.has_rot.then_some(e.rot_rad),
-            e_rot_norm_rad: j.has_rot.then_some(e.rot_norm_rad),
-        }))
+        s.collect_seq(
+            j.main
+                .errors(j.meas, j.split)
+                .enumerate()
+                .map(|(i, e)| PoseJson {
+                    index: i + 1,
+                    pose_id: j.labels.pose_id(i),
+                    line: j.labels.line(i).unwrap_or(0),
+                    e_pos_m: e.pos_m,
+                    e_pos_norm_m: e.pos_norm_m,
+                    e_rot_rad: j.has_rot.then_some(e.rot_rad),
+                    e_rot_norm_rad: j.has_rot.then_some(e.rot_norm_rad),
+                }),
+        )
     }
 }
 
@@ -441,13 +605,22 @@ fn validate<const N: usize>(
         },
         args.constraints.is_some(),
     )?;
-    let (set, meas, labels) = match loaded {
+    let (set, meas, labels, split) = match loaded {
+        data::PoseFile::Rows(set)
+            if !kincal_io::constraints::has_contacts(&set)
+                && kincal_io::constraints::has_instrument_sessions(&set) =>
+        {
+            let (split, meas) = SessionSplit::of(&set, robot)?;
+            let labels = RowLabels::of_set(&set);
+            (set, meas, labels, Some(split))
+        }
         data::PoseFile::Rows(set) => return validate_contacts(robot, name, file, args, &set),
-        data::PoseFile::Poses { set, meas, labels } => (set, meas, labels),
+        data::PoseFile::Poses { set, meas, labels } => (set, meas, labels, None),
     };
+    let split = split.as_ref();
     let has_rot = meas.iter().any(|m| m.mask.has_orientation());
     let fail = |(i, e): (usize, kincal::Error)| core_error(e, &set.source, |_| labels.line(i));
-    let main = score(name, robot, &meas).map_err(fail)?;
+    let main = score(name, robot, &meas, split).map_err(fail)?;
     let variants: Vec<(String, Robot<N>)> = file
         .variants::<N>()
         .map_err(|m| CliError::input(format!("{}: {m}", args.model)))?;
@@ -455,7 +628,7 @@ fn validate<const N: usize>(
     let bare = name.split(" + ").next().unwrap_or(name);
     let evals = variants
         .iter()
-        .map(|(n, r)| score(if n == bare { name } else { n }, r, &meas))
+        .map(|(n, r)| score(if n == bare { name } else { n }, r, &meas, split))
         .collect::<Result<Vec<_>, _>>()
         .map_err(fail)?;
     for e in std::iter::once(&main).chain(&evals) {
@@ -487,6 +660,7 @@ fn validate<const N: usize>(
             labels: &labels,
             targets,
             has_rot,
+            split,
         };
         write_json(p, &inputs, args, &judged, &biopsy)?;
     }
@@ -495,7 +669,7 @@ fn validate<const N: usize>(
             .iter()
             .map(|e| Series {
                 name: e.name.clone(),
-                errors: e.errors(&meas).collect(),
+                errors: e.errors(&meas, split).collect(),
             })
             .collect();
         let title = format!("{} on {}", args.model, args.data.display());
@@ -525,13 +699,16 @@ fn validate<const N: usize>(
         let mask = |i: usize| meas.get(i).map_or(ComponentMask::ALL, |m| m.mask);
         crate::report::emit_streamed_table(
             &pose_table_header(has_rot),
-            || pose_table_rows(main.errors(&meas), id, has_rot, mask),
+            || pose_table_rows(main.errors(&meas, split), id, has_rot, mask),
             "  ",
         );
     }
     out.push_str(&summary_section(
         args, file, name, &main, &evals, targets, has_rot,
     ));
+    if let Some(s) = &main.sessions {
+        out.push_str(&sessions_text(s, name, has_rot));
+    }
     // Eq. (3) is the ARIA biopsy's budget: printed for ARIA or when asked for (--biopsy-d-mm).
     if is_aria(file) || args.biopsy_d_mm.is_some() {
         out.push_str(&eq3_text(args, &biopsy, &main, has_rot));
@@ -582,6 +759,7 @@ struct Judged<'a, const N: usize> {
     labels: &'a RowLabels,
     targets: Targets,
     has_rot: bool,
+    split: Option<&'a SessionSplit<N>>,
 }
 
 /// Writes `--json`: summaries of the model and of every variant, eq. (3), per-pose errors.
@@ -616,6 +794,7 @@ fn write_json<const N: usize>(
             .iter()
             .map(|e| summary_json(e, targets, has_rot))
             .collect(),
+        sessions: main.sessions.as_deref().map(|s| sessions_json(s, has_rot)),
         poses: PosesJson(j),
     };
     // Written as it is serialised: the per-pose part of a million rows is never held.
