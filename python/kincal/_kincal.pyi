@@ -257,6 +257,7 @@ def evaluate_designs(
     designs: Sequence[str] = ("standard", "clustering", "table2"),
     tools: Sequence[Tuple[str, _Path]] = (),
     commanded: Sequence[Tuple[str, _Path]] = (),
+    plates: Sequence[Tuple[str, float, int, int]] = (),
     runs: int = 10000,
     m: int = 10,
     index: str = "o",
@@ -282,5 +283,8 @@ def evaluate_designs(
     seed: int = 1,
 ) -> Dict[str, Any]:
     """Monte-Carlo comparison of designs on the same random robots, as ``kincal
-    evaluate-designs`` without socket plates: returns its ``--json`` dict (per design the
-    worst-pose e_p [mm] and e_φ [deg] median, p95, max, mean; scenario in m and rad)."""
+    evaluate-designs``: returns its ``--json`` dict (per design the worst-pose e_p [mm] and
+    e_φ [deg] median, p95, max, mean; scenario in m and rad). ``plates``: socket plates
+    ``(name, d_mm, placements, contacts)`` as ``--plate NAME=D_MM,PLACEMENTS,CONTACTS``
+    (sockets ``d_mm`` [mm] apart); with plates the dict has ``plates``: per design and plate
+    the absolute and registered worst-pose errors [mm, deg]."""

@@ -11,6 +11,7 @@ use kincal_io::design::Silent;
 use kincal_io::design::context::{Context, ScenarioSpec, SelectionSettings, Setup, region};
 use kincal_io::design::designs::Design;
 use kincal_io::design::evaluation::{self as ev, BuiltIn, DesignChoice};
+use kincal_io::design::plate::{self as pl, PlateSpec};
 use kincal_io::design::pose_selection::{self as ps, Which};
 use kincal_io::design::study;
 use kincal_io::design::tool_design::{self as td, ToolObjective, ToolOptions};
@@ -431,13 +432,41 @@ pub fn design_tool<'py>(
     })
 }
 
+/// The plates of `evaluate_designs`, checked: `(name, d_mm, placements, contacts)`.
+fn plate_specs(
+    py: Python<'_>,
+    plates: Vec<(String, f64, usize, usize)>,
+) -> PyResult<Vec<PlateSpec>> {
+    plates
+        .into_iter()
+        .enumerate()
+        .map(|(i, (name, distance_mm, placements, contacts))| {
+            let spec = PlateSpec {
+                name: name.trim().to_string(),
+                distance_mm,
+                placements,
+                contacts,
+            };
+            match spec.problem() {
+                None => Ok(spec),
+                Some(why) => Err(errors::usage(
+                    py,
+                    format!(
+                        "plates[{i}] = ({name:?}, {distance_mm}, {placements}, {contacts}): {why} (expected (name, d_mm, placements, contacts))"
+                    ),
+                )),
+            }
+        })
+        .collect()
+}
+
 fn evaluate_run<'py, const N: usize>(
     py: Python<'py>,
     robot: &CoreRobot<N>,
     name: &str,
     s: &Setup,
     (choice, settings, spec): (&DesignChoice, &SelectionSettings, ScenarioSpec),
-    runs: u64,
+    (runs, plates): (u64, &[PlateSpec]),
 ) -> PyResult<Bound<'py, PyAny>> {
     let ctx = context(py, robot, name, s)?;
     let files: Vec<String> = choice
@@ -447,11 +476,14 @@ fn evaluate_run<'py, const N: usize>(
         .map(|(_, p)| p.display().to_string())
         .collect();
     let files: Vec<&str> = files.iter().map(String::as_str).collect();
-    let (results, timing) = py
+    // As the command: the designs, the plates, the study, then the plates' comparison.
+    let (results, timing, rows) = py
         .detach(|| {
             let built = ev::build_designs(&ctx, choice, settings, &spec, &Silent)?;
             let designs: Vec<Design<N>> = built.into_iter().map(|b| b.design).collect();
-            study::run_study(
+            let probe = (spec.scenario(), settings.robust_robots);
+            let plates = pl::build_plates(&ctx, plates, &designs, probe, "plates", &Silent)?;
+            let (results, timing) = study::run_study(
                 &ctx,
                 &designs,
                 spec.scenario(),
@@ -459,26 +491,37 @@ fn evaluate_run<'py, const N: usize>(
                 ctx.seed,
                 "Monte-Carlo",
                 &Silent,
-            )
+            )?;
+            let rows = if plates.is_empty() {
+                None
+            } else {
+                let c = pl::compare(&ctx, &designs, &plates, spec.scenario(), runs, &Silent)?;
+                Some(c.rows)
+            };
+            Ok::<_, kincal_io::Error>((results, timing, rows))
         })
         .map_err(|e| errors::from_io(py, &e, &files))?;
-    crate::json::loads(
-        py,
-        &ev::json(&ctx, runs, &spec, &results, &timing).to_string(),
-    )
+    let doc = ev::json(&ctx, runs, &spec, &results, &timing, rows.as_deref());
+    crate::json::loads(py, &doc.to_string())
 }
 
 /// Monte-Carlo comparison of data-acquisition designs on the same random robots, as
-/// ``kincal evaluate-designs`` (without socket plates): the built-in ``designs``
-/// (``"standard"``, ``"clustering"``, ``"table2"``), ``tools`` (name → tool file) and
-/// ``commanded`` (name → measurement CSV of configurations), each calibrated ``runs`` times.
+/// ``kincal evaluate-designs``: the built-in ``designs`` (``"standard"``, ``"clustering"``,
+/// ``"table2"``), ``tools`` (name → tool file) and ``commanded`` (name → measurement CSV of
+/// configurations), each calibrated ``runs`` times. ``plates``: socket plates compared with
+/// them on the same robots, as ``--plate NAME=D_MM,PLACEMENTS,CONTACTS``: tuples ``(name,
+/// d_mm, placements, contacts)`` (two ball sockets ``d_mm`` [mm] apart at unknown positions,
+/// placed ``placements`` times, ``contacts`` contacts in all, at least 2 per socket).
 /// Selection, scenario and setting keywords as :func:`select_poses` and
 /// :func:`design_tool`. Returns the dict ``kincal evaluate-designs --json`` writes:
 /// ``designs`` (per design: ``worst_pose_e_p_mm``, ``worst_pose_e_phi_deg`` (median, p95,
-/// max, mean), …), ``scenario`` [m, rad], ``validation_poses``, ``calibrations``. The GIL
-/// is released.
+/// max, mean), …), ``scenario`` [m, rad], ``validation_poses``, ``calibrations``; with
+/// plates also ``plates`` (the designs, then the plates: ``kind``, ``contacts``,
+/// ``placements``, ``distance_mm``, ``failed``, ``absolute_worst_pose_e_p_mm``,
+/// ``registered_worst_pose_e_p_mm`` [mm], ``…_e_phi_deg`` [deg], each median, p95, max,
+/// mean). The GIL is released.
 #[pyfunction]
-#[pyo3(signature = (robot, *, designs=vec!["standard".to_string(), "clustering".to_string(), "table2".to_string()], tools=Vec::new(), commanded=Vec::new(), runs=10000, m=10, index="o", pool=2000, starts=8, refine=200, workspace=[-1.0, -1.0, 0.05, 1.0, 1.0, 1.5], cube_mm=100.0, tolerance=0.1, min_dexterity=0.08, robust_robots=32, length_error_mm=5.0, angle_error_deg=5.0, noise_pos_mm=0.05, noise_rot_deg=0.02, tool_tol_mm=0.05, tool_tol_deg=0.02, region=None, working_rpy_deg=None, cone_deg=20.0, grid=[4, 4, 2], margin_deg=5.0, seed=1))]
+#[pyo3(signature = (robot, *, designs=vec!["standard".to_string(), "clustering".to_string(), "table2".to_string()], tools=Vec::new(), commanded=Vec::new(), plates=Vec::new(), runs=10000, m=10, index="o", pool=2000, starts=8, refine=200, workspace=[-1.0, -1.0, 0.05, 1.0, 1.0, 1.5], cube_mm=100.0, tolerance=0.1, min_dexterity=0.08, robust_robots=32, length_error_mm=5.0, angle_error_deg=5.0, noise_pos_mm=0.05, noise_rot_deg=0.02, tool_tol_mm=0.05, tool_tol_deg=0.02, region=None, working_rpy_deg=None, cone_deg=20.0, grid=[4, 4, 2], margin_deg=5.0, seed=1))]
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate_designs<'py>(
     py: Python<'py>,
@@ -486,6 +529,7 @@ pub fn evaluate_designs<'py>(
     designs: Vec<String>,
     tools: Vec<(String, PathBuf)>,
     commanded: Vec<(String, PathBuf)>,
+    plates: Vec<(String, f64, usize, usize)>,
     runs: u64,
     m: usize,
     index: &str,
@@ -529,6 +573,7 @@ pub fn evaluate_designs<'py>(
         tools,
         commanded,
     };
+    let plates = plate_specs(py, plates)?;
     let s = setup(
         py,
         region,
@@ -563,6 +608,6 @@ pub fn evaluate_designs<'py>(
         ],
     )?;
     kincal::with_any_robot!(&robot.robot, r => {
-        evaluate_run(py, r, &robot.name, &s, (&choice, &settings, spec), runs)
+        evaluate_run(py, r, &robot.name, &s, (&choice, &settings, spec), (runs, &plates))
     })
 }

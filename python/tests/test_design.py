@@ -1,6 +1,7 @@
 """Pose selection, tool design and design evaluation through Python give the command line's
 files and numbers exactly: `kincal select-poses --out`, `kincal design-tool --json/--out` and
-`kincal evaluate-designs --json`, with small settings (the debug CLI runs them in seconds)."""
+`kincal evaluate-designs --json` (with socket plates too), with small settings (the debug CLI
+runs them in seconds)."""
 
 import json
 
@@ -79,6 +80,39 @@ def test_evaluate_designs_is_the_cli_json(kincal_bin, tmp_path):
     assert_same(mine, cli, rel=0.0)
     assert [d["name"] for d in mine["designs"]] == ["standard", "table2", "mine"]
     assert mine["calibrations"] == 90
+
+
+def test_evaluate_designs_with_plates_is_the_cli_json(kincal_bin, tmp_path):
+    cli_json = tmp_path / "p.json"
+    done = run_cli(kincal_bin, "evaluate-designs", "--designs", "table2", "--runs", "6",
+                   "--robust-robots", "4", "--plate", "p200=200,2,16", "--json", str(cli_json))
+    assert done.returncode == 0, done.stderr
+    mine = kincal.evaluate_designs(kincal.aria(), designs=["table2"], runs=6, robust_robots=4,
+                                   plates=[("p200", 200.0, 2, 16)])
+    assert_same(mine, json.loads(cli_json.read_text()), rel=0.0)
+    tool, plate = mine["plates"]
+    assert (tool["kind"], plate["kind"]) == ("known-pose tool", "socket plate")
+    assert (plate["contacts"], plate["placements"], plate["distance_mm"]) == (16, 2, 200.0)
+    # Independently: the plates' tool row is the study's table2 calibration on the same
+    # robots (another code path), so its absolute figures are the study's.
+    study = mine["designs"][0]["worst_pose_e_p_mm"]
+    for k in ("median", "p95", "max"):
+        assert tool["absolute_worst_pose_e_p_mm"][k] == pytest.approx(study[k], rel=1e-12)
+    # A plate cannot see the base frame: absolute errors of millimetres, registered ones
+    # a fraction of them.
+    reg = plate["registered_worst_pose_e_p_mm"]["median"]
+    assert plate["absolute_worst_pose_e_p_mm"]["median"] > 10 * reg
+
+
+def test_bad_plates_raise():
+    robot = kincal.aria()
+    with pytest.raises(kincal.UsageError, match=r"plates\[0\].*fewer than 2"):
+        kincal.evaluate_designs(robot, designs=["table2"], plates=[("x", 50.0, 3, 11)])
+    with pytest.raises(kincal.UsageError, match="D_MM must be a positive number"):
+        kincal.evaluate_designs(robot, designs=["table2"], plates=[("x", -5.0, 1, 10)])
+    with pytest.raises(kincal.UsageError, match="plates: two designs are named 'table2'"):
+        kincal.evaluate_designs(robot, designs=["table2"], runs=2, robust_robots=2,
+                                plates=[("table2", 50.0, 1, 10)])
 
 
 def test_bad_design_arguments_raise(tmp_path):

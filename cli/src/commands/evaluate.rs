@@ -8,6 +8,7 @@ use kincal::montecarlo::Acquisition;
 use kincal_io::design::context::{Context, SelectionSettings};
 use kincal_io::design::designs::Design;
 use kincal_io::design::evaluation::{self as ev, Built, DesignChoice};
+use kincal_io::design::plate::{self as io_plate, Plate, PlateSpec};
 use kincal_io::design::pose_selection::Search;
 use kincal_io::design::study::{self as io_study, DesignResult};
 use kincal_io::robot_arg::resolve_robot;
@@ -143,14 +144,19 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     for c in &args.commanded {
         named(c, "--commanded")?;
     }
-    for p in &args.plates {
-        plate::parse_plate(p)?;
-    }
+    let plates = parse_plates(args)?;
     if args.plate_plot.is_some() && args.plates.is_empty() {
         return Err(CliError::usage("--plate-plot: give at least one --plate"));
     }
     let spec = resolve_robot(&args.setup.robot, &args.setup.chain)?;
-    kincal::with_any_robot!(&spec.robot, r => evaluate(*r, &spec.name, args))
+    kincal::with_any_robot!(&spec.robot, r => evaluate(*r, &spec.name, args, &plates))
+}
+
+fn parse_plates(args: &Args) -> Result<Vec<PlateSpec>, CliError> {
+    args.plates
+        .iter()
+        .map(|p| io_plate::parse_plate(p))
+        .collect()
 }
 
 /// The designs of the arguments (built-in ones from the seed, then the files), and the
@@ -283,36 +289,24 @@ fn verdicts(results: &[DesignResult]) -> String {
 fn build_plates<const N: usize>(
     ctx: &Context<N>,
     args: &Args,
+    specs: &[PlateSpec],
     designs: &[Design<N>],
     robust: u64,
-) -> Result<Vec<plate::Plate<N>>, CliError> {
-    let probe = ctx.study(args.scenario.scenario(), ctx.seed);
-    // Robustly reachable contacts take a while for large plates: a bar per plate.
+) -> Result<Vec<Plate<N>>, CliError> {
     let pb = crate::progress::counter(
-        args.plates.len() as u64,
+        specs.len() as u64,
         "socket plates: robustly reachable contacts",
     );
-    let plates = args
-        .plates
-        .iter()
-        .map(|p| {
-            let plate = plate::build_plate(ctx, &plate::parse_plate(p)?, &probe, robust);
-            pb.inc(1);
-            plate
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let plates = io_plate::build_plates(
+        ctx,
+        specs,
+        designs,
+        (args.scenario.scenario(), robust),
+        "--plate",
+        &crate::progress::Bar(&pb),
+    );
     pb.finish_and_clear();
-    for (i, p) in plates.iter().enumerate() {
-        let name = &p.spec.name;
-        let clash = designs.iter().any(|d| &d.name == name)
-            || plates[..i].iter().any(|o| &o.spec.name == name);
-        if clash {
-            return Err(CliError::usage(format!(
-                "--plate: two designs are named '{name}'"
-            )));
-        }
-    }
-    Ok(plates)
+    plates
 }
 
 /// The plates' comparison with the designs, appended to `out`.
@@ -320,17 +314,25 @@ fn compare_plates<const N: usize>(
     ctx: &Context<N>,
     args: &Args,
     designs: &[Design<N>],
-    plates: &[plate::Plate<N>],
+    plates: &[Plate<N>],
     out: &mut String,
-) -> Result<Vec<plate::Row>, CliError> {
-    let (rows, wall_s) = plate::compare(ctx, designs, plates, args.scenario.scenario(), args.runs)?;
-    let reference = args.plate_match.clone().unwrap_or_else(|| {
-        if designs.iter().any(|d| d.name == "optimised") {
-            "optimised".into()
-        } else {
-            "table2".into()
-        }
-    });
+) -> Result<Vec<io_plate::Row>, CliError> {
+    let total = args.runs * (designs.len() + plates.len()) as u64;
+    let pb = crate::progress::counter(total, "plate comparison: calibrations");
+    let done = io_plate::compare(
+        ctx,
+        designs,
+        plates,
+        args.scenario.scenario(),
+        args.runs,
+        &crate::progress::Bar(&pb),
+    );
+    pb.finish_and_clear();
+    let io_plate::Comparison { rows, wall_s } = done?;
+    let reference = args
+        .plate_match
+        .clone()
+        .unwrap_or_else(|| io_plate::default_reference(designs));
     let _ = writeln!(
         out,
         "\nSocket plates vs the designs above, on the same {} robots: worst validation pose per run, absolute (base frame) and registered (after the best rigid base registration):",
@@ -351,12 +353,13 @@ fn evaluate<const N: usize>(
     robot: kincal::Robot<N>,
     name: &str,
     args: &Args,
+    plate_specs: &[PlateSpec],
 ) -> Result<(), CliError> {
     let ctx = Context::new(robot, name, &args.setup.setup())?;
     let settings = args.selection.settings()?;
     let mut log = String::new();
     let designs = build_designs(&ctx, args, &settings, &mut log)?;
-    let plates = build_plates(&ctx, args, &designs, settings.robust_robots)?;
+    let plates = build_plates(&ctx, args, plate_specs, &designs, settings.robust_robots)?;
     let mut out = String::new();
     let _ = writeln!(out, "Design evaluation: {}", ctx.describe());
     let _ = writeln!(out, "Scenario: {}", args.scenario.describe());
@@ -414,10 +417,14 @@ fn evaluate<const N: usize>(
         )?;
     }
     if let Some(p) = &args.json {
-        let mut json = ev::json(&ctx, args.runs, &args.scenario.spec(), &results, &timing);
-        if let Some(rows) = &plate_rows {
-            json["plates"] = plate::json(rows);
-        }
+        let json = ev::json(
+            &ctx,
+            args.runs,
+            &args.scenario.spec(),
+            &results,
+            &timing,
+            plate_rows.as_deref(),
+        );
         kincal_io::files::write_atomic(p, &inputs, |w| {
             serde_json::to_writer_pretty(&mut *w, &json).map_err(std::io::Error::other)?;
             w.write_all(b"\n")

@@ -1,12 +1,14 @@
 //! The designs `kincal evaluate-designs` and `kincal.evaluate_designs` compare: the
 //! built-in ones (standard, clustering, Table 2, built from the seed) and those from files
-//! (tools, commanded configurations), and the `--json` document of the comparison.
+//! (tools, commanded configurations), and the `--json` document of the comparison (with
+//! the socket plates of [`plate`], when there are any).
 
 use std::path::PathBuf;
 
 use crate::design::Progress;
 use crate::design::context::{Context, ScenarioSpec, SelectionSettings};
 use crate::design::designs::{self, Design};
+use crate::design::plate;
 use crate::design::pose_selection::Search;
 use crate::design::study::{self, DesignResult, Timing};
 use crate::error::Error;
@@ -120,17 +122,19 @@ fn builtin<const N: usize>(
     })
 }
 
-/// The numbers of a comparison (`kincal evaluate-designs --json`, without plates). Run
-/// times and the thread count are left out: the document is byte-for-byte reproducible.
+/// The numbers of a comparison (`kincal evaluate-designs --json`), with the plates'
+/// comparison (`plates`, [`plate::json`]) when there is one. Run times and the thread count
+/// are left out: the document is byte-for-byte reproducible.
 pub fn json<const N: usize>(
     ctx: &Context<N>,
     runs: u64,
     scenario: &ScenarioSpec,
     results: &[DesignResult],
     t: &Timing,
+    plates: Option<&[plate::Row]>,
 ) -> serde_json::Value {
     let s = scenario.scenario();
-    serde_json::json!({
+    let mut doc = serde_json::json!({
         "robot": ctx.robot_name,
         "seed": ctx.seed,
         "runs": runs,
@@ -142,5 +146,9 @@ pub fn json<const N: usize>(
         },
         "designs": study::results_json(results),
         "calibrations": t.calibrations,
-    })
+    });
+    if let Some(rows) = plates {
+        doc["plates"] = plate::json(rows);
+    }
+    doc
 }

@@ -2,12 +2,14 @@
 //! `evaluate-designs`) and of Python's `kincal.select_poses`/`design_tool`/
 //! `evaluate_designs`, as data: the resolved setting (`context`), the data-acquisition
 //! designs (`designs`), the Monte-Carlo comparison of designs (`study`), the pose selection
-//! (`pose_selection`), the calibration-tool search (`tool_design`) and the evaluation of
-//! several designs (`evaluation`). Front ends word the results; nothing here prints.
+//! (`pose_selection`), the calibration-tool search (`tool_design`), the evaluation of
+//! several designs (`evaluation`) and the socket plates compared with them (`plate`). Front
+//! ends word the results; nothing here prints.
 
 pub mod context;
 pub mod designs;
 pub mod evaluation;
+pub mod plate;
 pub mod pose_selection;
 pub mod study;
 pub mod tool_design;
