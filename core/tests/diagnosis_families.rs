@@ -147,6 +147,7 @@ const PLAIN: [Effect; 5] = [
     Effect::JointCyclic,
 ];
 
+// Long by design: a data table, one entry per family of cases.
 fn families() -> Vec<Family> {
     let lib = singles(&Effect::ALL);
     let out = Outside::ALL.to_vec();

@@ -68,6 +68,7 @@ const R0: [f64; 3] = [0.0; 3];
 const ARM: (f64, f64) = (-2.5, 2.5);
 
 /// The TIAGo-like tree (made-up numbers of TIAGo's size, not PAL's file).
+// Long by design: a data table, one entry per joint of the tree.
 fn robot_joints() -> Vec<TJoint> {
     use Kind::*;
     let mut j = vec![

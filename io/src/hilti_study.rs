@@ -772,6 +772,8 @@ mod tests {
     }
 
     /// Exploration of the variants of issue 14's tilted floors (prints; release).
+    // Long by design: a menu of independent exploration runs, one `if` per KINCAL_HILTI_EXPLORE
+    // keyword, each printing one table of docs/real-data.md's variants.
     #[test]
     #[ignore = "exploration: KINCAL_HILTI_EXPLORE=scan,disp,grav,ext,floorfit,where,robust,d23"]
     fn explore() {

@@ -146,6 +146,8 @@ fn errors(robot: &Robot<N>, data: &[kincal::identify::Measurement<N>]) -> [f64; 
 /// the centre of the working region), measured like the paper's experiment (motion capture,
 /// 0.1 mm / 0.02°, 20 poses repeated), calibrated geometrically — which improves the
 /// errors only ~5× — and diagnosed by the same code as `kincal diagnose`. Returns the text.
+// Long by design: the story the demo tells, in order (simulate, calibrate, diagnose, validate,
+// word it); each step is a call, what remains is the wording.
 pub fn sim_to_real_diagnosis(ctx: &DemoContext<'_>) -> Result<String, CliError> {
     use kincal::sim;
     let mut text = String::new();

@@ -1539,7 +1539,6 @@ fn score<const N: usize>(out: &mut Diagnosis<N>, mdl: usize) -> &mut ModelScore 
 /// [`diagnose`] into the caller's `out` (e.g. a `static` on a controller): the result
 /// (about 28 KiB for six joints) is not held on the stack, which then stays near that of
 /// identification. `out` is overwritten; on error its content is unspecified.
-// Long by design: the numbered steps of spec/effects.md, in order, over one caller-provided workspace (no heap); split, each step would take a dozen of its buffers as arguments.
 pub fn diagnose_into<const N: usize, const P: usize>(
     robot: &Robot<N>,
     data: &[Measurement<N>],
@@ -1557,6 +1556,7 @@ pub fn diagnose_into<const N: usize, const P: usize>(
 /// frame (each session registered into the robot's, e.g. by kincal-io's `session_frames`);
 /// the sessions enter the test of each candidate's confounding with them
 /// ([`ModelScore::session`], `sessions.rs`): a confounded candidate is never chosen.
+// Long by design: the numbered steps of spec/effects.md, in order, over one caller-provided workspace (no heap); split, each step would take a dozen of its buffers as arguments.
 #[allow(clippy::too_many_arguments)]
 pub fn diagnose_sessions_into<const N: usize, const P: usize>(
     robot: &Robot<N>,
