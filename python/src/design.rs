@@ -441,21 +441,14 @@ fn plate_specs(
         .into_iter()
         .enumerate()
         .map(|(i, (name, distance_mm, placements, contacts))| {
-            let spec = PlateSpec {
-                name: name.trim().to_string(),
-                distance_mm,
-                placements,
-                contacts,
-            };
-            match spec.problem() {
-                None => Ok(spec),
-                Some(why) => Err(errors::usage(
+            PlateSpec::checked(&name, distance_mm, placements, contacts).map_err(|why| {
+                errors::usage(
                     py,
                     format!(
                         "plates[{i}] = ({name:?}, {distance_mm}, {placements}, {contacts}): {why} (expected (name, d_mm, placements, contacts))"
                     ),
-                )),
-            }
+                )
+            })
         })
         .collect()
 }

@@ -54,6 +54,26 @@ const BAD_DISTANCE: &str = "D_MM must be a positive number";
 const BAD_PLACEMENTS: &str = "PLACEMENTS must be a whole number >= 1";
 
 impl PlateSpec {
+    /// The plate `name` (trimmed), checked: the plate, or why it cannot be built
+    /// ([`PlateSpec::problem`]). One check for the CLI's `--plate` and Python's `plates`.
+    pub fn checked(
+        name: &str,
+        distance_mm: f64,
+        placements: usize,
+        contacts: usize,
+    ) -> Result<PlateSpec, String> {
+        let spec = PlateSpec {
+            name: name.trim().to_string(),
+            distance_mm,
+            placements,
+            contacts,
+        };
+        match spec.problem() {
+            Some(why) => Err(why),
+            None => Ok(spec),
+        }
+    }
+
     /// Why the plate cannot be built, if it cannot: an empty name, a distance not finite
     /// and > 0, no placement, fewer than 2 contacts per socket.
     pub fn problem(&self) -> Option<String> {
@@ -103,16 +123,7 @@ pub fn parse_plate(arg: &str) -> Result<PlateSpec, Error> {
     let contacts: usize = c
         .parse()
         .map_err(|_| bad("CONTACTS must be a whole number"))?;
-    let spec = PlateSpec {
-        name: name.trim().to_string(),
-        distance_mm,
-        placements,
-        contacts,
-    };
-    match spec.problem() {
-        Some(why) => Err(bad(&why)),
-        None => Ok(spec),
-    }
+    PlateSpec::checked(name, distance_mm, placements, contacts).map_err(|why| bad(&why))
 }
 
 /// A plate design with the data it borrows to the core.
