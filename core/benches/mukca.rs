@@ -18,9 +18,11 @@
 //! costed without Jacobians (`RowSource::fold_cost`) and contact rows folded by
 //! `GramAccumulator::add_rows3`; after, in one session alternating the two binaries (load
 //! 17–19 on 2 cores, which inflates both), 123.4 → 80.0 ms and 111.3 → 73.0 ms (ratio
-//! 0.65, so about 43 ms at the load of the 66.0 ms figure); per recording (second run)
+//! 0.65); per recording (second run)
 //! panda_3 27.4 → 12.8, panda_4 21.8 → 13.1 ms. Instructions for one pass over the eleven
-//! (callgrind, `identify_constrained` inclusive): 976.9M → 681.3M.
+//! (callgrind, `identify_constrained` inclusive): 976.9M → 681.3M. On a quiet machine (load
+//! about 1, another session's machine): all eleven 58.1 ms (55.4–61.3): the 50 ms goal is
+//! not met yet.
 //!
 //! The recordings and the Panda (built from `panda.urdf`'s joint origins, no URDF reader)
 //! come from `tests/mukca/mod.rs`, which the convergence test `tests/mukca_convergence.rs`
