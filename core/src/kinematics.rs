@@ -290,6 +290,19 @@ impl<const N: usize> Robot<N> {
     /// `(T − 20)·Σ_i (d_i·col(d_i) + a_i·col(a_i))`. Columns of effects whose input is
     /// missing (approach directions, temperature) are zero.
     pub fn jacobian(&self, state: &JointState<N>, jac: &mut [JacobianColumn]) -> Result<Transform> {
+        self.jacobian_with(state, jac, true)
+    }
+
+    /// [`Robot::jacobian`]; with `frame_rotations` false the base and tool rotation
+    /// columns are not written (left as they were: for a caller that reads none of them,
+    /// e.g. a contact fit, where they are gauges; they cost two `J_l(r)`, each a sine and
+    /// cosine). Every column written, and the pose, are [`Robot::jacobian`]'s bit for bit.
+    pub(crate) fn jacobian_with(
+        &self,
+        state: &JointState<N>,
+        jac: &mut [JacobianColumn],
+        frame_rotations: bool,
+    ) -> Result<Transform> {
         let links_only = jac.len() == 5 * N;
         let full = if jac.len() == Self::NUM_PARAMS {
             true
@@ -333,6 +346,40 @@ impl<const N: usize> Robot<N> {
         if links_only {
             return Ok(f.t_base_ee);
         }
+        self.frame_columns(&f, jac, frame_rotations);
+        if full {
+            self.effect_columns(state, scale, &f, jac);
+        }
+        check_pose(&f.t_base_ee)?;
+        Ok(f.t_base_ee)
+    }
+
+    /// The base and tool columns of [`Robot::jacobian`], from the frames `f`.
+    fn frame_columns(&self, f: &Frames<N>, jac: &mut [JacobianColumn], rotations: bool) {
+        let pe = f.t_base_ee.translation.vector;
+        let col = |lin: Vector3<f64>, ang: Vector3<f64>| [lin.x, lin.y, lin.z, ang.x, ang.y, ang.z];
+        let zero = ZERO;
+        // Tool: T_e = T_N·Trans(p)·Rot(r); dp moves along R_N's axes.
+        let r_n = f
+            .t_base_link
+            .last()
+            .map_or(*f.t_base_0.rotation.matrix(), |t| *t.rotation.matrix());
+        for k in FrameParam::ALL.into_iter().take(3) {
+            let ax = k as usize % 3;
+            put(
+                jac,
+                ParamId::Base(k).index(N).0,
+                col(column3(&IDENTITY, ax), zero),
+            );
+            put(
+                jac,
+                ParamId::Tool(k).index(N).0,
+                col(column3(&r_n, ax), zero),
+            );
+        }
+        if !rotations {
+            return;
+        }
         // Base: T_0^b = Trans(p)·Rot(r); a change dr rotates everything after it about the
         // base-frame axis J_l(r)·dr through p.
         let base_p = f.t_base_0.translation.vector;
@@ -341,12 +388,7 @@ impl<const N: usize> Robot<N> {
             self.geom.base[4],
             self.geom.base[5],
         ));
-        // Tool: T_e = T_N·Trans(p)·Rot(r); dp moves along R_N's axes, dr rotates about
-        // R_e·J_r(r)·dr with J_r(r) = J_l(r)ᵀ.
-        let r_n = f
-            .t_base_link
-            .last()
-            .map_or(*f.t_base_0.rotation.matrix(), |t| *t.rotation.matrix());
+        // Tool: dr rotates about R_e·J_r(r)·dr with J_r(r) = J_l(r)ᵀ.
         let r_e = *f.t_base_ee.rotation.matrix();
         let jr_tool = so3_left_jacobian(&Vector3::new(
             self.geom.tool[3],
@@ -354,26 +396,17 @@ impl<const N: usize> Robot<N> {
             self.geom.tool[5],
         ))
         .transpose();
-        for k in FrameParam::ALL {
+        for k in FrameParam::ALL.into_iter().skip(3) {
             let ax = k as usize % 3;
-            let (b, t) = if (k as usize) < 3 {
-                (
-                    col(column3(&IDENTITY, ax), zero),
-                    col(column3(&r_n, ax), zero),
-                )
-            } else {
-                let w = column3(&jl_base, ax);
-                let wt = mat_vec(&r_e, &column3(&jr_tool, ax));
-                (col(w.cross(&(pe - base_p)), w), col(zero, wt))
-            };
-            put(jac, ParamId::Base(k).index(N).0, b);
-            put(jac, ParamId::Tool(k).index(N).0, t);
+            let w = column3(&jl_base, ax);
+            let wt = mat_vec(&r_e, &column3(&jr_tool, ax));
+            put(
+                jac,
+                ParamId::Base(k).index(N).0,
+                col(w.cross(&(pe - base_p)), w),
+            );
+            put(jac, ParamId::Tool(k).index(N).0, col(zero, wt));
         }
-        if full {
-            self.effect_columns(state, scale, &f, jac);
-        }
-        check_pose(&f.t_base_ee)?;
-        Ok(f.t_base_ee)
     }
 
     /// Effect columns, from the θ0, d and a columns already in `jac` and the frames `f`

@@ -61,7 +61,7 @@ use super::{
 use crate::error::{Error, ParamIndex, Quantity, Result, check_finite};
 use crate::math::sqrt;
 use crate::model::{JointState, Robot};
-use crate::params::ParamId;
+use crate::params::{FrameParam, ParamId};
 use crate::pose::Transform;
 
 /// One contact: the robot's joint state while its tool point (`point`, tool frame, \[m\])
@@ -309,6 +309,7 @@ fn contact_rows<const N: usize, const P: usize>(
         jac,
         cols,
         colscale,
+        frame_rotations,
         ..
     } = ws;
     let cols = cols.get(..n_cols).ok_or(Error::CapacityExceeded {
@@ -320,7 +321,9 @@ fn contact_rows<const N: usize, const P: usize>(
         needed: n_jac,
         capacity: super::MAX_MODEL_PARAMS,
     })?;
-    let t = c.as_measurement().model_jacobian(robot, jac)?;
+    let t = c
+        .as_measurement()
+        .model_jacobian_with(robot, jac, *frame_rotations)?;
     for (j, (&col, &scale)) in cols.iter().zip(colscale.iter()).enumerate() {
         let jc = jac.get(col).copied().unwrap_or([0.0; 6]);
         for (k, row) in rows.iter_mut().take(3).enumerate() {
@@ -466,7 +469,9 @@ fn fold6<const P: usize>(
         ws.gram
             .add_rows3(rows, &[e[0], e[1], e[2]], &[w[0], w[1], w[2]])
     } else {
-        ws.lsq.add_rows6(rows, e, w)
+        // As on the Gram path: rows 3–5 are never written, their weights are 0.
+        ws.lsq
+            .add_rows3(rows, &[e[0], e[1], e[2]], &[w[0], w[1], w[2]])
     }
 }
 
@@ -622,6 +627,9 @@ fn fold_target_once<const N: usize, const P: usize>(
     n_cols: usize,
     ws: &mut Workspace<P>,
 ) -> Result<f64> {
+    if ws.cost_only {
+        return target_cost(robot, data, gi, opts, ws);
+    }
     let g = data
         .groups
         .get(gi)
@@ -676,6 +684,62 @@ fn fold_target_once<const N: usize, const P: usize>(
     let pbar = [o[0] + dbar[0], o[1] + dbar[1], o[2] + dbar[2]];
     cache_mean(data, gi, w_sum, pbar, &jbar, ws);
     Ok(opts.weight_pos * (s2 - w_sum * dot3(&dbar, &dbar)))
+}
+
+/// [`fold_target_once`] of a cost-only pass ([`RowSource::fold_cost`]): the same tool
+/// points and the same sums in the same order, so the same cost bit for bit, without the
+/// Jacobian rows' scratch (zeroing it cost about as much as the sums); caches the mean
+/// point (not `J̄`, which a cost-only pass never uses).
+fn target_cost<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &ConstraintData<'_, N>,
+    gi: usize,
+    opts: &IdentifyOptions<'_>,
+    ws: &mut Workspace<P>,
+) -> Result<f64> {
+    let g = data
+        .groups
+        .get(gi)
+        .copied()
+        .ok_or(Error::BadGroup { group: gi })?;
+    let mut origin: Option<[f64; 3]> = None;
+    let (mut w_sum, mut s1, mut s2) = (0.0, [0.0; 3], 0.0);
+    for c in data.group_contacts(&g).iter().filter(|c| c.weight > 0.0) {
+        let p = c.tool_point(robot)?;
+        let o = *origin.get_or_insert(p);
+        let d = [p[0] - o[0], p[1] - o[1], p[2] - o[2]];
+        w_sum += c.weight;
+        for k in 0..3 {
+            s1[k] += c.weight * d[k];
+        }
+        s2 += c.weight * dot3(&d, &d);
+    }
+    let Some(o) = origin else {
+        return Ok(0.0);
+    };
+    let dbar = [s1[0] / w_sum, s1[1] / w_sum, s1[2] / w_sum];
+    let pbar = [o[0] + dbar[0], o[1] + dbar[1], o[2] + dbar[2]];
+    let named = data.distances.iter().any(|d| d.a == gi || d.b == gi);
+    if let Some(m) = ws.means.get_mut(gi % MEAN_CACHE).filter(|_| named) {
+        m.group = gi;
+        m.w = w_sum;
+        m.p = pbar;
+    }
+    Ok(opts.weight_pos * (s2 - w_sum * dot3(&dbar, &dbar)))
+}
+
+/// Weight and mean point of group `gi` ([`group_mean`] without copying its `J̄`).
+fn mean_point<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &ConstraintData<'_, N>,
+    gi: usize,
+    n_cols: usize,
+    ws: &mut Workspace<P>,
+) -> Result<(f64, [f64; 3])> {
+    if let Some(m) = ws.means.iter().find(|m| m.group == gi) {
+        return Ok((m.w, m.p));
+    }
+    group_mean(robot, data, gi, n_cols, ws).map(|m| (m.w, m.p))
 }
 
 /// The mean of group `gi` from the cache, or computed (one Jacobian pass).
@@ -737,6 +801,22 @@ fn fold_distance<const N: usize, const P: usize>(
         .get(di)
         .copied()
         .ok_or(Error::BadDistance { distance: di })?;
+    if ws.cost_only {
+        // The cached means' points alone (copying `J̄` would cost more than the rest).
+        let (wa, pa) = mean_point(robot, data, d.a, n_cols, ws)?;
+        let (wb, pb) = mean_point(robot, data, d.b, n_cols, ws)?;
+        if wa <= 0.0 || wb <= 0.0 {
+            return Ok(0.0);
+        }
+        let diff = [pa[0] - pb[0], pa[1] - pb[1], pa[2] - pb[2]];
+        let len = sqrt(dot3(&diff, &diff));
+        if len <= 0.0 {
+            return Err(Error::DegenerateGroup { group: d.a });
+        }
+        let e = d.m - len;
+        // A cost-only pass (`RowSource::fold_cost`) folds nothing.
+        return Ok(opts.weight_pos * d.weight * e * e);
+    }
     let ma = group_mean(robot, data, d.a, n_cols, ws)?;
     let mb = group_mean(robot, data, d.b, n_cols, ws)?;
     if ma.w <= 0.0 || mb.w <= 0.0 {
@@ -756,9 +836,7 @@ fn fold_distance<const N: usize, const P: usize>(
     let w = opts.weight_pos * d.weight;
     let b = if with_rhs { e } else { 0.0 };
     let a = row.get(..n_cols).unwrap_or(&[]);
-    if ws.cost_only {
-        // A cost-only pass (`RowSource::fold_cost`) folds nothing.
-    } else if ws.to_gram {
+    if ws.to_gram {
         ws.gram.add_row_weighted(a, b, w)?;
     } else {
         ws.lsq.add_row_weighted(a, b, w)?;
@@ -1028,28 +1106,7 @@ impl<const N: usize> RowSource<N> for ConstraintData<'_, N> {
         n_cols: usize,
         ws: &mut Workspace<P>,
     ) -> Result<f64> {
-        let mut c = 0.0;
-        for (l, m) in self.instrument.iter().enumerate() {
-            if m.weight > 0.0 && !self.in_session(l) {
-                c += add_rows(robot, m, with_rhs, opts, n_cols, ws)?;
-            }
-        }
-        for s in 0..self.sessions.len() {
-            let rows = self.session_rows(s);
-            c += fold_session(robot, rows, with_rhs, opts, n_cols, ws)?;
-        }
-        for m in ws.means.iter_mut() {
-            m.group = usize::MAX;
-        }
-        for gi in 0..self.groups.len() {
-            c += fold_group(robot, self, gi, with_rhs, opts, n_cols, ws)?;
-            for (di, d) in self.distances.iter().enumerate() {
-                if d.a.max(d.b) == gi {
-                    c += fold_distance(robot, self, di, with_rhs, opts, n_cols, ws)?;
-                }
-            }
-        }
-        Ok(c)
+        self.fold_until(robot, with_rhs, opts, n_cols, f64::INFINITY, ws)
     }
 
     /// MUKCa: the damped fallback takes `panda_6` from 186 to 10 iterations, every
@@ -1062,13 +1119,15 @@ impl<const N: usize> RowSource<N> for ConstraintData<'_, N> {
     }
     /// The normal-equation fold itself with `ws.cost_only` set: the same code and the same
     /// tool points (forward kinematics is the Jacobian's chain), so the same cost bit for
-    /// bit, without Jacobians or folding. Not with instrument rows (their fold has no such
-    /// mode).
+    /// bit, without Jacobians or folding; it stops after the first group (with its
+    /// distances) whose running sum exceeds `stop_above` (see [`STOP_MARGIN`]). Not with
+    /// instrument rows (their fold has no such mode).
     fn fold_cost<const P: usize>(
         &self,
         robot: &Robot<N>,
         opts: &IdentifyOptions<'_>,
         n_cols: usize,
+        stop_above: f64,
         ws: &mut Workspace<P>,
     ) -> Result<Option<f64>> {
         if !self.instrument.is_empty() || !self.sessions.is_empty() {
@@ -1077,7 +1136,7 @@ impl<const N: usize> RowSource<N> for ConstraintData<'_, N> {
         // `to_gram` selects the normal-equation path (its cost arithmetic) of each group.
         let to_gram = core::mem::replace(&mut ws.to_gram, true);
         ws.cost_only = true;
-        let c = self.fold(robot, true, opts, n_cols, ws);
+        let c = self.fold_until(robot, true, opts, n_cols, stop_above, ws);
         ws.cost_only = false;
         ws.to_gram = to_gram;
         c.map(Some)
@@ -1099,7 +1158,64 @@ impl<const N: usize> RowSource<N> for ConstraintData<'_, N> {
     }
 }
 
+/// A cost pass ([`RowSource::fold_cost`]) stops once its running sum exceeds the bound by
+/// this much (relative): every term it adds is a weighted sum of squares (a target's
+/// scatter `Σw|p − p̄|²`, a distance's `w·e²`), never below 0 but for a rounding error of a
+/// few ulps of the group's own sum of squares, so a running sum this far above the bound
+/// ends above it: the trial is rejected as the whole sum would reject it. (A trial whose
+/// later groups would fail, e.g. non-finite tool points, is then rejected instead of
+/// reporting that error; those groups are evaluated only if the trial is accepted.)
+pub(crate) const STOP_MARGIN: f64 = 1e-9;
+
 impl<const N: usize> ConstraintData<'_, N> {
+    /// [`RowSource::fold`], stopping after the first group (with the distances it closes)
+    /// at which the running cost exceeds `stop_above` by [`STOP_MARGIN`]: the value
+    /// returned is then that running cost (above `stop_above`), not the whole sum.
+    fn fold_until<const P: usize>(
+        &self,
+        robot: &Robot<N>,
+        with_rhs: bool,
+        opts: &IdentifyOptions<'_>,
+        n_cols: usize,
+        stop_above: f64,
+        ws: &mut Workspace<P>,
+    ) -> Result<f64> {
+        let stop = stop_above + STOP_MARGIN * stop_above.abs();
+        // Base and tool rotation columns only when one is selected (contact fits select
+        // the tool translation at most: the rotations are gauges of point contacts).
+        let selected = ws.cols.get(..n_cols).unwrap_or(&[]);
+        ws.frame_rotations = selected.iter().any(|&c| {
+            FrameParam::ALL.into_iter().skip(3).any(|k| {
+                c == ParamId::Base(k).index(N).0 || c == ParamId::Tool(k).index(N).0
+            })
+        });
+        let mut c = 0.0;
+        for (l, m) in self.instrument.iter().enumerate() {
+            if m.weight > 0.0 && !self.in_session(l) {
+                c += add_rows(robot, m, with_rhs, opts, n_cols, ws)?;
+            }
+        }
+        for s in 0..self.sessions.len() {
+            let rows = self.session_rows(s);
+            c += fold_session(robot, rows, with_rhs, opts, n_cols, ws)?;
+        }
+        for m in ws.means.iter_mut() {
+            m.group = usize::MAX;
+        }
+        for gi in 0..self.groups.len() {
+            c += fold_group(robot, self, gi, with_rhs, opts, n_cols, ws)?;
+            for (di, d) in self.distances.iter().enumerate() {
+                if d.a.max(d.b) == gi {
+                    c += fold_distance(robot, self, di, with_rhs, opts, n_cols, ws)?;
+                }
+            }
+            if c > stop {
+                break;
+            }
+        }
+        Ok(c)
+    }
+
     /// The instrument rows' cost: in the base frame, or each session's rows in its own
     /// fitted frame when there are sessions.
     fn instrument_cost(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<f64> {
@@ -1753,9 +1869,9 @@ mod tests {
             let folded = fold_all(&robot, &d, true, &mut ws);
             let gram = ws.gram.clone();
             // At another model: the cost-only pass leaves the normal equations alone.
-            let other = d.fold_cost(&moved(k + 7), &opts, n, &mut ws).unwrap();
+            let other = d.fold_cost(&moved(k + 7), &opts, n, f64::INFINITY, &mut ws).unwrap();
             assert!(other.is_some_and(|o| o.to_bits() != folded.to_bits()));
-            let cost = d.fold_cost(&robot, &opts, n, &mut ws).unwrap().unwrap();
+            let cost = d.fold_cost(&robot, &opts, n, f64::INFINITY, &mut ws).unwrap().unwrap();
             assert_eq!(
                 cost.to_bits(),
                 folded.to_bits(),
@@ -1775,10 +1891,39 @@ mod tests {
         // With instrument rows there is no cost-only pass.
         assert!(
             data(&c)
-                .fold_cost(&moved(0), &opts, n, &mut ws)
+                .fold_cost(&moved(0), &opts, n, f64::INFINITY, &mut ws)
                 .unwrap()
                 .is_none()
         );
+    }
+
+    #[test]
+    fn a_cost_pass_stops_only_above_its_bound() {
+        let c = case();
+        let d = contact_data(&c);
+        let opts = IdentifyOptions::new(Algorithm::Ols, params());
+        let n = params().len();
+        let mut ws = ws();
+        for k in 0..5 {
+            let robot = moved(k);
+            let full = d.fold_cost(&robot, &opts, n, f64::INFINITY, &mut ws);
+            let full = full.unwrap().unwrap();
+            // The first group's cost alone: the running sum after it.
+            (ws.cost_only, ws.to_gram) = (true, true);
+            let first = fold_group(&robot, &d, 0, true, &opts, n, &mut ws).unwrap();
+            (ws.cost_only, ws.to_gram) = (false, false);
+            assert!(first > 0.0 && first < full, "model {k}: {first} vs {full}");
+            // A bound below the first group's cost: the pass stops there, above the bound.
+            let low = 0.5 * first;
+            let partial = d.fold_cost(&robot, &opts, n, low, &mut ws).unwrap().unwrap();
+            assert!(partial > low && partial < full, "model {k}: {partial} vs {full}");
+            // A bound at the whole cost, or just below it (within the margin): the whole
+            // sum, bit for bit.
+            for bound in [full, full * (1.0 - 0.5 * STOP_MARGIN)] {
+                let c = d.fold_cost(&robot, &opts, n, bound, &mut ws).unwrap().unwrap();
+                assert_eq!(c.to_bits(), full.to_bits(), "model {k}");
+            }
+        }
     }
 
     /// `d`'s rows, counting the Jacobian passes; with `cost_pass` false it hides
@@ -1820,10 +1965,11 @@ mod tests {
             robot: &Robot<6>,
             opts: &IdentifyOptions<'_>,
             n_cols: usize,
+            stop_above: f64,
             ws: &mut Workspace<P>,
         ) -> Result<Option<f64>> {
             if self.cost_pass {
-                self.d.fold_cost(robot, opts, n_cols, ws)
+                self.d.fold_cost(robot, opts, n_cols, stop_above, ws)
             } else {
                 Ok(None)
             }

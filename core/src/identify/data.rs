@@ -83,8 +83,24 @@ impl<const N: usize> Measurement<N> {
         robot: &Robot<N>,
         jac: &mut [JacobianColumn],
     ) -> Result<Transform> {
-        let t = robot.jacobian(&self.state, jac)?;
-        if let Some(p) = self.point {
+        self.model_jacobian_with(robot, jac, true)
+    }
+
+    /// [`Measurement::model_jacobian`], the base and tool rotation columns left unwritten
+    /// unless `frame_rotations` (see [`Robot::jacobian_with`]). A point at the tool origin
+    /// would add `Δφ × 0 = ±0` to each position entry: skipped. That leaves every entry's
+    /// value, and can only keep a −0 that adding +0 would have made +0; every sum the rows
+    /// enter (Gram matrix, right-hand side, `J̄`) starts at +0, where a ±0 term adds
+    /// nothing, so the fits are the same bit for bit (MUKCa's contacts, whose point is the
+    /// tool origin: `core/tests/mukca_convergence.rs`).
+    pub(crate) fn model_jacobian_with(
+        &self,
+        robot: &Robot<N>,
+        jac: &mut [JacobianColumn],
+        frame_rotations: bool,
+    ) -> Result<Transform> {
+        let t = robot.jacobian_with(&self.state, jac, frame_rotations)?;
+        if let Some(p) = self.point.filter(|p| *p != [0.0; 3]) {
             let r = t.rotation * nalgebra::Vector3::new(p[0], p[1], p[2]);
             for c in jac.iter_mut() {
                 let w = nalgebra::Vector3::new(c[3], c[4], c[5]);
@@ -271,7 +287,10 @@ pub(crate) fn accumulate_gram<const N: usize, const P: usize, D: RowSource<N> + 
 /// bit, with the Jacobian pass skipped for rejected trials where the data have a
 /// Jacobian-free cost pass ([`RowSource::fold_cost`]; contact data, where most trials of a
 /// step-halving iteration are rejected: of the 290 Jacobian passes of OLS on MUKCa's Panda
-/// recordings about 160 were for trials then rejected). After a rejected trial `ws.gram` is stale, as after any rejected trial.
+/// recordings about 160 were for trials then rejected), and the cost pass of a rejected
+/// trial stops once its running sum is certain to exceed `current` (the value returned is
+/// then that running sum: above `current`, which is all a rejection is judged by). After a
+/// rejected trial `ws.gram` is stale, as after any rejected trial.
 pub(crate) fn accumulate_trial_gram<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
     robot: &Robot<N>,
     data: &D,
@@ -280,7 +299,7 @@ pub(crate) fn accumulate_trial_gram<const N: usize, const P: usize, D: RowSource
     current: f64,
     ws: &mut Workspace<P>,
 ) -> Result<f64> {
-    if let Some(c) = data.fold_cost(robot, opts, n_cols, ws)? {
+    if let Some(c) = data.fold_cost(robot, opts, n_cols, current, ws)? {
         // A non-finite cost takes the full pass, which reports the error as before.
         if c.is_finite() && c > current {
             return Ok(c);
@@ -318,12 +337,15 @@ pub(crate) trait RowSource<const N: usize> {
     /// kinematics alone (no Jacobian, nothing folded; `ws.gram` is left alone), or `None`
     /// where the source has no such pass. The solvers use it to reject a trial step
     /// without paying for its Jacobian ([`RowSource::cost`] is the same sum to rounding,
-    /// not bit for bit).
+    /// not bit for bit). The pass may stop early once the cost is certain to exceed
+    /// `stop_above` (a rejected trial); it then returns a partial sum, still above
+    /// `stop_above` (`f64::INFINITY`: the whole sum).
     fn fold_cost<const P: usize>(
         &self,
         _robot: &Robot<N>,
         _opts: &IdentifyOptions<'_>,
         _n_cols: usize,
+        _stop_above: f64,
         _ws: &mut Workspace<P>,
     ) -> Result<Option<f64>> {
         Ok(None)

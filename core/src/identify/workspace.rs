@@ -20,6 +20,9 @@ pub struct Workspace<const P: usize> {
     /// Whether a fold computes its cost only (no Jacobian, nothing folded): see
     /// [`super::data::RowSource::fold_cost`].
     pub(crate) cost_only: bool,
+    /// Whether a contact fold's Jacobians need the base and tool rotation columns (one of
+    /// them is selected); set by each fold of constraint data.
+    pub(crate) frame_rotations: bool,
     pub(crate) damped: DampedScratch<P>,
     pub(crate) svd: SvdScratch<P>,
     /// Scratch matrix (orthonormal basis, covariance).
@@ -58,6 +61,7 @@ impl<const P: usize> Workspace<P> {
             gram: GramAccumulator::new(),
             to_gram: false,
             cost_only: false,
+            frame_rotations: true,
             damped: DampedScratch::new(),
             svd: SvdScratch::new(),
             mat: [[0.0; P]; P],

@@ -137,6 +137,96 @@ impl<const P: usize> LsqAccumulator<P> {
         Ok(())
     }
 
+    /// [`add_rows6`](Self::add_rows6) of position rows: rows 0–2 of `a` with right-hand
+    /// sides `b` and weights `w`, rows 3–5 taken as zero with weight 0 (never read). The
+    /// same factor, `Qᵀb`, residual and row count bit for bit, with half the reflection
+    /// work: in `add_rows6` such rows stay +0 through every reflection (`+0 − s·(±0) =
+    /// +0`), their squares add +0 to the norms, and their products add ±0 to sums that
+    /// include an `R` or `Qᵀb` entry, which is never −0 (each starts at +0 and only ever
+    /// has something subtracted, `x − x = +0`): so no sum, nor its sign of zero, changes.
+    /// Errors as `add_rows6`.
+    pub fn add_rows3(&mut self, a: &[[f64; P]; 6], b: &[f64; 3], w: &[f64; 3]) -> Result<()> {
+        let n = self.n;
+        check_capacity::<P>(n)?;
+        if !super::util::all_finite(w.iter()) || w.iter().any(|&v| v < 0.0) {
+            return Err(bad_setting());
+        }
+        for row in a.iter().take(3) {
+            check_finite(&row[..n])?;
+        }
+        if !super::util::all_finite(b.iter()) {
+            return Err(Error::NonFinite {
+                what: Quantity::Parameter,
+                index: n,
+            });
+        }
+        let mut rows = [[0.0; P]; 3];
+        let mut beta = [0.0; 3];
+        for r in 0..3 {
+            let sw = libm::sqrt(w[r]);
+            for (dst, src) in rows[r][..n].iter_mut().zip(a[r][..n].iter()) {
+                *dst = sw * *src;
+            }
+            beta[r] = sw * b[r];
+        }
+        for k in 0..n {
+            self.reflect_column3(&mut rows, &mut beta, k);
+        }
+        self.rss += beta.iter().map(|x| x * x).sum::<f64>();
+        let counted = w.iter().filter(|&&v| v > 0.0).count();
+        self.rows = self.rows.saturating_add(counted);
+        Ok(())
+    }
+
+    /// [`reflect_column`](Self::reflect_column) of three rows (see
+    /// [`add_rows3`](Self::add_rows3)).
+    fn reflect_column3(&mut self, rows: &mut [[f64; P]; 3], beta: &mut [f64; 3], k: usize) {
+        let n = self.n.min(P);
+        let (Some(rk), Some(qk)) = (self.r.get_mut(k), self.qtb.get_mut(k)) else {
+            return;
+        };
+        let Some(&x0) = rk.get(k) else {
+            return;
+        };
+        let mut x = [0.0; 6];
+        for (xi, row) in x.iter_mut().zip(rows.iter()) {
+            *xi = row.get(k).copied().unwrap_or(0.0);
+        }
+        let Some((mu, tau, v)) = reflector6(x0, &x) else {
+            return;
+        };
+        rk[k] = mu;
+        for row in rows.iter_mut() {
+            if let Some(e) = row.get_mut(k) {
+                *e = 0.0;
+            }
+        }
+        let [a0, a1, a2] = rows;
+        let (Some(rk), Some(a0), Some(a1), Some(a2)) = (
+            rk.get_mut(k + 1..n),
+            a0.get_mut(k + 1..n),
+            a1.get_mut(k + 1..n),
+            a2.get_mut(k + 1..n),
+        ) else {
+            return;
+        };
+        // Equal lengths, known to the compiler: no bounds checks, the loop vectorises.
+        let len = rk.len();
+        let (a0, a1, a2) = (&mut a0[..len], &mut a1[..len], &mut a2[..len]);
+        for j in 0..len {
+            let s = tau * (rk[j] + v[0] * a0[j] + v[1] * a1[j] + v[2] * a2[j]);
+            rk[j] -= s;
+            a0[j] -= s * v[0];
+            a1[j] -= s * v[1];
+            a2[j] -= s * v[2];
+        }
+        let sb = tau * (*qk + v.iter().zip(beta.iter()).map(|(a, b)| a * b).sum::<f64>());
+        *qk -= sb;
+        for (bi, vi) in beta.iter_mut().zip(v.iter()) {
+            *bi -= sb * vi;
+        }
+    }
+
     /// Zeroes column `k` of `rows` (columns before `k` are zero already) against `R[k][k]`
     /// with the Householder reflection that makes the new diagonal `μ = |(R[k][k], rows[·][k])|`
     /// (LAPACK `dlarfgp`'s non-negative form), applied to the rest of row `k` of `R`, the
