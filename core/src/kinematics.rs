@@ -516,3 +516,38 @@ fn put(jac: &mut [JacobianColumn], i: usize, column: JacobianColumn) {
 fn col_at(jac: &[JacobianColumn], i: usize) -> JacobianColumn {
     jac.get(i).copied().unwrap_or([0.0; 6])
 }
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn jacobian_without_frame_rotations_writes_the_rest_bit_for_bit() {
+        let mut robot = crate::aria::nominal();
+        // Base and tool rotations away from zero, so their columns are not trivial.
+        for (i, v) in [(33, 0.1), (34, -0.2), (39, 0.3), (41, -0.4)] {
+            robot.set_param(crate::error::ParamIndex(i), v).unwrap();
+        }
+        let state = JointState::new([0.3, -0.7, 1.1, 0.2, -0.5, 0.9]);
+        let n = Robot::<6>::NUM_PARAMS;
+        let mut all = [[0.0; 6]; Robot::<6>::NUM_PARAMS];
+        let t = robot.jacobian(&state, &mut all).unwrap();
+        let mut some = [[f64::NAN; 6]; Robot::<6>::NUM_PARAMS];
+        let t2 = robot.jacobian_with(&state, &mut some, false).unwrap();
+        assert_eq!(t, t2);
+        let rotation = |i: usize| {
+            FrameParam::ALL.into_iter().skip(3).any(|k| {
+                i == ParamId::Base(k).index(6).0 || i == ParamId::Tool(k).index(6).0
+            })
+        };
+        for i in 0..n {
+            if rotation(i) {
+                assert!(some[i].iter().all(|v| v.is_nan()), "column {i} written");
+            } else {
+                assert_eq!(some[i].map(f64::to_bits), all[i].map(f64::to_bits), "{i}");
+            }
+        }
+        assert_eq!((0..n).filter(|&i| rotation(i)).count(), 6);
+    }
+}

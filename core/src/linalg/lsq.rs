@@ -413,6 +413,54 @@ mod tests {
     }
 
     #[test]
+    fn three_position_rows_fold_as_six_rows_bit_for_bit() {
+        let mut rng = Rng(77);
+        let n = 8;
+        let mut three = Box::new(LsqAccumulator::<P>::new());
+        let mut six = Box::new(LsqAccumulator::<P>::new());
+        three.reset(n).unwrap();
+        six.reset(n).unwrap();
+        for block in 0..12 {
+            // Rows 3–5 zero with weight 0, as contact rows are folded; some zero columns,
+            // some zero weights among rows 0–2, and repeated rows (exact cancellations).
+            let mut a = [[0.0; P]; 6];
+            let (mut b, mut w) = ([0.0; 6], [0.0; 6]);
+            for r in 0..3 {
+                for v in a[r].iter_mut().take(n) {
+                    *v = rng.sym();
+                }
+                a[r][2] = 0.0;
+                b[r] = rng.sym();
+                w[r] = if (block + r) % 5 == 0 {
+                    0.0
+                } else {
+                    0.5 + 0.4 * rng.sym()
+                };
+            }
+            if block % 4 == 3 {
+                a[1] = a[0];
+                b[1] = b[0];
+            }
+            three
+                .add_rows3(&a, &[b[0], b[1], b[2]], &[w[0], w[1], w[2]])
+                .unwrap();
+            six.add_rows6(&a, &b, &w).unwrap();
+        }
+        for i in 0..P {
+            for j in 0..P {
+                assert_eq!(three.r()[i][j].to_bits(), six.r()[i][j].to_bits(), "{i},{j}");
+            }
+            assert_eq!(three.qtb()[i].to_bits(), six.qtb()[i].to_bits(), "{i}");
+        }
+        assert_eq!(three.rss().to_bits(), six.rss().to_bits());
+        assert_eq!(three.rows(), six.rows());
+        let mut bad = [[0.0; P]; 6];
+        bad[2][1] = f64::NAN;
+        assert!(three.add_rows3(&bad, &[0.0; 3], &[1.0; 3]).is_err());
+        assert!(three.add_rows3(&[[0.0; P]; 6], &[0.0; 3], &[-1.0, 1.0, 1.0]).is_err());
+    }
+
+    #[test]
     fn six_rows_at_once_match_six_givens_rows() {
         let mut rng = Rng(321);
         let n = 7;
