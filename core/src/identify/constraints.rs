@@ -324,13 +324,14 @@ fn contact_rows<const N: usize, const P: usize>(
     let t = c
         .as_measurement()
         .model_jacobian_with(robot, jac, *frame_rotations)?;
-    for (j, (&col, &scale)) in cols.iter().zip(colscale.iter()).enumerate() {
+    // The three position rows side by side: no bounds check per entry.
+    let [r0, r1, r2, ..] = rows;
+    let out = r0.iter_mut().zip(r1.iter_mut().zip(r2.iter_mut()));
+    for ((&col, &scale), (x0, (x1, x2))) in cols.iter().zip(colscale.iter()).zip(out) {
         let jc = jac.get(col).copied().unwrap_or([0.0; 6]);
-        for (k, row) in rows.iter_mut().take(3).enumerate() {
-            if let Some(x) = row.get_mut(j) {
-                *x = jc[k] * scale;
-            }
-        }
+        *x0 = jc[0] * scale;
+        *x1 = jc[1] * scale;
+        *x2 = jc[2] * scale;
     }
     let v = t.translation.vector;
     Ok([v.x, v.y, v.z])

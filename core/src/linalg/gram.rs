@@ -141,13 +141,35 @@ impl<const P: usize> GramAccumulator<P> {
                 index: n,
             });
         }
-        let rows = self.g.iter_mut().zip(self.atb.iter_mut()).take(n);
-        for (i, (grow, atb)) in rows.enumerate() {
-            let c = [w[0] * a0[i], w[1] * a1[i], w[2] * a2[i], 0.0, 0.0, 0.0];
+        // Two rows of the triangle per pass (one load of the three rows' entries for both):
+        // each entry still adds its own three products in the same order. A row whose
+        // coefficients are all zero adds ±0 to entries that are never −0 (every sum starts
+        // at +0), so folding it too changes nothing.
+        let coef = |i: usize| [w[0] * a0[i], w[1] * a1[i], w[2] * a2[i], 0.0, 0.0, 0.0];
+        let (g, atb) = (&mut self.g[..n], &mut self.atb[..n]);
+        let mut i = 0;
+        while i + 1 < n {
+            let (c, d) = (coef(i), coef(i + 1));
+            atb[i] += c[0] * b[0] + c[1] * b[1] + c[2] * b[2];
+            atb[i + 1] += d[0] * b[0] + d[1] * b[1] + d[2] * b[2];
+            let (lo, hi) = g.split_at_mut(i + 1);
+            let (Some(gi), Some(gj)) = (lo.last_mut(), hi.first_mut()) else {
+                break;
+            };
+            gi[i] += c[0] * a0[i] + c[1] * a1[i] + c[2] * a2[i];
+            let j = i + 1;
+            fold3_pair(
+                &mut gi[j..n],
+                &mut gj[j..n],
+                &c,
+                &d,
+                [&a0[j..], &a1[j..], &a2[j..]],
+            );
+            i += 2;
+        }
+        if let (Some(grow), Some(atb)) = (g.get_mut(i), atb.get_mut(i)) {
+            let c = coef(i);
             *atb += c[0] * b[0] + c[1] * b[1] + c[2] * b[2];
-            if c[0] == 0.0 && c[1] == 0.0 && c[2] == 0.0 {
-                continue;
-            }
             fold3(&mut grow[i..n], &c, [&a0[i..], &a1[i..], &a2[i..]]);
         }
         self.btb += w[0] * b[0] * b[0] + w[1] * b[1] * b[1] + w[2] * b[2] * b[2];
@@ -281,6 +303,22 @@ fn fold3(row: &mut [f64], c: &[f64; 6], a: [&[f64]; 3]) {
     };
     for k in 0..m {
         row[k] += c[0] * a0[k] + c[1] * a1[k] + c[2] * a2[k];
+    }
+}
+
+/// [`fold3`] into two rows at once (`r0` with coefficients `c`, `r1` with `d`).
+#[inline]
+fn fold3_pair(r0: &mut [f64], r1: &mut [f64], c: &[f64; 6], d: &[f64; 6], a: [&[f64]; 3]) {
+    let m = r0.len();
+    let (Some(r1), Some(a0), Some(a1), Some(a2)) =
+        (r1.get_mut(..m), a[0].get(..m), a[1].get(..m), a[2].get(..m))
+    else {
+        return;
+    };
+    for k in 0..m {
+        let (x0, x1, x2) = (a0[k], a1[k], a2[k]);
+        r0[k] += c[0] * x0 + c[1] * x1 + c[2] * x2;
+        r1[k] += d[0] * x0 + d[1] * x1 + d[2] * x2;
     }
 }
 
