@@ -21,8 +21,13 @@
 //! 0.65); per recording (second run)
 //! panda_3 27.4 → 12.8, panda_4 21.8 → 13.1 ms. Instructions for one pass over the eleven
 //! (callgrind, `identify_constrained` inclusive): 976.9M → 681.3M. On a quiet machine (load
-//! about 1, another session's machine): all eleven 58.1 ms (55.4–61.3): the 50 ms goal is
-//! not met yet.
+//! about 1, another session's machine): all eleven 58.1 ms (55.4–61.3): the 50 ms goal was
+//! not met. Then trial costs that stop once above the current cost, no Jacobian scratch in
+//! cost passes, leaner contact Jacobians, a three-row Householder fold in the analysis and
+//! a two-rows-per-pass Gram fold (every fit bit for bit: `tests/mukca_convergence.rs`):
+//! 681.3M → 516.1M instructions; both binaries alternating in one session (load 4–7 on 2
+//! cores), all eleven 53.0 → 41.8 ms and 55.0 → 41.9 ms (ratio 0.79, 0.76): **under
+//! 50 ms**; per recording (second run) panda_3 11.0 → 8.0, panda_4 9.06 → 6.53 ms.
 //!
 //! The recordings and the Panda (built from `panda.urdf`'s joint origins, no URDF reader)
 //! come from `tests/mukca/mod.rs`, which the convergence test `tests/mukca_convergence.rs`

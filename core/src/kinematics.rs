@@ -537,9 +537,10 @@ mod tests {
         let t2 = robot.jacobian_with(&state, &mut some, false).unwrap();
         assert_eq!(t, t2);
         let rotation = |i: usize| {
-            FrameParam::ALL.into_iter().skip(3).any(|k| {
-                i == ParamId::Base(k).index(6).0 || i == ParamId::Tool(k).index(6).0
-            })
+            FrameParam::ALL
+                .into_iter()
+                .skip(3)
+                .any(|k| i == ParamId::Base(k).index(6).0 || i == ParamId::Tool(k).index(6).0)
         };
         for i in 0..n {
             if rotation(i) {

@@ -107,5 +107,8 @@ fn every_panda_fit_is_bit_for_bit_the_recorded_one() {
             bad.push(name);
         }
     }
-    assert!(bad.is_empty(), "fits differ from the recorded ones: {bad:?}");
+    assert!(
+        bad.is_empty(),
+        "fits differ from the recorded ones: {bad:?}"
+    );
 }

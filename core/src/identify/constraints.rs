@@ -1186,9 +1186,10 @@ impl<const N: usize> ConstraintData<'_, N> {
         // the tool translation at most: the rotations are gauges of point contacts).
         let selected = ws.cols.get(..n_cols).unwrap_or(&[]);
         ws.frame_rotations = selected.iter().any(|&c| {
-            FrameParam::ALL.into_iter().skip(3).any(|k| {
-                c == ParamId::Base(k).index(N).0 || c == ParamId::Tool(k).index(N).0
-            })
+            FrameParam::ALL
+                .into_iter()
+                .skip(3)
+                .any(|k| c == ParamId::Base(k).index(N).0 || c == ParamId::Tool(k).index(N).0)
         });
         let mut c = 0.0;
         for (l, m) in self.instrument.iter().enumerate() {
@@ -1870,9 +1871,14 @@ mod tests {
             let folded = fold_all(&robot, &d, true, &mut ws);
             let gram = ws.gram.clone();
             // At another model: the cost-only pass leaves the normal equations alone.
-            let other = d.fold_cost(&moved(k + 7), &opts, n, f64::INFINITY, &mut ws).unwrap();
+            let other = d
+                .fold_cost(&moved(k + 7), &opts, n, f64::INFINITY, &mut ws)
+                .unwrap();
             assert!(other.is_some_and(|o| o.to_bits() != folded.to_bits()));
-            let cost = d.fold_cost(&robot, &opts, n, f64::INFINITY, &mut ws).unwrap().unwrap();
+            let cost = d
+                .fold_cost(&robot, &opts, n, f64::INFINITY, &mut ws)
+                .unwrap()
+                .unwrap();
             assert_eq!(
                 cost.to_bits(),
                 folded.to_bits(),
@@ -1916,12 +1922,21 @@ mod tests {
             assert!(first > 0.0 && first < full, "model {k}: {first} vs {full}");
             // A bound below the first group's cost: the pass stops there, above the bound.
             let low = 0.5 * first;
-            let partial = d.fold_cost(&robot, &opts, n, low, &mut ws).unwrap().unwrap();
-            assert!(partial > low && partial < full, "model {k}: {partial} vs {full}");
+            let partial = d
+                .fold_cost(&robot, &opts, n, low, &mut ws)
+                .unwrap()
+                .unwrap();
+            assert!(
+                partial > low && partial < full,
+                "model {k}: {partial} vs {full}"
+            );
             // A bound at the whole cost, or just below it (within the margin): the whole
             // sum, bit for bit.
             for bound in [full, full * (1.0 - 0.5 * STOP_MARGIN)] {
-                let c = d.fold_cost(&robot, &opts, n, bound, &mut ws).unwrap().unwrap();
+                let c = d
+                    .fold_cost(&robot, &opts, n, bound, &mut ws)
+                    .unwrap()
+                    .unwrap();
                 assert_eq!(c.to_bits(), full.to_bits(), "model {k}");
             }
         }

@@ -448,7 +448,11 @@ mod tests {
         }
         for i in 0..P {
             for j in 0..P {
-                assert_eq!(three.r()[i][j].to_bits(), six.r()[i][j].to_bits(), "{i},{j}");
+                assert_eq!(
+                    three.r()[i][j].to_bits(),
+                    six.r()[i][j].to_bits(),
+                    "{i},{j}"
+                );
             }
             assert_eq!(three.qtb()[i].to_bits(), six.qtb()[i].to_bits(), "{i}");
         }
@@ -457,7 +461,11 @@ mod tests {
         let mut bad = [[0.0; P]; 6];
         bad[2][1] = f64::NAN;
         assert!(three.add_rows3(&bad, &[0.0; 3], &[1.0; 3]).is_err());
-        assert!(three.add_rows3(&[[0.0; P]; 6], &[0.0; 3], &[-1.0, 1.0, 1.0]).is_err());
+        assert!(
+            three
+                .add_rows3(&[[0.0; P]; 6], &[0.0; 3], &[-1.0, 1.0, 1.0])
+                .is_err()
+        );
     }
 
     #[test]
