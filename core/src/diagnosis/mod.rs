@@ -694,9 +694,9 @@ pub struct PoseDiagnosis {
     pub(crate) gsq: [f64; MAX_MODELS],
     pub(crate) gsq_rot: [f64; MAX_MODELS],
     pub(crate) scratch: f64,
-    /// The smooth check's per-pose features that do not depend on its hyperparameters
-    /// (`smooth.rs`), kept so they are computed once per check.
-    pub(crate) smooth: [f64; smooth::FEATURES],
+    /// The smooth check's per-pose features at each of its length scales (`smooth.rs`),
+    /// kept so they are computed once per check.
+    pub(crate) smooth: [f64; smooth::STORED],
 }
 
 impl PoseDiagnosis {
@@ -716,7 +716,7 @@ impl PoseDiagnosis {
         gsq: [0.0; MAX_MODELS],
         gsq_rot: [0.0; MAX_MODELS],
         scratch: 0.0,
-        smooth: [0.0; smooth::FEATURES],
+        smooth: [0.0; smooth::STORED],
     };
     /// Whitened held-out squared error of model `model` (0 = baseline, c + 1 = candidate c).
     #[must_use]

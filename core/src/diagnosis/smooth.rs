@@ -262,21 +262,39 @@ fn project<const N: usize>(ws: &mut SmoothWorkspace, robot: &Robot<N>, state: &J
     }
 }
 
-/// Keeps the pose's [`project`] results in its record (`PoseDiagnosis::smooth`: the
-/// linear and task-space slots, then the Fourier projections), so the nested
-/// cross-validation, which needs them about 20 times per pose, computes them once.
-fn stash_projection(ws: &SmoothWorkspace, p: &mut PoseDiagnosis) {
+/// Slots of a pose's stored features (`PoseDiagnosis::smooth`): the `2N + TASK` shared
+/// ones and the Fourier ones of every length scale, at most `L·M − (L − 1)·TASK`.
+pub(crate) const STORED: usize = L * M - (L - 1) * TASK;
+
+/// Keeps the pose's features at every length scale in its record (`PoseDiagnosis::smooth`:
+/// the linear and task-space slots, then the Fourier slots of each length scale in turn),
+/// so the nested cross-validation, which needs them about 20 times per pose and check,
+/// computes them (and their cosines) once. Needs [`project`]'s results in `ws`.
+fn stash_features(ws: &mut SmoothWorkspace, p: &mut PoseDiagnosis, inv_l0: f64) {
     let nl = ws.n_linear + TASK;
-    for (k, c) in p.smooth.iter_mut().enumerate() {
-        *c = if k < nl { ws.phi[k] } else { ws.u[k] };
+    for (d, &v) in p.smooth.iter_mut().zip(&ws.phi).take(nl) {
+        *d = v;
+    }
+    for (li, &scale) in LENGTH_SCALES.iter().enumerate() {
+        features(ws, inv_l0 / scale);
+        let at = nl + li * M.saturating_sub(nl);
+        for (d, &v) in p.smooth.iter_mut().skip(at).zip(ws.phi.iter().skip(nl)) {
+            *d = v;
+        }
     }
 }
 
-/// [`project`]'s results for pose `p` from its record ([`stash_projection`]).
-fn load_projection(ws: &mut SmoothWorkspace, p: &PoseDiagnosis) {
+/// The features of pose `p` at length scale `li` into `ws.phi` ([`stash_features`]):
+/// the same values [`features`] computes, bit for bit.
+fn load_features(ws: &mut SmoothWorkspace, p: &PoseDiagnosis, li: usize) {
     let nl = ws.n_linear + TASK;
-    ws.phi[..nl].copy_from_slice(&p.smooth[..nl]);
-    ws.u[nl..].copy_from_slice(&p.smooth[nl..]);
+    for (d, &v) in ws.phi.iter_mut().zip(&p.smooth).take(nl) {
+        *d = v;
+    }
+    let at = nl + li * M.saturating_sub(nl);
+    for (d, &v) in ws.phi.iter_mut().skip(nl).zip(p.smooth.iter().skip(at)) {
+        *d = v;
+    }
 }
 
 /// Task-space terms of a pose, each of unit mean square over the data (about): the
@@ -342,7 +360,7 @@ fn accumulate(g: &mut [[f64; M]; M], r: &mut [[f64; 6]; M], phi: &[f64; M], y: &
     }
 }
 
-/// Gram and right-hand side over the fitted poses of fold `fold` at length scale `inv_l`
+/// Gram and right-hand side over the fitted poses of fold `fold` at length scale `li`
 /// into `ws.g_out`/`r_out` (`inner = false`) or `ws.g_in`/`r_in`.
 #[allow(clippy::too_many_arguments)]
 fn fold_gram<const N: usize>(
@@ -352,7 +370,7 @@ fn fold_gram<const N: usize>(
     sw: &[f64; 6],
     act: &[bool; 2],
     fold: Option<usize>,
-    inv_l: f64,
+    li: usize,
     inner: bool,
 ) {
     {
@@ -373,8 +391,7 @@ fn fold_gram<const N: usize>(
             continue;
         }
         let y = target(m, p, sw);
-        load_projection(ws, p);
-        features(ws, inv_l);
+        load_features(ws, p, li);
         let SmoothWorkspace {
             g_out,
             r_out,
@@ -534,7 +551,6 @@ fn choose<const N: usize>(
     act: &[bool; 2],
     folds: usize,
     f: usize,
-    inv_l0: f64,
 ) -> [Choice; 2] {
     // Zero model: the training targets' own squares.
     let mut best = [(0.0, None::<(usize, f64)>); 2];
@@ -545,13 +561,12 @@ fn choose<const N: usize>(
             best[1].0 += e[1];
         }
     }
-    for (li, &scale) in LENGTH_SCALES.iter().enumerate() {
-        let inv_l = inv_l0 / scale;
-        fold_gram(ws, data, poses, sw, act, Some(f), inv_l, false);
+    for li in 0..L {
+        fold_gram(ws, data, poses, sw, act, Some(f), li, false);
         let mut err = [[0.0f64; 2]; R];
         let mut ok = [true; R];
         for g in (0..folds).filter(|&g| g != f) {
-            fold_gram(ws, data, poses, sw, act, Some(g), inv_l, true);
+            fold_gram(ws, data, poses, sw, act, Some(g), li, true);
             // Every ridge's solution first, so each validation row's features are computed
             // once for all ridges (the features cost more than the predictions).
             let mut solved = [false; R];
@@ -571,8 +586,7 @@ fn choose<const N: usize>(
                     continue;
                 }
                 let y = target(m, p, sw);
-                load_projection(ws, p);
-                features(ws, inv_l);
+                load_features(ws, p, li);
                 for ((e_r, beta), _) in err
                     .iter_mut()
                     .zip(&ws.beta_ridge)
@@ -717,17 +731,17 @@ pub(crate) fn check<const N: usize>(
         *b = 2.0 * core::f64::consts::PI * rng.uniform();
     }
 
-    // Each fitted pose's ℓ-independent features, once.
+    // Each fitted pose's features at every length scale, once.
     for (m, p) in data.iter().zip(poses.iter_mut()) {
         if fits(m, &act) {
             project(ws, robot, &m.state);
-            stash_projection(ws, p);
+            stash_features(ws, p, inv_l0);
         }
     }
 
     // Grams over all fitted poses, one per length scale.
-    for (li, &scale) in LENGTH_SCALES.iter().enumerate() {
-        fold_gram(ws, data, poses, &sw, &act, None, inv_l0 / scale, false);
+    for li in 0..L {
+        fold_gram(ws, data, poses, &sw, &act, None, li, false);
         if let (Some(g), Some(r)) = (ws.g_all.get_mut(li), ws.r_all.get_mut(li)) {
             *g = ws.g_out;
             *r = ws.r_out;
@@ -741,7 +755,7 @@ pub(crate) fn check<const N: usize>(
     }
     let mut delta = [0.0; 2];
     for f in 0..folds {
-        let choice = choose(ws, data, poses, &sw, &act, folds, f, inv_l0);
+        let choice = choose(ws, data, poses, &sw, &act, folds, f);
         // One fit per distinct choice (both types usually agree).
         for c in 0..2 {
             let Some((li, lambda)) = choice[c] else {
@@ -752,8 +766,7 @@ pub(crate) fn check<const N: usize>(
                 continue;
             }
             let use_class = [c == 0 || same, c == 1 || same];
-            let inv_l = inv_l0 / LENGTH_SCALES.get(li).copied().unwrap_or(1.0);
-            fold_gram(ws, data, poses, &sw, &act, Some(f), inv_l, false);
+            fold_gram(ws, data, poses, &sw, &act, Some(f), li, false);
             if !factor(ws, li, false, lambda) {
                 continue;
             }
@@ -763,8 +776,7 @@ pub(crate) fn check<const N: usize>(
                     continue;
                 }
                 let y = target(m, p, &sw);
-                load_projection(ws, p);
-                features(ws, inv_l);
+                load_features(ws, p, li);
                 let pred = predict(ws, &act, &use_class);
                 let (before, after) = (class_sq(&y, &[0.0; 6]), class_sq(&y, &pred));
                 for (cc, d) in delta.iter_mut().enumerate() {
