@@ -202,12 +202,12 @@ fn rss<const P: usize>(
 /// with `ws.g_all` the whitened Gram of the clean rows there (as left by the verdict's
 /// final cross-validation pass). Uses `ws.g_fold` and the factor scratch.
 ///
-/// The splits need the model's columns only: `ws.g_all` is narrowed to them in place
-/// ([`GramAccumulator::select`], bit for bit) and the union `ws.u` with it for the run, so
-/// each split's Gram costs `p²` instead of `|U|²` per row (the union of all 28 candidates'
-/// columns is about twice the verdict's). `ws.u`, `ws.n_u` and the model's column
-/// positions are restored afterwards; `ws.g_all` stays narrowed (the form check, the only
-/// later user, rebuilds it).
+/// The splits need the model's columns only: the union `U` is narrowed to them for the
+/// run ([`cv::narrow_to_model`]) and `ws.g_all` with it ([`GramAccumulator::select`], bit
+/// for bit; nothing to do when the final pass already folded it over them), so each
+/// split's Gram costs `p²` instead of `|U|²` per row. `ws.u`, `ws.n_u` and the model's
+/// column positions are restored afterwards; `ws.g_all` stays narrow (the form check, the
+/// only later user, rebuilds it).
 ///
 /// [`GramAccumulator::select`]: crate::linalg::gram::GramAccumulator::select
 pub(crate) fn check<const N: usize, const P: usize>(
@@ -220,30 +220,15 @@ pub(crate) fn check<const N: usize, const P: usize>(
     ws: &mut DiagWorkspace<P>,
 ) -> Result<ExtrapolationCheck> {
     let p = ws.model_n.get(mdl).copied().unwrap_or(0).min(P);
-    let (saved_u, saved_n_u) = (ws.u, ws.n_u);
-    let Some(saved_cols) = ws.model_cols.get(mdl).copied() else {
-        return Ok(ExtrapolationCheck::default());
-    };
-    // The model's positions in U, ascending (the narrowed U keeps U's order, so every
-    // entry is the same product in the same orientation).
     let mut sorted = [0usize; P];
-    for (s, &c) in sorted.iter_mut().zip(&saved_cols).take(p) {
-        *s = usize::from(c);
-    }
-    sorted[..p].sort_unstable();
-    ws.g_all.select(&sorted[..p])?;
-    for (u, &c) in ws.u.iter_mut().zip(&sorted).take(p) {
-        *u = saved_u[c];
-    }
-    ws.n_u = p;
-    for (col, &old) in ws.model_cols[mdl].iter_mut().zip(&saved_cols).take(p) {
-        let at = sorted[..p].partition_point(|&c| c < usize::from(old));
-        *col = at as u8;
+    let saved = cv::narrow_to_model(ws, mdl, &mut sorted);
+    // Identity when the final pass already folded `g_all` over the model's columns.
+    if let Err(e) = ws.g_all.select(sorted.get(..p).unwrap_or(&[])) {
+        cv::restore_union(ws, &saved);
+        return Err(e);
     }
     let out = splits(lin, data, sw, poses, mdl, cfg, ws);
-    ws.u = saved_u;
-    ws.n_u = saved_n_u;
-    ws.model_cols[mdl] = saved_cols;
+    cv::restore_union(ws, &saved);
     out
 }
 

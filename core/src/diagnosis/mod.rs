@@ -2008,6 +2008,9 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
     // errors; from the fitted model, only those of the fold-to-fold changes remain).
     let mut verdict = verdict;
     let mut refined = false;
+    // The union `U` while the final pass and the extrapolation check work on the verdict's
+    // columns only (`cv::narrow_to_model`: bit for bit, a fraction of the work).
+    let mut narrowed = None;
     if let Some(c) = verdict.candidate {
         let mdl = c + 1;
         let mut o = opts;
@@ -2016,7 +2019,9 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
         let mut fit = Identification::start(&lin, o.algorithm, None);
         model_analysis(ws, mdl, score(out, mdl), cfg.rank_tol, &mut fit.analysis)?;
         crate::identify::identify_into(data, &o, &mut ws.id, &mut fit)?;
-        ws.g_all.reset(n_u)?;
+        let mut sorted = [0usize; P];
+        narrowed = Some(cv::narrow_to_model(ws, mdl, &mut sorted));
+        ws.g_all.reset(ws.n_u)?;
         for (l, m) in data.iter().enumerate() {
             if !poses[l].suspect {
                 cv::pose_rows(&fit.robot, m, &sw, ws)?;
@@ -2137,6 +2142,9 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
                 upper: x.upper,
             };
         }
+    }
+    if let Some(saved) = narrowed.take() {
+        cv::restore_union(ws, &saved);
     }
     // 11. Do the data single out the library's form? (`joint_cyclic` against a function of
     // the same joints outside the library.)
