@@ -98,6 +98,11 @@ pub const RIDGES: [f64; 4] = [1.0, 0.1, 0.01, 1e-3];
 /// Seed of the random features.
 pub const FEATURE_SEED: u64 = 0x736d_6f6f_7468;
 
+/// Folds up to which the nested cross-validation keeps every fold's Gram (one length scale
+/// at a time) instead of rebuilding each about `2·folds` times ([`choose_all`]); more
+/// folds take the rebuilding path ([`choose`]), with the same results bit for bit.
+pub const STORED_FOLDS: usize = 8;
+
 const M: usize = FEATURES;
 const L: usize = LENGTH_SCALES.len();
 const R: usize = RIDGES.len();
@@ -131,7 +136,7 @@ pub struct SmoothCheck {
     pub significant: bool,
 }
 
-/// Working memory of the check (part of [`super::DiagWorkspace`]; about 116 KiB).
+/// Working memory of the check (part of [`super::DiagWorkspace`]; about 278 KiB).
 #[derive(Debug, Clone)]
 pub struct SmoothWorkspace {
     omega: [[f64; X]; M],
@@ -146,6 +151,9 @@ pub struct SmoothWorkspace {
     beta: [[f64; 6]; M],
     /// One solution per ridge while the ridges are compared.
     beta_ridge: [[[f64; 6]; M]; R],
+    /// Every fold's Gram and right-hand side at one length scale ([`choose_all`]).
+    g_folds: [[[f64; M]; M]; STORED_FOLDS],
+    r_folds: [[[f64; 6]; M]; STORED_FOLDS],
     u: [f64; M],
     n_linear: usize,
     task_mean: [f64; 3],
@@ -169,6 +177,8 @@ impl SmoothWorkspace {
             chol: [[0.0; M]; M],
             beta: [[0.0; 6]; M],
             beta_ridge: [[[0.0; 6]; M]; R],
+            g_folds: [[[0.0; M]; M]; STORED_FOLDS],
+            r_folds: [[[0.0; 6]; M]; STORED_FOLDS],
             u: [0.0; M],
             n_linear: 0,
             task_mean: [0.0; 3],
@@ -610,6 +620,122 @@ fn choose<const N: usize>(
     [best[0].1, best[1].1]
 }
 
+/// [`choose`] for every outer fold at once (`folds ≤ STORED_FOLDS`), bit for bit: per
+/// length scale every fold's Gram is built once ([`fold_grams`]) and copied where
+/// [`choose`] rebuilds it, then each outer fold's errors are summed over its inner folds
+/// in the same order, and the hyperparameters compared in the same order (length scale,
+/// then ridge) as [`choose`] compares them.
+#[allow(clippy::too_many_arguments)]
+fn choose_all<const N: usize>(
+    ws: &mut SmoothWorkspace,
+    data: &[Measurement<N>],
+    poses: &[PoseDiagnosis],
+    sw: &[f64; 6],
+    act: &[bool; 2],
+    folds: usize,
+    choices: &mut [[Choice; 2]; STORED_FOLDS],
+) {
+    let mut err = [[[[0.0f64; 2]; R]; L]; STORED_FOLDS];
+    let mut ok = [[[true; R]; L]; STORED_FOLDS];
+    for li in 0..L {
+        fold_grams(ws, data, poses, sw, act, folds, li);
+        for f in 0..folds.min(STORED_FOLDS) {
+            ws.g_out = ws.g_folds[f];
+            ws.r_out = ws.r_folds[f];
+            for g in (0..folds.min(STORED_FOLDS)).filter(|&g| g != f) {
+                ws.g_in = ws.g_folds[g];
+                ws.r_in = ws.r_folds[g];
+                let mut solved = [false; R];
+                for (ri, &lambda) in RIDGES.iter().enumerate() {
+                    if !factor(ws, li, true, lambda) {
+                        ok[f][li][ri] = false;
+                        continue;
+                    }
+                    solve(ws, li, true);
+                    if let Some(b) = ws.beta_ridge.get_mut(ri) {
+                        *b = ws.beta;
+                        solved[ri] = true;
+                    }
+                }
+                for (m, p) in data.iter().zip(poses) {
+                    if p.suspect || usize::from(p.fold) != g || !fits(m, act) {
+                        continue;
+                    }
+                    let y = target(m, p, sw);
+                    load_features(ws, p, li);
+                    for ((e_r, beta), _) in err[f][li]
+                        .iter_mut()
+                        .zip(&ws.beta_ridge)
+                        .zip(solved)
+                        .filter(|&(_, s)| s)
+                    {
+                        let e = class_sq(&y, &predict_with(&ws.phi, beta, act, &[true; 2]));
+                        e_r[0] += e[0];
+                        e_r[1] += e[1];
+                    }
+                }
+            }
+        }
+    }
+    for (f, choice) in choices.iter_mut().enumerate().take(folds) {
+        // Zero model: the training targets' own squares.
+        let mut best = [(0.0, None::<(usize, f64)>); 2];
+        for (m, p) in data.iter().zip(poses) {
+            if !p.suspect && usize::from(p.fold) != f && fits(m, act) {
+                let e = class_sq(&target(m, p, sw), &[0.0; 6]);
+                best[0].0 += e[0];
+                best[1].0 += e[1];
+            }
+        }
+        for li in 0..L {
+            for (ri, &lambda) in RIDGES.iter().enumerate() {
+                for c in 0..2 {
+                    if ok[f][li][ri] && err[f][li][ri][c] < best[c].0 {
+                        best[c] = (err[f][li][ri][c], Some((li, lambda)));
+                    }
+                }
+            }
+        }
+        *choice = [best[0].1, best[1].1];
+    }
+}
+
+/// Every fold's Gram and right-hand side at length scale `li` into `ws.g_folds`/`r_folds`
+/// (`folds ≤ STORED_FOLDS`), each the sum over its fitted poses in row order, as
+/// [`fold_gram`] builds one.
+#[allow(clippy::too_many_arguments)]
+fn fold_grams<const N: usize>(
+    ws: &mut SmoothWorkspace,
+    data: &[Measurement<N>],
+    poses: &[PoseDiagnosis],
+    sw: &[f64; 6],
+    act: &[bool; 2],
+    folds: usize,
+    li: usize,
+) {
+    for (g, r) in ws.g_folds.iter_mut().zip(ws.r_folds.iter_mut()).take(folds) {
+        *g = [[0.0; M]; M];
+        *r = [[0.0; 6]; M];
+    }
+    for (m, p) in data.iter().zip(poses) {
+        let f = usize::from(p.fold);
+        if p.suspect || f >= folds || !fits(m, act) {
+            continue;
+        }
+        let y = target(m, p, sw);
+        load_features(ws, p, li);
+        let SmoothWorkspace {
+            g_folds,
+            r_folds,
+            phi,
+            ..
+        } = ws;
+        if let (Some(g), Some(r)) = (g_folds.get_mut(f), r_folds.get_mut(f)) {
+            accumulate(g, r, phi, &y);
+        }
+    }
+}
+
 /// The check on the diagnosis's held-out baseline residuals (`poses[l].heldout_baseline`,
 /// folds in `poses[l].fold`), with the nominal arm `robot` for the task-space terms:
 /// `base` is the baseline's accumulator (its expected totals at the noise floor); the
@@ -754,8 +880,15 @@ pub(crate) fn check<const N: usize>(
         p.scratch = sq(m, &target(m, p, &sw), &[0.0; 6]);
     }
     let mut delta = [0.0; 2];
+    let mut stored = [[None; 2]; STORED_FOLDS];
+    if folds <= STORED_FOLDS {
+        choose_all(ws, data, poses, &sw, &act, folds, &mut stored);
+    }
     for f in 0..folds {
-        let choice = choose(ws, data, poses, &sw, &act, folds, f);
+        let choice = match stored.get(f) {
+            Some(&c) if folds <= STORED_FOLDS => c,
+            _ => choose(ws, data, poses, &sw, &act, folds, f),
+        };
         // One fit per distinct choice (both types usually agree).
         for c in 0..2 {
             let Some((li, lambda)) = choice[c] else {
@@ -924,6 +1057,71 @@ fn group_wilcoxon<const N: usize>(
 mod tests {
     use super::*;
     use std::boxed::Box;
+    use std::vec;
+
+    /// The stored-Gram path ([`choose_all`]) chooses what the rebuilding path ([`choose`])
+    /// chooses for every outer fold, on the features and Grams a real diagnosis leaves in
+    /// the workspace (a simulated joint compliance, 5 folds), and some choice is a smooth
+    /// model (the comparison is not between two zero models).
+    #[test]
+    #[allow(clippy::unwrap_used)]
+    fn stored_fold_grams_choose_as_rebuilt_ones() {
+        use crate::diagnosis::{DiagWorkspace, diagnose};
+        use crate::sim::{SessionConfig, add_effect, perturb_geometry, simulate_session};
+        use crate::{Effect, Transform, aria};
+        let nominal = aria::nominal();
+        let mut rng = SplitMix64::new(120);
+        let mut truth = perturb_geometry(&nominal, 5e-3, 0.08, &mut rng).unwrap();
+        add_effect(&mut truth, Effect::JointCompliance, 1.0, &mut rng).unwrap();
+        let cfg = SessionConfig {
+            poses: 90,
+            repeated: 30,
+            ..SessionConfig::blind_training()
+        };
+        let n = cfg.measurements();
+        let mut data = vec![Measurement::new([0.0; 6], Transform::identity()); n];
+        let mut groups = vec![0u32; n];
+        simulate_session(
+            &truth,
+            &aria::TOOL_SEED_Q,
+            &cfg,
+            &mut rng,
+            &mut data,
+            &mut groups,
+        )
+        .unwrap();
+        let mut poses = vec![PoseDiagnosis::default(); n];
+        // SAFETY: all-zero is a valid DiagWorkspace (documented).
+        let mut ws: Box<DiagWorkspace<80>> = unsafe { Box::new_zeroed().assume_init() };
+        let dc = Config::default();
+        let d = diagnose(&nominal, &data, &groups, &dc, &mut poses, &mut ws).unwrap();
+        assert!(d.explainable.evaluated);
+        // The baseline's check again, so the workspace holds its features and Grams.
+        let base = ws.acc[0];
+        let again = check(
+            &nominal,
+            &data,
+            &mut poses,
+            &d.noise,
+            &base,
+            &dc,
+            &mut ws.smooth,
+        );
+        assert_eq!(again, d.explainable);
+        let (wp, wr) = (1.0 / d.noise.sigma_pos_m, 1.0 / d.noise.sigma_rot_rad);
+        let sw = [wp, wp, wp, wr, wr, wr];
+        let act = active_classes(&data);
+        let mut all = [[None; 2]; STORED_FOLDS];
+        choose_all(&mut ws.smooth, &data, &poses, &sw, &act, dc.folds, &mut all);
+        let mut smooth_models = 0;
+        for (f, stored) in all.iter().enumerate().take(dc.folds) {
+            let rebuilt = choose(&mut ws.smooth, &data, &poses, &sw, &act, dc.folds, f);
+            let bits = |c: &[Choice; 2]| c.map(|x| x.map(|(li, l)| (li, l.to_bits())));
+            assert_eq!(bits(stored), bits(&rebuilt), "fold {f}");
+            smooth_models += stored.iter().filter(|c| c.is_some()).count();
+        }
+        assert!(smooth_models > 0);
+    }
 
     /// The greedy-free Cholesky and the two triangular solves against the normal equations
     /// themselves: `(G_all − G_out + λ·I)·β = r_all − r_out` with a full symmetric `G`.
@@ -963,9 +1161,9 @@ mod tests {
                 assert!((lhs - rhs).abs() < 1e-9 * (1.0 + rhs.abs()), "{i} {k}");
             }
         }
-        // The documented size (about 116 KiB).
+        // The documented size (about 278 KiB).
         let size = core::mem::size_of::<SmoothWorkspace>();
-        assert!((110 * 1024..125 * 1024).contains(&size), "{size}");
+        assert!((270 * 1024..285 * 1024).contains(&size), "{size}");
         // Not positive definite (λ = 0 with fewer rows than features): refused.
         ws.g_all[1] = [[0.0; M]; M];
         ws.g_out = [[0.0; M]; M];
