@@ -420,7 +420,81 @@ fn fold_gram<const N: usize>(
 
 /// Cholesky factor of `G_all[li] − G_out − (G_in if inner) + λ·I` into `ws.chol`;
 /// false when not positive definite.
+///
+/// Row by row (Cholesky–Crout): `L[i][j] = (A[i][j] − Σ_{k<j} L[i][k]·L[j][k]) / L[j][j]`,
+/// each sum in increasing `k` from the value an empty `f64` sum starts at. Two rows at a
+/// time: rows `i` and `i + 1` need the same earlier rows `j < i`, so their two sums share
+/// the loads of row `j` and run as two independent chains; every entry is still the same
+/// expression evaluated in the same order, so the factor is bit for bit the one-row-at-a-
+/// time factor's (unit test), in about half the time.
 fn factor(ws: &mut SmoothWorkspace, li: usize, inner: bool, lambda: f64) -> bool {
+    let SmoothWorkspace {
+        g_all,
+        g_out,
+        g_in,
+        chol,
+        ..
+    } = ws;
+    let Some(ga) = g_all.get(li) else {
+        return false;
+    };
+    // Entry (i, j) of the matrix being factored.
+    let a = |i: usize, j: usize| {
+        let mut s = ga[i][j] - g_out[i][j];
+        if inner {
+            s -= g_in[i][j];
+        }
+        if i == j {
+            s += lambda;
+        }
+        s
+    };
+    let zero: f64 = core::iter::empty::<f64>().sum();
+    let mut i = 0;
+    while i < M {
+        let (upper, lower) = chol.split_at_mut(i);
+        let pair = i + 1 < M;
+        let (ci, rest) = lower.split_at_mut(1);
+        let ci = &mut ci[0];
+        let mut spare = [0.0; M];
+        let cn = if pair { &mut rest[0] } else { &mut spare };
+        for (j, cj) in upper.iter().enumerate() {
+            let (mut d0, mut d1) = (zero, zero);
+            for ((&x0, &x1), &y) in ci[..j].iter().zip(&cn[..j]).zip(&cj[..j]) {
+                d0 += x0 * y;
+                d1 += x1 * y;
+            }
+            ci[j] = (a(i, j) - d0) / cj[j];
+            if pair {
+                cn[j] = (a(i + 1, j) - d1) / cj[j];
+            }
+        }
+        let s = a(i, i) - ci[..i].iter().map(|v| v * v).sum::<f64>();
+        if !(s > 0.0 && s.is_finite()) {
+            return false;
+        }
+        ci[i] = sqrt(s);
+        if pair {
+            let d = cn[..i]
+                .iter()
+                .zip(&ci[..i])
+                .map(|(x, y)| x * y)
+                .sum::<f64>();
+            cn[i] = (a(i + 1, i) - d) / ci[i];
+            let s = a(i + 1, i + 1) - cn[..=i].iter().map(|v| v * v).sum::<f64>();
+            if !(s > 0.0 && s.is_finite()) {
+                return false;
+            }
+            cn[i + 1] = sqrt(s);
+        }
+        i += 2;
+    }
+    true
+}
+
+/// The one-row-at-a-time factor [`factor`] must equal bit for bit (its test).
+#[cfg(test)]
+fn factor_by_rows(ws: &mut SmoothWorkspace, li: usize, inner: bool, lambda: f64) -> bool {
     let SmoothWorkspace {
         g_all,
         g_out,
@@ -1058,6 +1132,44 @@ mod tests {
     use super::*;
     use std::boxed::Box;
     use std::vec;
+
+    /// The two-rows-at-a-time factor equals the one-row-at-a-time one bit for bit, with and
+    /// without the inner fold, at every ridge, and both refuse the same singular matrix.
+    #[test]
+    fn paired_factor_is_the_row_factor_bit_for_bit() {
+        let mut ws = Box::new(SmoothWorkspace::new());
+        let mut rng = SplitMix64::new(11);
+        let mut phi = [0.0; M];
+        for r in 0..90 {
+            for v in phi.iter_mut() {
+                *v = rng.normal();
+            }
+            let y = [rng.normal(), 0.0, 1.0, -0.5, rng.normal(), 0.25];
+            accumulate(&mut ws.g_all[0], &mut ws.r_all[0], &phi, &y);
+            match r % 3 {
+                0 => accumulate(&mut ws.g_out, &mut ws.r_out, &phi, &y),
+                1 => accumulate(&mut ws.g_in, &mut ws.r_in, &phi, &y),
+                _ => {}
+            }
+        }
+        for inner in [false, true] {
+            for lambda in RIDGES {
+                assert!(factor(&mut ws, 0, inner, lambda));
+                let paired = ws.chol;
+                ws.chol = [[0.0; M]; M];
+                assert!(factor_by_rows(&mut ws, 0, inner, lambda));
+                for (a, b) in paired.iter().zip(&ws.chol) {
+                    for (x, y) in a.iter().zip(b) {
+                        assert_eq!(x.to_bits(), y.to_bits(), "{inner} {lambda}");
+                    }
+                }
+            }
+        }
+        // The training set of 30 rows only (all minus both folds) and no ridge: singular.
+        ws.g_all[1] = ws.g_all[0];
+        assert!(!factor(&mut ws, 1, true, 0.0));
+        assert!(!factor_by_rows(&mut ws, 1, true, 0.0));
+    }
 
     /// The stored-Gram path ([`choose_all`]) chooses what the rebuilding path ([`choose`])
     /// chooses for every outer fold, on the features and Grams a real diagnosis leaves in
