@@ -1735,13 +1735,19 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
     let mut n_susp = 0;
     out.suspect_cap = 0;
     out.rows_over_threshold = 0;
+    // The screen's Gram of the clean rows, still valid at the geometric calibration when
+    // the screen excluded nothing (the same rows, calibration and weights as step 5a).
+    let mut screened_gram = false;
     if cfg.screen_outliers {
         out.suspect_cap = screen::cap(MAX_SUSPECTS, data.len());
         ws.model_n[SCREEN_MODEL] = n_u;
         for k in 0..n_u {
             ws.model_cols[SCREEN_MODEL][k] = k as u8;
         }
-        match screen::screen(&lin, data, &sw, poses, MAX_SUSPECTS, cfg.rank_tol, ws)? {
+        let (screening, current) =
+            screen::screen(&lin, data, &sw, poses, MAX_SUSPECTS, cfg.rank_tol, ws)?;
+        screened_gram = current && screening == screen::Screening::Suspects(0);
+        match screening {
             screen::Screening::TooMany(count) => {
                 out.rows_over_threshold = count;
                 out.warn(Warning::TooManySuspects {
@@ -1779,12 +1785,17 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
 
     // 5a. Whitened Gram of the clean rows at the geometric calibration; in-sample
     // residuals (of every row) and their whitened totals per part (the σ check).
-    ws.g_all.reset(n_u)?;
+    let fold_again = !(screened_gram && ws.g_all.n() == n_u);
+    if fold_again {
+        ws.g_all.reset(n_u)?;
+    }
     let mut insample = ModelAcc::default();
     for (l, m) in data.iter().enumerate() {
         let mut e = cv::pose_rows(&lin, m, &sw, ws)?;
         if !poses[l].suspect {
-            cv::fold_rows(ws, false)?;
+            if fold_again {
+                cv::fold_rows(ws, false)?;
+            }
             for k in (0..6).filter(|&k| m.mask.has(k)) {
                 let b2 = ws.b[k] * ws.b[k];
                 insample.chi2 += b2;
