@@ -117,4 +117,10 @@ fn one_size() {
     )
     .unwrap();
     assert_eq!(d.n_candidates, 28);
+    println!(
+        "bytes: DiagWorkspace<MAX_MODEL_PARAMS> {}, PoseDiagnosis {}, Measurement<6> {}",
+        size_of::<DiagWorkspace<{ kincal::identify::MAX_MODEL_PARAMS }>>(),
+        size_of::<PoseDiagnosis>(),
+        size_of::<Measurement<6>>()
+    );
 }
