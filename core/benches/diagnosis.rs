@@ -4,6 +4,17 @@
 //! poses, 30 repeated; target under 10 ms), 1,000 and 5,000 (target under 0.5 s): the
 //! rank tests are O(G log G) in the pose groups.
 //! `cargo bench -p kincal --bench diagnosis -- --noplot`
+//!
+//! Measured (CPU time per run from `cpu_time`, loaded 2-core machine, this and the
+//! previous code alternated in one session, two runs each): 120 rows 18.1–18.3 ms (was
+//! 24.0), 1,000 rows 137.5–138.3 ms (was 176.7–177.5), 5,000 rows 592–600 ms (was
+//! 780–790): ×0.76, ×0.78, ×0.76, outputs bit-identical. Instructions of one diagnosis
+//! (callgrind, `tests/diagnosis_dump.rs`'s `one_size`): 120 rows 286 → 211 M, 1,000 rows
+//! 2,250 → 1,740 M, 5,000 rows 9,372 → 6,837 M. Neither target is met yet. Shares of a
+//! 5,000-row diagnosis's instructions now: the Gauss–Newton fits 33 %, the candidates'
+//! cross-validation 17 %, the smooth check 12 %, the outlier screen 12 %, the
+//! extrapolation check 11 %; at 120 rows the smooth check 33 % (its 48×48 ridge
+//! factorisations 15 %).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use kincal::diagnosis::{Config, DiagWorkspace, PoseDiagnosis, diagnose};

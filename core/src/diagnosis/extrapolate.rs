@@ -201,7 +201,39 @@ fn rss<const P: usize>(
 /// Runs the check of model `mdl` (its columns in `ws.model_cols`) linearised at `lin`,
 /// with `ws.g_all` the whitened Gram of the clean rows there (as left by the verdict's
 /// final cross-validation pass). Uses `ws.g_fold` and the factor scratch.
+///
+/// The splits need the model's columns only: the union `U` is narrowed to them for the
+/// run ([`cv::narrow_to_model`]) and `ws.g_all` with it ([`GramAccumulator::select`], bit
+/// for bit; nothing to do when the final pass already folded it over them), so each
+/// split's Gram costs `p²` instead of `|U|²` per row. `ws.u`, `ws.n_u` and the model's
+/// column positions are restored afterwards; `ws.g_all` stays narrow (the form check, the
+/// only later user, rebuilds it).
+///
+/// [`GramAccumulator::select`]: crate::linalg::gram::GramAccumulator::select
 pub(crate) fn check<const N: usize, const P: usize>(
+    lin: &Robot<N>,
+    data: &[Measurement<N>],
+    sw: &[f64; 6],
+    poses: &mut [PoseDiagnosis],
+    mdl: usize,
+    cfg: &Config,
+    ws: &mut DiagWorkspace<P>,
+) -> Result<ExtrapolationCheck> {
+    let p = ws.model_n.get(mdl).copied().unwrap_or(0).min(P);
+    let mut sorted = [0usize; P];
+    let saved = cv::narrow_to_model(ws, mdl, &mut sorted);
+    // Identity when the final pass already folded `g_all` over the model's columns.
+    if let Err(e) = ws.g_all.select(sorted.get(..p).unwrap_or(&[])) {
+        cv::restore_union(ws, &saved);
+        return Err(e);
+    }
+    let out = splits(lin, data, sw, poses, mdl, cfg, ws);
+    cv::restore_union(ws, &saved);
+    out
+}
+
+/// [`check`]'s splits on the narrowed workspace.
+fn splits<const N: usize, const P: usize>(
     lin: &Robot<N>,
     data: &[Measurement<N>],
     sw: &[f64; 6],

@@ -694,9 +694,9 @@ pub struct PoseDiagnosis {
     pub(crate) gsq: [f64; MAX_MODELS],
     pub(crate) gsq_rot: [f64; MAX_MODELS],
     pub(crate) scratch: f64,
-    /// The smooth check's per-pose features that do not depend on its hyperparameters
-    /// (`smooth.rs`), kept so they are computed once per check.
-    pub(crate) smooth: [f64; smooth::FEATURES],
+    /// The smooth check's per-pose features at each of its length scales (`smooth.rs`),
+    /// kept so they are computed once per check.
+    pub(crate) smooth: [f64; smooth::STORED],
 }
 
 impl PoseDiagnosis {
@@ -716,7 +716,7 @@ impl PoseDiagnosis {
         gsq: [0.0; MAX_MODELS],
         gsq_rot: [0.0; MAX_MODELS],
         scratch: 0.0,
-        smooth: [0.0; smooth::FEATURES],
+        smooth: [0.0; smooth::STORED],
     };
     /// Whitened held-out squared error of model `model` (0 = baseline, c + 1 = candidate c).
     #[must_use]
@@ -1735,13 +1735,19 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
     let mut n_susp = 0;
     out.suspect_cap = 0;
     out.rows_over_threshold = 0;
+    // The screen's Gram of the clean rows, still valid at the geometric calibration when
+    // the screen excluded nothing (the same rows, calibration and weights as step 5a).
+    let mut screened_gram = false;
     if cfg.screen_outliers {
         out.suspect_cap = screen::cap(MAX_SUSPECTS, data.len());
         ws.model_n[SCREEN_MODEL] = n_u;
         for k in 0..n_u {
             ws.model_cols[SCREEN_MODEL][k] = k as u8;
         }
-        match screen::screen(&lin, data, &sw, poses, MAX_SUSPECTS, cfg.rank_tol, ws)? {
+        let (screening, current) =
+            screen::screen(&lin, data, &sw, poses, MAX_SUSPECTS, cfg.rank_tol, ws)?;
+        screened_gram = current && screening == screen::Screening::Suspects(0);
+        match screening {
             screen::Screening::TooMany(count) => {
                 out.rows_over_threshold = count;
                 out.warn(Warning::TooManySuspects {
@@ -1779,12 +1785,17 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
 
     // 5a. Whitened Gram of the clean rows at the geometric calibration; in-sample
     // residuals (of every row) and their whitened totals per part (the σ check).
-    ws.g_all.reset(n_u)?;
+    let fold_again = !(screened_gram && ws.g_all.n() == n_u);
+    if fold_again {
+        ws.g_all.reset(n_u)?;
+    }
     let mut insample = ModelAcc::default();
     for (l, m) in data.iter().enumerate() {
         let mut e = cv::pose_rows(&lin, m, &sw, ws)?;
         if !poses[l].suspect {
-            cv::fold_rows(ws, false)?;
+            if fold_again {
+                cv::fold_rows(ws, false)?;
+            }
             for k in (0..6).filter(|&k| m.mask.has(k)) {
                 let b2 = ws.b[k] * ws.b[k];
                 insample.chi2 += b2;
@@ -2008,6 +2019,9 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
     // errors; from the fitted model, only those of the fold-to-fold changes remain).
     let mut verdict = verdict;
     let mut refined = false;
+    // The union `U` while the final pass and the extrapolation check work on the verdict's
+    // columns only (`cv::narrow_to_model`: bit for bit, a fraction of the work).
+    let mut narrowed = None;
     if let Some(c) = verdict.candidate {
         let mdl = c + 1;
         let mut o = opts;
@@ -2016,7 +2030,9 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
         let mut fit = Identification::start(&lin, o.algorithm, None);
         model_analysis(ws, mdl, score(out, mdl), cfg.rank_tol, &mut fit.analysis)?;
         crate::identify::identify_into(data, &o, &mut ws.id, &mut fit)?;
-        ws.g_all.reset(n_u)?;
+        let mut sorted = [0usize; P];
+        narrowed = Some(cv::narrow_to_model(ws, mdl, &mut sorted));
+        ws.g_all.reset(ws.n_u)?;
         for (l, m) in data.iter().enumerate() {
             if !poses[l].suspect {
                 cv::pose_rows(&fit.robot, m, &sw, ws)?;
@@ -2137,6 +2153,9 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
                 upper: x.upper,
             };
         }
+    }
+    if let Some(saved) = narrowed.take() {
+        cv::restore_union(ws, &saved);
     }
     // 11. Do the data single out the library's form? (`joint_cyclic` against a function of
     // the same joints outside the library.)

@@ -35,8 +35,11 @@ pub(crate) enum Screening {
 }
 
 /// Screens `data` (module documentation) with the union model in slot [`SCREEN_MODEL`]
-/// of `ws` (its columns set by the caller); marks `poses[l].suspect`. Leaves `ws.g_all`
-/// holding the clean rows at `lin`, and `heldout_final` of every pose zeroed.
+/// of `ws` (its columns set by the caller); marks `poses[l].suspect`. Leaves
+/// `heldout_final` of every pose zeroed and `ws.g_all` folded over the rows that were
+/// clean in the last pass; the flag returned says whether those are the rows clean now
+/// (the last pass changed no mark), i.e. whether `ws.g_all` is the Gram of the clean rows
+/// at `lin`, bit for bit as a new pass over them would fold it.
 pub(crate) fn screen<const N: usize, const P: usize>(
     lin: &Robot<N>,
     data: &[Measurement<N>],
@@ -45,10 +48,11 @@ pub(crate) fn screen<const N: usize, const P: usize>(
     max_suspects: usize,
     tol: f64,
     ws: &mut DiagWorkspace<P>,
-) -> Result<Screening> {
+) -> Result<(Screening, bool)> {
     let n = data.len();
     let cap = cap(max_suspects, n);
     let mut outcome = Screening::Suspects(0);
+    let mut current = false;
     for _ in 0..MAX_PASSES {
         ws.g_all.reset(ws.n_u)?;
         for (l, m) in data.iter().enumerate() {
@@ -122,13 +126,14 @@ pub(crate) fn screen<const N: usize, const P: usize>(
         }
         outcome = Screening::Suspects(count);
         if !changed {
+            current = true;
             break;
         }
     }
     for q in poses.iter_mut() {
         q.heldout_final = [0.0; 6];
     }
-    Ok(outcome)
+    Ok((outcome, current))
 }
 
 /// Suspects the screen excludes at most among `rows` rows: `max_suspects` (the capacity

@@ -291,6 +291,30 @@ impl<const P: usize> GramAccumulator<P> {
     pub fn btb(&self) -> f64 {
         self.btb
     }
+    /// Narrows the normal equations to the unknowns `cols` (strictly increasing, each
+    /// below [`Self::n`]) in place: unknown `i` becomes the old `cols[i]`, every entry
+    /// copied bit for bit, `bᵀWb` kept. Rows folded afterwards with the same columns
+    /// (in the same order) give exactly what folding them into a narrow accumulator from
+    /// the start would have given, since each entry is its own sum.
+    pub fn select(&mut self, cols: &[usize]) -> Result<()> {
+        let increasing = cols.windows(2).all(|w| w[0] < w[1]);
+        if !increasing || cols.last().is_some_and(|&c| c >= self.n) {
+            return Err(Error::InvalidParameter {
+                index: 0,
+                value: cols.len() as f64,
+            });
+        }
+        // In place: entry (i, j) reads (cols[i], cols[j]) with cols[i] ≥ i, cols[j] ≥ j,
+        // i.e. a later row, or a later column of this row, neither written yet.
+        for (i, &ci) in cols.iter().enumerate() {
+            for (j, &cj) in cols.iter().enumerate().skip(i) {
+                self.g[i][j] = self.g[ci][cj];
+            }
+            self.atb[i] = self.atb[ci];
+        }
+        self.n = cols.len();
+        Ok(())
+    }
 }
 
 /// `row[j] += Σ_r c[r]·a[r][j]` over the three position rows. The slices are cut to one
@@ -420,6 +444,62 @@ mod tests {
     extern crate std;
     use super::*;
     use crate::linalg::lsq::LsqAccumulator;
+
+    /// Narrowing after folding equals folding only the selected columns, bit for bit, and
+    /// later rows keep agreeing; unsorted or out-of-range selections are refused.
+    #[test]
+    #[allow(clippy::unwrap_used)]
+    fn select_equals_folding_the_selected_columns() {
+        const P: usize = 9;
+        let cols = [1usize, 2, 5, 8];
+        let (mut wide, mut narrow) = (GramAccumulator::<P>::new(), GramAccumulator::<P>::new());
+        wide.reset(P).unwrap();
+        narrow.reset(cols.len()).unwrap();
+        let row = |r: usize| -> [[f64; P]; 6] {
+            let mut a = [[0.0; P]; 6];
+            for (k, ak) in a.iter_mut().enumerate() {
+                for (j, v) in ak.iter_mut().enumerate() {
+                    *v = ((r * 31 + k * 7 + j * 3) % 17) as f64 / 7.0 - 1.1;
+                }
+            }
+            a
+        };
+        let pick = |a: &[[f64; P]; 6]| -> [[f64; P]; 6] {
+            let mut s = [[0.0; P]; 6];
+            for (sk, ak) in s.iter_mut().zip(a) {
+                for (v, &c) in sk.iter_mut().zip(&cols) {
+                    *v = ak[c];
+                }
+            }
+            s
+        };
+        let b = |r: usize| [0.3 * r as f64, -1.0, 0.7, 0.1, 2.0 / (1.0 + r as f64), 0.5];
+        for r in 0..5 {
+            wide.add_rows6_in_order(&row(r), &b(r)).unwrap();
+            narrow.add_rows6_in_order(&pick(&row(r)), &b(r)).unwrap();
+        }
+        wide.select(&cols).unwrap();
+        for r in 5..8 {
+            // Narrowed, `wide` takes the narrow rows from now on.
+            wide.add_rows6_in_order(&pick(&row(r)), &b(r)).unwrap();
+            narrow.add_rows6_in_order(&pick(&row(r)), &b(r)).unwrap();
+        }
+        assert_eq!(wide.n(), cols.len());
+        for i in 0..cols.len() {
+            assert_eq!(wide.atb()[i].to_bits(), narrow.atb()[i].to_bits());
+            for j in i..cols.len() {
+                assert_eq!(wide.gram()[i][j].to_bits(), narrow.gram()[i][j].to_bits());
+            }
+        }
+        assert_eq!(wide.btb().to_bits(), narrow.btb().to_bits());
+        // The selection is not a no-op here: entry (0, 0) moved.
+        let mut fresh = GramAccumulator::<P>::new();
+        fresh.reset(P).unwrap();
+        fresh.add_rows6_in_order(&row(0), &b(0)).unwrap();
+        assert_ne!(fresh.gram()[0][0], fresh.gram()[1][1]);
+        assert!(wide.select(&[2, 1]).is_err());
+        assert!(wide.select(&[0, cols.len()]).is_err());
+    }
 
     #[test]
     #[allow(clippy::unwrap_used)]
