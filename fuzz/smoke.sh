@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Runs every fuzz target (or the ones named) for FUZZ_SECONDS each (default 10: the CI smoke
-# run) and fails on the first crash, leak or timeout. Crash inputs land in
-# fuzz/artifacts/TARGET/; turn each into a regression test (README.md).
+# run), or for FUZZ_RUNS executions each when that is set (the long run), and fails on the
+# first crash, leak or timeout. Crash inputs land in fuzz/artifacts/TARGET/; turn each into a
+# regression test (README.md).
 #
 #   fuzz/smoke.sh                          # all targets, 10 s each
 #   FUZZ_SECONDS=600 fuzz/smoke.sh csv     # a longer run of targets whose name contains csv
+#   FUZZ_RUNS=10000000 fuzz/smoke.sh       # the long run: 10^7 executions per target
 #
 # Needs cargo-fuzz (installed here with `cargo install cargo-fuzz` when missing) and a C++
 # compiler (libFuzzer is built from source). libFuzzer needs nightly-only rustc flags: on a
@@ -17,6 +19,17 @@ SECS=${FUZZ_SECONDS:-10}
 CARGO_FUZZ_VERSION=0.13.2
 
 fail() { printf 'fuzz/smoke.sh: error: %s\n' "$*" >&2; exit 1; }
+
+RUNS=${FUZZ_RUNS:-}
+if [ -n "$RUNS" ]; then
+    case $RUNS in *[!0-9]*) fail "FUZZ_RUNS must be a whole number of executions, got '$RUNS'" ;; esac
+    budget=(-runs="$RUNS")
+    what="$RUNS executions"
+else
+    case $SECS in '' | *[!0-9]*) fail "FUZZ_SECONDS must be a whole number of seconds, got '$SECS'" ;; esac
+    budget=(-max_total_time="$SECS")
+    what="${SECS}s"
+fi
 
 command -v cargo >/dev/null || fail "cargo is missing (install Rust with rustup)"
 command -v c++ >/dev/null || command -v g++ >/dev/null || command -v clang++ >/dev/null ||
@@ -51,10 +64,10 @@ for t in "${targets[@]}"; do
     mkdir -p "corpus/$t" "seeds/$t"
     log="artifacts/$t.log"
     mkdir -p artifacts
-    echo "==> $t for ${SECS}s"
+    echo "==> $t for $what"
     # -timeout: one input taking longer than 10 s is a hang; -rss_limit_mb: 2 GiB.
     if ! cargo fuzz run "$t" "corpus/$t" "seeds/$t" -- \
-        -max_total_time="$SECS" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
+        "${budget[@]}" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
         >"$log" 2>&1; then
         # The input's Debug dump is one very long line: keep lines short.
         grep -v '^[[:space:]]*\[' "$log" | tail -n 40 | cut -c1-300 >&2
