@@ -105,35 +105,11 @@ impl<const P: usize> LsqAccumulator<P> {
     /// [`add_row`](Self::add_row), `NonFinite { Setting, 0 }` for a negative or non-finite
     /// weight.
     pub fn add_rows6(&mut self, a: &[[f64; P]; 6], b: &[f64; 6], w: &[f64; 6]) -> Result<()> {
-        let n = self.n;
-        check_capacity::<P>(n)?;
-        if !super::util::all_finite(w.iter()) || w.iter().any(|&v| v < 0.0) {
-            return Err(bad_setting());
-        }
-        for row in a {
-            check_finite(&row[..n])?;
-        }
-        if !super::util::all_finite(b.iter()) {
-            return Err(Error::NonFinite {
-                what: Quantity::Parameter,
-                index: n,
-            });
-        }
-        let mut rows = [[0.0; P]; 6];
-        let mut beta = [0.0; 6];
-        for r in 0..6 {
-            let sw = libm::sqrt(w[r]);
-            for (dst, src) in rows[r][..n].iter_mut().zip(a[r][..n].iter()) {
-                *dst = sw * *src;
-            }
-            beta[r] = sw * b[r];
-        }
-        for k in 0..n {
+        let (mut rows, mut beta) = scaled_rows::<P, 6>(self.n, a, b, w)?;
+        for k in 0..self.n {
             self.reflect_column(&mut rows, &mut beta, k);
         }
-        self.rss += beta.iter().map(|x| x * x).sum::<f64>();
-        let counted = w.iter().filter(|&&v| v > 0.0).count();
-        self.rows = self.rows.saturating_add(counted);
+        self.count_folded(&beta, w);
         Ok(())
     }
 
@@ -146,36 +122,20 @@ impl<const P: usize> LsqAccumulator<P> {
     /// has something subtracted, `x − x = +0`): so no sum, nor its sign of zero, changes.
     /// Errors as `add_rows6`.
     pub fn add_rows3(&mut self, a: &[[f64; P]; 6], b: &[f64; 3], w: &[f64; 3]) -> Result<()> {
-        let n = self.n;
-        check_capacity::<P>(n)?;
-        if !super::util::all_finite(w.iter()) || w.iter().any(|&v| v < 0.0) {
-            return Err(bad_setting());
-        }
-        for row in a.iter().take(3) {
-            check_finite(&row[..n])?;
-        }
-        if !super::util::all_finite(b.iter()) {
-            return Err(Error::NonFinite {
-                what: Quantity::Parameter,
-                index: n,
-            });
-        }
-        let mut rows = [[0.0; P]; 3];
-        let mut beta = [0.0; 3];
-        for r in 0..3 {
-            let sw = libm::sqrt(w[r]);
-            for (dst, src) in rows[r][..n].iter_mut().zip(a[r][..n].iter()) {
-                *dst = sw * *src;
-            }
-            beta[r] = sw * b[r];
-        }
-        for k in 0..n {
+        let (mut rows, mut beta) = scaled_rows::<P, 3>(self.n, a, b, w)?;
+        for k in 0..self.n {
             self.reflect_column3(&mut rows, &mut beta, k);
         }
+        self.count_folded(&beta, w);
+        Ok(())
+    }
+
+    /// Adds a folded block's residual (what its reflections left in `beta`) and counts its
+    /// rows of positive weight.
+    fn count_folded<const M: usize>(&mut self, beta: &[f64; M], w: &[f64; M]) {
         self.rss += beta.iter().map(|x| x * x).sum::<f64>();
         let counted = w.iter().filter(|&&v| v > 0.0).count();
         self.rows = self.rows.saturating_add(counted);
-        Ok(())
     }
 
     /// [`reflect_column`](Self::reflect_column) of three rows (see
@@ -377,6 +337,47 @@ fn reflector6(x0: f64, x: &[f64; 6]) -> Option<(f64, f64, [f64; 6])> {
         return None;
     }
     Some((mu, -v0 / mu, x.map(|xi| xi / v0)))
+}
+
+/// The first `M` rows of `a` (columns `..n`) and their right-hand sides `b`, each scaled by
+/// the square root of its weight: the block [`LsqAccumulator::add_rows6`] and
+/// [`LsqAccumulator::add_rows3`] fold. Errors (nothing folded): capacity as
+/// `check_capacity`, a negative or non-finite weight, a non-finite row entry, a non-finite
+/// right-hand side (`NonFinite { Parameter, n }`).
+fn scaled_rows<const P: usize, const M: usize>(
+    n: usize,
+    a: &[[f64; P]; 6],
+    b: &[f64; M],
+    w: &[f64; M],
+) -> Result<([[f64; P]; M], [f64; M])> {
+    check_capacity::<P>(n)?;
+    if !super::util::all_finite(w.iter()) || w.iter().any(|&v| v < 0.0) {
+        return Err(bad_setting());
+    }
+    for row in a.iter().take(M) {
+        check_finite(&row[..n])?;
+    }
+    if !super::util::all_finite(b.iter()) {
+        return Err(Error::NonFinite {
+            what: Quantity::Parameter,
+            index: n,
+        });
+    }
+    let mut rows = [[0.0; P]; M];
+    let mut beta = [0.0; M];
+    for (((dst, src), bd), (&bs, &wr)) in rows
+        .iter_mut()
+        .zip(a.iter())
+        .zip(beta.iter_mut())
+        .zip(b.iter().zip(w.iter()))
+    {
+        let sw = libm::sqrt(wr);
+        for (d, s) in dst[..n].iter_mut().zip(src[..n].iter()) {
+            *d = sw * *s;
+        }
+        *bd = sw * bs;
+    }
+    Ok((rows, beta))
 }
 
 #[cfg(test)]
