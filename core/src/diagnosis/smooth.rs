@@ -651,37 +651,7 @@ fn choose<const N: usize>(
         let mut ok = [true; R];
         for g in (0..folds).filter(|&g| g != f) {
             fold_gram(ws, data, poses, sw, act, Some(g), li, true);
-            // Every ridge's solution first, so each validation row's features are computed
-            // once for all ridges (the features cost more than the predictions).
-            let mut solved = [false; R];
-            for (ri, &lambda) in RIDGES.iter().enumerate() {
-                if !factor(ws, li, true, lambda) {
-                    ok[ri] = false;
-                    continue;
-                }
-                solve(ws, li, true);
-                if let Some(b) = ws.beta_ridge.get_mut(ri) {
-                    *b = ws.beta;
-                    solved[ri] = true;
-                }
-            }
-            for (m, p) in data.iter().zip(poses) {
-                if p.suspect || usize::from(p.fold) != g || !fits(m, act) {
-                    continue;
-                }
-                let y = target(m, p, sw);
-                load_features(ws, p, li);
-                for ((e_r, beta), _) in err
-                    .iter_mut()
-                    .zip(&ws.beta_ridge)
-                    .zip(solved)
-                    .filter(|&(_, s)| s)
-                {
-                    let e = class_sq(&y, &predict_with(&ws.phi, beta, act, &[true; 2]));
-                    e_r[0] += e[0];
-                    e_r[1] += e[1];
-                }
-            }
+            validate_ridges(ws, data, poses, sw, act, li, g, &mut err, &mut ok);
         }
         for (ri, &lambda) in RIDGES.iter().enumerate() {
             for c in 0..2 {
@@ -692,6 +662,56 @@ fn choose<const N: usize>(
         }
     }
     [best[0].1, best[1].1]
+}
+
+/// One inner fold `g` of the nested cross-validation at length scale `li`, the training
+/// Gram already in `ws` (`g_in`, `r_in`): every ridge's solution first, so each validation
+/// row's features are computed once for all ridges (the features cost more than the
+/// predictions), then each ridge's squared validation errors per class added to `err`; a
+/// ridge whose factorisation fails is marked in `ok`.
+#[allow(clippy::too_many_arguments)]
+fn validate_ridges<const N: usize>(
+    ws: &mut SmoothWorkspace,
+    data: &[Measurement<N>],
+    poses: &[PoseDiagnosis],
+    sw: &[f64; 6],
+    act: &[bool; 2],
+    li: usize,
+    g: usize,
+    err: &mut [[f64; 2]; R],
+    ok: &mut [bool; R],
+) {
+    let mut solved = [false; R];
+    for (ri, &lambda) in RIDGES.iter().enumerate() {
+        if !factor(ws, li, true, lambda) {
+            if let Some(o) = ok.get_mut(ri) {
+                *o = false;
+            }
+            continue;
+        }
+        solve(ws, li, true);
+        if let (Some(b), Some(s)) = (ws.beta_ridge.get_mut(ri), solved.get_mut(ri)) {
+            *b = ws.beta;
+            *s = true;
+        }
+    }
+    for (m, p) in data.iter().zip(poses) {
+        if p.suspect || usize::from(p.fold) != g || !fits(m, act) {
+            continue;
+        }
+        let y = target(m, p, sw);
+        load_features(ws, p, li);
+        for ((e_r, beta), _) in err
+            .iter_mut()
+            .zip(&ws.beta_ridge)
+            .zip(solved)
+            .filter(|&(_, s)| s)
+        {
+            let e = class_sq(&y, &predict_with(&ws.phi, beta, act, &[true; 2]));
+            e_r[0] += e[0];
+            e_r[1] += e[1];
+        }
+    }
 }
 
 /// [`choose`] for every outer fold at once (`folds ≤ STORED_FOLDS`), bit for bit: per
@@ -719,35 +739,8 @@ fn choose_all<const N: usize>(
             for g in (0..folds.min(STORED_FOLDS)).filter(|&g| g != f) {
                 ws.g_in = ws.g_folds[g];
                 ws.r_in = ws.r_folds[g];
-                let mut solved = [false; R];
-                for (ri, &lambda) in RIDGES.iter().enumerate() {
-                    if !factor(ws, li, true, lambda) {
-                        ok[f][li][ri] = false;
-                        continue;
-                    }
-                    solve(ws, li, true);
-                    if let Some(b) = ws.beta_ridge.get_mut(ri) {
-                        *b = ws.beta;
-                        solved[ri] = true;
-                    }
-                }
-                for (m, p) in data.iter().zip(poses) {
-                    if p.suspect || usize::from(p.fold) != g || !fits(m, act) {
-                        continue;
-                    }
-                    let y = target(m, p, sw);
-                    load_features(ws, p, li);
-                    for ((e_r, beta), _) in err[f][li]
-                        .iter_mut()
-                        .zip(&ws.beta_ridge)
-                        .zip(solved)
-                        .filter(|&(_, s)| s)
-                    {
-                        let e = class_sq(&y, &predict_with(&ws.phi, beta, act, &[true; 2]));
-                        e_r[0] += e[0];
-                        e_r[1] += e[1];
-                    }
-                }
+                let (err, ok) = (&mut err[f][li], &mut ok[f][li]);
+                validate_ridges(ws, data, poses, sw, act, li, g, err, ok);
             }
         }
     }
