@@ -202,11 +202,22 @@ fn ur10e_held_out_orientation_improves_position_stays_at_the_noise() {
     // nominal geometry's held-out error is already at the camera's noise, docs/real-data.md).
     assert!(cal_r < 0.85 * nom_r, "{cal_r}° vs {nom_r}°");
     close(nom_p, 4.369, "UR10e nominal held-out RMS position [mm]");
-    close(cal_p, 4.974, "UR10e calibrated held-out RMS position [mm]");
+    // 4.974 mm while fold 2's OLS fit stopped "converged" at cost 135.66 on a crawl (every
+    // cut of a step 1857 times the parameters' norm failed); OLS now hands such a fit to
+    // OPT2's trust region and reaches the fold's minimum, 62.54 (kincal::identify solvers,
+    // core/tests/ols_stop.rs). Every fold is still OLS's own fit.
+    close(cal_p, 4.246, "UR10e calibrated held-out RMS position [mm]");
+    let algorithms: Vec<&str> = cv["per_fold"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["algorithm"].as_str().unwrap())
+        .collect();
+    assert_eq!(algorithms, ["ols"; 5]);
     close(nom_r, 0.6006, "UR10e nominal held-out RMS rotation [deg]");
     close(
         cal_r,
-        0.4712,
+        0.4485,
         "UR10e calibrated held-out RMS rotation [deg]",
     );
     assert_eq!(cv["outliers"]["suspects"].as_array().unwrap().len(), 2);
