@@ -105,7 +105,9 @@ impl<const P: usize> LsqAccumulator<P> {
     /// [`add_row`](Self::add_row), `NonFinite { Setting, 0 }` for a negative or non-finite
     /// weight.
     pub fn add_rows6(&mut self, a: &[[f64; P]; 6], b: &[f64; 6], w: &[f64; 6]) -> Result<()> {
-        let (mut rows, mut beta) = scaled_rows::<P, 6>(self.n, a, b, w)?;
+        let mut rows = [[0.0; P]; 6];
+        let mut beta = [0.0; 6];
+        scale_rows(self.n, a, b, w, &mut rows, &mut beta)?;
         for k in 0..self.n {
             self.reflect_column(&mut rows, &mut beta, k);
         }
@@ -122,7 +124,9 @@ impl<const P: usize> LsqAccumulator<P> {
     /// has something subtracted, `x − x = +0`): so no sum, nor its sign of zero, changes.
     /// Errors as `add_rows6`.
     pub fn add_rows3(&mut self, a: &[[f64; P]; 6], b: &[f64; 3], w: &[f64; 3]) -> Result<()> {
-        let (mut rows, mut beta) = scaled_rows::<P, 3>(self.n, a, b, w)?;
+        let mut rows = [[0.0; P]; 3];
+        let mut beta = [0.0; 3];
+        scale_rows(self.n, a, b, w, &mut rows, &mut beta)?;
         for k in 0..self.n {
             self.reflect_column3(&mut rows, &mut beta, k);
         }
@@ -339,17 +343,21 @@ fn reflector6(x0: f64, x: &[f64; 6]) -> Option<(f64, f64, [f64; 6])> {
     Some((mu, -v0 / mu, x.map(|xi| xi / v0)))
 }
 
-/// The first `M` rows of `a` (columns `..n`) and their right-hand sides `b`, each scaled by
-/// the square root of its weight: the block [`LsqAccumulator::add_rows6`] and
-/// [`LsqAccumulator::add_rows3`] fold. Errors (nothing folded): capacity as
-/// `check_capacity`, a negative or non-finite weight, a non-finite row entry, a non-finite
-/// right-hand side (`NonFinite { Parameter, n }`).
-fn scaled_rows<const P: usize, const M: usize>(
+/// Writes the first `M` rows of `a` (columns `..n`) and their right-hand sides `b`, each
+/// scaled by the square root of its weight, to `rows` and `beta`: the block
+/// [`LsqAccumulator::add_rows6`] and [`LsqAccumulator::add_rows3`] fold. Into the caller's
+/// arrays, not returned: a returned `[[f64; P]; 6]` is a second 7 KiB copy on the stack
+/// where the optimiser does not elide it (the dev profile's core, `core/tests/stack.rs`).
+/// Errors (nothing folded): capacity as `check_capacity`, a negative or non-finite weight,
+/// a non-finite row entry, a non-finite right-hand side (`NonFinite { Parameter, n }`).
+fn scale_rows<const P: usize, const M: usize>(
     n: usize,
     a: &[[f64; P]; 6],
     b: &[f64; M],
     w: &[f64; M],
-) -> Result<([[f64; P]; M], [f64; M])> {
+    rows: &mut [[f64; P]; M],
+    beta: &mut [f64; M],
+) -> Result<()> {
     check_capacity::<P>(n)?;
     if !super::util::all_finite(w.iter()) || w.iter().any(|&v| v < 0.0) {
         return Err(bad_setting());
@@ -363,8 +371,6 @@ fn scaled_rows<const P: usize, const M: usize>(
             index: n,
         });
     }
-    let mut rows = [[0.0; P]; M];
-    let mut beta = [0.0; M];
     for (((dst, src), bd), (&bs, &wr)) in rows
         .iter_mut()
         .zip(a.iter())
@@ -377,7 +383,7 @@ fn scaled_rows<const P: usize, const M: usize>(
         }
         *bd = sw * bs;
     }
-    Ok((rows, beta))
+    Ok(())
 }
 
 #[cfg(test)]
