@@ -73,6 +73,11 @@ for t in "${targets[@]}"; do
         grep -v '^[[:space:]]*\[' "$log" | tail -n 40 | cut -c1-300 >&2
         fail "$t crashed; the input is in fuzz/artifacts/$t/ (log: fuzz/$log)"
     fi
+    # A target that rejects every input (e.g. a fixed-size input its seeds no longer fill)
+    # runs without coverage: its executions test nothing, so that is a failure too.
+    if grep -q 'no interesting inputs were found' "$log" || ! grep -q 'INITED cov:' "$log"; then
+        fail "$t gains no coverage: every input is rejected before the code under test (log: fuzz/$log)"
+    fi
     runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -n 1)
     echo "    $t: ${runs:-?} executions, no crash"
     total=$((total + ${runs:-0}))
