@@ -798,13 +798,19 @@ fn levenberg_marquardt<const N: usize, const P: usize, D: RowSource<N> + ?Sized>
             let prered = temp1 * temp1 + 2.0 * temp2 * temp2;
             let dirder = -(temp1 * temp1 + temp2 * temp2);
             let ratio = if prered != 0.0 { actred / prered } else { 0.0 };
+            // A trial whose reduction cannot be measured (an overflowed step or cost makes
+            // the ratio NaN) is a failed step: with a NaN ratio MINPACK's update keeps δ and
+            // λ and tries the same step again, forever (a fuzzed OPT2 fit hung so). The
+            // shrink factor is then 0.1, so δ falls below the stop tests in a bounded number
+            // of trials. Finite ratios and factors are unchanged.
+            let ratio = if ratio.is_nan() { 0.0 } else { ratio };
             if ratio <= 0.25 {
                 let mut temp = if actred >= 0.0 {
                     0.5
                 } else {
                     0.5 * dirder / (dirder + 0.5 * actred)
                 };
-                if 0.1 * fnorm1 >= fnorm || temp < 0.1 {
+                if 0.1 * fnorm1 >= fnorm || !(temp >= 0.1) {
                     temp = 0.1;
                 }
                 delta = temp * delta.min(pnorm / 0.1);
