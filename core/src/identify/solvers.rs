@@ -810,7 +810,7 @@ fn levenberg_marquardt<const N: usize, const P: usize, D: RowSource<N> + ?Sized>
                 } else {
                     0.5 * dirder / (dirder + 0.5 * actred)
                 };
-                if 0.1 * fnorm1 >= fnorm || !(temp >= 0.1) {
+                if 0.1 * fnorm1 >= fnorm || temp < 0.1 || temp.is_nan() {
                     temp = 0.1;
                 }
                 delta = temp * delta.min(pnorm / 0.1);
