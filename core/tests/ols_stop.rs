@@ -2,28 +2,11 @@
 //! accepting rounding-level "gains"), and a fit whose Gauss–Newton step is abnormal is not
 //! declared converged short of its minimum (solvers.rs, `gauss_newton`).
 
-use kincal::identify::{Algorithm, IdentifyOptions, Measurement, Workspace, identify};
-use kincal::ik::{IkOptions, solve_ik};
-use kincal::{JointState, aria};
+mod common;
 
-/// The ARIA calibration-tool data (Table 2 poses reached by the virtual truth), as the
-/// MATLAB tests build them (`kincal_ik(truth, kincal_aria_tool())`, `kincal_fk`).
-fn aria_tool_data() -> Vec<Measurement<6>> {
-    let truth = aria::virtual_truth();
-    (0..10)
-        .map(|l| {
-            let target = aria::tool_pose(l).expect("pose");
-            let s = solve_ik(
-                &truth,
-                &target,
-                &JointState::new(aria::TOOL_SEED_Q),
-                &IkOptions::default(),
-            )
-            .expect("reachable");
-            Measurement::new(s.q, truth.fk_q(&s.q).expect("fk"))
-        })
-        .collect()
-}
+use common::aria_tool_data;
+use kincal::aria;
+use kincal::identify::{Algorithm, IdentifyOptions, Workspace, identify};
 
 /// Octave `matlab/tests/test_identify.m`, `too_few_poses`, in Rust: the gateway's default
 /// options (OLS, ARIA's geometric parameters, `kincal_identify_options_default`) on the

@@ -6,30 +6,11 @@
 
 mod common;
 
-use common::{SplitMix64, arm7, perturbed};
+use common::{SplitMix64, aria_tool_data, arm7, perturbed};
 use kincal::identify::{
     Algorithm, Bounds, Identification, IdentifyOptions, Measurement, Workspace, analyze, identify,
 };
-use kincal::ik::{IkOptions, solve_ik};
-use kincal::{JointState, ParamIndex, Robot, aria};
-
-/// The ARIA calibration-tool data (Table 2 poses reached by the virtual truth).
-fn aria_tool_data() -> Vec<Measurement<6>> {
-    let truth = aria::virtual_truth();
-    (0..10)
-        .map(|l| {
-            let target = aria::tool_pose(l).expect("pose");
-            let s = solve_ik(
-                &truth,
-                &target,
-                &JointState::new(aria::TOOL_SEED_Q),
-                &IkOptions::default(),
-            )
-            .expect("reachable");
-            Measurement::new(s.q, truth.fk_q(&s.q).expect("fk"))
-        })
-        .collect()
-}
+use kincal::{ParamIndex, Robot, aria};
 
 /// `m` poses of `truth` at random configurations, each component disturbed by Gaussian-ish
 /// noise of `noise` (m and rad; 0: exact).

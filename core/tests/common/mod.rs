@@ -364,3 +364,22 @@ pub fn full_state<const N: usize>(
         temp_c: Some(rng.uniform(5.0, 45.0)),
     }
 }
+
+/// The ARIA calibration-tool data: the Table 2 poses reached by the virtual truth (its IK
+/// from the tool's seed), measured exactly (as the MATLAB tests build them).
+pub fn aria_tool_data() -> Vec<kincal::identify::Measurement<6>> {
+    let truth = aria::virtual_truth();
+    (0..10)
+        .map(|l| {
+            let target = aria::tool_pose(l).expect("pose");
+            let s = kincal::ik::solve_ik(
+                &truth,
+                &target,
+                &JointState::new(aria::TOOL_SEED_Q),
+                &kincal::ik::IkOptions::default(),
+            )
+            .expect("reachable");
+            kincal::identify::Measurement::new(s.q, truth.fk_q(&s.q).expect("fk"))
+        })
+        .collect()
+}
