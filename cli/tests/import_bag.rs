@@ -39,8 +39,13 @@ struct Msg {
 /// Writes the messages as an MCAP file (zstd-compressed chunks, the crate's default, as
 /// rosbag2 writes by default) with ROS 2 schema and channel conventions.
 fn write_bag(path: &Path, msgs: &[Msg]) {
+    write_bag_with(path, msgs, mcap::WriteOptions::new());
+}
+
+/// [`write_bag`] with the writer's options (chunking, compression).
+fn write_bag_with(path: &Path, msgs: &[Msg], options: mcap::WriteOptions) {
     let file = std::io::BufWriter::new(fs::File::create(path).unwrap());
-    let mut w = mcap::Writer::new(file).unwrap();
+    let mut w = options.create(file).unwrap();
     let mut channels: BTreeMap<&str, u16> = BTreeMap::new();
     for m in msgs {
         let id = match channels.get(m.topic) {
@@ -613,5 +618,71 @@ fn python_written_bag_reads_back_the_script_poses() {
         let q = f("wxyz");
         let dot = (w * q[0] + x * q[1] + y * q[2] + z * q[3]).abs();
         assert!(1.0 - dot < 1e-12);
+    }
+}
+
+/// Writes the `ros_bag` fuzz target's seeds (fuzz/seeds/ros_bag): small bags on the topics
+/// the target reads (`/joint_states` with joint1, joint2; `/tool` poses), chunked with zstd,
+/// chunked uncompressed and unchunked, and each CDR message type alone (the target also
+/// decodes its input as one message). Kept small so that mutations stay cheap.
+/// `cargo test -p kincal-cli --test import_bag -- --ignored write_fuzz_seeds`
+#[test]
+#[ignore = "writes the fuzz seeds into the repository"]
+fn write_fuzz_seeds() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz/seeds/ros_bag");
+    fs::create_dir_all(&dir).unwrap();
+    let stamp = |k: i128| T0_NS + k * JOINT_PERIOD_NS;
+    let mut msgs = Vec::new();
+    for k in 0..6 {
+        let q = if k < 3 { [0.1, -0.2] } else { [0.4, 0.3] };
+        msgs.push(Msg {
+            topic: "/joint_states",
+            schema: "sensor_msgs/msg/JointState",
+            log_ns: u64::try_from(stamp(k)).unwrap(),
+            data: cdr::joint_state(stamp(k), &["joint1", "joint2"], &q),
+        });
+        let p = [0.3 + 0.01 * k as f64, 0.0, 0.5];
+        let (schema, data) = match k % 3 {
+            0 => (
+                "geometry_msgs/msg/PoseStamped",
+                cdr::pose_stamped(stamp(k), "mocap", p, [1.0, 0.0, 0.0, 0.0]),
+            ),
+            1 => (
+                "geometry_msgs/msg/TransformStamped",
+                cdr::transform_stamped(stamp(k), "mocap", "tool", p, [1.0, 0.0, 0.0, 0.0]),
+            ),
+            _ => (
+                "geometry_msgs/msg/PointStamped",
+                cdr::point_stamped(stamp(k), "tracker", p),
+            ),
+        };
+        let topic = if k % 3 == 0 { "/tool" } else { "/other" };
+        msgs.push(Msg {
+            topic,
+            schema,
+            log_ns: u64::try_from(stamp(k) + 1).unwrap(),
+            data,
+        });
+    }
+    let plain = mcap::WriteOptions::new().compression(None);
+    write_bag(&dir.join("chunked-zstd.mcap"), &msgs);
+    write_bag_with(&dir.join("chunked-plain.mcap"), &msgs, plain.clone());
+    write_bag_with(&dir.join("unchunked.mcap"), &msgs, plain.use_chunks(false));
+    let p = [0.3, 0.1, 0.5];
+    let q = [0.5, 0.5, 0.5, 0.5];
+    let cdr_seeds = [
+        (
+            "joint_state.cdr",
+            cdr::joint_state(T0_NS, &["joint1", "joint2"], &[0.1, -0.2]),
+        ),
+        ("pose_stamped.cdr", cdr::pose_stamped(T0_NS, "mocap", p, q)),
+        (
+            "transform_stamped.cdr",
+            cdr::transform_stamped(T0_NS, "mocap", "tool", p, q),
+        ),
+        ("point_stamped.cdr", cdr::point_stamped(T0_NS, "tracker", p)),
+    ];
+    for (name, bytes) in cdr_seeds {
+        fs::write(dir.join(name), bytes).unwrap();
     }
 }
