@@ -84,8 +84,11 @@ fn cases() -> Vec<(String, String)> {
         ("geometric", nominal.geometric_param_set()),
         ("with base", with_base),
     ];
-    let datas: [(&str, &[Measurement<6>]); 3] =
-        [("tool", &tool), ("noisy", &noisy), ("positions", &positions)];
+    let datas: [(&str, &[Measurement<6>]); 3] = [
+        ("tool", &tool),
+        ("noisy", &noisy),
+        ("positions", &positions),
+    ];
     for (dname, data) in datas {
         for (sname, set) in sets {
             for alg in Algorithm::ALL {
@@ -100,7 +103,10 @@ fn cases() -> Vec<(String, String)> {
                         opts.allow_data_deficiency = true;
                         let r = identify(&nominal, data, &opts, &mut ws);
                         push(
-                            format!("aria {dname} {sname} {} cov {covariance} cold {cold}", alg.name()),
+                            format!(
+                                "aria {dname} {sname} {} cov {covariance} cold {cold}",
+                                alg.name()
+                            ),
                             format!("{r:?}"),
                             &ws,
                         );
@@ -112,10 +118,18 @@ fn cases() -> Vec<(String, String)> {
                 ..IdentifyOptions::new(Algorithm::Ols, set)
             };
             let a = analyze(&nominal, data, &opts, &mut ws);
-            push(format!("aria {dname} {sname} analysis"), format!("{a:?}"), &ws);
+            push(
+                format!("aria {dname} {sname} analysis"),
+                format!("{a:?}"),
+                &ws,
+            );
             if let Ok(a) = a {
                 let r = identify_with_analysis(&nominal, data, &opts, &a, &mut ws);
-                push(format!("aria {dname} {sname} with analysis"), format!("{r:?}"), &ws);
+                push(
+                    format!("aria {dname} {sname} with analysis"),
+                    format!("{r:?}"),
+                    &ws,
+                );
             }
         }
     }
@@ -132,7 +146,11 @@ fn cases() -> Vec<(String, String)> {
         opts.weight_rot = 0.25;
         opts.orientation = kincal::pose::OrientationError::SmallAngle;
         let r = identify(&nominal, &weighted, &opts, &mut ws);
-        push(format!("aria weighted {}", alg.name()), format!("{r:?}"), &ws);
+        push(
+            format!("aria weighted {}", alg.name()),
+            format!("{r:?}"),
+            &ws,
+        );
         let mut opts = IdentifyOptions::new(alg, with_base);
         opts.bounds = Some(&bounds);
         opts.prior = Some(&prior);
