@@ -520,13 +520,20 @@ pub(crate) fn add_rows<const N: usize, const P: usize>(
         on[k] = true;
         c += wk[k] * e[k] * e[k];
     }
-    // Column by column: one Jacobian column (six contiguous values) per parameter.
-    for (j, (&col, &scale)) in cols.iter().zip(ws.colscale.iter()).enumerate() {
-        let jc = jac.get(col).copied().unwrap_or([0.0; 6]);
-        for (k, row) in rows.iter_mut().enumerate() {
-            if let Some(x) = row.get_mut(j) {
-                *x = if on[k] { jc[k] * scale } else { 0.0 };
-            }
+    // Column by column: one Jacobian column (six contiguous values) per parameter, every
+    // row written (no branch, no bounds check: `j < n <= P`); an unmeasured row is zeroed
+    // afterwards, which leaves the same entries (0) as not scaling it.
+    let n = cols.len().min(P);
+    for j in 0..n {
+        let jc = jac.get(cols[j]).copied().unwrap_or([0.0; 6]);
+        let scale = ws.colscale[j];
+        for k in 0..6 {
+            rows[k][j] = jc[k] * scale;
+        }
+    }
+    for k in 0..6 {
+        if !on[k] {
+            rows[k][..n].fill(0.0);
         }
     }
     if ws.fold_both {

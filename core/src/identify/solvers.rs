@@ -14,7 +14,7 @@ use crate::effects::Effect;
 use crate::error::{Error, ParamIndex, Quantity, Result, check_finite};
 use crate::linalg::lm::lm_parameter;
 use crate::linalg::minnorm::min_norm_solve;
-use crate::linalg::tri::{solve_upper, solve_upper_transpose, upper_inverse_gram};
+use crate::linalg::tri::{solve_upper_transpose, upper_inverse_gram};
 use crate::math::sqrt;
 use crate::model::Robot;
 use crate::params::{ParamId, ParamSet};
@@ -371,10 +371,10 @@ fn factor_gram<const P: usize>(ws: &mut Workspace<P>, m: usize, how: GramSel) ->
     crate::linalg::gram::cholesky_upper_in_place(mat, m, 1e-14)
 }
 
-/// Solves `RᵀR·x = rhs` with `R = mat` (from [`factor_gram`]) in place in `x`.
+/// Solves `RᵀR·x = rhs` with `R = mat` (from [`factor_gram`] or [`damped_step`]'s
+/// factorisation, each just successful) in place in `x`.
 fn solve_normal<const P: usize>(mat: &[[f64; P]; P], n: usize, x: &mut [f64]) -> Result<()> {
-    solve_upper_transpose(mat, n, x)?;
-    solve_upper(mat, n, x)
+    crate::linalg::tri::solve_normal_factored(mat, n, x)
 }
 
 /// How a solver ended.
