@@ -16,6 +16,22 @@
 //! processes on the shared build machine do not inflate (much).
 //!
 //! Run: `cargo bench -p kincal --bench identification -- --noplot`.
+//!
+//! Figures (3 Dec 2026, this 2-core machine shared with other builds; the bench binaries of
+//! 0350d2f and d51d992 alternated in one session, 3 rounds of 3 s each, CPU time, as
+//! multiples of the same binary's FK): OLS `with_analysis` 766–768 FK (135 µs) before,
+//! 715–729 FK (124–126 µs) after; `no_covariance` 674–684 before, 651–663 after; in a second
+//! session `with_analysis_cold` 963–987 before, 911–931 after, `analysis_reused` 472–473
+//! before, 444–455 after. Instructions (callgrind, per calibration; FK 2.0 k): 1.513 M
+//! (756 FK) before, 1.357 M (678 FK) after: the analysis's pass at the starting model also
+//! gives the first iteration's normal equations and the initial residuals, OLS's last trial
+//! gives the fitted residuals and the covariance's normal equations, and the fold and solve
+//! kernels lost per-entry branches and redundant scans (results bit for bit the same:
+//! `core/tests/calibration_fingerprint.rs`). Goal 2's 150 FK is not reached. What remains,
+//! per calibration: five normal-equation passes, 107 k instructions each (per pose:
+//! Jacobian 2.9 k, Gram fold 5.9 k, row building 1.3 k); the analysis's pass 297 k (its
+//! Givens factor 17.7 k per pose) and its 24×24 singular values 177 k; five 24×24 Cholesky
+//! factorisations and solves, 28 k each; the covariance's factor and inverse, 78 k.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use kincal::identify::{

@@ -266,6 +266,80 @@ pub(crate) fn accumulate_jacobian<const N: usize, const P: usize, D: RowSource<N
     data.fold(robot, false, opts, n_cols, ws).map(|_| ())
 }
 
+/// [`accumulate_jacobian`] at a fit's starting model that also leaves in `ws.gram` the
+/// unit-scaled normal equations (with the right-hand side) the fit's first iteration
+/// folds, in `ws.first_cost` their cost and in `ws.pass_stats` the residual statistics of
+/// that model: one Jacobian per pose for the identifiability analysis, the first iteration
+/// and the initial residuals, instead of three passes. Each sum is the one the separate
+/// passes compute, term for term and in the same order (the pose's transform is the one
+/// [`Measurement::model_pose`] computes, by the same chain), so the results are the same
+/// bit for bit (`core/tests/calibration_fingerprint.rs`). Only for instrument rows
+/// (`[Measurement]`, whose `stats` is [`residual_stats`]); `ws.colscale[..n_cols]` must
+/// be 1.
+pub(crate) fn fold_first_pass<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    opts: &IdentifyOptions<'_>,
+    n_cols: usize,
+    ws: &mut Workspace<P>,
+) -> Result<()> {
+    ws.lsq.reset(n_cols)?;
+    ws.gram.reset(n_cols)?;
+    ws.pass_stats = StatsAcc::EMPTY;
+    ws.to_gram = false;
+    // Cleared by a pose whose rows the normal equations refuse (see `add_rows`).
+    ws.first_pass = true;
+    ws.fold_both = true;
+    let folded = data.fold(robot, true, opts, n_cols, ws);
+    ws.fold_both = false;
+    match folded {
+        Ok(c) => ws.first_cost = c,
+        Err(e) => {
+            ws.first_pass = false;
+            return Err(e);
+        }
+    }
+    Ok(())
+}
+
+/// The cost of the trial model `robot`, [`cost`]'s value bit for bit (the same terms summed
+/// in the same order; the pose is [`Measurement::model_pose`]'s, by the same chain), and
+/// its unit-scaled normal equations in `ws.gram` as [`accumulate_gram`] folds them, with
+/// the residual statistics of `robot` in `ws.pass_stats`: for OLS's last trial, whose
+/// normal equations the covariance then needs (one pass instead of three: the trial's cost,
+/// the fitted residuals and the covariance's fold). `None` when the fold fails (the caller
+/// then takes [`cost`], which reports what it reports); `ws.gram` is then stale.
+pub(crate) fn fold_last_trial<const N: usize, const P: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    opts: &IdentifyOptions<'_>,
+    n_cols: usize,
+    ws: &mut Workspace<P>,
+) -> Option<f64> {
+    ws.pass_stats = StatsAcc::EMPTY;
+    ws.last_cost = 0.0;
+    ws.last_pass = true;
+    let folded = accumulate_gram(robot, data, opts, n_cols, ws);
+    ws.last_pass = false;
+    folded.ok().map(|_| ws.last_cost)
+}
+
+/// [`accumulate_gram`] at a solver's starting model, or what [`fold_first_pass`] left for
+/// it (then taken: a second call folds).
+pub(crate) fn first_gram<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
+    robot: &Robot<N>,
+    data: &D,
+    opts: &IdentifyOptions<'_>,
+    n_cols: usize,
+    ws: &mut Workspace<P>,
+) -> Result<f64> {
+    if ws.first_pass && ws.gram.n() == n_cols {
+        ws.first_pass = false;
+        return Ok(ws.first_cost);
+    }
+    accumulate_gram(robot, data, opts, n_cols, ws)
+}
+
 /// As [`accumulate`], into the normal equations `ws.gram` (the fast path of the iterations).
 pub(crate) fn accumulate_gram<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
     robot: &Robot<N>,
@@ -275,6 +349,7 @@ pub(crate) fn accumulate_gram<const N: usize, const P: usize, D: RowSource<N> + 
     ws: &mut Workspace<P>,
 ) -> Result<f64> {
     ws.gram.reset(n_cols)?;
+    ws.first_pass = false;
     ws.to_gram = true;
     let folded = data.fold(robot, true, opts, n_cols, ws);
     // Also on an error: a later fold must not land in `ws.gram` by accident.
@@ -352,6 +427,11 @@ pub(crate) trait RowSource<const N: usize> {
     }
     /// Residual statistics.
     fn stats(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<ResidualStats>;
+    /// The instrument rows themselves, when the source is just those (no prior rows, no
+    /// frames): then [`fold_last_trial`] gives this source's cost and statistics.
+    fn instrument_rows(&self) -> Option<&[Measurement<N>]> {
+        None
+    }
     /// The prior whose rows [`RowSource::fold`] adds after the data's, if any.
     fn prior(&self) -> Option<&super::Prior> {
         None
@@ -396,6 +476,9 @@ impl<const N: usize> RowSource<N> for [Measurement<N>] {
     fn stats(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<ResidualStats> {
         residual_stats(robot, self, opts)
     }
+    fn instrument_rows(&self) -> Option<&[Measurement<N>]> {
+        Some(self)
+    }
 }
 
 /// Folds the rows of one pose (weighted by its weight) into `ws.lsq` or `ws.gram`; with
@@ -437,17 +520,43 @@ pub(crate) fn add_rows<const N: usize, const P: usize>(
         on[k] = true;
         c += wk[k] * e[k] * e[k];
     }
-    // Column by column: one Jacobian column (six contiguous values) per parameter.
-    for (j, (&col, &scale)) in cols.iter().zip(ws.colscale.iter()).enumerate() {
-        let jc = jac.get(col).copied().unwrap_or([0.0; 6]);
-        for (k, row) in rows.iter_mut().enumerate() {
-            if let Some(x) = row.get_mut(j) {
-                *x = if on[k] { jc[k] * scale } else { 0.0 };
-            }
+    // Column by column: one Jacobian column (six contiguous values) per parameter, every
+    // row written (no branch, no bounds check: `j < n <= P`); an unmeasured row is zeroed
+    // afterwards, which leaves the same entries (0) as not scaling it.
+    let n = cols.len().min(P);
+    for j in 0..n {
+        let jc = jac.get(cols[j]).copied().unwrap_or([0.0; 6]);
+        let scale = ws.colscale[j];
+        for k in 0..6 {
+            rows[k][j] = jc[k] * scale;
         }
     }
-    if ws.to_gram {
+    for k in 0..6 {
+        if !on[k] {
+            rows[k][..n].fill(0.0);
+        }
+    }
+    if ws.fold_both {
+        // The analysis's rows (zero right-hand side) first, so that any error is the one the
+        // analysis alone reports; then the first iteration's, and the pose's statistics
+        // (`t` is `model_pose`'s transform bit for bit: the same chain).
+        // A pose the first iteration cannot fold (a non-finite residual) is no error of the
+        // analysis: the first pass is then not taken, and the fit's own passes report it.
+        ws.lsq.add_rows6(&rows, &[0.0; 6], &wk)?;
+        if ws.first_pass {
+            ws.first_pass = ws.gram.add_rows6(&rows, &e, &wk).is_ok();
+            ws.pass_stats.add(m, &t, opts);
+        }
+    } else if ws.to_gram {
         ws.gram.add_rows6(&rows, &e, &wk)?;
+        if ws.last_pass {
+            ws.pass_stats.add(m, &t, opts);
+            for k in 0..6 {
+                if on[k] {
+                    ws.last_cost += wk[k] * e[k] * e[k];
+                }
+            }
+        }
     } else {
         ws.lsq.add_rows6(&rows, &e, &wk)?;
     }
@@ -519,6 +628,23 @@ pub(crate) struct StatsAcc {
 }
 
 impl StatsAcc {
+    /// No rows yet (the `Default`, usable in a `const` workspace).
+    pub(crate) const EMPTY: StatsAcc = StatsAcc {
+        s: ResidualStats {
+            poses: 0,
+            rows: 0,
+            cost: 0.0,
+            pos_poses: 0,
+            rot_poses: 0,
+            rms_pos_m: 0.0,
+            max_pos_m: 0.0,
+            rms_rot_rad: 0.0,
+            max_rot_rad: 0.0,
+        },
+        sum_pos2: 0.0,
+        sum_rot2: 0.0,
+    };
+
     /// Adds measurement `m` against the model pose `t` (its weight and `opts` decide the
     /// cost; the angle statistics use the exact orientation error, unweighted).
     pub(crate) fn add<const N: usize>(

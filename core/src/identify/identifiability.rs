@@ -211,8 +211,15 @@ pub(crate) fn analyze_into<const N: usize, const P: usize>(
     // 2. Data: the structurally identifiable columns on the given poses.
     for k in 0..n_struct {
         ws.cols[k] = ws.free[k];
+        ws.colscale[k] = 1.0;
     }
-    data_step(robot, data, opts, ws, out, n_struct)
+    if ws.share_first_pass {
+        // `identify`: the fit's first iteration and initial residuals from the same pass.
+        super::data::fold_first_pass(robot, data, opts, n_struct, ws)?;
+    } else {
+        super::data::accumulate_jacobian(robot, data, opts, n_struct, ws)?;
+    }
+    data_step_folded(robot, data, opts, ws, out, n_struct)
 }
 
 /// Steps 2 and 3 of [`analyze`] on the candidate columns `ws.cols[..n_struct]`: which the
@@ -229,6 +236,21 @@ pub(super) fn data_step<const N: usize, const P: usize, D: RowSource<N> + ?Sized
         ws.colscale[k] = 1.0;
     }
     super::data::accumulate_jacobian(robot, data, opts, n_struct, ws)?;
+    data_step_folded(robot, data, opts, ws, out, n_struct)
+}
+
+/// [`data_step`] once the Jacobian of the candidate columns (unit scale) is folded into
+/// `ws.lsq`. When `ws.gram` holds the first pass's normal equations of the same columns
+/// ([`super::data::fold_first_pass`]), they are narrowed to the identifiable ones, as if
+/// folded with those alone (each entry is its own sum: bit for bit the same).
+fn data_step_folded<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
+    robot: &Robot<N>,
+    data: &D,
+    opts: &IdentifyOptions<'_>,
+    ws: &mut Workspace<P>,
+    out: &mut Identifiability,
+    n_struct: usize,
+) -> Result<()> {
     let kept = greedy(ws, n_struct, opts.rank_tol, &mut out.partner)?;
     let mut n_id = 0;
     for k in 0..n_struct {
@@ -242,6 +264,13 @@ pub(super) fn data_step<const N: usize, const P: usize, D: RowSource<N> + ?Sized
         }
     }
     out.rank = n_id;
+    if ws.first_pass && n_id < n_struct {
+        let mut positions = [0usize; P];
+        for (slot, k) in positions.iter_mut().zip(kept.iter()) {
+            *slot = k;
+        }
+        ws.gram.select(positions.get(..n_id).unwrap_or(&[]))?;
+    }
 
     // 3. Conditioning of the identifiable set (unit-scaled columns). The factor of step 2
     // is that of the identifiable columns unless some were dropped.

@@ -1,7 +1,10 @@
 //! The three identification algorithms on the identifiable parameter set, and the
 //! parameter covariance of the result.
 
-use super::data::{ResidualStats, RowSource, accumulate, accumulate_gram, accumulate_trial_gram};
+use super::data::{
+    ResidualStats, RowSource, accumulate, accumulate_gram, accumulate_trial_gram, first_gram,
+    fold_last_trial,
+};
 use super::identifiability::analyze_into;
 use super::{
     Algorithm, CORRELATION_REPORT_THRESHOLD, Correlation, Identification, IdentifyOptions,
@@ -11,7 +14,7 @@ use crate::effects::Effect;
 use crate::error::{Error, ParamIndex, Quantity, Result, check_finite};
 use crate::linalg::lm::lm_parameter;
 use crate::linalg::minnorm::min_norm_solve;
-use crate::linalg::tri::{solve_upper, solve_upper_transpose, upper_inverse_gram};
+use crate::linalg::tri::{solve_upper_transpose, upper_inverse_gram};
 use crate::math::sqrt;
 use crate::model::Robot;
 use crate::params::{ParamId, ParamSet};
@@ -47,8 +50,15 @@ pub(crate) fn identify_in_place<const N: usize, const P: usize>(
     check_identify_options(opts)?;
     check_inputs(data, opts)?;
     out.robot = *robot;
-    analyze_into(robot, data, opts, ws, &mut out.analysis)?;
-    identify_into(data, opts, ws, out)
+    // The analysis's pass over the data at `robot` also leaves the first iteration's
+    // normal equations and the initial residuals (`fold_first_pass`); not with a prior,
+    // whose rows the fit's passes add.
+    ws.share_first_pass = opts.prior.is_none();
+    let analysed = analyze_into(robot, data, opts, ws, &mut out.analysis);
+    ws.share_first_pass = false;
+    let fitted = analysed.and_then(|()| identify_into(data, opts, ws, out));
+    ws.first_pass = false;
+    fitted
 }
 
 /// Checks the numeric options of [`identify`].
@@ -191,18 +201,31 @@ fn fit_set<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
             needed: n,
         });
     }
+    // What the analysis's pass left (`fold_first_pass`) is the fit's first pass when it
+    // folded exactly these columns, in this order, at this model (`identify_in_place`).
+    ws.first_pass = ws.first_pass
+        && ws.gram.n() == n
+        && fitted.iter().zip(ws.cols.iter()).all(|(i, &c)| i == c);
     for (k, i) in fitted.iter().enumerate() {
         ws.cols[k] = i;
     }
     out.algorithm = opts.algorithm;
-    out.initial = data.stats(&out.robot, opts)?;
+    out.initial = if ws.first_pass {
+        ws.pass_stats.finish()
+    } else {
+        data.stats(&out.robot, opts)?
+    };
     let finish = match opts.algorithm {
         Algorithm::Ols => gauss_newton(&mut out.robot, data, opts, n, ws)?,
         Algorithm::Opt2 => levenberg_marquardt(&mut out.robot, data, opts, n, ws)?,
         Algorithm::Opt1 => bounded(&mut out.robot, data, opts, n, ws)?,
     };
     out.iterations = finish.iterations;
-    out.fitted = data.stats(&out.robot, opts)?;
+    out.fitted = if core::mem::take(&mut ws.fitted_stats) {
+        ws.pass_stats.finish()
+    } else {
+        data.stats(&out.robot, opts)?
+    };
     out.sigma2 = 0.0;
     out.std_errors = [0.0; MAX_MODEL_PARAMS];
     out.at_bound = ParamSet::new();
@@ -348,10 +371,10 @@ fn factor_gram<const P: usize>(ws: &mut Workspace<P>, m: usize, how: GramSel) ->
     crate::linalg::gram::cholesky_upper_in_place(mat, m, 1e-14)
 }
 
-/// Solves `RᵀR·x = rhs` with `R = mat` (from [`factor_gram`]) in place in `x`.
+/// Solves `RᵀR·x = rhs` with `R = mat` (from [`factor_gram`] or [`damped_step`]'s
+/// factorisation, each just successful) in place in `x`.
 fn solve_normal<const P: usize>(mat: &[[f64; P]; P], n: usize, x: &mut [f64]) -> Result<()> {
-    solve_upper_transpose(mat, n, x)?;
-    solve_upper(mat, n, x)
+    crate::linalg::tri::solve_normal_factored(mat, n, x)
 }
 
 /// How a solver ended.
@@ -440,7 +463,7 @@ fn gauss_newton<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
     // One trial model, equal to `robot` except for the fitted parameters being tried.
     let mut trial = *robot;
     unit_scale(ws, n);
-    let mut c = accumulate_gram(robot, data, opts, n, ws)?;
+    let mut c = first_gram(robot, data, opts, n, ws)?;
     for it in 0..opts.max_iterations {
         get_x(robot, n, ws)?;
         if c <= opts.abs_cost_tol {
@@ -465,10 +488,24 @@ fn gauss_newton<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
         let mut gram_current = true;
         let mut accepted = None;
         let mut scale = 1.0;
+        ws.fitted_stats = false;
         for halving in 0..30u32 {
             apply(&mut trial, n, ws, None)?;
             let c2 = if last {
-                data.cost(&trial, opts)?
+                // The covariance will need the normal equations of the model this step
+                // ends at: the full step's trial is folded (its cost is `cost`'s bit for
+                // bit), which spares the covariance its pass and the fitted residuals theirs.
+                let rows = data
+                    .instrument_rows()
+                    .filter(|_| halving == 0 && opts.covariance);
+                match rows.and_then(|rows| fold_last_trial(&trial, rows, opts, n, ws)) {
+                    Some(c2) => {
+                        gram_current = c2 <= c;
+                        ws.fitted_stats = gram_current;
+                        c2
+                    }
+                    None => data.cost(&trial, opts)?,
+                }
             } else {
                 gram_current = false;
                 accumulate_trial_gram(&trial, data, opts, n, c, ws)?
@@ -526,9 +563,10 @@ fn gauss_newton<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
         };
         *robot = trial;
         if dx <= opts.xtol * (xn + opts.xtol) || (c - c2) <= opts.ftol * c {
+            // After a last step, current when its full step was folded and accepted.
             return Ok(Finish {
                 iterations: it + 1,
-                gram_current: !last,
+                gram_current: !last || (gram_current && ws.fitted_stats),
             });
         }
         c = c2;
@@ -731,7 +769,7 @@ fn levenberg_marquardt<const N: usize, const P: usize, D: RowSource<N> + ?Sized>
     for it in 0..opts.max_iterations {
         get_x(robot, n, ws)?;
         unit_scale(ws, n);
-        let fnorm2 = accumulate_gram(robot, data, opts, n, ws)?;
+        let fnorm2 = first_gram(robot, data, opts, n, ws)?;
         if fnorm2 <= opts.abs_cost_tol {
             return Ok(Finish::current(it));
         }
@@ -878,7 +916,7 @@ fn bounded<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
     for it in 0..opts.max_iterations {
         get_x(robot, n, ws)?;
         unit_scale(ws, n);
-        let c = accumulate_gram(robot, data, opts, n, ws)?;
+        let c = first_gram(robot, data, opts, n, ws)?;
         if c <= opts.abs_cost_tol {
             return Ok(Finish::current(it));
         }

@@ -50,6 +50,29 @@ pub struct Workspace<const P: usize> {
     /// The last structural step of the identifiability analysis, with its exact key
     /// ([`super::memo`]): repeated fits of one model skip it.
     pub(crate) memo: super::memo::StructuralMemo<P>,
+    /// The first pass at the initial model, shared ([`super::data::fold_first_pass`]): set
+    /// by `identify` for the analysis's data step, which then also folds `gram`, the cost
+    /// and the residual statistics at the model it analyses (the first fit's starting model).
+    pub(crate) share_first_pass: bool,
+    /// Whether `add_rows` folds into both `lsq` (zero right-hand side) and `gram`, and adds
+    /// the pose to `pass_stats` (only inside [`super::data::fold_first_pass`]).
+    pub(crate) fold_both: bool,
+    /// Whether `gram` holds the unit-scaled normal equations of the fit's starting model
+    /// and `first_cost`, `pass_stats` its cost and residual statistics: the first
+    /// iteration of the solver takes them instead of folding the data again. Cleared by
+    /// every other fold into `gram` and when taken.
+    pub(crate) first_pass: bool,
+    pub(crate) first_cost: f64,
+    /// Residual statistics collected by a pass: the first pass's ([`Self::first_pass`]), or
+    /// the last trial's ([`Self::last_pass`]).
+    pub(crate) pass_stats: super::data::StatsAcc,
+    /// Whether `add_rows` folding into `gram` also adds each pose to `pass_stats` and its
+    /// cost, summed as [`super::data::cost`] sums it, to `last_cost` (OLS's last trial with a
+    /// covariance to follow, [`super::data::fold_last_trial`]).
+    pub(crate) last_pass: bool,
+    pub(crate) last_cost: f64,
+    /// Whether `pass_stats` are the residual statistics of the model the solver returned.
+    pub(crate) fitted_stats: bool,
 }
 
 impl<const P: usize> Workspace<P> {
@@ -79,6 +102,14 @@ impl<const P: usize> Workspace<P> {
             n_sv: 0,
             means: [super::constraints::GroupMean::EMPTY; super::constraints::MEAN_CACHE],
             memo: super::memo::StructuralMemo::new(),
+            share_first_pass: false,
+            fold_both: false,
+            first_pass: false,
+            first_cost: 0.0,
+            pass_stats: super::data::StatsAcc::EMPTY,
+            last_pass: false,
+            last_cost: 0.0,
+            fitted_stats: false,
         }
     }
 

@@ -69,6 +69,39 @@ pub fn solve_upper<const P: usize>(r: &[[f64; P]; P], n: usize, x: &mut [f64]) -
     Ok(())
 }
 
+/// Solves `RᵀR x = b` in place (`x` holds `b` on entry) for a factor `r` that
+/// [`super::gram::cholesky_upper_in_place`] has just returned without error: the same
+/// result and errors as [`solve_upper_transpose`] then [`solve_upper`], without their
+/// scans of the factor (finite, non-zero diagonal), which such a factor always passes —
+/// each off-diagonal entry entered a later pivot (`d − r²`), so a non-finite one would
+/// have failed that pivot's test, and every diagonal entry is the root of a positive
+/// pivot. The right-hand side is checked as those do; after the forward substitution
+/// every entry of `x` is a finite quotient, which the second check would pass.
+pub(crate) fn solve_normal_factored<const P: usize>(
+    r: &[[f64; P]; P],
+    n: usize,
+    x: &mut [f64],
+) -> Result<()> {
+    check_capacity::<P>(n)?;
+    check_len(x.len(), n)?;
+    check_finite(x)?;
+    let n = n.min(P);
+    forward_unchecked(r, n, x)?;
+    for i in (0..n).rev() {
+        let ri = &r[i];
+        let mut sum = x[i];
+        for (rij, xj) in ri[i + 1..n].iter().zip(x[i + 1..n].iter()) {
+            sum -= rij * xj;
+        }
+        let v = sum / ri[i];
+        if !v.is_finite() {
+            return Err(overflow(n));
+        }
+        x[i] = v;
+    }
+    Ok(())
+}
+
 /// Solves `Rᵀ x = b` in place (`x` holds `b` on entry) by forward substitution, using
 /// only the upper triangle of the leading block of `r`.
 ///
