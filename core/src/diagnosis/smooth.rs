@@ -1148,7 +1148,22 @@ fn outer_folds<const N: usize>(
                 continue;
             }
             let use_class = [t == 0 || same, t == 1 || same];
-            fold_gram(ws, data, poses, sw, act, Some(f), li, false);
+            // The fold's Gram at the last length scale is still stored ([`choose_all`]
+            // builds it the same way, over the same outputs): copied, not rebuilt.
+            let SmoothWorkspace {
+                g_folds,
+                r_folds,
+                g_out,
+                r_out,
+                ..
+            } = ws;
+            match (g_folds.get(f), r_folds.get(f)) {
+                (Some(g), Some(r)) if folds <= STORED_FOLDS && li + 1 == L => {
+                    *g_out = *g;
+                    *r_out = *r;
+                }
+                _ => fold_gram(ws, data, poses, sw, act, Some(f), li, false),
+            }
             if !factor(ws, li, false, lambda) {
                 continue;
             }
