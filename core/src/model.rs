@@ -812,7 +812,8 @@ impl<const N: usize> Robot<N> {
     /// after the joint effects: compliance, scale, cyclic, backlash. Fails with [`Error::MissingInput`] when
     /// the model has backlash but `state` has no approach directions.
     pub fn joint_angles(&self, state: &JointState<N>) -> Result<[f64; N]> {
-        self.joint_angles_and_torques(state).map(|(angles, _)| angles)
+        self.joint_angles_and_torques(state)
+            .map(|(angles, _)| angles)
     }
 
     /// [`Robot::joint_angles`], and the gravity torques at the readings when the model's

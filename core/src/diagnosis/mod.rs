@@ -136,7 +136,7 @@
 //! per-pose outputs ([`PoseDiagnosis`]), and a caller-provided [`DiagWorkspace`] of
 //! capacity `P` columns (the union of all models' parameters: 71 for a 6-joint arm with
 //! every effect, so `P = 80` suffices there; `P = 144` for 9 joints), which includes the
-//! fixed ~116 KiB of the smooth check ([`SmoothWorkspace`]).
+//! fixed ~321 KiB of the smooth check ([`SmoothWorkspace`]).
 
 pub mod contacts;
 mod cv;

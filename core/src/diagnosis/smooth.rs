@@ -1437,13 +1437,36 @@ mod tests {
             p.heldout_final = p.heldout_baseline.map(|v| 0.5 * v + 1e-5);
         }
         let (a, b) = check_both(
-            &nominal, &data, &mut poses, &d.noise, &base, Some(&acc), &dc, &mut ws.smooth,
+            &nominal,
+            &data,
+            &mut poses,
+            &d.noise,
+            &base,
+            Some(&acc),
+            &dc,
+            &mut ws.smooth,
         );
         let b = b.unwrap();
         let scratch: std::vec::Vec<u64> = poses.iter().map(|p| p.scratch.to_bits()).collect();
-        let alone_a = check(&nominal, &data, &mut poses, &d.noise, &base, &dc, &mut ws.smooth);
+        let alone_a = check(
+            &nominal,
+            &data,
+            &mut poses,
+            &d.noise,
+            &base,
+            &dc,
+            &mut ws.smooth,
+        );
         swap_residuals(&mut poses);
-        let alone_b = check(&nominal, &data, &mut poses, &d.noise, &acc, &dc, &mut ws.smooth);
+        let alone_b = check(
+            &nominal,
+            &data,
+            &mut poses,
+            &d.noise,
+            &acc,
+            &dc,
+            &mut ws.smooth,
+        );
         swap_residuals(&mut poses);
         assert!(a.evaluated && b.evaluated);
         assert_eq!(bits(&a), bits(&alone_a));
