@@ -6,15 +6,16 @@
 //! `cargo bench -p kincal --bench diagnosis -- --noplot`
 //!
 //! Measured (CPU time per run from `cpu_time`, loaded 2-core machine, this and the
-//! previous code alternated in one session, two runs each): 120 rows 18.1–18.3 ms (was
-//! 24.0), 1,000 rows 137.5–138.3 ms (was 176.7–177.5), 5,000 rows 592–600 ms (was
-//! 780–790): ×0.76, ×0.78, ×0.76, outputs bit-identical. Instructions of one diagnosis
-//! (callgrind, `tests/diagnosis_dump.rs`'s `one_size`): 120 rows 286 → 211 M, 1,000 rows
-//! 2,250 → 1,740 M, 5,000 rows 9,372 → 6,837 M. Neither target is met yet. Shares of a
-//! 5,000-row diagnosis's instructions now: the Gauss–Newton fits 33 %, the candidates'
-//! cross-validation 17 %, the smooth check 12 %, the outlier screen 12 %, the
-//! extrapolation check 11 %; at 120 rows the smooth check 33 % (its 48×48 ridge
-//! factorisations 15 %).
+//! previous code alternated in one session, three runs each): 120 rows 15.0–15.1 ms (was
+//! 18.35–18.45), 1,000 rows 127.5–128.8 ms (was 140.0–144.2), 5,000 rows 547.5–555 ms
+//! (was 607.5–615): ×0.82, ×0.91, ×0.90, outputs bit-identical. Instructions of one
+//! diagnosis (callgrind, `tests/diagnosis_dump.rs`'s `one_size`, release): 120 rows
+//! 210 → 180 M, 1,000 rows 1,737 → 1,656 M, 5,000 rows 6,819 → 6,521 M. Neither target is
+//! met yet. Shares of a 5,000-row diagnosis's instructions now: the Gauss–Newton fits
+//! 34 %, the candidates' cross-validation 17 %, the outlier screen 12 %, the extrapolation
+//! check 11 %, the smooth checks (baseline's and verdict's, run together) 10 %; at 120
+//! rows the fits 26 %, the smooth checks 24 % (their 48×48 ridge factorisations and
+//! solves 15 %), the cross-validation 22 %.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use kincal::diagnosis::{Config, DiagWorkspace, PoseDiagnosis, diagnose};

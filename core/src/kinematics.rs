@@ -314,7 +314,7 @@ impl<const N: usize> Robot<N> {
                 found: jac.len(),
             });
         };
-        let angles = self.joint_angles(state)?;
+        let (angles, torques) = self.joint_angles_and_torques(state)?;
         let scale = self.length_scale(state)?;
         let mut f = Frames::default();
         self.frames_at(&angles, scale, &mut f);
@@ -348,7 +348,9 @@ impl<const N: usize> Robot<N> {
         }
         self.frame_columns(&f, jac, frame_rotations);
         if full {
-            self.effect_columns(state, scale, &f, jac);
+            // The torques the compliance's angles used, bit for bit those computed again.
+            let tau = torques.unwrap_or_else(|| self.gravity_torques(&state.q));
+            self.effect_columns(state, scale, &f, &tau, jac);
         }
         check_pose(&f.t_base_ee)?;
         Ok(f.t_base_ee)
@@ -409,16 +411,16 @@ impl<const N: usize> Robot<N> {
         }
     }
 
-    /// Effect columns, from the θ0, d and a columns already in `jac` and the frames `f`
-    /// (the axes of prismatic joints).
+    /// Effect columns, from the θ0, d and a columns already in `jac`, the frames `f` (the
+    /// axes of prismatic joints) and the gravity torques `tau` at the readings.
     fn effect_columns(
         &self,
         state: &JointState<N>,
         scale: f64,
         f: &Frames<N>,
+        tau: &[f64; N],
         jac: &mut [JacobianColumn],
     ) {
-        let tau = self.gravity_torques(&state.q);
         let approach = state.approach.unwrap_or([0.0; N]);
         let scaled = |c: JacobianColumn, f: f64| c.map(|v| v * f);
         let mut thermal = [0.0; 6];

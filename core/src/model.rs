@@ -812,6 +812,17 @@ impl<const N: usize> Robot<N> {
     /// after the joint effects: compliance, scale, cyclic, backlash. Fails with [`Error::MissingInput`] when
     /// the model has backlash but `state` has no approach directions.
     pub fn joint_angles(&self, state: &JointState<N>) -> Result<[f64; N]> {
+        self.joint_angles_and_torques(state)
+            .map(|(angles, _)| angles)
+    }
+
+    /// [`Robot::joint_angles`], and the gravity torques at the readings when the model's
+    /// compliance needed them (`None` otherwise): the identification Jacobian's compliance
+    /// columns use the same torques, computed once.
+    pub(crate) fn joint_angles_and_torques(
+        &self,
+        state: &JointState<N>,
+    ) -> Result<([f64; N], Option<[f64; N]>)> {
         state.validate()?;
         let e = &self.effects;
         let mut out = state.q;
@@ -832,9 +843,10 @@ impl<const N: usize> Robot<N> {
         };
         let has_scale = e.scale.iter().any(|&k| k != 0.0);
         let has_cyclic = e.cyclic.iter().any(|c| c.iter().any(|&v| v != 0.0));
+        let torques = has_compliance.then_some(tau);
         if !(has_compliance || has_backlash || has_scale || has_cyclic) {
             // The geometric model: the readings are the angles.
-            return Ok(state.q);
+            return Ok((state.q, torques));
         }
         for j in 0..N {
             let q = state.q[j];
@@ -855,7 +867,7 @@ impl<const N: usize> Robot<N> {
         }
         // Finite but absurd effect parameters can overflow (fuzzing): never pass NaN on.
         check_finite(&out, Quantity::Parameter)?;
-        Ok(out)
+        Ok((out, torques))
     }
 
     /// The factor `1 + κ·(T − 20 °C)` applied to every d and a. Fails when κ ≠ 0 and the

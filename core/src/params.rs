@@ -175,7 +175,9 @@ pub const fn num_geometric_params(n: usize) -> usize {
 
 impl ParamId {
     /// Flat index of this parameter in an `n`-joint model.
+    // Inlined: the Jacobian computes ~65 column indices per pose, a call each otherwise.
     #[must_use]
+    #[inline]
     pub const fn index(self, n: usize) -> ParamIndex {
         ParamIndex(match self {
             ParamId::Link { link, kind } => 5 * link + kind as usize,

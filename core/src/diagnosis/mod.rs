@@ -136,7 +136,7 @@
 //! per-pose outputs ([`PoseDiagnosis`]), and a caller-provided [`DiagWorkspace`] of
 //! capacity `P` columns (the union of all models' parameters: 71 for a 6-joint arm with
 //! every effect, so `P = 80` suffices there; `P = 144` for 9 joints), which includes the
-//! fixed ~116 KiB of the smooth check ([`SmoothWorkspace`]).
+//! fixed ~321 KiB of the smooth check ([`SmoothWorkspace`]).
 
 pub mod contacts;
 mod cv;
@@ -2121,15 +2121,29 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
     // 7. Where.
     out.location = locate::locate(robot, data, poses, &noise);
     // 8. Explainable at all? (library-free smooth model on the same folds.)
-    out.explainable = smooth::check(robot, data, poses, &noise, &ws.acc[0], cfg, &mut ws.smooth);
     // 9. Structure left in what the verdict's effects leave: `explained` needs the remainder
     // to be noise-like, not only small (an out-of-library effect a candidate absorbs in part
-    // can leave a total near the floor while a smooth function of q still finds it).
-    if out.verdict.status == Status::Explained
-        && let Some(c) = out.verdict.candidate
-    {
-        let acc = ws.acc.get(c + 1).copied().unwrap_or(ws.acc[0]);
-        let rest = smooth::check_remaining(robot, data, poses, &noise, &acc, cfg, &mut ws.smooth);
+    // can leave a total near the floor while a smooth function of q still finds it). Both
+    // checks in one run: they share the features, Grams and factorisations.
+    let remaining = match out.verdict.candidate {
+        Some(c) if out.verdict.status == Status::Explained => {
+            Some(ws.acc.get(c + 1).copied().unwrap_or(ws.acc[0]))
+        }
+        _ => None,
+    };
+    let base = ws.acc[0];
+    let (explainable, rest) = smooth::check_both(
+        robot,
+        data,
+        poses,
+        &noise,
+        &base,
+        remaining.as_ref(),
+        cfg,
+        &mut ws.smooth,
+    );
+    out.explainable = explainable;
+    if let Some(rest) = rest {
         out.remaining_structure = rest;
         if rest.evaluated && rest.significant {
             out.verdict.status = Status::PartiallyExplained;

@@ -107,6 +107,9 @@ const M: usize = FEATURES;
 const L: usize = LENGTH_SCALES.len();
 const R: usize = RIDGES.len();
 const X: usize = 2 * MAX_JOINTS;
+/// Right-hand sides the workspace holds: six outputs per check, and the baseline's check
+/// and the verdict's ([`check_both`]) share the features, Grams and factors.
+const OUT: usize = 12;
 
 /// The model-free "explainable at all?" check (module documentation).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -136,24 +139,26 @@ pub struct SmoothCheck {
     pub significant: bool,
 }
 
-/// Working memory of the check (part of [`super::DiagWorkspace`]; about 278 KiB).
+/// Working memory of the check (part of [`super::DiagWorkspace`]; about 321 KiB).
 #[derive(Debug, Clone)]
 pub struct SmoothWorkspace {
     omega: [[f64; X]; M],
     phase: [f64; M],
     g_all: [[[f64; M]; M]; L],
-    r_all: [[[f64; 6]; M]; L],
+    r_all: [[[f64; OUT]; M]; L],
     g_out: [[f64; M]; M],
-    r_out: [[f64; 6]; M],
+    r_out: [[f64; OUT]; M],
     g_in: [[f64; M]; M],
-    r_in: [[f64; 6]; M],
+    r_in: [[f64; OUT]; M],
     chol: [[f64; M]; M],
-    beta: [[f64; 6]; M],
+    beta: [[f64; OUT]; M],
     /// One solution per ridge while the ridges are compared.
-    beta_ridge: [[[f64; 6]; M]; R],
+    beta_ridge: [[[f64; OUT]; M]; R],
     /// Every fold's Gram and right-hand side at one length scale ([`choose_all`]).
     g_folds: [[[f64; M]; M]; STORED_FOLDS],
-    r_folds: [[[f64; 6]; M]; STORED_FOLDS],
+    r_folds: [[[f64; OUT]; M]; STORED_FOLDS],
+    /// Right-hand sides in use: 6 (one check) or [`OUT`] (both checks, [`check_both`]).
+    n_out: usize,
     u: [f64; M],
     n_linear: usize,
     task_mean: [f64; 3],
@@ -169,16 +174,17 @@ impl SmoothWorkspace {
             omega: [[0.0; X]; M],
             phase: [0.0; M],
             g_all: [[[0.0; M]; M]; L],
-            r_all: [[[0.0; 6]; M]; L],
+            r_all: [[[0.0; OUT]; M]; L],
             g_out: [[0.0; M]; M],
-            r_out: [[0.0; 6]; M],
+            r_out: [[0.0; OUT]; M],
             g_in: [[0.0; M]; M],
-            r_in: [[0.0; 6]; M],
+            r_in: [[0.0; OUT]; M],
             chol: [[0.0; M]; M],
-            beta: [[0.0; 6]; M],
-            beta_ridge: [[[0.0; 6]; M]; R],
+            beta: [[0.0; OUT]; M],
+            beta_ridge: [[[0.0; OUT]; M]; R],
             g_folds: [[[0.0; M]; M]; STORED_FOLDS],
-            r_folds: [[[0.0; 6]; M]; STORED_FOLDS],
+            r_folds: [[[0.0; OUT]; M]; STORED_FOLDS],
+            n_out: 6,
             u: [0.0; M],
             n_linear: 0,
             task_mean: [0.0; 3],
@@ -199,17 +205,40 @@ const CLASSES: [core::ops::Range<usize>; 2] = [0..3, 3..6];
 
 /// Whitened held-out baseline residual of a pose (zero where not measured).
 fn target<const N: usize>(m: &Measurement<N>, p: &PoseDiagnosis, sw: &[f64; 6]) -> [f64; 6] {
+    whitened(m, &p.heldout_baseline, sw)
+}
+
+/// Whitened residual `r` of a pose (zero where not measured).
+fn whitened<const N: usize>(m: &Measurement<N>, r: &[f64; 6], sw: &[f64; 6]) -> [f64; 6] {
     let mut y = [0.0; 6];
-    for (k, (yk, (&r, &w))) in y
-        .iter_mut()
-        .zip(p.heldout_baseline.iter().zip(sw))
-        .enumerate()
-    {
+    for (k, (yk, (&r, &w))) in y.iter_mut().zip(r.iter().zip(sw)).enumerate() {
         if m.mask.has(k) {
             *yk = r * w;
         }
     }
     y
+}
+
+/// The targets of every check in use (`n_out` outputs): the baseline's held-out residual
+/// ([`target`]) and, for [`OUT`], the verdict's (`heldout_final`) after it.
+fn targets<const N: usize>(
+    m: &Measurement<N>,
+    p: &PoseDiagnosis,
+    sw: &[f64; 6],
+    n_out: usize,
+) -> [f64; OUT] {
+    let mut y = [0.0; OUT];
+    let (first, second) = y.split_at_mut(6);
+    first.copy_from_slice(&target(m, p, sw));
+    if n_out > 6 {
+        second.copy_from_slice(&whitened(m, &p.heldout_final, sw));
+    }
+    y
+}
+
+/// Check `c`'s six outputs of `y`.
+fn part(y: &[f64; OUT], c: usize) -> [f64; 6] {
+    core::array::from_fn(|k| y.get(6 * c + k).copied().unwrap_or(0.0))
 }
 
 /// Whitened squared error of a pose with prediction `pred` (zero outside active classes),
@@ -357,14 +386,21 @@ fn features(ws: &mut SmoothWorkspace, inv_l: f64) {
     }
 }
 
-/// Adds `φ·φᵀ` (lower triangle) and `φ·yᵀ` to a Gram/right-hand side.
-fn accumulate(g: &mut [[f64; M]; M], r: &mut [[f64; 6]; M], phi: &[f64; M], y: &[f64; 6]) {
+/// Adds `φ·φᵀ` (lower triangle) and `φ·yᵀ` (the first `n_out` outputs) to a Gram/right-hand
+/// side.
+fn accumulate(
+    g: &mut [[f64; M]; M],
+    r: &mut [[f64; OUT]; M],
+    phi: &[f64; M],
+    y: &[f64; OUT],
+    n_out: usize,
+) {
     for (i, (gi, ri)) in g.iter_mut().zip(r.iter_mut()).enumerate() {
         let pi = phi[i % M];
         for (gij, &pj) in gi.iter_mut().zip(phi).take(i + 1) {
             *gij += pi * pj;
         }
-        for (rik, &yk) in ri.iter_mut().zip(y) {
+        for (rik, &yk) in ri.iter_mut().zip(y).take(n_out) {
             *rik += pi * yk;
         }
     }
@@ -393,14 +429,15 @@ fn fold_gram<const N: usize>(
             *row = [0.0; M];
         }
         for row in rm.iter_mut() {
-            *row = [0.0; 6];
+            *row = [0.0; OUT];
         }
     }
+    let n_out = ws.n_out;
     for (m, p) in data.iter().zip(poses) {
         if p.suspect || fold.is_some_and(|f| usize::from(p.fold) != f) || !fits(m, act) {
             continue;
         }
-        let y = target(m, p, sw);
+        let y = targets(m, p, sw, n_out);
         load_features(ws, p, li);
         let SmoothWorkspace {
             g_out,
@@ -411,22 +448,27 @@ fn fold_gram<const N: usize>(
             ..
         } = ws;
         if inner {
-            accumulate(g_in, r_in, phi, &y);
+            accumulate(g_in, r_in, phi, &y, n_out);
         } else {
-            accumulate(g_out, r_out, phi, &y);
+            accumulate(g_out, r_out, phi, &y, n_out);
         }
     }
 }
+
+/// Rows the Cholesky factor computes together ([`factor`]).
+const BLOCK: usize = 4;
+const _: () = assert!(M.is_multiple_of(BLOCK));
 
 /// Cholesky factor of `G_all[li] − G_out − (G_in if inner) + λ·I` into `ws.chol`;
 /// false when not positive definite.
 ///
 /// Row by row (Cholesky–Crout): `L[i][j] = (A[i][j] − Σ_{k<j} L[i][k]·L[j][k]) / L[j][j]`,
-/// each sum in increasing `k` from the value an empty `f64` sum starts at. Two rows at a
-/// time: rows `i` and `i + 1` need the same earlier rows `j < i`, so their two sums share
-/// the loads of row `j` and run as two independent chains; every entry is still the same
-/// expression evaluated in the same order, so the factor is bit for bit the one-row-at-a-
-/// time factor's (unit test), in about half the time.
+/// each sum in increasing `k` from the value an empty `f64` sum starts at. [`BLOCK`] rows
+/// at a time: rows `i0..i0 + BLOCK` need the same earlier rows `j < i0`, so their sums
+/// share the loads of row `j` and run as `BLOCK` independent chains (a single chain waits
+/// on the latency of each addition); then the triangle inside the block, row by row.
+/// Every entry is still the same expression evaluated in the same order, so the factor is
+/// bit for bit the one-row-at-a-time factor's (unit test).
 fn factor(ws: &mut SmoothWorkspace, li: usize, inner: bool, lambda: f64) -> bool {
     let SmoothWorkspace {
         g_all,
@@ -450,44 +492,50 @@ fn factor(ws: &mut SmoothWorkspace, li: usize, inner: bool, lambda: f64) -> bool
         s
     };
     let zero: f64 = core::iter::empty::<f64>().sum();
-    let mut i = 0;
-    while i < M {
-        let (upper, lower) = chol.split_at_mut(i);
-        let pair = i + 1 < M;
-        let (ci, rest) = lower.split_at_mut(1);
-        let ci = &mut ci[0];
-        let mut spare = [0.0; M];
-        let cn = if pair { &mut rest[0] } else { &mut spare };
-        for (j, cj) in upper.iter().enumerate() {
-            let (mut d0, mut d1) = (zero, zero);
-            for ((&x0, &x1), &y) in ci[..j].iter().zip(&cn[..j]).zip(&cj[..j]) {
-                d0 += x0 * y;
-                d1 += x1 * y;
-            }
-            ci[j] = (a(i, j) - d0) / cj[j];
-            if pair {
-                cn[j] = (a(i + 1, j) - d1) / cj[j];
-            }
-        }
-        let s = a(i, i) - ci[..i].iter().map(|v| v * v).sum::<f64>();
-        if !(s > 0.0 && s.is_finite()) {
+    for i0 in (0..M).step_by(BLOCK) {
+        let (upper, lower) = chol.split_at_mut(i0);
+        let Some((block, _)) = lower.split_first_chunk_mut::<BLOCK>() else {
             return false;
+        };
+        let [r0, r1, r2, r3] = &mut *block;
+        // The columns of the complete rows above the block, four chains at a time.
+        for (j, cj) in upper.iter().enumerate() {
+            let mut d = [zero; BLOCK];
+            let rows = r0[..j].iter().zip(&r1[..j]).zip(&r2[..j]).zip(&r3[..j]);
+            for ((((&x0, &x1), &x2), &x3), &y) in rows.zip(&cj[..j]) {
+                d[0] += x0 * y;
+                d[1] += x1 * y;
+                d[2] += x2 * y;
+                d[3] += x3 * y;
+            }
+            let pivot = cj[j];
+            r0[j] = (a(i0, j) - d[0]) / pivot;
+            r1[j] = (a(i0 + 1, j) - d[1]) / pivot;
+            r2[j] = (a(i0 + 2, j) - d[2]) / pivot;
+            r3[j] = (a(i0 + 3, j) - d[3]) / pivot;
         }
-        ci[i] = sqrt(s);
-        if pair {
-            let d = cn[..i]
-                .iter()
-                .zip(&ci[..i])
-                .map(|(x, y)| x * y)
-                .sum::<f64>();
-            cn[i] = (a(i + 1, i) - d) / ci[i];
-            let s = a(i + 1, i + 1) - cn[..=i].iter().map(|v| v * v).sum::<f64>();
+        // The triangle inside the block, row by row.
+        for r in 0..BLOCK {
+            let i = i0 + r;
+            let (done, rest) = block.split_at_mut(r);
+            let Some(ci) = rest.first_mut() else {
+                return false;
+            };
+            for (jj, cj) in done.iter().enumerate() {
+                let j = i0 + jj;
+                let d = ci[..j]
+                    .iter()
+                    .zip(&cj[..j])
+                    .map(|(x, y)| x * y)
+                    .sum::<f64>();
+                ci[j] = (a(i, j) - d) / cj[j];
+            }
+            let s = a(i, i) - ci[..i].iter().map(|v| v * v).sum::<f64>();
             if !(s > 0.0 && s.is_finite()) {
                 return false;
             }
-            cn[i + 1] = sqrt(s);
+            ci[i] = sqrt(s);
         }
-        i += 2;
     }
     true
 }
@@ -536,9 +584,19 @@ fn factor_by_rows(ws: &mut SmoothWorkspace, li: usize, inner: bool, lambda: f64)
     true
 }
 
-/// Solves the factored system for the right-hand side `r_all[li] − r_out − (r_in)` into
-/// `ws.beta` (all six outputs).
+/// Solves the factored system for the right-hand sides `r_all[li] − r_out − (r_in)` into
+/// `ws.beta` (the first `ws.n_out` outputs; each output's arithmetic does not depend on
+/// how many are solved together).
 fn solve(ws: &mut SmoothWorkspace, li: usize, inner: bool) {
+    if ws.n_out > 6 {
+        solve_k::<OUT>(ws, li, inner);
+    } else {
+        solve_k::<6>(ws, li, inner);
+    }
+}
+
+/// [`solve`] for the first `K` outputs.
+fn solve_k<const K: usize>(ws: &mut SmoothWorkspace, li: usize, inner: bool) {
     let SmoothWorkspace {
         r_all,
         r_out,
@@ -550,9 +608,9 @@ fn solve(ws: &mut SmoothWorkspace, li: usize, inner: bool) {
     let Some(ra) = r_all.get(li) else {
         return;
     };
-    // The six right-hand sides together (innermost), each still summed over c in order.
+    // The right-hand sides together (innermost), each still summed over c in order.
     for i in 0..M {
-        let mut v = [0.0; 6];
+        let mut v = [0.0; K];
         for (k, vk) in v.iter_mut().enumerate() {
             *vk = ra[i][k] - r_out[i][k];
             if inner {
@@ -570,7 +628,7 @@ fn solve(ws: &mut SmoothWorkspace, li: usize, inner: bool) {
         }
     }
     for i in (0..M).rev() {
-        let mut v = beta[i];
+        let mut v: [f64; K] = core::array::from_fn(|k| beta[i][k]);
         for (row, b) in chol.iter().zip(beta.iter()).skip(i + 1) {
             let l = row[i];
             for (vk, &bk) in v.iter_mut().zip(b) {
@@ -584,25 +642,40 @@ fn solve(ws: &mut SmoothWorkspace, li: usize, inner: bool) {
     }
 }
 
-/// Prediction `φ·β` with the workspace's features and solution (see [`predict_with`]).
-fn predict(ws: &SmoothWorkspace, act: &[bool; 2], use_class: &[bool; 2]) -> [f64; 6] {
-    predict_with(&ws.phi, &ws.beta, act, use_class)
+/// Prediction `φ·β` of check `c` with the workspace's features and solution (see
+/// [`predict_with`]).
+fn predict(ws: &SmoothWorkspace, act: &[bool; 2], use_class: &[bool; 2], c: usize) -> [f64; 6] {
+    predict_with(&ws.phi, &ws.beta, act, use_class, c)
 }
 
-/// Prediction `φ·β` in the active component types (zero elsewhere).
+/// Prediction `φ·β` of check `c` (its six outputs of `β`) in the active component types
+/// (zero elsewhere). One pass over the features with six sums, each in increasing feature
+/// order from the value an empty `f64` sum starts at: every output the sum
+/// `Σ_j φ_j·β_j[k]` an iterator's `sum` gives, bit for bit, for a sixth of the loads of
+/// `φ`.
 fn predict_with(
     phi: &[f64; M],
-    beta: &[[f64; 6]; M],
+    beta: &[[f64; OUT]; M],
     act: &[bool; 2],
     use_class: &[bool; 2],
+    c: usize,
 ) -> [f64; 6] {
-    let mut pred = [0.0; 6];
-    for (c, range) in CLASSES.iter().enumerate() {
-        if !(act[c] && use_class[c]) {
-            continue;
+    let zero: f64 = core::iter::empty::<f64>().sum();
+    let mut acc = [zero; 6];
+    let o = 6 * c.min(OUT / 6 - 1);
+    for (&f, b) in phi.iter().zip(beta) {
+        if let Some(bc) = b.get(o..o + 6) {
+            for (a, &x) in acc.iter_mut().zip(bc) {
+                *a += f * x;
+            }
         }
-        for k in range.clone() {
-            pred[k] = phi.iter().zip(beta).map(|(f, b)| f * b[k]).sum();
+    }
+    let mut pred = [0.0; 6];
+    for (t, range) in CLASSES.iter().enumerate() {
+        if act[t] && use_class[t] {
+            for k in range.clone() {
+                pred[k] = acc[k];
+            }
         }
     }
     pred
@@ -624,8 +697,33 @@ fn class_sq(y: &[f64; 6], pred: &[f64; 6]) -> [f64; 2] {
 /// (the zero model).
 type Choice = Option<(usize, f64)>;
 
+/// Zero-model errors per check and component type: the training targets' own squares
+/// (every fold but `f`), as [`choose`] and [`choose_all`] start from.
+fn zero_model<const N: usize>(
+    data: &[Measurement<N>],
+    poses: &[PoseDiagnosis],
+    sw: &[f64; 6],
+    act: &[bool; 2],
+    n_out: usize,
+    f: usize,
+) -> [[(f64, Choice); 2]; 2] {
+    let mut best = [[(0.0, None::<(usize, f64)>); 2]; 2];
+    for (m, p) in data.iter().zip(poses) {
+        if !p.suspect && usize::from(p.fold) != f && fits(m, act) {
+            let y = targets(m, p, sw, n_out);
+            for (c, b) in best.iter_mut().enumerate().take(n_out / 6) {
+                let e = class_sq(&part(&y, c), &[0.0; 6]);
+                b[0].0 += e[0];
+                b[1].0 += e[1];
+            }
+        }
+    }
+    best
+}
+
 /// Inner cross-validation on the folds other than `f`: the best hyperparameters per
-/// component type (or the zero model when no smooth model beats it).
+/// component type (or the zero model when no smooth model beats it); one check
+/// (`ws.n_out = 6`).
 #[allow(clippy::too_many_arguments)]
 fn choose<const N: usize>(
     ws: &mut SmoothWorkspace,
@@ -636,18 +734,10 @@ fn choose<const N: usize>(
     folds: usize,
     f: usize,
 ) -> [Choice; 2] {
-    // Zero model: the training targets' own squares.
-    let mut best = [(0.0, None::<(usize, f64)>); 2];
-    for (m, p) in data.iter().zip(poses) {
-        if !p.suspect && usize::from(p.fold) != f && fits(m, act) {
-            let e = class_sq(&target(m, p, sw), &[0.0; 6]);
-            best[0].0 += e[0];
-            best[1].0 += e[1];
-        }
-    }
+    let [mut best, _] = zero_model(data, poses, sw, act, 6, f);
     for li in 0..L {
         fold_gram(ws, data, poses, sw, act, Some(f), li, false);
-        let mut err = [[0.0f64; 2]; R];
+        let mut err = [[0.0f64; 4]; R];
         let mut ok = [true; R];
         for g in (0..folds).filter(|&g| g != f) {
             fold_gram(ws, data, poses, sw, act, Some(g), li, true);
@@ -667,8 +757,9 @@ fn choose<const N: usize>(
 /// One inner fold `g` of the nested cross-validation at length scale `li`, the training
 /// Gram already in `ws` (`g_in`, `r_in`): every ridge's solution first, so each validation
 /// row's features are computed once for all ridges (the features cost more than the
-/// predictions), then each ridge's squared validation errors per class added to `err`; a
-/// ridge whose factorisation fails is marked in `ok`.
+/// predictions), then each ridge's squared validation errors per check and class added to
+/// `err` (`err[ri][2·c + t]`: check `c`, component type `t`); a ridge whose factorisation
+/// fails is marked in `ok`.
 #[allow(clippy::too_many_arguments)]
 fn validate_ridges<const N: usize>(
     ws: &mut SmoothWorkspace,
@@ -678,7 +769,7 @@ fn validate_ridges<const N: usize>(
     act: &[bool; 2],
     li: usize,
     g: usize,
-    err: &mut [[f64; 2]; R],
+    err: &mut [[f64; 4]; R],
     ok: &mut [bool; R],
 ) {
     let mut solved = [false; R];
@@ -695,11 +786,12 @@ fn validate_ridges<const N: usize>(
             *s = true;
         }
     }
+    let n_out = ws.n_out;
     for (m, p) in data.iter().zip(poses) {
         if p.suspect || usize::from(p.fold) != g || !fits(m, act) {
             continue;
         }
-        let y = target(m, p, sw);
+        let y = targets(m, p, sw, n_out);
         load_features(ws, p, li);
         for ((e_r, beta), _) in err
             .iter_mut()
@@ -707,18 +799,28 @@ fn validate_ridges<const N: usize>(
             .zip(solved)
             .filter(|&(_, s)| s)
         {
-            let e = class_sq(&y, &predict_with(&ws.phi, beta, act, &[true; 2]));
-            e_r[0] += e[0];
-            e_r[1] += e[1];
+            for c in 0..n_out / 6 {
+                let pred = predict_with(&ws.phi, beta, act, &[true; 2], c);
+                let e = class_sq(&part(&y, c), &pred);
+                if let Some([e0, e1]) = e_r.get_mut(2 * c..2 * c + 2) {
+                    *e0 += e[0];
+                    *e1 += e[1];
+                }
+            }
         }
     }
 }
 
-/// [`choose`] for every outer fold at once (`folds ≤ STORED_FOLDS`), bit for bit: per
-/// length scale every fold's Gram is built once ([`fold_grams`]) and copied where
-/// [`choose`] rebuilds it, then each outer fold's errors are summed over its inner folds
-/// in the same order, and the hyperparameters compared in the same order (length scale,
-/// then ridge) as [`choose`] compares them.
+/// Choices of every check in use (`[check][component type]`) for one outer fold.
+type Choices = [[Choice; 2]; 2];
+
+/// [`choose`] for every outer fold at once (`folds ≤ STORED_FOLDS`) and every check in use
+/// (`ws.n_out`), bit for bit: per length scale every fold's Gram is built once
+/// ([`fold_grams`]) and copied where [`choose`] rebuilds it, then each outer fold's errors
+/// are summed over its inner folds in the same order, and the hyperparameters compared in
+/// the same order (length scale, then ridge) as [`choose`] compares them. The checks share
+/// the Grams and factors (they depend on the features only), each has its own right-hand
+/// sides and errors.
 #[allow(clippy::too_many_arguments)]
 fn choose_all<const N: usize>(
     ws: &mut SmoothWorkspace,
@@ -727,9 +829,9 @@ fn choose_all<const N: usize>(
     sw: &[f64; 6],
     act: &[bool; 2],
     folds: usize,
-    choices: &mut [[Choice; 2]; STORED_FOLDS],
+    choices: &mut [Choices; STORED_FOLDS],
 ) {
-    let mut err = [[[[0.0f64; 2]; R]; L]; STORED_FOLDS];
+    let mut err = [[[[0.0f64; 4]; R]; L]; STORED_FOLDS];
     let mut ok = [[[true; R]; L]; STORED_FOLDS];
     for li in 0..L {
         fold_grams(ws, data, poses, sw, act, folds, li);
@@ -744,26 +846,22 @@ fn choose_all<const N: usize>(
             }
         }
     }
+    let n_out = ws.n_out;
     for (f, choice) in choices.iter_mut().enumerate().take(folds) {
-        // Zero model: the training targets' own squares.
-        let mut best = [(0.0, None::<(usize, f64)>); 2];
-        for (m, p) in data.iter().zip(poses) {
-            if !p.suspect && usize::from(p.fold) != f && fits(m, act) {
-                let e = class_sq(&target(m, p, sw), &[0.0; 6]);
-                best[0].0 += e[0];
-                best[1].0 += e[1];
-            }
-        }
-        for li in 0..L {
-            for (ri, &lambda) in RIDGES.iter().enumerate() {
-                for c in 0..2 {
-                    if ok[f][li][ri] && err[f][li][ri][c] < best[c].0 {
-                        best[c] = (err[f][li][ri][c], Some((li, lambda)));
+        let mut best = zero_model(data, poses, sw, act, n_out, f);
+        for (c, best) in best.iter_mut().enumerate().take(n_out / 6) {
+            for li in 0..L {
+                for (ri, &lambda) in RIDGES.iter().enumerate() {
+                    for t in 0..2 {
+                        let e = err[f][li][ri][2 * c + t];
+                        if ok[f][li][ri] && e < best[t].0 {
+                            best[t] = (e, Some((li, lambda)));
+                        }
                     }
                 }
             }
         }
-        *choice = [best[0].1, best[1].1];
+        *choice = best.map(|b| [b[0].1, b[1].1]);
     }
 }
 
@@ -782,14 +880,15 @@ fn fold_grams<const N: usize>(
 ) {
     for (g, r) in ws.g_folds.iter_mut().zip(ws.r_folds.iter_mut()).take(folds) {
         *g = [[0.0; M]; M];
-        *r = [[0.0; 6]; M];
+        *r = [[0.0; OUT]; M];
     }
+    let n_out = ws.n_out;
     for (m, p) in data.iter().zip(poses) {
         let f = usize::from(p.fold);
         if p.suspect || f >= folds || !fits(m, act) {
             continue;
         }
-        let y = target(m, p, sw);
+        let y = targets(m, p, sw, n_out);
         load_features(ws, p, li);
         let SmoothWorkspace {
             g_folds,
@@ -798,7 +897,7 @@ fn fold_grams<const N: usize>(
             ..
         } = ws;
         if let (Some(g), Some(r)) = (g_folds.get_mut(f), r_folds.get_mut(f)) {
-            accumulate(g, r, phi, &y);
+            accumulate(g, r, phi, &y, n_out);
         }
     }
 }
@@ -806,9 +905,10 @@ fn fold_grams<const N: usize>(
 /// The check on the diagnosis's held-out baseline residuals (`poses[l].heldout_baseline`,
 /// folds in `poses[l].fold`), with the nominal arm `robot` for the task-space terms:
 /// `base` is the baseline's accumulator (its expected totals at the noise floor); the
-/// folds and the significance threshold are the configuration's. Uses `poses[l].scratch`. Never fails: a check that cannot run is returned with `evaluated =
-/// false`.
-// Long by design: nested cross-validation over the caller's workspace: features, Grams and the outer folds share its buffers (no heap).
+/// folds and the significance threshold are the configuration's. Uses `poses[l].scratch`.
+/// Never fails: a check that cannot run is returned with `evaluated = false`. (The
+/// diagnosis calls [`check_both`]; this is its one-check form, for the tests.)
+#[cfg(test)]
 pub(crate) fn check<const N: usize>(
     robot: &Robot<N>,
     data: &[Measurement<N>],
@@ -818,8 +918,83 @@ pub(crate) fn check<const N: usize>(
     cfg: &Config,
     ws: &mut SmoothWorkspace,
 ) -> SmoothCheck {
-    let (folds, z_significance) = (cfg.folds, cfg.z_significance);
-    let out = SmoothCheck::default();
+    check_both(robot, data, poses, noise, base, None, cfg, ws).0
+}
+
+/// Swaps every pose's `heldout_baseline` and `heldout_final`: the verdict's check run as
+/// the baseline's, every helper reading one field.
+fn swap_residuals(poses: &mut [PoseDiagnosis]) {
+    for p in poses.iter_mut() {
+        core::mem::swap(&mut p.heldout_baseline, &mut p.heldout_final);
+    }
+}
+
+/// [`check`], and with `remaining` (the verdict's accumulator) the same check on the
+/// verdict's held-out residuals (`heldout_final`): does a smooth function of q still
+/// explain part of what the chosen effects leave? The two checks' outputs are each bit for
+/// bit what the check run alone on its residuals gives: with up to [`STORED_FOLDS`] folds
+/// they share the features, the Grams and the ridge factorisations of the nested
+/// cross-validation (which depend on the poses' features only; each check has its own
+/// right-hand sides, errors and choices), with more folds the verdict's check runs again
+/// on swapped residual fields. `poses[l].scratch` is left as the last check leaves it.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn check_both<const N: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    poses: &mut [PoseDiagnosis],
+    noise: &NoiseFloor,
+    base: &ModelAcc,
+    remaining: Option<&ModelAcc>,
+    cfg: &Config,
+    ws: &mut SmoothWorkspace,
+) -> (SmoothCheck, Option<SmoothCheck>) {
+    let shared = remaining.is_some() && cfg.folds <= STORED_FOLDS;
+    ws.n_out = if shared { OUT } else { 6 };
+    let first = match prepare(robot, data, poses, noise, cfg, ws) {
+        None => SmoothCheck::default(),
+        Some((sw, act)) => {
+            let mut stored = [[[None; 2]; 2]; STORED_FOLDS];
+            if cfg.folds <= STORED_FOLDS {
+                choose_all(ws, data, poses, &sw, &act, cfg.folds, &mut stored);
+            }
+            let first = outer_folds(ws, data, poses, noise, base, cfg, &sw, &act, &stored, 0);
+            if let (true, Some(acc)) = (shared, remaining) {
+                // The verdict's right-hand sides are the second six; its outputs from swapped
+                // fields, so the summary reads its residuals.
+                let second = outer_folds(ws, data, poses, noise, acc, cfg, &sw, &act, &stored, 1);
+                ws.n_out = 6;
+                return (first, Some(second));
+            }
+            first
+        }
+    };
+    ws.n_out = 6;
+    let second = remaining.map(|acc| {
+        swap_residuals(poses);
+        let out = check_both(robot, data, poses, noise, acc, None, cfg, ws).0;
+        swap_residuals(poses);
+        out
+    });
+    (first, second)
+}
+
+/// The check's data-dependent set-up shared by every check in use: whitening `sw`, active
+/// component types `act`, the input and task-space scales, the random features, each
+/// fitted pose's features (`PoseDiagnosis::smooth`) and the Grams over all fitted poses per
+/// length scale (`ws.g_all`, `ws.r_all` with `ws.n_out` outputs). `None` when the check
+/// cannot run.
+// Long by design: the input scale, the task-space scale and the random features share the
+// caller's workspace and the fitted-pose filter (no heap).
+fn prepare<const N: usize>(
+    robot: &Robot<N>,
+    data: &[Measurement<N>],
+    poses: &mut [PoseDiagnosis],
+    noise: &NoiseFloor,
+    cfg: &Config,
+    ws: &mut SmoothWorkspace,
+) -> Option<([f64; 6], [bool; 2])> {
+    let folds = cfg.folds;
+    let out = None;
     let (sp, sr) = (noise.sigma_pos_m, noise.sigma_rot_rad);
     if folds < 3 || data.len() != poses.len() || N > MAX_JOINTS || 2 * N + TASK + 4 > M {
         return out;
@@ -941,43 +1116,74 @@ pub(crate) fn check<const N: usize>(
         }
     }
 
-    // Outer folds: choose, fit on the other folds, predict this one. `scratch` holds each
-    // pose's corrected whitened total; `delta` the change of each type's total.
+    Some((sw, act))
+}
+
+/// The outer folds of check `c` (0: the baseline's, 1: the verdict's right-hand sides):
+/// choose (stored choices, or [`choose`] with more than [`STORED_FOLDS`] folds), fit on the
+/// other folds, predict this one; then the outputs ([`summarise`]). `scratch` holds each
+/// pose's corrected whitened total; `delta` the change of each type's total.
+#[allow(clippy::too_many_arguments)]
+fn outer_folds<const N: usize>(
+    ws: &mut SmoothWorkspace,
+    data: &[Measurement<N>],
+    poses: &mut [PoseDiagnosis],
+    noise: &NoiseFloor,
+    base: &ModelAcc,
+    cfg: &Config,
+    sw: &[f64; 6],
+    act: &[bool; 2],
+    stored: &[Choices; STORED_FOLDS],
+    c: usize,
+) -> SmoothCheck {
+    let (folds, z_significance) = (cfg.folds, cfg.z_significance);
+    let n_out = ws.n_out;
     for (m, p) in data.iter().zip(poses.iter_mut()) {
-        p.scratch = sq(m, &target(m, p, &sw), &[0.0; 6]);
+        p.scratch = sq(m, &part(&targets(m, p, sw, n_out), c), &[0.0; 6]);
     }
     let mut delta = [0.0; 2];
-    let mut stored = [[None; 2]; STORED_FOLDS];
-    if folds <= STORED_FOLDS {
-        choose_all(ws, data, poses, &sw, &act, folds, &mut stored);
-    }
     for f in 0..folds {
         let choice = match stored.get(f) {
-            Some(&c) if folds <= STORED_FOLDS => c,
-            _ => choose(ws, data, poses, &sw, &act, folds, f),
+            Some(s) if folds <= STORED_FOLDS => s.get(c).copied().unwrap_or([None; 2]),
+            _ => choose(ws, data, poses, sw, act, folds, f),
         };
         // One fit per distinct choice (both types usually agree).
-        for c in 0..2 {
-            let Some((li, lambda)) = choice[c] else {
+        for t in 0..2 {
+            let Some((li, lambda)) = choice[t] else {
                 continue;
             };
             let same = choice[0] == choice[1];
-            if c == 1 && same {
+            if t == 1 && same {
                 continue;
             }
-            let use_class = [c == 0 || same, c == 1 || same];
-            fold_gram(ws, data, poses, &sw, &act, Some(f), li, false);
+            let use_class = [t == 0 || same, t == 1 || same];
+            // The fold's Gram at the last length scale is still stored ([`choose_all`]
+            // builds it the same way, over the same outputs): copied, not rebuilt.
+            let SmoothWorkspace {
+                g_folds,
+                r_folds,
+                g_out,
+                r_out,
+                ..
+            } = ws;
+            match (g_folds.get(f), r_folds.get(f)) {
+                (Some(g), Some(r)) if folds <= STORED_FOLDS && li + 1 == L => {
+                    *g_out = *g;
+                    *r_out = *r;
+                }
+                _ => fold_gram(ws, data, poses, sw, act, Some(f), li, false),
+            }
             if !factor(ws, li, false, lambda) {
                 continue;
             }
             solve(ws, li, false);
             for (m, p) in data.iter().zip(poses.iter_mut()) {
-                if p.suspect || usize::from(p.fold) != f || !fits(m, &act) {
+                if p.suspect || usize::from(p.fold) != f || !fits(m, act) {
                     continue;
                 }
-                let y = target(m, p, &sw);
+                let y = part(&targets(m, p, sw, n_out), c);
                 load_features(ws, p, li);
-                let pred = predict(ws, &act, &use_class);
+                let pred = predict(ws, act, &use_class, c);
                 let (before, after) = (class_sq(&y, &[0.0; 6]), class_sq(&y, &pred));
                 for (cc, d) in delta.iter_mut().enumerate() {
                     if use_class[cc] && act[cc] {
@@ -988,31 +1194,13 @@ pub(crate) fn check<const N: usize>(
             }
         }
     }
-    summarise(data, poses, noise, base, &sw, delta, z_significance)
-}
-
-/// [`check`] on the verdict's held-out residuals (`heldout_final`) instead of the geometric
-/// model's: does a smooth function of q still explain part of what the chosen effects leave?
-/// (`base` is then the verdict's accumulator.) The per-pose residual fields are swapped for
-/// the run and restored, so every helper of [`check`] reads one field.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn check_remaining<const N: usize>(
-    robot: &Robot<N>,
-    data: &[Measurement<N>],
-    poses: &mut [PoseDiagnosis],
-    noise: &NoiseFloor,
-    base: &ModelAcc,
-    cfg: &Config,
-    ws: &mut SmoothWorkspace,
-) -> SmoothCheck {
-    let swap = |poses: &mut [PoseDiagnosis]| {
-        for p in poses.iter_mut() {
-            core::mem::swap(&mut p.heldout_baseline, &mut p.heldout_final);
-        }
-    };
-    swap(poses);
-    let out = check(robot, data, poses, noise, base, cfg, ws);
-    swap(poses);
+    if c == 1 {
+        swap_residuals(poses);
+    }
+    let out = summarise(data, poses, noise, base, sw, delta, z_significance);
+    if c == 1 {
+        swap_residuals(poses);
+    }
     out
 }
 
@@ -1126,10 +1314,10 @@ mod tests {
     use std::boxed::Box;
     use std::vec;
 
-    /// The two-rows-at-a-time factor equals the one-row-at-a-time one bit for bit, with and
+    /// The block factor equals the one-row-at-a-time one bit for bit, with and
     /// without the inner fold, at every ridge, and both refuse the same singular matrix.
     #[test]
-    fn paired_factor_is_the_row_factor_bit_for_bit() {
+    fn block_factor_is_the_row_factor_bit_for_bit() {
         let mut ws = Box::new(SmoothWorkspace::new());
         let mut rng = SplitMix64::new(11);
         let mut phi = [0.0; M];
@@ -1137,11 +1325,12 @@ mod tests {
             for v in phi.iter_mut() {
                 *v = rng.normal();
             }
-            let y = [rng.normal(), 0.0, 1.0, -0.5, rng.normal(), 0.25];
-            accumulate(&mut ws.g_all[0], &mut ws.r_all[0], &phi, &y);
+            let mut y = [0.0; OUT];
+            y[..6].copy_from_slice(&[rng.normal(), 0.0, 1.0, -0.5, rng.normal(), 0.25]);
+            accumulate(&mut ws.g_all[0], &mut ws.r_all[0], &phi, &y, 6);
             match r % 3 {
-                0 => accumulate(&mut ws.g_out, &mut ws.r_out, &phi, &y),
-                1 => accumulate(&mut ws.g_in, &mut ws.r_in, &phi, &y),
+                0 => accumulate(&mut ws.g_out, &mut ws.r_out, &phi, &y, 6),
+                1 => accumulate(&mut ws.g_in, &mut ws.r_in, &phi, &y, 6),
                 _ => {}
             }
         }
@@ -1216,16 +1405,75 @@ mod tests {
         let (wp, wr) = (1.0 / d.noise.sigma_pos_m, 1.0 / d.noise.sigma_rot_rad);
         let sw = [wp, wp, wp, wr, wr, wr];
         let act = active_classes(&data);
-        let mut all = [[None; 2]; STORED_FOLDS];
+        let mut all = [[[None; 2]; 2]; STORED_FOLDS];
         choose_all(&mut ws.smooth, &data, &poses, &sw, &act, dc.folds, &mut all);
         let mut smooth_models = 0;
         for (f, stored) in all.iter().enumerate().take(dc.folds) {
             let rebuilt = choose(&mut ws.smooth, &data, &poses, &sw, &act, dc.folds, f);
             let bits = |c: &[Choice; 2]| c.map(|x| x.map(|(li, l)| (li, l.to_bits())));
-            assert_eq!(bits(stored), bits(&rebuilt), "fold {f}");
-            smooth_models += stored.iter().filter(|c| c.is_some()).count();
+            assert_eq!(bits(&stored[0]), bits(&rebuilt), "fold {f}");
+            smooth_models += stored[0].iter().filter(|c| c.is_some()).count();
         }
         assert!(smooth_models > 0);
+
+        // Both checks in one run (shared features, Grams and factors, two sets of
+        // right-hand sides) against each run alone, the verdict's on swapped fields: the same
+        // outputs bit for bit, and the same per-pose scratch (the last check's).
+        let acc = ws.acc[1];
+        let bits = |c: &SmoothCheck| {
+            [
+                c.share_of_gap,
+                c.share_pos,
+                c.share_rot,
+                c.heldout_rms_pos_m,
+                c.heldout_rms_rot_rad,
+                c.heldout_chi2,
+                c.z,
+            ]
+            .map(f64::to_bits)
+        };
+        for p in poses.iter_mut() {
+            // A remainder unlike the baseline's, so the two checks differ.
+            p.heldout_final = p.heldout_baseline.map(|v| 0.5 * v + 1e-5);
+        }
+        let (a, b) = check_both(
+            &nominal,
+            &data,
+            &mut poses,
+            &d.noise,
+            &base,
+            Some(&acc),
+            &dc,
+            &mut ws.smooth,
+        );
+        let b = b.unwrap();
+        let scratch: std::vec::Vec<u64> = poses.iter().map(|p| p.scratch.to_bits()).collect();
+        let alone_a = check(
+            &nominal,
+            &data,
+            &mut poses,
+            &d.noise,
+            &base,
+            &dc,
+            &mut ws.smooth,
+        );
+        swap_residuals(&mut poses);
+        let alone_b = check(
+            &nominal,
+            &data,
+            &mut poses,
+            &d.noise,
+            &acc,
+            &dc,
+            &mut ws.smooth,
+        );
+        swap_residuals(&mut poses);
+        assert!(a.evaluated && b.evaluated);
+        assert_eq!(bits(&a), bits(&alone_a));
+        assert_eq!(bits(&b), bits(&alone_b));
+        assert_ne!(bits(&a), bits(&b));
+        let alone: std::vec::Vec<u64> = poses.iter().map(|p| p.scratch.to_bits()).collect();
+        assert_eq!(scratch, alone);
     }
 
     /// The greedy-free Cholesky and the two triangular solves against the normal equations
@@ -1235,13 +1483,16 @@ mod tests {
         let mut ws = Box::new(SmoothWorkspace::new());
         let mut rng = SplitMix64::new(5);
         let mut full = [[0.0; M]; M];
-        let (mut phi, mut y) = ([0.0; M], [0.0; 6]);
+        let (mut phi, mut y) = ([0.0; M], [0.0; OUT]);
+        ws.n_out = OUT;
         for _ in 0..30 {
             for v in phi.iter_mut() {
                 *v = rng.normal();
             }
-            y = [rng.normal(), rng.normal(), 0.0, 1.0, -2.0, 0.5];
-            accumulate(&mut ws.g_all[1], &mut ws.r_all[1], &phi, &y);
+            for v in y.iter_mut() {
+                *v = rng.normal();
+            }
+            accumulate(&mut ws.g_all[1], &mut ws.r_all[1], &phi, &y, OUT);
             for i in 0..M {
                 for j in 0..M {
                     full[i][j] += phi[i] * phi[j];
@@ -1249,15 +1500,15 @@ mod tests {
             }
         }
         // One "fold" removed: the last row.
-        let (mut g, mut r) = ([[0.0; M]; M], [[0.0; 6]; M]);
-        accumulate(&mut g, &mut r, &phi, &y);
+        let (mut g, mut r) = ([[0.0; M]; M], [[0.0; OUT]; M]);
+        accumulate(&mut g, &mut r, &phi, &y, OUT);
         ws.g_out = g;
         ws.r_out = r;
         let lambda = 0.1;
         assert!(factor(&mut ws, 1, false, lambda));
         solve(&mut ws, 1, false);
         for i in 0..M {
-            for k in 0..6 {
+            for k in 0..OUT {
                 let mut lhs = lambda * ws.beta[i][k];
                 for j in 0..M {
                     lhs += (full[i][j] - phi[i] * phi[j]) * ws.beta[j][k];
@@ -1266,9 +1517,16 @@ mod tests {
                 assert!((lhs - rhs).abs() < 1e-9 * (1.0 + rhs.abs()), "{i} {k}");
             }
         }
-        // The documented size (about 278 KiB).
+        // Six outputs solved alone: the first six of the twelve, bit for bit.
+        let twelve = ws.beta;
+        ws.n_out = 6;
+        solve(&mut ws, 1, false);
+        for (a, b) in twelve.iter().zip(&ws.beta) {
+            assert_eq!(part(a, 0).map(f64::to_bits), part(b, 0).map(f64::to_bits));
+        }
+        // The documented size (about 321 KiB).
         let size = core::mem::size_of::<SmoothWorkspace>();
-        assert!((270 * 1024..285 * 1024).contains(&size), "{size}");
+        assert!((315 * 1024..325 * 1024).contains(&size), "{size}");
         // Not positive definite (λ = 0 with fewer rows than features): refused.
         ws.g_all[1] = [[0.0; M]; M];
         ws.g_out = [[0.0; M]; M];
