@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::{SplitMix64, aria_tool_data, arm7, perturbed};
+use common::{aria_tool_data, arm7, perturbed, random_data};
 use kincal::identify::{
     Algorithm, Bounds, ComponentMask, IdentifyOptions, Measurement, Prior, PriorSizes, Workspace,
     analyze, identify, identify_with_analysis,
@@ -21,38 +21,6 @@ fn fnv1a(s: &str) -> u64 {
     s.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
         (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
     })
-}
-
-/// `m` poses of `truth` at random configurations, each component disturbed by up to
-/// `noise` (m and rad; 0: exact).
-fn random_data<const N: usize>(
-    truth: &Robot<N>,
-    m: usize,
-    noise: f64,
-    seed: u64,
-) -> Vec<Measurement<N>> {
-    let mut rng = SplitMix64::new(seed);
-    (0..m)
-        .map(|_| {
-            let q = rng.q_within(truth.limits());
-            let t = truth.fk_q(&q).expect("fk");
-            let dp = nalgebra::Vector3::new(
-                rng.uniform(-noise, noise),
-                rng.uniform(-noise, noise),
-                rng.uniform(-noise, noise),
-            );
-            let dr = nalgebra::Rotation3::new(nalgebra::Vector3::new(
-                rng.uniform(-noise, noise),
-                rng.uniform(-noise, noise),
-                rng.uniform(-noise, noise),
-            ));
-            let pose = kincal::pose::Transform::from_parts(
-                nalgebra::Translation3::from(t.translation.vector + dp),
-                dr * t.rotation,
-            );
-            Measurement::new(q, pose)
-        })
-        .collect()
 }
 
 /// The text of every case, in order: each fit's `Debug` text and the workspace's singular

@@ -6,43 +6,11 @@
 
 mod common;
 
-use common::{SplitMix64, aria_tool_data, arm7, perturbed};
+use common::{aria_tool_data, arm7, perturbed, random_data};
 use kincal::identify::{
     Algorithm, Bounds, Identification, IdentifyOptions, Measurement, Workspace, analyze, identify,
 };
 use kincal::{ParamIndex, Robot, aria};
-
-/// `m` poses of `truth` at random configurations, each component disturbed by Gaussian-ish
-/// noise of `noise` (m and rad; 0: exact).
-fn random_data<const N: usize>(
-    truth: &Robot<N>,
-    m: usize,
-    noise: f64,
-    seed: u64,
-) -> Vec<Measurement<N>> {
-    let mut rng = SplitMix64::new(seed);
-    (0..m)
-        .map(|_| {
-            let q = rng.q_within(truth.limits());
-            let t = truth.fk_q(&q).expect("fk");
-            let dp = nalgebra::Vector3::new(
-                rng.uniform(-noise, noise),
-                rng.uniform(-noise, noise),
-                rng.uniform(-noise, noise),
-            );
-            let dr = nalgebra::Rotation3::new(nalgebra::Vector3::new(
-                rng.uniform(-noise, noise),
-                rng.uniform(-noise, noise),
-                rng.uniform(-noise, noise),
-            ));
-            let pose = kincal::pose::Transform::from_parts(
-                nalgebra::Translation3::from(t.translation.vector + dp),
-                dr * t.rotation,
-            );
-            Measurement::new(q, pose)
-        })
-        .collect()
-}
 
 /// Fits `data` twice on one workspace (the second call replays the remembered structural
 /// step) and once on a fresh workspace per call; all three must be identical.

@@ -383,3 +383,35 @@ pub fn aria_tool_data() -> Vec<kincal::identify::Measurement<6>> {
         })
         .collect()
 }
+
+/// `m` poses of `truth` at random configurations, each component disturbed by up to
+/// `noise` (m and rad; 0: exact).
+pub fn random_data<const N: usize>(
+    truth: &Robot<N>,
+    m: usize,
+    noise: f64,
+    seed: u64,
+) -> Vec<kincal::identify::Measurement<N>> {
+    let mut rng = SplitMix64::new(seed);
+    (0..m)
+        .map(|_| {
+            let q = rng.q_within(truth.limits());
+            let t = truth.fk_q(&q).expect("fk");
+            let dp = nalgebra::Vector3::new(
+                rng.uniform(-noise, noise),
+                rng.uniform(-noise, noise),
+                rng.uniform(-noise, noise),
+            );
+            let dr = nalgebra::Rotation3::new(nalgebra::Vector3::new(
+                rng.uniform(-noise, noise),
+                rng.uniform(-noise, noise),
+                rng.uniform(-noise, noise),
+            ));
+            let pose = kincal::pose::Transform::from_parts(
+                nalgebra::Translation3::from(t.translation.vector + dp),
+                dr * t.rotation,
+            );
+            kincal::identify::Measurement::new(q, pose)
+        })
+        .collect()
+}
