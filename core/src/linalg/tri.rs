@@ -54,19 +54,7 @@ pub fn solve_upper<const P: usize>(r: &[[f64; P]; P], n: usize, x: &mut [f64]) -
     check_finite_block(r, n, true)?;
     check_finite(x)?;
     check_diagonal(r, n)?;
-    for i in (0..n).rev() {
-        let ri = &r[i];
-        let mut sum = x[i];
-        for (rij, xj) in ri[i + 1..n].iter().zip(x[i + 1..n].iter()) {
-            sum -= rij * xj;
-        }
-        let v = sum / ri[i];
-        if !v.is_finite() {
-            return Err(overflow(n));
-        }
-        x[i] = v;
-    }
-    Ok(())
+    backward_unchecked(r, n, x)
 }
 
 /// Solves `RᵀR x = b` in place (`x` holds `b` on entry) for a factor `r` that
@@ -87,19 +75,7 @@ pub(crate) fn solve_normal_factored<const P: usize>(
     check_finite(x)?;
     let n = n.min(P);
     forward_unchecked(r, n, x)?;
-    for i in (0..n).rev() {
-        let ri = &r[i];
-        let mut sum = x[i];
-        for (rij, xj) in ri[i + 1..n].iter().zip(x[i + 1..n].iter()) {
-            sum -= rij * xj;
-        }
-        let v = sum / ri[i];
-        if !v.is_finite() {
-            return Err(overflow(n));
-        }
-        x[i] = v;
-    }
-    Ok(())
+    backward_unchecked(r, n, x)
 }
 
 /// Solves `Rᵀ x = b` in place (`x` holds `b` on entry) by forward substitution, using
@@ -136,6 +112,26 @@ pub(crate) fn forward_unchecked<const P: usize>(
         for (rkj, xj) in rk[k + 1..n].iter().zip(x[k + 1..n].iter_mut()) {
             *xj -= rkj * v;
         }
+    }
+    Ok(())
+}
+
+/// Back substitution `R x = b` in place without checking `r` (the callers have, or hold a
+/// factor that needs no check); refuses an overflowed entry. `n` is clamped to what `r`
+/// and `x` hold (the callers checked it) so that no index can be out of bounds.
+fn backward_unchecked<const P: usize>(r: &[[f64; P]; P], n: usize, x: &mut [f64]) -> Result<()> {
+    let n = n.min(P).min(x.len());
+    for i in (0..n).rev() {
+        let ri = &r[i];
+        let mut sum = x[i];
+        for (rij, xj) in ri[i + 1..n].iter().zip(x[i + 1..n].iter()) {
+            sum -= rij * xj;
+        }
+        let v = sum / ri[i];
+        if !v.is_finite() {
+            return Err(overflow(n));
+        }
+        x[i] = v;
     }
     Ok(())
 }
