@@ -281,6 +281,18 @@ fn study_matches_the_docs(out: &str) {
             close(*g, *w, &format!("{label} {line}"));
         }
     }
+    for (i, want) in DOC_LEVEL.iter().enumerate() {
+        let label = format!("level {}:", i + 1);
+        let line = out
+            .lines()
+            .find(|l| l.starts_with(&label))
+            .unwrap_or_else(|| panic!("no line '{label}' in\n{out}"));
+        let got = numbers_after(line.split('|').next().unwrap_or_default(), &label);
+        assert_eq!(got.len(), want.len(), "{line}");
+        for (g, w) in got.iter().zip(want) {
+            close(*g, *w, &format!("{label} {line}"));
+        }
+    }
 }
 
 // The diagnosis figures docs/real-data.md states (held-out RMS |Δp| in mm).
@@ -317,9 +329,16 @@ const DOC_SESSIONS: [(&str, f64, f64, f64, f64); 7] = [
 ];
 /// The variants' rows (kincal-io `hilti_study::VARIANTS` order): flat in-sample, flat held
 /// out, outdoor, pallet, orthogonal_wood, wood_left_track, seesaw, diagonal_wood.
-const DOC_VARIANTS: [[f64; 8]; 4] = [
+const DOC_VARIANTS: [[f64; 8]; 5] = [
     [1.22, 1.25, 1.75, 2.71, 2.15, 12.47, 7.34, 3.78],
     [1.28, 1.30, 1.60, 2.25, 1.70, 2.78, 3.65, 2.23],
     [3.98, 4.07, 3.54, 3.80, 3.76, 3.75, 4.74, 3.87],
     [1.31, 1.33, 1.61, 2.29, 1.75, 3.81, 3.84, 2.35],
+    [0.80, 0.83, 1.30, 1.90, 1.36, 2.05, 2.85, 1.78],
+];
+/// The variants' rows with a level new frame (kincal-io `hilti_study::LEVEL_VARIANTS`):
+/// flat, outdoor, pallet, orthogonal_wood, wood_left_track, seesaw, diagonal_wood.
+const DOC_LEVEL: [[f64; 7]; 2] = [
+    [1.28, 1.79, 2.27, 2.70, 3.44, 5.78, 3.02],
+    [0.80, 3.28, 1.97, 6.80, 4.62, 16.20, 6.49],
 ];

@@ -242,6 +242,26 @@ fn study_text(st: &kincal_io::hilti_study::Study) -> String {
             gains.join(", ")
         ));
     }
+    s.push_str(
+        "level new frame (a turn about the vertical and a shift), trained on flat: each floor's \
+         RMS | the variant; then the free frame's tilt about x, y [mrad]\n",
+    );
+    for (i, l) in st.level.iter().enumerate() {
+        let rms: Vec<String> = l.sessions.iter().map(|t| format!("{:.2}", t.1)).collect();
+        let tilt: Vec<String> = l
+            .sessions
+            .iter()
+            .map(|t| format!("{} {:+.1} {:+.1}", t.0, t.2[0] * 1e3, t.2[1] * 1e3))
+            .collect();
+        s.push_str(&format!(
+            "level {}: {} | {}\nfree frame tilt {}: {}\n",
+            i + 1,
+            rms.join(" "),
+            l.variant.name,
+            i + 1,
+            tilt.join(", ")
+        ));
+    }
     s
 }
 
