@@ -360,7 +360,11 @@ fn rigid_frame(robot: &Robot<N>, rows: &[HiltiRow], v: &Variant) -> Result<Trans
 
 /// `robot` with the rigid base frame that best fits `rows`.
 fn with_rigid_base(robot: &Robot<N>, rows: &[HiltiRow], v: &Variant) -> Result<Robot<N>, CliError> {
-    let t = rigid_frame(robot, rows, v)?;
+    moved_by(robot, &rigid_frame(robot, rows, v)?)
+}
+
+/// `robot` with its base frame moved by `t` (a new stationing: `t` applied after the base).
+fn moved_by(robot: &Robot<N>, t: &Transform) -> Result<Robot<N>, CliError> {
     robot
         .with_base(pose_to_vector6(&(t * robot.t_base_0())))
         .map_err(study_err)
@@ -420,10 +424,7 @@ pub fn level_base_rms_mm(
     rows: &[HiltiRow],
     v: &Variant,
 ) -> Result<f64, CliError> {
-    let t = level_frame(robot, rows, v)?;
-    let moved = robot
-        .with_base(pose_to_vector6(&(t * robot.t_base_0())))
-        .map_err(study_err)?;
+    let moved = moved_by(robot, &level_frame(robot, rows, v)?)?;
     rms_mm(&moved, rows, v)
 }
 
@@ -531,10 +532,7 @@ pub fn robust_transfer(
     rows: &[HiltiRow],
     v: &Variant,
 ) -> Result<RobustTransfer, CliError> {
-    let t = robust_rigid_frame(robot, rows, v)?;
-    let robust = robot
-        .with_base(pose_to_vector6(&(t * robot.t_base_0())))
-        .map_err(study_err)?;
+    let robust = moved_by(robot, &robust_rigid_frame(robot, rows, v)?)?;
     let e = errors_m(&robust, rows, v)?;
     let limit = GROSS_FLOOR_MULTIPLE * noise_floor_m();
     Ok(RobustTransfer {
