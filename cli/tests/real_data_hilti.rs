@@ -268,31 +268,8 @@ fn study_matches_the_docs(out: &str) {
             close(v[3], loso, &format!("{name}: leave one session out"));
         }
     }
-    for (i, want) in DOC_VARIANTS.iter().enumerate() {
-        let label = format!("variant {}:", i + 1);
-        let line = out
-            .lines()
-            .find(|l| l.starts_with(&label))
-            .unwrap_or_else(|| panic!("no line '{label}' in\n{out}"));
-        let figures = line.split('|').next().unwrap_or_default();
-        let got = numbers_after(figures, &label);
-        assert_eq!(got.len(), want.len(), "{line}");
-        for (g, w) in got.iter().zip(want) {
-            close(*g, *w, &format!("{label} {line}"));
-        }
-    }
-    for (i, want) in DOC_LEVEL.iter().enumerate() {
-        let label = format!("level {}:", i + 1);
-        let line = out
-            .lines()
-            .find(|l| l.starts_with(&label))
-            .unwrap_or_else(|| panic!("no line '{label}' in\n{out}"));
-        let got = numbers_after(line.split('|').next().unwrap_or_default(), &label);
-        assert_eq!(got.len(), want.len(), "{line}");
-        for (g, w) in got.iter().zip(want) {
-            close(*g, *w, &format!("{label} {line}"));
-        }
-    }
+    numbered_lines_close(out, "variant", &DOC_VARIANTS);
+    numbered_lines_close(out, "level", &DOC_LEVEL);
 }
 
 // The diagnosis figures docs/real-data.md states (held-out RMS |Δp| in mm).
@@ -342,3 +319,20 @@ const DOC_LEVEL: [[f64; 7]; 2] = [
     [1.28, 1.79, 2.27, 2.70, 3.44, 5.78, 3.02],
     [0.80, 3.28, 1.97, 6.80, 4.62, 16.20, 6.49],
 ];
+
+/// Each line `"{prefix} k: a b c … | …"` of `out` (k from 1) carries the figures of
+/// `wants[k - 1]` before its `|`, each within the documented rounding.
+fn numbered_lines_close<const K: usize>(out: &str, prefix: &str, wants: &[[f64; K]]) {
+    for (i, want) in wants.iter().enumerate() {
+        let label = format!("{prefix} {}:", i + 1);
+        let line = out
+            .lines()
+            .find(|l| l.starts_with(&label))
+            .unwrap_or_else(|| panic!("no line '{label}' in\n{out}"));
+        let got = numbers_after(line.split('|').next().unwrap_or_default(), &label);
+        assert_eq!(got.len(), want.len(), "{line}");
+        for (g, w) in got.iter().zip(want) {
+            close(*g, *w, &format!("{label} {line}"));
+        }
+    }
+}

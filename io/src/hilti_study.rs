@@ -622,6 +622,19 @@ fn flat_start(dir: &Path, flat: &[HiltiRow], v: &Variant) -> Result<Robot<N>, Cl
     with_rigid_base(&v.nominal(dir)?, flat, &v.without_tilts())
 }
 
+/// Folds of `flat`'s held-out figure: row i is in fold i mod [`FLAT_FOLDS`].
+pub const FLAT_FOLDS: usize = 5;
+
+/// `flat`'s rows split for `fold`: (training rows, held-out rows).
+fn flat_fold(flat: &[HiltiRow], fold: usize) -> (Vec<HiltiRow>, Vec<HiltiRow>) {
+    let (test, train): (Vec<_>, Vec<_>) = flat
+        .iter()
+        .enumerate()
+        .partition(|(i, _)| i % FLAT_FOLDS == fold);
+    let rows = |v: Vec<(usize, &HiltiRow)>| v.into_iter().map(|(_, r)| r.clone()).collect();
+    (rows(train), rows(test))
+}
+
 /// `v` calibrated on all of `flat`.
 pub fn train_on_flat(
     dir: &Path,
@@ -645,15 +658,8 @@ pub fn variant_figures(
     let mut flat_held_out_mm = f64::NAN;
     if with_folds {
         let (mut sum, mut n) = (0.0, 0usize);
-        for fold in 0..5 {
-            let (mut train, mut test) = (Vec::new(), Vec::new());
-            for (i, r) in flat.iter().enumerate() {
-                if i % 5 == fold {
-                    test.push(r.clone());
-                } else {
-                    train.push(r.clone());
-                }
-            }
+        for fold in 0..FLAT_FOLDS {
+            let (train, test) = flat_fold(flat, fold);
             let b = calibrate(&start, &train, v)?;
             sum += rms_mm(&b, &test, v)?.powi(2) * test.len() as f64;
             n += test.len();
@@ -1022,13 +1028,8 @@ mod tests {
             }
         };
         one("flat", flat, &v);
-        for fold in 0..5 {
-            let train: Vec<HiltiRow> = flat
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| i % 5 != fold)
-                .map(|(_, r)| r.clone())
-                .collect();
+        for fold in 0..FLAT_FOLDS {
+            let (train, _) = flat_fold(flat, fold);
             one(&format!("fold {fold}"), &train, &v);
         }
         for dc in [-0.1, 0.1] {
@@ -1057,12 +1058,7 @@ mod tests {
     fn fold1_drift(d: &Path, sessions: &[crate::datasets_hilti::Session]) {
         let v = BENDING_IN_BASE_TILT;
         let flat = &sessions[0].2;
-        let train: Vec<HiltiRow> = flat
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| i % 5 != 1)
-            .map(|(_, r)| r.clone())
-            .collect();
+        let (train, _) = flat_fold(flat, 1);
         let start = flat_start(d, flat, &v).unwrap();
         let ms = measurements(&train, &v);
         let mut ws = crate::calibration::new_workspace();
@@ -1104,12 +1100,7 @@ mod tests {
     /// same fit longer, by OPT2, with a loose `ftol` and then strict from there (prints).
     fn fold1_trace(d: &Path, sessions: &[crate::datasets_hilti::Session]) {
         let flat = &sessions[0].2;
-        let train: Vec<HiltiRow> = flat
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| i % 5 != 1)
-            .map(|(_, r)| r.clone())
-            .collect();
+        let (train, _) = flat_fold(flat, 1);
         for v in [BENDING_AT_TOP, BENDING_IN_BASE_TILT] {
             let start = flat_start(d, flat, &v).unwrap();
             let ms = measurements(&train, &v);
