@@ -9,6 +9,12 @@
 //! (schema, channel, message) are parsed, after their length prefixes were checked against
 //! the record's own size. The schema/channel bookkeeping is the crate's
 //! [`ChannelAccumulator`], so the checks `MessageStream` applies still apply.
+//!
+//! The crate's reader trusts one more length: inside an uncompressed chunk it subtracts each
+//! record's length from the chunk's remaining bytes without checking that the record fits
+//! (`mcap` 0.26.0, found by the same fuzz target: a panic with overflow checks, a read past
+//! the chunk in release). [`ChunkGuard`] walks the record framing of the bytes before the
+//! reader sees them and refuses such a chunk with its byte offset.
 
 use std::borrow::Cow;
 use std::io::Read;
@@ -17,6 +23,10 @@ use mcap::read::ChannelAccumulator;
 use mcap::records::{Record, op};
 use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
 use mcap::{McapError, Message};
+
+use self::guard::ChunkGuard;
+
+mod guard;
 
 /// The largest MCAP record (a message, or a chunk's compressed or uncompressed body) read:
 /// 256 MiB. Bags for calibration hold joint states and poses (rosbag2 writes 768 KiB
@@ -54,7 +64,7 @@ impl From<std::io::Error> for ReadError {
 
 /// The messages of one MCAP stream in file order; nothing after the first error.
 pub struct Messages<R> {
-    source: R,
+    source: ChunkGuard<R>,
     reader: LinearReader,
     channels: ChannelAccumulator<'static>,
     past_data_end: bool,
@@ -67,7 +77,7 @@ impl<R: Read> Messages<R> {
             .with_record_length_limit(MAX_RECORD_BYTES)
             .with_emit_chunks(false);
         Self {
-            source,
+            source: ChunkGuard::new(source),
             reader: LinearReader::new_with_options(options),
             channels: ChannelAccumulator::default(),
             past_data_end: false,
@@ -126,7 +136,12 @@ impl<R: Read> Messages<R> {
             match self.source.read(self.reader.insert(need)) {
                 Ok(n) => break n,
                 Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-                Err(e) => return Err(e.into()),
+                Err(e) => {
+                    return Err(match self.source.take_refusal() {
+                        Some(why) => ReadError::Framing(why),
+                        None => e.into(),
+                    });
+                }
             }
         };
         self.reader.notify_read(read);

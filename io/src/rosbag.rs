@@ -936,4 +936,41 @@ mod tests {
             );
         }
     }
+
+    /// The ros_bag fuzz target's inputs (kept as fuzz/seeds/ros_bag/regression-record-overruns-uncompressed-chunk-*): a record longer than its
+    /// uncompressed chunk made `mcap`'s reader underflow (a panic in this debug build). Now
+    /// the framing guard refuses it with the record's offset.
+    #[test]
+    fn the_fuzz_inputs_with_a_record_overrunning_its_chunk_are_refused() {
+        let inputs: [(&[u8], usize, u64); 2] = [
+            (
+                include_bytes!(
+                    "../../fuzz/seeds/ros_bag/regression-record-overruns-uncompressed-chunk-1"
+                ),
+                187,
+                2146,
+            ),
+            (
+                include_bytes!(
+                    "../../fuzz/seeds/ros_bag/regression-record-overruns-uncompressed-chunk-2"
+                ),
+                829,
+                1024,
+            ),
+        ];
+        let opts = BagOptions::new("/joint_states", MeasurementTopic::Pose("/tool".into()));
+        for (bag, at, declared) in inputs {
+            let Err(err) = import_bag_bytes(&[("fuzz.mcap", bag)], &opts) else {
+                panic!("the fuzz input is refused");
+            };
+            let text = err.to_string();
+            assert!(
+                text.contains("fuzz.mcap: not a readable MCAP file")
+                    && text.contains(&format!(
+                        "the record at byte {at} declares {declared} bytes"
+                    )),
+                "{text}"
+            );
+        }
+    }
 }
