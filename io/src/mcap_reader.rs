@@ -33,6 +33,12 @@ mod guard;
 /// chunks); a larger record is refused as damaged.
 pub const MAX_RECORD_BYTES: usize = 256 << 20;
 
+/// Bytes read from the source at a time. The reader asks for a whole record at once (up to
+/// [`MAX_RECORD_BYTES`], zero-filled before it is read into): asking the source for at most
+/// this much per read grows the reader's buffer with the bytes that really arrive, so a
+/// damaged 100-byte file declaring a 200 MiB record costs 100 bytes, not 200 MiB.
+const READ_BYTES: usize = 64 << 10;
+
 /// Why a stream could not be read: the crate's error, or a record's own framing (a length
 /// prefix larger than its record, a message after the data section).
 #[derive(Debug)]
@@ -130,10 +136,11 @@ impl<R: Read> Messages<R> {
         }
     }
 
-    /// Reads up to `need` bytes into the reader (0 at the end of the stream).
+    /// Reads up to `need` bytes, at most [`READ_BYTES`], into the reader (0 at the end of
+    /// the stream).
     fn fill(&mut self, need: usize) -> Result<(), ReadError> {
         let read = loop {
-            match self.source.read(self.reader.insert(need)) {
+            match self.source.read(self.reader.insert(need.min(READ_BYTES))) {
                 Ok(n) => break n,
                 Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
                 Err(e) => {

@@ -12,8 +12,7 @@ use std::io::{self, Read};
 
 use mcap::records::op;
 
-/// Bytes asked of the source per read.
-const READ_BYTES: usize = 64 << 10;
+use super::READ_BYTES;
 /// The magic at the start of a file.
 const MAGIC_BYTES: u64 = 8;
 /// A record's opcode and u64 length.
