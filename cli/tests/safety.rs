@@ -522,7 +522,7 @@ fn a_deeply_nested_urdf_is_refused_without_overflowing_the_stack() {
     assert!(e.contains("nested more than"), "{e}");
     // Ordinary nesting, comments and quoted '>' pass the scan.
     let ok = "<?xml version=\"1.0\"?><!-- <a><b><c> --><robot name=\"a>b\"><link name=\"x\"><visual><geometry><box size=\"1 1 1\"/></geometry></visual></link></robot>";
-    kincal_io::urdf::check_nesting(ok, "ok.urdf").unwrap();
+    kincal_io::urdf::check_markup(ok, "ok.urdf").unwrap();
 }
 
 // ---- 5. unbounded lines --------------------------------------------------------------

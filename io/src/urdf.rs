@@ -288,7 +288,7 @@ pub fn import_urdf_str(
     file: &str,
     sel: &ChainSelection<'_>,
 ) -> Result<ImportedUrdf, DescriptionError> {
-    check_nesting(text, file)?;
+    check_markup(text, file)?;
     let urdf = urdf_rs::read_from_string(text)
         .map_err(|e| DescriptionError::new(file, None, format!("not a readable URDF: {e}")))?;
     import_urdf(&urdf, file, sel).map_err(|mut e| {
@@ -325,11 +325,15 @@ fn element_line(text: &str, key: &str) -> Option<usize> {
 /// recurses per level: a file nested 20,000 deep overflowed the stack (exit 134).
 pub const MAX_URDF_DEPTH: usize = 64;
 
-/// Refuses XML nested deeper than [`MAX_URDF_DEPTH`] before the recursive parser sees it,
-/// naming the line and column of the first element too deep. A light scan: comments,
-/// `<?…?>`, `<!…>` and quoted attribute values are skipped; malformed XML is left to the
-/// parser.
-pub fn check_nesting(text: &str, file: &str) -> Result<(), DescriptionError> {
+/// Refuses, before the XML reader sees them, what it cannot survive, naming the line and
+/// column: elements nested deeper than [`MAX_URDF_DEPTH`] (it recurses per level), and
+/// namespace-prefixed names other than `xmlns:p` declarations. URDF has none, and the
+/// reader urdf-rs uses (RustyXML 0.3) panics printing an attribute with an empty prefix
+/// (`:ixz`) under a default namespace (found by the `urdf_import` fuzz target) and reads
+/// `<x:link>` as a `<link>`. A light scan:
+/// comments, `<?…?>`, `<!…>` and quoted attribute values are skipped; malformed XML is left
+/// to the parser.
+pub fn check_markup(text: &str, file: &str) -> Result<(), DescriptionError> {
     let b = text.as_bytes();
     let mut depth = 0usize;
     let mut i = 0;
@@ -347,26 +351,80 @@ pub fn check_nesting(text: &str, file: &str) -> Result<(), DescriptionError> {
             start + 2
         } else {
             let end = tag_end(b, start + 1);
+            let refuse = |at: usize, reason: String| {
+                let (line, column) = crate::robot_file::line_col(text, at);
+                Err(DescriptionError {
+                    file: file.to_string(),
+                    line: Some(line),
+                    column: Some(column),
+                    key: None,
+                    reason,
+                })
+            };
+            if let Some((at, name)) = prefixed_name(&text[start + 1..end.min(b.len())]) {
+                return refuse(
+                    start + 1 + at,
+                    format!(
+                        "the name '{name}' has a namespace prefix: URDF elements and attributes have none (expand a xacro file first: `xacro robot.urdf.xacro > robot.urdf`)"
+                    ),
+                );
+            }
             let self_closing = end > 0 && b.get(end - 1) == Some(&b'/');
             if !self_closing {
                 depth += 1;
                 if depth > MAX_URDF_DEPTH {
-                    let (line, column) = crate::robot_file::line_col(text, start);
-                    return Err(DescriptionError {
-                        file: file.to_string(),
-                        line: Some(line),
-                        column: Some(column),
-                        key: None,
-                        reason: format!(
+                    return refuse(
+                        start,
+                        format!(
                             "elements nested more than {MAX_URDF_DEPTH} deep: not a URDF (a robot description nests about 5 deep)"
                         ),
-                    });
+                    );
                 }
             }
             end + 1
         };
     }
     Ok(())
+}
+
+/// The first name in a start tag's text (between `<` and `>`) with a namespace prefix,
+/// `xmlns:p` declarations excepted, and its byte offset in `tag`.
+fn prefixed_name(tag: &str) -> Option<(usize, &str)> {
+    let b = tag.as_bytes();
+    let is_space = |c: u8| c.is_ascii_whitespace();
+    let name_end = |from: usize| {
+        (from..b.len())
+            .find(|&k| is_space(b[k]) || matches!(b[k], b'=' | b'/' | b'>'))
+            .unwrap_or(b.len())
+    };
+    let end = name_end(0);
+    if tag[..end].contains(':') {
+        return Some((0, &tag[..end]));
+    }
+    let mut k = end;
+    while k < b.len() {
+        if is_space(b[k]) || b[k] == b'/' {
+            k += 1;
+            continue;
+        }
+        let end = name_end(k).max(k + 1);
+        let name = &tag[k..end];
+        let declaration = name
+            .strip_prefix("xmlns:")
+            .is_some_and(|p| !p.is_empty() && !p.contains(':'));
+        if name.contains(':') && !declaration {
+            return Some((k, name));
+        }
+        // Past `=` and the quoted value (malformed text is the parser's to refuse).
+        k = end;
+        while k < b.len() && (is_space(b[k]) || b[k] == b'=') {
+            k += 1;
+        }
+        if let Some(&q) = b.get(k).filter(|&&q| q == b'"' || q == b'\'') {
+            k = tag[k + 1..].find(q as char).map_or(b.len(), |e| k + e + 2);
+        }
+    }
+    None
 }
 
 /// Index of the `>` closing the tag whose name starts at `from` (quoted values skipped), or

@@ -586,3 +586,67 @@ fn errors_carry_the_urdf_line() {
     );
     assert!(e.line.is_some(), "{e}");
 }
+
+/// The `urdf_import` fuzz target's input (kept as a seed): an attribute `:ixz` with an empty
+/// namespace prefix under a default namespace made RustyXML (urdf-rs's reader) panic while
+/// printing the element back; `<x:link>` was read as a `<link>`. Prefixed names are refused
+/// with their line and column before the reader sees them; `xmlns:p` declarations (xacro
+/// leftovers on `<robot>`) and a default namespace still pass.
+#[test]
+fn namespace_prefixed_names_are_refused_before_the_xml_reader() {
+    let fuzz = include_str!("../../fuzz/seeds/urdf_import/regression-empty-namespace-prefix");
+    let err = import_urdf_str(fuzz, "fuzz.urdf", &ChainSelection::default()).unwrap_err();
+    let column = fuzz
+        .lines()
+        .nth(2)
+        .and_then(|l| l.find(" :ixz="))
+        .map(|c| c + 2);
+    assert_eq!((err.line, err.column), (Some(3), column), "{err}");
+    assert!(
+        err.reason
+            .starts_with("the name ':ixz' has a namespace prefix"),
+        "{err}"
+    );
+    let body = r#"<link name="a"/><link name="b"/><joint name="j" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>"#;
+    let refused = [
+        (
+            format!(r#"<robot name="r" xmlns="u">{body}<link name="c" :ixz="0"/></robot>"#),
+            ":ixz",
+        ),
+        (
+            format!(r#"<robot name="r" xml:lang="en">{body}</robot>"#),
+            "xml:lang",
+        ),
+        (
+            format!(r#"<robot name="r" xmlns:x="u">{body}<x:link name="c"/></robot>"#),
+            "x:link",
+        ),
+        (
+            format!(r#"<robot name="r" xmlns:="u">{body}</robot>"#),
+            "xmlns:",
+        ),
+    ];
+    for (text, name) in &refused {
+        let err = import_urdf_str(text, "ns.urdf", &ChainSelection::default()).unwrap_err();
+        assert!(
+            err.reason
+                .contains(&format!("the name '{name}' has a namespace prefix")),
+            "{name}: {err}"
+        );
+        assert_eq!(err.line, Some(1), "{err}");
+        assert_eq!(
+            Some(text.find(name).unwrap() + 1),
+            err.column,
+            "{name}: {err}"
+        );
+    }
+    let accepted = [
+        format!(r#"<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">{body}</robot>"#),
+        format!(r#"<robot name="r" xmlns="u">{body}</robot>"#),
+        format!(r#"<robot name="r:'x'">{body}<!-- <x:y/> --></robot>"#),
+    ];
+    for text in &accepted {
+        let imp = import_urdf_str(text, "ok.urdf", &ChainSelection::default());
+        assert!(imp.is_ok(), "{text}: {:?}", imp.err());
+    }
+}

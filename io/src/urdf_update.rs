@@ -22,7 +22,7 @@ use nalgebra::Vector3;
 use urdf_rs::JointType;
 
 use crate::robot_file::DescriptionError;
-use crate::urdf::{ChainSelection, check_nesting, origin_transform, select_chain};
+use crate::urdf::{ChainSelection, check_markup, origin_transform, select_chain};
 
 /// Agreement required between the URDF's joint axes and the nominal model's [m, cosine].
 pub const AXIS_TOLERANCE: f64 = 1e-9;
@@ -49,7 +49,7 @@ pub fn update_urdf<const N: usize>(
     nominal: &Robot<N>,
     model: &Robot<N>,
 ) -> Result<String, DescriptionError> {
-    check_nesting(text, file)?;
+    check_markup(text, file)?;
     let urdf = urdf_rs::read_from_string(text)
         .map_err(|e| DescriptionError::new(file, None, format!("not a readable URDF: {e}")))?;
     let (base, tip, path) = select_chain(&urdf, file, sel)?;
