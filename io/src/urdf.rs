@@ -35,6 +35,7 @@
 //! effects (compliance, backlash, …) have no URDF form: exporting a model that has them is
 //! refused unless explicitly allowed (they are then dropped).
 
+use std::borrow::Cow;
 use std::collections::{HashMap, HashSet};
 use std::fmt;
 use std::path::Path;
@@ -288,8 +289,7 @@ pub fn import_urdf_str(
     file: &str,
     sel: &ChainSelection<'_>,
 ) -> Result<ImportedUrdf, DescriptionError> {
-    check_markup(text, file)?;
-    let urdf = urdf_rs::read_from_string(text)
+    let urdf = urdf_rs::read_from_string(&check_markup(text, file)?)
         .map_err(|e| DescriptionError::new(file, None, format!("not a readable URDF: {e}")))?;
     import_urdf(&urdf, file, sel).map_err(|mut e| {
         if e.line.is_none() {
@@ -325,17 +325,25 @@ fn element_line(text: &str, key: &str) -> Option<usize> {
 /// recurses per level: a file nested 20,000 deep overflowed the stack (exit 134).
 pub const MAX_URDF_DEPTH: usize = 64;
 
-/// Refuses, before the XML reader sees them, what it cannot survive, naming the line and
-/// column: elements nested deeper than [`MAX_URDF_DEPTH`] (it recurses per level), and
-/// namespace-prefixed names other than `xmlns:p` declarations. URDF has none, and the
-/// reader urdf-rs uses (RustyXML 0.3) panics printing an attribute with an empty prefix
-/// (`:ixz`) under a default namespace (found by the `urdf_import` fuzz target) and reads
-/// `<x:link>` as a `<link>`. A light scan:
-/// comments, `<?…?>`, `<!…>` and quoted attribute values are skipped; malformed XML is left
-/// to the parser.
-pub fn check_markup(text: &str, file: &str) -> Result<(), DescriptionError> {
+/// The URDF text the XML reader may see: what it cannot survive is refused, naming the line
+/// and column, and namespace declarations are blanked.
+///
+/// - Elements nested deeper than [`MAX_URDF_DEPTH`] are refused (the reader recurses per
+///   level).
+/// - Element and attribute names with a namespace prefix are refused: URDF has none, and
+///   the reader urdf-rs uses (RustyXML 0.3) reads `<x:link>` as a `<link>`.
+/// - Namespace declarations (`xmlns="…"`, `xmlns:p="…"`: xacro leftovers on `<robot>`)
+///   are replaced by spaces, so line and column numbers stay true. With no prefixed name
+///   they declare nothing the import uses, and RustyXML panics printing some of them back
+///   (`:ixz` under a default namespace, `xmlns:xmlns="…"`: both found by the
+///   `urdf_import` fuzz target), so it never sees one.
+///
+/// A light scan: comments, `<?…?>`, `<!…>` and quoted attribute values are skipped;
+/// malformed XML is left to the parser.
+pub fn check_markup<'t>(text: &'t str, file: &str) -> Result<Cow<'t, str>, DescriptionError> {
     let b = text.as_bytes();
     let mut depth = 0usize;
+    let mut declarations = Vec::new();
     let mut i = 0;
     while let Some(off) = b.get(i..).and_then(|r| r.iter().position(|&c| c == b'<')) {
         let start = i + off;
@@ -361,13 +369,20 @@ pub fn check_markup(text: &str, file: &str) -> Result<(), DescriptionError> {
                     reason,
                 })
             };
-            if let Some((at, name)) = prefixed_name(&text[start + 1..end.min(b.len())]) {
-                return refuse(
-                    start + 1 + at,
-                    format!(
-                        "the name '{name}' has a namespace prefix: URDF elements and attributes have none (expand a xacro file first: `xacro robot.urdf.xacro > robot.urdf`)"
-                    ),
-                );
+            let tag = &text[start + 1..end.min(b.len())];
+            for (k, attr) in tag_names(tag).into_iter().enumerate() {
+                let (at, name) = (start + 1 + attr.name_at, attr.name);
+                let is_attribute = k > 0;
+                if is_attribute && (name == "xmlns" || name.starts_with("xmlns:")) {
+                    declarations.push(at..start + 1 + attr.end);
+                } else if name.contains(':') {
+                    return refuse(
+                        at,
+                        format!(
+                            "the name '{name}' has a namespace prefix: URDF elements and attributes have none (expand a xacro file first: `xacro robot.urdf.xacro > robot.urdf`)"
+                        ),
+                    );
+                }
             }
             let self_closing = end > 0 && b.get(end - 1) == Some(&b'/');
             if !self_closing {
@@ -384,12 +399,34 @@ pub fn check_markup(text: &str, file: &str) -> Result<(), DescriptionError> {
             end + 1
         };
     }
-    Ok(())
+    if declarations.is_empty() {
+        return Ok(Cow::Borrowed(text));
+    }
+    let mut blanked = text.as_bytes().to_vec();
+    for span in declarations {
+        for c in &mut blanked[span] {
+            // A newline inside a quoted value stays, so that lines keep their numbers.
+            if *c != b'\n' {
+                *c = b' ';
+            }
+        }
+    }
+    // Only whole characters were replaced (a span starts at an ASCII name and ends after
+    // an ASCII quote or name), so the text stays UTF-8.
+    Ok(Cow::Owned(String::from_utf8_lossy(&blanked).into_owned()))
 }
 
-/// The first name in a start tag's text (between `<` and `>`) with a namespace prefix,
-/// `xmlns:p` declarations excepted, and its byte offset in `tag`.
-fn prefixed_name(tag: &str) -> Option<(usize, &str)> {
+/// A name in a start tag: the element's own (`end` is the name's end) or an attribute's
+/// (`end` is past its quoted value, or the name's end when malformed).
+struct TagName<'t> {
+    name: &'t str,
+    name_at: usize,
+    end: usize,
+}
+
+/// The names of a start tag's text (between `<` and `>`): the element's, then each
+/// attribute's, with their byte offsets in `tag`.
+fn tag_names(tag: &str) -> Vec<TagName<'_>> {
     let b = tag.as_bytes();
     let is_space = |c: u8| c.is_ascii_whitespace();
     let name_end = |from: usize| {
@@ -398,23 +435,19 @@ fn prefixed_name(tag: &str) -> Option<(usize, &str)> {
             .unwrap_or(b.len())
     };
     let end = name_end(0);
-    if tag[..end].contains(':') {
-        return Some((0, &tag[..end]));
-    }
+    let mut names = vec![TagName {
+        name: &tag[..end],
+        name_at: 0,
+        end,
+    }];
     let mut k = end;
     while k < b.len() {
         if is_space(b[k]) || b[k] == b'/' {
             k += 1;
             continue;
         }
+        let at = k;
         let end = name_end(k).max(k + 1);
-        let name = &tag[k..end];
-        let declaration = name
-            .strip_prefix("xmlns:")
-            .is_some_and(|p| !p.is_empty() && !p.contains(':'));
-        if name.contains(':') && !declaration {
-            return Some((k, name));
-        }
         // Past `=` and the quoted value (malformed text is the parser's to refuse).
         k = end;
         while k < b.len() && (is_space(b[k]) || b[k] == b'=') {
@@ -422,9 +455,16 @@ fn prefixed_name(tag: &str) -> Option<(usize, &str)> {
         }
         if let Some(&q) = b.get(k).filter(|&&q| q == b'"' || q == b'\'') {
             k = tag[k + 1..].find(q as char).map_or(b.len(), |e| k + e + 2);
+        } else {
+            k = end;
         }
+        names.push(TagName {
+            name: &tag[at..end],
+            name_at: at,
+            end: k,
+        });
     }
-    None
+    names
 }
 
 /// Index of the `>` closing the tag whose name starts at `from` (quoted values skipped), or

@@ -622,8 +622,8 @@ fn namespace_prefixed_names_are_refused_before_the_xml_reader() {
             "x:link",
         ),
         (
-            format!(r#"<robot name="r" xmlns:="u">{body}</robot>"#),
-            "xmlns:",
+            format!(r#"<xmlns:robot name="r">{body}</xmlns:robot>"#),
+            "xmlns:robot",
         ),
     ];
     for (text, name) in &refused {
@@ -640,13 +640,27 @@ fn namespace_prefixed_names_are_refused_before_the_xml_reader() {
             "{name}: {err}"
         );
     }
+    // Namespace declarations are blanked before the reader sees them (it panicked printing
+    // `xmlns:xmlns` back: the second fuzz input); lines and columns stay those of the file.
     let accepted = [
         format!(r#"<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">{body}</robot>"#),
         format!(r#"<robot name="r" xmlns="u">{body}</robot>"#),
         format!(r#"<robot name="r:'x'">{body}<!-- <x:y/> --></robot>"#),
+        format!(r#"<robot name="r" xmlns:xmlns="/" xmlns:a="1 >" xmlns:="u">{body}</robot>"#),
+        format!("<robot name=\"r\" xmlns:a=\"é\n\">{body}</robot>"),
     ];
     for text in &accepted {
         let imp = import_urdf_str(text, "ok.urdf", &ChainSelection::default());
         assert!(imp.is_ok(), "{text}: {:?}", imp.err());
     }
+    let blanked = check_markup(&accepted[4], "ok.urdf").unwrap();
+    assert_eq!(blanked.lines().count(), accepted[4].lines().count());
+    let first = blanked.lines().next().unwrap();
+    assert_eq!(first.trim_end(), "<robot name=\"r\"", "{blanked}");
+    assert_eq!(first.len(), accepted[4].lines().next().unwrap().len());
+    let bad_line = format!("<robot name=\"r\" xmlns:a=\"\n\">\n{body}<x:link/></robot>");
+    let err = import_urdf_str(&bad_line, "ns.urdf", &ChainSelection::default()).unwrap_err();
+    assert_eq!(err.line, Some(3), "{err}");
+    let second = include_str!("../../fuzz/seeds/urdf_import/regression-xmlns-xmlns-declaration");
+    assert!(import_urdf_str(second, "fuzz.urdf", &ChainSelection::default()).is_err());
 }

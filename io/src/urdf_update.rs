@@ -49,8 +49,7 @@ pub fn update_urdf<const N: usize>(
     nominal: &Robot<N>,
     model: &Robot<N>,
 ) -> Result<String, DescriptionError> {
-    check_markup(text, file)?;
-    let urdf = urdf_rs::read_from_string(text)
+    let urdf = urdf_rs::read_from_string(&check_markup(text, file)?)
         .map_err(|e| DescriptionError::new(file, None, format!("not a readable URDF: {e}")))?;
     let (base, tip, path) = select_chain(&urdf, file, sel)?;
     let err = |key: Option<String>, reason: String| DescriptionError::new(file, key, reason);
