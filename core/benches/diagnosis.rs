@@ -6,16 +6,18 @@
 //! `cargo bench -p kincal --bench diagnosis -- --noplot`
 //!
 //! Measured (CPU time per run from `cpu_time`, loaded 2-core machine, this and the
-//! previous code alternated in one session, three runs each): 120 rows 15.0–15.1 ms (was
-//! 18.35–18.45), 1,000 rows 127.5–128.8 ms (was 140.0–144.2), 5,000 rows 547.5–555 ms
-//! (was 607.5–615): ×0.82, ×0.91, ×0.90, outputs bit-identical. Instructions of one
-//! diagnosis (callgrind, `tests/diagnosis_dump.rs`'s `one_size`, release): 120 rows
-//! 210 → 180 M, 1,000 rows 1,737 → 1,656 M, 5,000 rows 6,819 → 6,521 M. Neither target is
-//! met yet. Shares of a 5,000-row diagnosis's instructions now: the Gauss–Newton fits
-//! 34 %, the candidates' cross-validation 17 %, the outlier screen 12 %, the extrapolation
-//! check 11 %, the smooth checks (baseline's and verdict's, run together) 10 %; at 120
-//! rows the fits 26 %, the smooth checks 24 % (their 48×48 ridge factorisations and
-//! solves 15 %), the cross-validation 22 %.
+//! previous code alternated in one session, three runs each): 120 rows 13.80–13.90 ms (was
+//! 14.75–14.90), 1,000 rows 121.7–122.9 ms (was 122.9–124.2), 5,000 rows 520–527.5 ms
+//! (was 522.5–527.5): ×0.94, ×0.99, ×1.00 (within the noise), outputs bit-identical.
+//! Instructions of one diagnosis (callgrind, `tests/diagnosis_dump.rs`'s `one_size`,
+//! release, `diagnose` inclusive): 120 rows 180.1 → 167.3 M, 1,000 rows 1,606.7 → 1,594.2 M,
+//! 5,000 rows 6,318 → 6,307 M (the smooth checks' inner ridge fits shared by fold pairs;
+//! they do not grow with the rows). Neither target is met yet. Shares of a 5,000-row
+//! diagnosis's instructions: the Gauss–Newton fits 34 %, the candidates' cross-validation
+//! 17 %, the outlier screen 12 %, the extrapolation check 11 %, the smooth checks
+//! (baseline's and verdict's, run together) 10 %; at 120 rows the smooth checks 18 % (their
+//! 48×48 ridge factorisations and solves 8.5 %), the fits and the cross-validation as many
+//! instructions as before (26 % and 22 % of the former 180 M).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use kincal::diagnosis::{Config, DiagWorkspace, PoseDiagnosis, diagnose};

@@ -164,6 +164,11 @@ pub struct SmoothWorkspace {
     task_mean: [f64; 3],
     task_scale: f64,
     phi: [f64; M],
+    /// Tests only: the inner training sets in the order before fits were shared by fold
+    /// pairs (`G_all − G_out − G_in`, each outer fold's inner folds fitted on their own;
+    /// [`training`]), the reference the shared fits are compared with.
+    #[cfg(test)]
+    legacy: bool,
 }
 
 impl SmoothWorkspace {
@@ -190,6 +195,8 @@ impl SmoothWorkspace {
             task_mean: [0.0; 3],
             task_scale: 0.0,
             phi: [0.0; M],
+            #[cfg(test)]
+            legacy: false,
         }
     }
 }
@@ -455,12 +462,47 @@ fn fold_gram<const N: usize>(
     }
 }
 
+/// Entry of a training matrix or right-hand side: `all − out` (outer fit), or for an inner
+/// fit `all − (out + in)`, the two held-out folds' sums added first: addition commutes
+/// exactly, so the training set of the fold pair {f, g} is the same bits whichever of the
+/// two is the outer fold, and one fit serves both ([`choose_all`]). (`legacy`, tests only:
+/// `all − out − in`, the order before, where the pair's two fits differed in the last bits.)
+#[inline]
+fn training(all: f64, out: f64, inn: f64, inner: bool, legacy: bool) -> f64 {
+    if !inner {
+        all - out
+    } else if legacy {
+        all - out - inn
+    } else {
+        all - (out + inn)
+    }
+}
+
+/// Whether the workspace computes the test-only reference order ([`training`]).
+#[cfg(test)]
+fn legacy(ws: &SmoothWorkspace) -> bool {
+    ws.legacy
+}
+
+/// Whether the workspace computes the test-only reference order ([`training`]): never
+/// outside the tests.
+#[cfg(not(test))]
+fn legacy(_: &SmoothWorkspace) -> bool {
+    false
+}
+
+/// Whether the nested cross-validation keeps every fold's Gram ([`choose_all`]) rather than
+/// rebuilding them per outer fold ([`choose`]; always in the tests' reference order).
+fn stored_path(ws: &SmoothWorkspace, folds: usize) -> bool {
+    folds <= STORED_FOLDS && !legacy(ws)
+}
+
 /// Rows the Cholesky factor computes together ([`factor`]).
 const BLOCK: usize = 4;
 const _: () = assert!(M.is_multiple_of(BLOCK));
 
-/// Cholesky factor of `G_all[li] − G_out − (G_in if inner) + λ·I` into `ws.chol`;
-/// false when not positive definite.
+/// Cholesky factor of `G_all[li] − G_out + λ·I`, or `G_all[li] − (G_out + G_in) + λ·I` if
+/// `inner` ([`training`]), into `ws.chol`; false when not positive definite.
 ///
 /// Row by row (Cholesky–Crout): `L[i][j] = (A[i][j] − Σ_{k<j} L[i][k]·L[j][k]) / L[j][j]`,
 /// each sum in increasing `k` from the value an empty `f64` sum starts at. [`BLOCK`] rows
@@ -470,6 +512,7 @@ const _: () = assert!(M.is_multiple_of(BLOCK));
 /// Every entry is still the same expression evaluated in the same order, so the factor is
 /// bit for bit the one-row-at-a-time factor's (unit test).
 fn factor(ws: &mut SmoothWorkspace, li: usize, inner: bool, lambda: f64) -> bool {
+    let legacy = legacy(ws);
     let SmoothWorkspace {
         g_all,
         g_out,
@@ -482,10 +525,7 @@ fn factor(ws: &mut SmoothWorkspace, li: usize, inner: bool, lambda: f64) -> bool
     };
     // Entry (i, j) of the matrix being factored.
     let a = |i: usize, j: usize| {
-        let mut s = ga[i][j] - g_out[i][j];
-        if inner {
-            s -= g_in[i][j];
-        }
+        let mut s = training(ga[i][j], g_out[i][j], g_in[i][j], inner, legacy);
         if i == j {
             s += lambda;
         }
@@ -543,6 +583,7 @@ fn factor(ws: &mut SmoothWorkspace, li: usize, inner: bool, lambda: f64) -> bool
 /// The one-row-at-a-time factor [`factor`] must equal bit for bit (its test).
 #[cfg(test)]
 fn factor_by_rows(ws: &mut SmoothWorkspace, li: usize, inner: bool, lambda: f64) -> bool {
+    let legacy = legacy(ws);
     let SmoothWorkspace {
         g_all,
         g_out,
@@ -555,10 +596,7 @@ fn factor_by_rows(ws: &mut SmoothWorkspace, li: usize, inner: bool, lambda: f64)
     };
     for i in 0..M {
         for j in 0..=i {
-            let mut s = ga[i][j] - g_out[i][j];
-            if inner {
-                s -= g_in[i][j];
-            }
+            let mut s = training(ga[i][j], g_out[i][j], g_in[i][j], inner, legacy);
             if i == j {
                 s += lambda;
             }
@@ -584,7 +622,8 @@ fn factor_by_rows(ws: &mut SmoothWorkspace, li: usize, inner: bool, lambda: f64)
     true
 }
 
-/// Solves the factored system for the right-hand sides `r_all[li] − r_out − (r_in)` into
+/// Solves the factored system for the right-hand sides `r_all[li] − r_out` or
+/// `r_all[li] − (r_out + r_in)` ([`training`]) into
 /// `ws.beta` (the first `ws.n_out` outputs; each output's arithmetic does not depend on
 /// how many are solved together).
 fn solve(ws: &mut SmoothWorkspace, li: usize, inner: bool) {
@@ -597,6 +636,7 @@ fn solve(ws: &mut SmoothWorkspace, li: usize, inner: bool) {
 
 /// [`solve`] for the first `K` outputs.
 fn solve_k<const K: usize>(ws: &mut SmoothWorkspace, li: usize, inner: bool) {
+    let legacy = legacy(ws);
     let SmoothWorkspace {
         r_all,
         r_out,
@@ -612,10 +652,7 @@ fn solve_k<const K: usize>(ws: &mut SmoothWorkspace, li: usize, inner: bool) {
     for i in 0..M {
         let mut v = [0.0; K];
         for (k, vk) in v.iter_mut().enumerate() {
-            *vk = ra[i][k] - r_out[i][k];
-            if inner {
-                *vk -= r_in[i][k];
-            }
+            *vk = training(ra[i][k], r_out[i][k], r_in[i][k], inner, legacy);
         }
         for (&l, b) in chol[i].iter().zip(beta.iter()).take(i) {
             for (vk, &bk) in v.iter_mut().zip(b) {
@@ -741,7 +778,12 @@ fn choose<const N: usize>(
         let mut ok = [true; R];
         for g in (0..folds).filter(|&g| g != f) {
             fold_gram(ws, data, poses, sw, act, Some(g), li, true);
-            validate_ridges(ws, data, poses, sw, act, li, g, &mut err, &mut ok);
+            let side = Side {
+                fold: g,
+                err: &mut err,
+                ok: &mut ok,
+            };
+            validate_ridges(ws, data, poses, sw, act, li, &mut [side]);
         }
         for (ri, &lambda) in RIDGES.iter().enumerate() {
             for c in 0..2 {
@@ -754,12 +796,22 @@ fn choose<const N: usize>(
     [best[0].1, best[1].1]
 }
 
-/// One inner fold `g` of the nested cross-validation at length scale `li`, the training
-/// Gram already in `ws` (`g_in`, `r_in`): every ridge's solution first, so each validation
-/// row's features are computed once for all ridges (the features cost more than the
-/// predictions), then each ridge's squared validation errors per check and class added to
-/// `err` (`err[ri][2·c + t]`: check `c`, component type `t`); a ridge whose factorisation
-/// fails is marked in `ok`.
+/// A fold validated by an inner fit and where its squared errors go: `err[ri][2·c + t]`
+/// (ridge `ri`, check `c`, component type `t`) of the outer fold it is an inner fold of;
+/// `ok[ri]` is cleared when ridge `ri`'s factorisation fails.
+struct Side<'a> {
+    fold: usize,
+    err: &'a mut [[f64; 4]; R],
+    ok: &'a mut [bool; R],
+}
+
+/// One inner fit of the nested cross-validation at length scale `li`, the training Gram
+/// already in `ws` (`g_in`, `r_in`), validated on each side's fold: every ridge's solution
+/// first, so each validation row's features are computed once for all ridges (the features
+/// cost more than the predictions), then each ridge's squared validation errors per check
+/// and class added to the side of the row's fold, row by row in row order. [`choose`]
+/// passes one side (inner fold `g` of outer fold `f`); [`choose_all`] two (the pair's fit
+/// validated on `g` for outer fold `f` and on `f` for outer fold `g`).
 #[allow(clippy::too_many_arguments)]
 fn validate_ridges<const N: usize>(
     ws: &mut SmoothWorkspace,
@@ -768,15 +820,15 @@ fn validate_ridges<const N: usize>(
     sw: &[f64; 6],
     act: &[bool; 2],
     li: usize,
-    g: usize,
-    err: &mut [[f64; 4]; R],
-    ok: &mut [bool; R],
+    sides: &mut [Side<'_>],
 ) {
     let mut solved = [false; R];
     for (ri, &lambda) in RIDGES.iter().enumerate() {
         if !factor(ws, li, true, lambda) {
-            if let Some(o) = ok.get_mut(ri) {
-                *o = false;
+            for side in sides.iter_mut() {
+                if let Some(o) = side.ok.get_mut(ri) {
+                    *o = false;
+                }
             }
             continue;
         }
@@ -788,12 +840,16 @@ fn validate_ridges<const N: usize>(
     }
     let n_out = ws.n_out;
     for (m, p) in data.iter().zip(poses) {
-        if p.suspect || usize::from(p.fold) != g || !fits(m, act) {
+        if p.suspect || !fits(m, act) {
             continue;
         }
+        let Some(side) = sides.iter_mut().find(|s| s.fold == usize::from(p.fold)) else {
+            continue;
+        };
         let y = targets(m, p, sw, n_out);
         load_features(ws, p, li);
-        for ((e_r, beta), _) in err
+        for ((e_r, beta), _) in side
+            .err
             .iter_mut()
             .zip(&ws.beta_ridge)
             .zip(solved)
@@ -816,11 +872,15 @@ type Choices = [[Choice; 2]; 2];
 
 /// [`choose`] for every outer fold at once (`folds ≤ STORED_FOLDS`) and every check in use
 /// (`ws.n_out`), bit for bit: per length scale every fold's Gram is built once
-/// ([`fold_grams`]) and copied where [`choose`] rebuilds it, then each outer fold's errors
-/// are summed over its inner folds in the same order, and the hyperparameters compared in
-/// the same order (length scale, then ridge) as [`choose`] compares them. The checks share
-/// the Grams and factors (they depend on the features only), each has its own right-hand
-/// sides and errors.
+/// ([`fold_grams`]) and copied where [`choose`] rebuilds it. Inner fold `g` of outer fold
+/// `f` trains on every fold but `f` and `g`, the training set of inner fold `f` of outer
+/// fold `g`, in the same bits ([`training`]): each pair `f < g` is factored and solved once
+/// (at every ridge) and validated on `g` for `f` and on `f` for `g`. Pairs run in
+/// lexicographic order, so each outer fold still receives its inner folds' errors in
+/// increasing fold order, row by row, as [`choose`] sums them; the hyperparameters are
+/// compared in the same order (length scale, then ridge) as [`choose`] compares them. The
+/// checks share the Grams and factors (they depend on the features only), each has its own
+/// right-hand sides and errors.
 #[allow(clippy::too_many_arguments)]
 fn choose_all<const N: usize>(
     ws: &mut SmoothWorkspace,
@@ -833,16 +893,40 @@ fn choose_all<const N: usize>(
 ) {
     let mut err = [[[[0.0f64; 4]; R]; L]; STORED_FOLDS];
     let mut ok = [[[true; R]; L]; STORED_FOLDS];
+    let k = folds.min(STORED_FOLDS);
     for li in 0..L {
         fold_grams(ws, data, poses, sw, act, folds, li);
-        for f in 0..folds.min(STORED_FOLDS) {
+        for f in 0..k {
             ws.g_out = ws.g_folds[f];
             ws.r_out = ws.r_folds[f];
-            for g in (0..folds.min(STORED_FOLDS)).filter(|&g| g != f) {
+            for g in f + 1..k {
                 ws.g_in = ws.g_folds[g];
                 ws.r_in = ws.r_folds[g];
-                let (err, ok) = (&mut err[f][li], &mut ok[f][li]);
-                validate_ridges(ws, data, poses, sw, act, li, g, err, ok);
+                // Outer fold f's errors (f < g) in the first part, outer fold g's first in
+                // the second.
+                let (err_f, err_g) = err.split_at_mut(g);
+                let (ok_f, ok_g) = ok.split_at_mut(g);
+                let (Some(ef), Some(eg), Some(of), Some(og)) = (
+                    err_f.get_mut(f),
+                    err_g.first_mut(),
+                    ok_f.get_mut(f),
+                    ok_g.first_mut(),
+                ) else {
+                    continue;
+                };
+                let mut sides = [
+                    Side {
+                        fold: g,
+                        err: &mut ef[li],
+                        ok: &mut of[li],
+                    },
+                    Side {
+                        fold: f,
+                        err: &mut eg[li],
+                        ok: &mut og[li],
+                    },
+                ];
+                validate_ridges(ws, data, poses, sw, act, li, &mut sides);
             }
         }
     }
@@ -948,13 +1032,14 @@ pub(crate) fn check_both<const N: usize>(
     cfg: &Config,
     ws: &mut SmoothWorkspace,
 ) -> (SmoothCheck, Option<SmoothCheck>) {
-    let shared = remaining.is_some() && cfg.folds <= STORED_FOLDS;
+    let stored_path = stored_path(ws, cfg.folds);
+    let shared = remaining.is_some() && stored_path;
     ws.n_out = if shared { OUT } else { 6 };
     let first = match prepare(robot, data, poses, noise, cfg, ws) {
         None => SmoothCheck::default(),
         Some((sw, act)) => {
             let mut stored = [[[None; 2]; 2]; STORED_FOLDS];
-            if cfg.folds <= STORED_FOLDS {
+            if stored_path {
                 choose_all(ws, data, poses, &sw, &act, cfg.folds, &mut stored);
             }
             let first = outer_folds(ws, data, poses, noise, base, cfg, &sw, &act, &stored, 0);
@@ -1138,13 +1223,14 @@ fn outer_folds<const N: usize>(
 ) -> SmoothCheck {
     let (folds, z_significance) = (cfg.folds, cfg.z_significance);
     let n_out = ws.n_out;
+    let stored_path = stored_path(ws, folds);
     for (m, p) in data.iter().zip(poses.iter_mut()) {
         p.scratch = sq(m, &part(&targets(m, p, sw, n_out), c), &[0.0; 6]);
     }
     let mut delta = [0.0; 2];
     for f in 0..folds {
         let choice = match stored.get(f) {
-            Some(s) if folds <= STORED_FOLDS => s.get(c).copied().unwrap_or([None; 2]),
+            Some(s) if stored_path => s.get(c).copied().unwrap_or([None; 2]),
             _ => choose(ws, data, poses, sw, act, folds, f),
         };
         // One fit per distinct choice (both types usually agree).
@@ -1167,7 +1253,7 @@ fn outer_folds<const N: usize>(
                 ..
             } = ws;
             match (g_folds.get(f), r_folds.get(f)) {
-                (Some(g), Some(r)) if folds <= STORED_FOLDS && li + 1 == L => {
+                (Some(g), Some(r)) if stored_path && li + 1 == L => {
                     *g_out = *g;
                     *r_out = *r;
                 }
@@ -1474,6 +1560,108 @@ mod tests {
         assert_ne!(bits(&a), bits(&b));
         let alone: std::vec::Vec<u64> = poses.iter().map(|p| p.scratch.to_bits()).collect();
         assert_eq!(scratch, alone);
+    }
+
+    /// Fits shared by fold pairs ([`choose_all`], `G_all − (G_out + G_in)`) against the
+    /// former computation (the tests-only reference order `G_all − G_out − G_in`, each outer
+    /// fold's inner fits its own, [`choose`] per fold): on diagnoses of simulated sessions
+    /// (a joint compliance, a cyclic error, no effect; 120 measurements, 5 folds) the same
+    /// hyperparameters for every outer fold, and both checks' outputs bit for bit: the
+    /// order changes the inner fits' last bits only, and those only choose the
+    /// hyperparameters; the outputs come from the outer fits, whose arithmetic is unchanged.
+    /// The choices include smooth models, so the comparison is not between zero models.
+    #[test]
+    #[allow(clippy::unwrap_used)]
+    fn pair_fits_match_the_former_order() {
+        use crate::diagnosis::{DiagWorkspace, diagnose};
+        use crate::sim::{SessionConfig, add_effect, perturb_geometry, simulate_session};
+        use crate::{Effect, Transform, aria};
+        let mut smooth_models = 0;
+        for (effect, seed) in [
+            (Some(Effect::JointCompliance), 120),
+            (Some(Effect::JointCyclic), 7),
+            (None, 3),
+        ] {
+            let nominal = aria::nominal();
+            let mut rng = SplitMix64::new(seed);
+            let mut truth = perturb_geometry(&nominal, 5e-3, 0.08, &mut rng).unwrap();
+            if let Some(e) = effect {
+                add_effect(&mut truth, e, 1.0, &mut rng).unwrap();
+            }
+            let cfg = SessionConfig {
+                poses: 90,
+                repeated: 30,
+                ..SessionConfig::blind_training()
+            };
+            let n = cfg.measurements();
+            let mut data = vec![Measurement::new([0.0; 6], Transform::identity()); n];
+            let mut groups = vec![0u32; n];
+            simulate_session(
+                &truth,
+                &aria::TOOL_SEED_Q,
+                &cfg,
+                &mut rng,
+                &mut data,
+                &mut groups,
+            )
+            .unwrap();
+            let mut poses = vec![PoseDiagnosis::default(); n];
+            // SAFETY: all-zero is a valid DiagWorkspace (documented).
+            let mut ws: Box<DiagWorkspace<80>> = unsafe { Box::new_zeroed().assume_init() };
+            let dc = Config::default();
+            let d = diagnose(&nominal, &data, &groups, &dc, &mut poses, &mut ws).unwrap();
+            let (base, acc) = (ws.acc[0], ws.acc[1]);
+            let what = std::format!("{effect:?}");
+            let mut both = |ws: &mut SmoothWorkspace, legacy: bool| {
+                ws.legacy = legacy;
+                let (a, b) = check_both(
+                    &nominal,
+                    &data,
+                    &mut poses,
+                    &d.noise,
+                    &base,
+                    Some(&acc),
+                    &dc,
+                    ws,
+                );
+                (a, b.unwrap())
+            };
+            let (a, b) = both(&mut ws.smooth, false);
+            // The diagnosis's own check is the shared one.
+            assert_eq!(a, d.explainable, "{what}");
+            let (a0, b0) = both(&mut ws.smooth, true);
+            assert!(a.evaluated && b.evaluated, "{what}");
+            assert_eq!(a, a0, "{what}");
+            assert_eq!(b, b0, "{what}");
+
+            // Every outer fold's choices of the baseline's check: shared pairs against the
+            // reference, on the features and Grams the baseline's check alone leaves (the
+            // reference ran the verdict's check last).
+            ws.smooth.legacy = false;
+            let alone = check(
+                &nominal,
+                &data,
+                &mut poses,
+                &d.noise,
+                &base,
+                &dc,
+                &mut ws.smooth,
+            );
+            assert_eq!(alone, a, "{what}");
+            let (wp, wr) = (1.0 / d.noise.sigma_pos_m, 1.0 / d.noise.sigma_rot_rad);
+            let sw = [wp, wp, wp, wr, wr, wr];
+            let act = active_classes(&data);
+            let mut all = [[[None; 2]; 2]; STORED_FOLDS];
+            choose_all(&mut ws.smooth, &data, &poses, &sw, &act, dc.folds, &mut all);
+            ws.smooth.legacy = true;
+            for (f, stored) in all.iter().enumerate().take(dc.folds) {
+                let former = choose(&mut ws.smooth, &data, &poses, &sw, &act, dc.folds, f);
+                let bits = |c: &[Choice; 2]| c.map(|x| x.map(|(li, l)| (li, l.to_bits())));
+                assert_eq!(bits(&stored[0]), bits(&former), "{what} fold {f}");
+                smooth_models += stored[0].iter().filter(|c| c.is_some()).count();
+            }
+        }
+        assert!(smooth_models > 0);
     }
 
     /// The greedy-free Cholesky and the two triangular solves against the normal equations
