@@ -504,3 +504,49 @@ fn skipping_candidates_by_their_bounds_changes_no_selection() {
         }
     }
 }
+
+/// A pool larger than `RANK_CAPACITY` is swept in index order (bounds against the best so
+/// far, no ranking): the same selection as evaluating every candidate exactly.
+#[test]
+fn a_pool_beyond_the_ranking_capacity_gives_the_same_selection() {
+    let robot = aria::nominal();
+    let c = Constraints {
+        joint_margin_rad: 0.05,
+        ..Constraints::none()
+    };
+    let obs = ObservabilityOptions::new(robot.geometric_param_set());
+    let k = kincal::selection::RANK_CAPACITY + 100;
+    let owned = OwnedPool::new(joint_pool(k, &c, 5), &obs);
+    let mut ws = Box::<Ws>::default();
+    for index in [Index::O, Index::DOpt] {
+        let mut opts = small_opts(Objective::Index(index), 21);
+        opts.starts = 1;
+        opts.refine_trials = 0;
+        let mut run = |exact: bool| {
+            let mut s = Box::<SelectScratch<P>>::default();
+            s.set_exact_only(exact);
+            let mut out = [[0.0; 6]; 10];
+            let sel = select_poses(
+                &robot,
+                &owned.pool(),
+                10,
+                &obs,
+                &c,
+                &opts,
+                &mut ws,
+                &mut s,
+                &mut out,
+            )
+            .unwrap();
+            (out.map(|q| q.map(f64::to_bits)), sel, s.skipped())
+        };
+        let (q_fast, sel_fast, skipped) = run(false);
+        let (q_exact, sel_exact, _) = run(true);
+        assert_eq!((q_fast, sel_fast), (q_exact, sel_exact), "{index:?}");
+        assert!(
+            skipped * 2 > sel_fast.evaluations,
+            "{index:?}: {skipped} of {}",
+            sel_fast.evaluations
+        );
+    }
+}
