@@ -720,7 +720,9 @@ impl<const P: usize> Eval<'_, P> {
         let mut len = 0;
         for cand in (0..k_pool).filter(|&c| eligible(c)) {
             let u = self.bound(phase, &blocks[cand], poses, f64::INFINITY);
-            self.s.rank[len] = (u.unwrap_or(f64::INFINITY), cand as u32);
+            // No bound (or a NaN one): +∞, evaluated exactly.
+            let key = u.filter(|v| !v.is_nan()).unwrap_or(f64::INFINITY);
+            self.s.rank[len] = (key, cand as u32);
             len += 1;
         }
         let rank = &mut self.s.rank[..len];
@@ -736,8 +738,7 @@ impl<const P: usize> Eval<'_, P> {
                     self.s.skipped += rest;
                     break;
                 }
-                // A NaN bound sorts first (total order) and is never skipped. The σ-type
-                // bound is refined (more Ritz vectors) now that `b` is known.
+                // The σ-type bound is refined (more Ritz vectors) now that `b` is known.
                 if phase == Phase::Add
                     && self
                         .bound(phase, &blocks[cand], poses, b)
