@@ -21,7 +21,9 @@
 //!
 //! Objectives are evaluated from the Gram matrix of the set (sum of the blocks' `BᵀB`,
 //! [`crate::observability::indices_from_gram`]); report the final set's indices with
-//! [`crate::observability::observability`].
+//! [`crate::observability::observability`]. Where steps 2 and 3 pick the best of the pool,
+//! a candidate whose cheap upper bound ([`bound`]) lies below the best value found so far
+//! is skipped without the exact evaluation: the choice is the same, to the bit.
 
 use crate::error::{Error, Result};
 use crate::identify::Workspace;
@@ -37,6 +39,9 @@ use crate::observability::{
 use crate::pose::{Transform, transform};
 use crate::rng::SplitMix64;
 use nalgebra::{Matrix3, Vector3};
+
+pub mod bound;
+use bound::AddBound;
 
 /// Largest design (m plus the excursion) [`select_start`] handles.
 pub const MAX_DESIGN: usize = 64;
@@ -460,6 +465,13 @@ pub struct SelectScratch<const P: usize> {
     has_reference: bool,
     gs: GramScratch<P>,
     blocks: [PoseBlock<P>; MAX_DESIGN],
+    bound: AddBound<P>,
+    /// Candidates skipped by their bound since the scratch was made (bound.rs).
+    skipped: u64,
+    /// Every candidate evaluated exactly (no bounds): for tests and benches.
+    exact_only: bool,
+    /// Candidates ranked by their bounds: (bound, pool index).
+    rank: [(f64, u32); RANK_CAPACITY],
 }
 
 impl<const P: usize> SelectScratch<P> {
@@ -475,7 +487,22 @@ impl<const P: usize> SelectScratch<P> {
             has_reference: false,
             gs: GramScratch::new(),
             blocks: [[[0.0; P]; 6]; MAX_DESIGN],
+            bound: AddBound::new(),
+            skipped: 0,
+            exact_only: false,
+            rank: [(0.0, 0); RANK_CAPACITY],
         }
+    }
+    /// With `true`, every candidate is evaluated exactly, none skipped by its bound (the
+    /// selection is the same either way: see [`bound`]); for tests and benches.
+    pub fn set_exact_only(&mut self, on: bool) {
+        self.exact_only = on;
+    }
+    /// Candidates skipped by their bound (not evaluated exactly) since the scratch was made;
+    /// they count in [`Selection::evaluations`] all the same.
+    #[must_use]
+    pub fn skipped(&self) -> u64 {
+        self.skipped
     }
     /// Sets the reference poses of [`Objective::PredictionVariance`] from their blocks.
     pub fn set_reference(&mut self, blocks: &[PoseBlock<P>], n: usize) {
@@ -512,6 +539,18 @@ pub struct Selection {
     pub refinements: usize,
     /// Which start gave the result.
     pub start: usize,
+}
+
+/// Largest pool whose candidates [`select_start`] ranks by their bounds (larger pools are
+/// swept in index order, with the same result).
+pub const RANK_CAPACITY: usize = 4096;
+
+/// Which objective a candidate search maximises: the greedy start's regularised D-criterion
+/// on `s.g`, or the objective on the excursion's `s.tg`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    Greedy,
+    Add,
 }
 
 struct Eval<'s, const P: usize> {
@@ -556,6 +595,166 @@ impl<const P: usize> Eval<'_, P> {
                 Ok(-tr)
             }
         }
+    }
+    /// Prepares the σ-type bound of [`Eval::add_bound`] for candidates added to `s.tg`.
+    fn prepare_add(&mut self) {
+        if !self.s.exact_only
+            && let Objective::Index(i) = self.objective
+            && AddBound::<P>::uses_ritz(i)
+        {
+            let SelectScratch { tg, bound, .. } = &mut *self.s;
+            bound.prepare(tg, self.n, self.unit);
+        }
+    }
+    /// An upper bound of the objective of `s.tg + BᵀB` for `poses` poses, or `None` (a
+    /// cheaper, looser one when that is below `best`); [`Eval::prepare_add`] must have seen
+    /// the same `s.tg`. Uses `s.trial` as scratch.
+    fn add_bound(&mut self, block: &PoseBlock<P>, poses: usize, best: f64) -> Option<f64> {
+        let Objective::Index(i) = self.objective else {
+            return None;
+        };
+        if self.s.exact_only {
+            return None;
+        }
+        let SelectScratch {
+            tg, trial, bound, ..
+        } = &mut *self.s;
+        if AddBound::<P>::uses_ritz(i) {
+            bound.ritz_bound(block, i, best)
+        } else {
+            bound::det_bound(tg, block, self.n, poses, self.unit, i, trial)
+        }
+    }
+    /// An upper bound of [`Eval::regularised`] for `s.g + BᵀB`; uses `s.trial` as scratch.
+    /// `s.blocks[..set]` must hold the set's blocks (a rank-deficient set's bound uses them).
+    fn regularised_bound(&mut self, block: &PoseBlock<P>, set: usize) -> Option<f64> {
+        if self.s.exact_only {
+            return None;
+        }
+        let SelectScratch {
+            g,
+            trial,
+            chol,
+            gs,
+            blocks,
+            ..
+        } = &mut *self.s;
+        if 6 * (set + 1) < self.n {
+            let GramScratch { eig, off, .. } = gs;
+            bound::regularised_bound_small(
+                &blocks[..set],
+                block,
+                self.n,
+                self.unit,
+                chol,
+                trial,
+                eig,
+                off,
+            )
+        } else {
+            bound::regularised_bound(g, block, self.n, self.unit, trial)
+        }
+    }
+    /// An upper bound of candidate `block`'s objective in `phase`, or `None`.
+    fn bound(
+        &mut self,
+        phase: Phase,
+        block: &PoseBlock<P>,
+        poses: usize,
+        best: f64,
+    ) -> Option<f64> {
+        match phase {
+            Phase::Greedy => self.regularised_bound(block, poses - 1),
+            Phase::Add => self.add_bound(block, poses, best),
+        }
+    }
+    /// The exact objective of candidate `block` in `phase` (`s.g` or `s.tg` plus `BᵀB`).
+    fn exact(&mut self, phase: Phase, block: &PoseBlock<P>, poses: usize) -> Result<f64> {
+        let n = self.n;
+        let SelectScratch { g, tg, trial, .. } = &mut *self.s;
+        copy_gram(if phase == Phase::Greedy { g } else { tg }, trial, n);
+        gram_update(trial, block, n, 1.0);
+        match phase {
+            Phase::Greedy => self.regularised(poses),
+            Phase::Add => self.trial(poses),
+        }
+    }
+    /// The eligible candidate of largest exact objective in `phase` for `poses` poses (the
+    /// lowest index on ties), as `(value, index)`; `None` if none is eligible.
+    ///
+    /// Every eligible candidate counts as one evaluation, but only those whose upper bound
+    /// ([`bound`]) is not below the best value found so far are evaluated exactly, in the
+    /// order of decreasing bound (so the best is found early and the rest skipped). A pool
+    /// larger than [`RANK_CAPACITY`] is swept in index order instead.
+    fn best_candidate(
+        &mut self,
+        blocks: &[PoseBlock<P>],
+        k_pool: usize,
+        eligible: &dyn Fn(usize) -> bool,
+        phase: Phase,
+        poses: usize,
+    ) -> Result<Option<(f64, usize)>> {
+        let better = |v: f64, c: usize, best: Option<(f64, usize)>| {
+            best.is_none_or(|(b, bi)| v > b || (v == b && c < bi))
+        };
+        let mut best: Option<(f64, usize)> = None;
+        if self.s.exact_only || k_pool > RANK_CAPACITY {
+            for cand in (0..k_pool).filter(|&c| eligible(c)) {
+                if let Some((b, _)) = best
+                    && self
+                        .bound(phase, &blocks[cand], poses, b)
+                        .is_some_and(|u| u < b)
+                {
+                    self.count += 1;
+                    self.s.skipped += 1;
+                    continue;
+                }
+                let v = self.exact(phase, &blocks[cand], poses)?;
+                if better(v, cand, best) {
+                    best = Some((v, cand));
+                }
+            }
+            return Ok(best);
+        }
+        // Rank by the cheapest bound (for σ-type indices two Ritz vectors); +∞ for none.
+        let mut len = 0;
+        for cand in (0..k_pool).filter(|&c| eligible(c)) {
+            let u = self.bound(phase, &blocks[cand], poses, f64::INFINITY);
+            // No bound (or a NaN one): +∞, evaluated exactly.
+            let key = u.filter(|v| !v.is_nan()).unwrap_or(f64::INFINITY);
+            self.s.rank[len] = (key, cand as u32);
+            len += 1;
+        }
+        let rank = &mut self.s.rank[..len];
+        rank.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        for r in 0..len {
+            let (u, cand) = self.s.rank[r];
+            let cand = cand as usize;
+            if let Some((b, _)) = best {
+                if u < b {
+                    // Sorted: every bound from here on is below the best.
+                    let rest = (len - r) as u64;
+                    self.count += rest;
+                    self.s.skipped += rest;
+                    break;
+                }
+                // The σ-type bound is refined (more Ritz vectors) now that `b` is known.
+                if phase == Phase::Add
+                    && self
+                        .bound(phase, &blocks[cand], poses, b)
+                        .is_some_and(|u| u < b)
+                {
+                    self.count += 1;
+                    self.s.skipped += 1;
+                    continue;
+                }
+            }
+            let v = self.exact(phase, &blocks[cand], poses)?;
+            if better(v, cand, best) {
+                best = Some((v, cand));
+            }
+        }
+        Ok(best)
     }
     /// Regularised D-criterion Σ ln(σ² + ε) of `s.trial` (for growing partial sets).
     fn regularised(&mut self, poses: usize) -> Result<f64> {
@@ -655,25 +854,17 @@ pub fn select_start<const N: usize, const P: usize>(
     zero_gram(&mut ev.s.g, n);
     let first = rng.below(k_pool);
     let mut len = add_to(&mut ev.s.g, pool, &mut set, 0, first, n);
+    ev.s.blocks[0] = pool.blocks[first];
     while len < m {
-        let mut best: Option<(f64, usize)> = None;
-        for cand in 0..k_pool {
-            if set[..len].contains(&cand) || !spaced(&set[..len], cand) {
-                continue;
-            }
-            copy_gram(&ev.s.g, &mut ev.s.trial, n);
-            gram_update(&mut ev.s.trial, &pool.blocks[cand], n, 1.0);
-            let v = ev.regularised(len + 1)?;
-            if best.is_none_or(|(b, _)| v > b) {
-                best = Some((v, cand));
-            }
-        }
+        let eligible = |cand: usize| !set[..len].contains(&cand) && spaced(&set[..len], cand);
+        let best = ev.best_candidate(pool.blocks, k_pool, &eligible, Phase::Greedy, len + 1)?;
         let Some((_, cand)) = best else {
             return Err(Error::TooFewData {
                 found: len,
                 needed: m,
             });
         };
+        ev.s.blocks[len] = pool.blocks[cand];
         len = add_to(&mut ev.s.g, pool, &mut set, len, cand, n);
     }
     copy_gram(&ev.s.g, &mut ev.s.trial, n);
@@ -689,18 +880,10 @@ pub fn select_start<const N: usize, const P: usize>(
         copy_gram(&ev.s.g, &mut ev.s.tg, n);
         let mut grown = 0;
         for _ in 0..k {
-            let mut best: Option<(f64, usize)> = None;
-            for cand in 0..k_pool {
-                if tset[..tlen].contains(&cand) || !spaced(&tset[..tlen], cand) {
-                    continue;
-                }
-                copy_gram(&ev.s.tg, &mut ev.s.trial, n);
-                gram_update(&mut ev.s.trial, &pool.blocks[cand], n, 1.0);
-                let v = ev.trial(tlen + 1)?;
-                if best.is_none_or(|(b, _)| v > b) {
-                    best = Some((v, cand));
-                }
-            }
+            let eligible =
+                |cand: usize| !tset[..tlen].contains(&cand) && spaced(&tset[..tlen], cand);
+            ev.prepare_add();
+            let best = ev.best_candidate(pool.blocks, k_pool, &eligible, Phase::Add, tlen + 1)?;
             let Some((_, cand)) = best else { break };
             tset[tlen] = cand;
             tlen += 1;
