@@ -1399,6 +1399,7 @@ mod tests {
     use super::*;
     use std::boxed::Box;
     use std::vec;
+    use std::vec::Vec;
 
     /// The block factor equals the one-row-at-a-time one bit for bit, with and
     /// without the inner fold, at every ridge, and both refuse the same singular matrix.
@@ -1439,20 +1440,25 @@ mod tests {
         assert!(!factor_by_rows(&mut ws, 1, true, 0.0));
     }
 
-    /// The stored-Gram path ([`choose_all`]) chooses what the rebuilding path ([`choose`])
-    /// chooses for every outer fold, on the features and Grams a real diagnosis leaves in
-    /// the workspace (a simulated joint compliance, 5 folds), and some choice is a smooth
-    /// model (the comparison is not between two zero models).
-    #[test]
+    /// A diagnosis of a simulated ARIA session (90 poses, 30 repeated) and what it leaves.
+    struct Simulated {
+        data: Vec<Measurement<6>>,
+        poses: Vec<PoseDiagnosis>,
+        ws: Box<crate::diagnosis::DiagWorkspace<80>>,
+        d: crate::diagnosis::Diagnosis<6>,
+    }
+
+    /// [`Simulated`] for a perturbed ARIA with `effect` (unit strength) from `seed`.
     #[allow(clippy::unwrap_used)]
-    fn stored_fold_grams_choose_as_rebuilt_ones() {
-        use crate::diagnosis::{DiagWorkspace, diagnose};
+    fn simulated_diagnosis(effect: Option<crate::Effect>, seed: u64, dc: &Config) -> Simulated {
         use crate::sim::{SessionConfig, add_effect, perturb_geometry, simulate_session};
-        use crate::{Effect, Transform, aria};
+        use crate::{Transform, aria};
         let nominal = aria::nominal();
-        let mut rng = SplitMix64::new(120);
+        let mut rng = SplitMix64::new(seed);
         let mut truth = perturb_geometry(&nominal, 5e-3, 0.08, &mut rng).unwrap();
-        add_effect(&mut truth, Effect::JointCompliance, 1.0, &mut rng).unwrap();
+        if let Some(e) = effect {
+            add_effect(&mut truth, e, 1.0, &mut rng).unwrap();
+        }
         let cfg = SessionConfig {
             poses: 90,
             repeated: 30,
@@ -1461,20 +1467,32 @@ mod tests {
         let n = cfg.measurements();
         let mut data = vec![Measurement::new([0.0; 6], Transform::identity()); n];
         let mut groups = vec![0u32; n];
-        simulate_session(
-            &truth,
-            &aria::TOOL_SEED_Q,
-            &cfg,
-            &mut rng,
-            &mut data,
-            &mut groups,
-        )
-        .unwrap();
+        let q0 = aria::TOOL_SEED_Q;
+        simulate_session(&truth, &q0, &cfg, &mut rng, &mut data, &mut groups).unwrap();
         let mut poses = vec![PoseDiagnosis::default(); n];
         // SAFETY: all-zero is a valid DiagWorkspace (documented).
-        let mut ws: Box<DiagWorkspace<80>> = unsafe { Box::new_zeroed().assume_init() };
+        let mut ws: Box<crate::diagnosis::DiagWorkspace<80>> =
+            unsafe { Box::new_zeroed().assume_init() };
+        let d =
+            crate::diagnosis::diagnose(&nominal, &data, &groups, dc, &mut poses, &mut ws).unwrap();
+        Simulated { data, poses, ws, d }
+    }
+
+    /// The stored-Gram path ([`choose_all`]) chooses what the rebuilding path ([`choose`])
+    /// chooses for every outer fold, on the features and Grams a real diagnosis leaves in
+    /// the workspace (a simulated joint compliance, 5 folds), and some choice is a smooth
+    /// model (the comparison is not between two zero models).
+    #[test]
+    #[allow(clippy::unwrap_used)]
+    fn stored_fold_grams_choose_as_rebuilt_ones() {
+        let nominal = crate::aria::nominal();
         let dc = Config::default();
-        let d = diagnose(&nominal, &data, &groups, &dc, &mut poses, &mut ws).unwrap();
+        let Simulated {
+            data,
+            mut poses,
+            mut ws,
+            d,
+        } = simulated_diagnosis(Some(crate::Effect::JointCompliance), 120, &dc);
         assert!(d.explainable.evaluated);
         // The baseline's check again, so the workspace holds its features and Grams.
         let base = ws.acc[0];
@@ -1573,43 +1591,21 @@ mod tests {
     #[test]
     #[allow(clippy::unwrap_used)]
     fn pair_fits_match_the_former_order() {
-        use crate::diagnosis::{DiagWorkspace, diagnose};
-        use crate::sim::{SessionConfig, add_effect, perturb_geometry, simulate_session};
-        use crate::{Effect, Transform, aria};
+        use crate::Effect;
         let mut smooth_models = 0;
         for (effect, seed) in [
             (Some(Effect::JointCompliance), 120),
             (Some(Effect::JointCyclic), 7),
             (None, 3),
         ] {
-            let nominal = aria::nominal();
-            let mut rng = SplitMix64::new(seed);
-            let mut truth = perturb_geometry(&nominal, 5e-3, 0.08, &mut rng).unwrap();
-            if let Some(e) = effect {
-                add_effect(&mut truth, e, 1.0, &mut rng).unwrap();
-            }
-            let cfg = SessionConfig {
-                poses: 90,
-                repeated: 30,
-                ..SessionConfig::blind_training()
-            };
-            let n = cfg.measurements();
-            let mut data = vec![Measurement::new([0.0; 6], Transform::identity()); n];
-            let mut groups = vec![0u32; n];
-            simulate_session(
-                &truth,
-                &aria::TOOL_SEED_Q,
-                &cfg,
-                &mut rng,
-                &mut data,
-                &mut groups,
-            )
-            .unwrap();
-            let mut poses = vec![PoseDiagnosis::default(); n];
-            // SAFETY: all-zero is a valid DiagWorkspace (documented).
-            let mut ws: Box<DiagWorkspace<80>> = unsafe { Box::new_zeroed().assume_init() };
+            let nominal = crate::aria::nominal();
             let dc = Config::default();
-            let d = diagnose(&nominal, &data, &groups, &dc, &mut poses, &mut ws).unwrap();
+            let Simulated {
+                data,
+                mut poses,
+                mut ws,
+                d,
+            } = simulated_diagnosis(effect, seed, &dc);
             let (base, acc) = (ws.acc[0], ws.acc[1]);
             let what = std::format!("{effect:?}");
             let mut both = |ws: &mut SmoothWorkspace, legacy: bool| {
