@@ -327,7 +327,7 @@ pub fn regularised_bound<const P: usize>(
 /// rows): the nonzero eigenvalues of `A' = D'JᵀJD'` are those of the small r×r matrix
 /// `JD'²Jᵀ` (r = 6 per pose), the other n − r are zero, so the criterion is
 /// `Σ_{i≤r} ln(μ_i + ε_r) + (n − r)·ln ε_r` from an r×r eigenvalue problem (cheaper than
-/// the n×n one; a bound with [`REG_MARGIN`] for the two routes' rounding). `rows` and
+/// the n×n one; a bound with `REG_MARGIN` for the two routes' rounding). `rows` and
 /// `work` are scratch; `eig`, `off` too.
 #[allow(clippy::too_many_arguments)]
 pub fn regularised_bound_small<const P: usize>(
