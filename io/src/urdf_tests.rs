@@ -663,4 +663,20 @@ fn namespace_prefixed_names_are_refused_before_the_xml_reader() {
     assert_eq!(err.line, Some(3), "{err}");
     let second = include_str!("../../fuzz/seeds/urdf_import/regression-xmlns-xmlns-declaration");
     assert!(import_urdf_str(second, "fuzz.urdf", &ChainSelection::default()).is_err());
+    // The third: `xmlns:xmlns` behind a `<?` the scan once skipped two bytes of (the reader
+    // ends it at the first `>` after a `?`). The scan now ends it there too, and whatever
+    // it mistakes, no `xmlns` or `xml:` may reach the reader outside a blanked declaration.
+    let third =
+        include_str!("../../fuzz/seeds/urdf_import/regression-xmlns-behind-processing-instruction");
+    assert!(import_urdf_str(third, "fuzz.urdf", &ChainSelection::default()).is_err());
+    for hidden in [
+        format!("<?pi x?><robot name=\"r\">{body}</robot><!-- xmlns -->"),
+        format!("<robot name=\"xml:r\">{body}</robot>"),
+    ] {
+        let err = import_urdf_str(&hidden, "ns.urdf", &ChainSelection::default()).unwrap_err();
+        assert!(
+            err.reason.contains("outside a start tag's attributes"),
+            "{err}"
+        );
+    }
 }
