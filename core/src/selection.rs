@@ -694,25 +694,10 @@ impl<const P: usize> Eval<'_, P> {
         phase: Phase,
         poses: usize,
     ) -> Result<Option<(f64, usize)>> {
-        let better = |v: f64, c: usize, best: Option<(f64, usize)>| {
-            best.is_none_or(|(b, bi)| v > b || (v == b && c < bi))
-        };
         let mut best: Option<(f64, usize)> = None;
         if self.s.exact_only || k_pool > RANK_CAPACITY {
             for cand in (0..k_pool).filter(|&c| eligible(c)) {
-                if let Some((b, _)) = best
-                    && self
-                        .bound(phase, &blocks[cand], poses, b)
-                        .is_some_and(|u| u < b)
-                {
-                    self.count += 1;
-                    self.s.skipped += 1;
-                    continue;
-                }
-                let v = self.exact(phase, &blocks[cand], poses)?;
-                if better(v, cand, best) {
-                    best = Some((v, cand));
-                }
+                self.consider(&blocks[cand], cand, phase, poses, true, &mut best)?;
             }
             return Ok(best);
         }
@@ -730,31 +715,47 @@ impl<const P: usize> Eval<'_, P> {
         for r in 0..len {
             let (u, cand) = self.s.rank[r];
             let cand = cand as usize;
-            if let Some((b, _)) = best {
-                if u < b {
-                    // Sorted: every bound from here on is below the best.
-                    let rest = (len - r) as u64;
-                    self.count += rest;
-                    self.s.skipped += rest;
-                    break;
-                }
-                // The σ-type bound is refined (more Ritz vectors) now that `b` is known.
-                if phase == Phase::Add
-                    && self
-                        .bound(phase, &blocks[cand], poses, b)
-                        .is_some_and(|u| u < b)
-                {
-                    self.count += 1;
-                    self.s.skipped += 1;
-                    continue;
-                }
+            if let Some((b, _)) = best
+                && u < b
+            {
+                // Sorted: every bound from here on is below the best.
+                let rest = (len - r) as u64;
+                self.count += rest;
+                self.s.skipped += rest;
+                break;
             }
-            let v = self.exact(phase, &blocks[cand], poses)?;
-            if better(v, cand, best) {
-                best = Some((v, cand));
-            }
+            // The σ-type bound is refined (more Ritz vectors) now that the best is known; the
+            // greedy start's bound does not depend on it, so it is not taken twice.
+            let refine = phase == Phase::Add;
+            self.consider(&blocks[cand], cand, phase, poses, refine, &mut best)?;
         }
         Ok(best)
+    }
+    /// Evaluates candidate `cand` exactly and keeps it in `best` if it is better (the lower
+    /// index on ties), unless `recheck` and its bound given `best` shows it cannot win: then
+    /// it only counts, as skipped.
+    fn consider(
+        &mut self,
+        block: &PoseBlock<P>,
+        cand: usize,
+        phase: Phase,
+        poses: usize,
+        recheck: bool,
+        best: &mut Option<(f64, usize)>,
+    ) -> Result<()> {
+        if recheck
+            && let Some((b, _)) = *best
+            && self.bound(phase, block, poses, b).is_some_and(|u| u < b)
+        {
+            self.count += 1;
+            self.s.skipped += 1;
+            return Ok(());
+        }
+        let v = self.exact(phase, block, poses)?;
+        if best.is_none_or(|(b, bi)| v > b || (v == b && cand < bi)) {
+            *best = Some((v, cand));
+        }
+        Ok(())
     }
     /// Regularised D-criterion Σ ln(σ² + ε) of `s.trial` (for growing partial sets).
     fn regularised(&mut self, poses: usize) -> Result<f64> {
