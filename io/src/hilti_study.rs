@@ -1158,11 +1158,43 @@ mod tests {
         }
     }
 
+    /// Each floor calibrated on its own rows (in-sample, and held out over 5 folds as flat's
+    /// figure): what the model class reaches when it may learn the floor itself, the ceiling
+    /// of any transfer from flat (prints).
+    fn self_fits(d: &Path, sessions: &[crate::datasets_hilti::Session]) {
+        for v in [FINAL, ARM_COMPLIANCE] {
+            for (s, _, rows) in sessions {
+                let t = std::time::Instant::now();
+                let fits = || -> Result<(f64, f64, Vec<f64>), CliError> {
+                    let start = flat_start(d, rows, &v)?;
+                    let own = calibrate(&start, rows, &v)?;
+                    let (mut sum, mut n) = (0.0, 0usize);
+                    for fold in 0..FLAT_FOLDS {
+                        let (train, test) = flat_fold(rows, fold);
+                        let b = calibrate(&start, &train, &v)?;
+                        sum += rms_mm(&b, &test, &v)?.powi(2) * test.len() as f64;
+                        n += test.len();
+                    }
+                    let held = (sum / n.max(1) as f64).sqrt();
+                    Ok((rms_mm(&own, rows, &v)?, held, v.gains_of(&own)))
+                };
+                match fits() {
+                    Ok((inside, held, gains)) => println!(
+                        "self {} {s:<16} in {inside:.3} held {held:.3} gains {gains:?} ({:.1} s)",
+                        v.name,
+                        t.elapsed().as_secs_f64()
+                    ),
+                    Err(e) => println!("self {} {s:<16} failed: {e}", v.name),
+                }
+            }
+        }
+    }
+
     /// Exploration of the variants of issue 14's tilted floors (prints; release).
     // Long by design: a menu of independent exploration runs, one `if` per KINCAL_HILTI_EXPLORE
     // keyword, each printing one table of docs/real-data.md's variants.
     #[test]
-    #[ignore = "exploration: KINCAL_HILTI_EXPLORE=scan,disp,grav,ext,floorfit,where,robust,d23,bibt,fold1,drift,tilt2"]
+    #[ignore = "exploration: KINCAL_HILTI_EXPLORE=scan,disp,grav,ext,floorfit,where,robust,d23,bibt,fold1,drift,tilt2,self"]
     fn explore() {
         let Some(d) = dir() else { return };
         let sessions = read_all(&d).unwrap();
@@ -1275,9 +1307,24 @@ mod tests {
                 .iter()
                 .map(|&f| ParamId::Base(f).index(N).0)
                 .collect();
+            // The column's θ0 turns everything after the tilt joints about the column, the
+            // base frame turns it back: together the base accelerometer's yaw on the robot.
+            let yaw = ParamId::Link {
+                link: 2,
+                kind: kincal::params::LinkParam::Theta0,
+            };
             for (name, extra) in [
                 ("column scale", vec![ParamId::Scale(2)]),
                 ("bending gains", vec![ParamId::Scale(3), ParamId::Scale(4)]),
+                (
+                    "base tilt gains",
+                    vec![ParamId::Scale(0), ParamId::Scale(1)],
+                ),
+                ("tilt axes' yaw", vec![yaw]),
+                (
+                    "yaw + base tilt gains",
+                    vec![yaw, ParamId::Scale(0), ParamId::Scale(1)],
+                ),
             ] {
                 for (s, _, rows) in sessions.iter().skip(1) {
                     let start = with_rigid_base(&m, rows, &BENDING_AT_TOP).unwrap();
@@ -1388,6 +1435,9 @@ mod tests {
         }
         if what.contains("bibt") {
             bibt_fits(&d, &sessions);
+        }
+        if what.contains("self") {
+            self_fits(&d, &sessions);
         }
         if what.contains("disp") {
             for c in [0.25, 0.5, 0.67, 0.75, 1.0] {
