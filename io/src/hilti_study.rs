@@ -1194,7 +1194,7 @@ mod tests {
     // Long by design: a menu of independent exploration runs, one `if` per KINCAL_HILTI_EXPLORE
     // keyword, each printing one table of docs/real-data.md's variants.
     #[test]
-    #[ignore = "exploration: KINCAL_HILTI_EXPLORE=scan,disp,grav,ext,floorfit,where,robust,d23,bibt,fold1,drift,tilt2,self"]
+    #[ignore = "exploration: KINCAL_HILTI_EXPLORE=scan,disp,grav,ext,floorfit,where,robust,d23,bibt,fold1,drift,tilt2,self,comp,c567"]
     fn explore() {
         let Some(d) = dir() else { return };
         let sessions = read_all(&d).unwrap();
@@ -1435,6 +1435,56 @@ mod tests {
         }
         if what.contains("bibt") {
             bibt_fits(&d, &sessions);
+        }
+        if what.contains("comp") {
+            // Gravity compliance only where a harmonic drive carries the arm's weight.
+            for joints in [&[6, 7][..], &[5, 6, 7], &[6, 7, 9]] {
+                let v = Variant {
+                    compliance: joints,
+                    ..ARM_COMPLIANCE
+                };
+                show(&v);
+                println!(
+                    "   compliance {:?}",
+                    &fit(&v).effect_params().compliance[5..]
+                );
+            }
+        }
+        if what.contains("c567") {
+            let v = Variant {
+                compliance: &[5, 6, 7],
+                ..ARM_COMPLIANCE
+            };
+            let t = std::time::Instant::now();
+            let f = variant_figures(&d, &sessions, &v, true).unwrap();
+            let m = fit(&v);
+            println!(
+                "c567: in {:.3} held {:.3} gains {:?} compliance {:?} ({:.1} s)",
+                f.flat_in_sample_mm,
+                f.flat_held_out_mm,
+                f.gains,
+                &m.effect_params().compliance[5..],
+                t.elapsed().as_secs_f64()
+            );
+            for (s, _, rows) in &sessions {
+                let tilt = new_frame_tilt(&m, rows, &v).unwrap();
+                println!(
+                    "   {s:<16} free {:.3} level {:.3} | free frame tilt x {:+.3} y {:+.3} mrad",
+                    new_base_rms_mm(&m, rows, &v).unwrap(),
+                    level_base_rms_mm(&m, rows, &v).unwrap(),
+                    tilt[0] * 1e3,
+                    tilt[1] * 1e3
+                );
+            }
+            match leave_one_session_out(&d, &sessions, &v) {
+                Ok(l) => {
+                    for (s, mm, g) in l {
+                        println!("   loso {s:<16} {mm:.3} gains {g:?}");
+                    }
+                }
+                Err(e) => println!("   loso failed: {e}"),
+            }
+            println!("c567 done ({:.1} s)", t.elapsed().as_secs_f64());
         }
         if what.contains("self") {
             self_fits(&d, &sessions);
