@@ -128,6 +128,16 @@ fn bench(c: &mut Criterion<ThreadCpuTime>) {
                 )
             })
         });
+        // What a controller recalibrating in the loop needs: its analysis kept from the
+        // first run, no covariance.
+        c.bench_function(&name("analysis_reused_no_covariance"), |b| {
+            b.iter(|| {
+                black_box(
+                    identify_with_analysis(&nominal, black_box(&data), &no_cov, &analysis, &mut ws)
+                        .expect("fit"),
+                )
+            })
+        });
     }
 }
 
