@@ -588,7 +588,7 @@ pub fn calibrate_sessions(
         &index,
         sessions.len(),
         SIGMA_POS_M,
-        a.identifiable,
+        &options(a.identifiable),
     )
     .map_err(study_err)?;
     Ok(r.geometric)

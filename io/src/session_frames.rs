@@ -13,7 +13,6 @@
 //! row is small, and it is stated in the report).
 
 use kincal::identify::{Algorithm, IdentifyOptions, Measurement, identify};
-use kincal::params::ParamSet;
 use kincal::registration::weighted_rigid_fit;
 use kincal::{Robot, Transform};
 
@@ -64,25 +63,21 @@ pub fn register<const N: usize>(
     n_sessions: usize,
     sigma_m: f64,
 ) -> kincal::Result<Registered<N>> {
-    register_with(
-        robot,
-        data,
-        index,
-        n_sessions,
-        sigma_m,
-        robot.geometric_param_set(),
-    )
+    let mut opts = IdentifyOptions::new(Algorithm::Ols, robot.geometric_param_set());
+    opts.allow_data_deficiency = true;
+    register_with(robot, data, index, n_sessions, sigma_m, &opts)
 }
 
-/// [`register`] with the model's parameters `params` calibrated between the
-/// registrations (the geometry plus effects, e.g. sensor joints' gains).
+/// [`register`] with the calibration between the registrations run with `opts` (its
+/// parameter set: the geometry plus effects, e.g. sensor joints' gains; its iteration limit
+/// and tolerances: a study's own).
 pub fn register_with<const N: usize>(
     robot: &Robot<N>,
     data: &[Measurement<N>],
     index: &[u16],
     n_sessions: usize,
     sigma_m: f64,
-    params: ParamSet,
+    opts: &IdentifyOptions<'_>,
 ) -> kincal::Result<Registered<N>> {
     let mut ws = crate::calibration::new_workspace();
     let mut model = *robot;
@@ -105,9 +100,7 @@ pub fn register_with<const N: usize>(
             }
         }
         if round + 1 < ROUNDS {
-            let mut opts = IdentifyOptions::new(Algorithm::Ols, params);
-            opts.allow_data_deficiency = true;
-            model = identify(robot, &out, &opts, &mut ws)?.robot;
+            model = identify(robot, &out, opts, &mut ws)?.robot;
         }
     }
     Ok(Registered {
