@@ -36,6 +36,16 @@
 // reduction round and kernels, <= 1 ulp) was tried and did not pay: six of them 56 ns CPU
 // against libm's 53 ns and the inlined sin_cos's 69 ns (criterion, random angles), so FK
 // keeps sin_cos.
+// Also tried and not kept (branch wt-fk, session 12): a firmware FK for the prepared handle
+// with all six sines and cosines in one branch-free vectorisable polynomial (within 1 ulp of
+// libm over +-2pi) and the link products re-associated (Rz(q)*Rx(alpha)*Ry(beta) formed off
+// the critical path, one 3x3 product per link), equal to kincal_fk to 1.1e-15 but not bit
+// for bit. Core FK 184 -> 144-170 ns; through the ABI against Pinocchio 0.64-0.82 (FK) and
+// 0.74-0.84 (FK + Jacobian) over three invocations, against 0.64-0.84 (median 0.76) and
+// 0.72-1.03 (median 0.87) for this build alternated with it over seven: within the load's
+// noise, so not worth giving up bit-identity with kincal_fk. perf: Pinocchio's largest cost
+// is glibc's __sincos_fma (an FMA variant chosen at run time; this library targets the
+// x86-64 baseline without FMA).
 
 #include <kincal.h>
 
