@@ -419,14 +419,23 @@ fn record<const N: usize, const P: usize>(
     let (n_pos, n_rot) = measured(m);
     let mut r = [0.0; 6];
     let (mut s, mut s_rot) = (0.0, 0.0);
-    for k in 0..6 {
-        let mut v = ws.b[k];
-        for j in 0..ws.model_n[model] {
-            let d = ws.delta[model][j];
-            if d != 0.0 {
-                v -= ws.a[k][ws.model_cols[model][j] as usize] * d;
+    // Column by column, the six rows together: each row's subtractions keep their order
+    // (the columns in model order, zero steps skipped), so every sum is the row-by-row one.
+    let mut vs = ws.b;
+    let n_cols = ws.model_n[model].min(P);
+    for (&d, &c) in ws.delta[model][..n_cols]
+        .iter()
+        .zip(ws.model_cols[model][..n_cols].iter())
+    {
+        if d != 0.0 {
+            let c = c as usize;
+            for (v, ak) in vs.iter_mut().zip(ws.a.iter()) {
+                *v -= ak[c] * d;
             }
         }
+    }
+    for k in 0..6 {
+        let v = vs[k];
         r[k] = if sw[k] > 0.0 && m.mask.has(k) {
             v / sw[k]
         } else {
