@@ -732,6 +732,82 @@ mod tests {
         );
     }
 
+    /// Rows of a pose whose columns mix every class the paired kernels tell apart: all
+    /// zero (column 2, and column 9 at every third pose), position only (3, 4, 7, and 8 at
+    /// odd poses) and full; entries beyond `n` are NaN and must not be read.
+    fn mixed_rows<const P: usize>(k: usize, n: usize) -> [[f64; P]; 6] {
+        let x = |r: usize, j: usize| libm::sin(0.41 * (k * 37 + r * 11 + j) as f64 + 0.7);
+        let mut a = [[0.0; P]; 6];
+        for (r, row) in a.iter_mut().enumerate() {
+            for (j, v) in row.iter_mut().enumerate() {
+                let zero = j == 2 || (j == 9 && k % 3 == 0);
+                let length = matches!(j, 3 | 4 | 7) || (j == 8 && k % 2 == 1);
+                *v = if j >= n {
+                    f64::NAN
+                } else if zero || (length && r >= 3) {
+                    0.0
+                } else {
+                    x(r, j)
+                };
+            }
+        }
+        a
+    }
+
+    /// The paired kernels against their definitions, bit for bit: `add_rows6` against each
+    /// entry's `fold3`/`fold6` expression computed one row at a time, `add_rows6_in_order`
+    /// against six `add_row_weighted` calls of weight 1; odd and even `n`.
+    #[test]
+    #[allow(clippy::unwrap_used)]
+    fn paired_rows_give_each_entry_its_single_row_sum() {
+        const P: usize = 12;
+        for n in [11, 12] {
+            let mut g = GramAccumulator::<P>::new();
+            let mut o = GramAccumulator::<P>::new();
+            let mut s = GramAccumulator::<P>::new();
+            g.reset(n).unwrap();
+            o.reset(n).unwrap();
+            s.reset(n).unwrap();
+            let mut r = [[0.0f64; P]; P];
+            let mut ratb = [0.0f64; P];
+            for k in 0..30 {
+                let a = mixed_rows::<P>(k, n);
+                let b = [0.3, -1.1, 0.02, 0.5, -0.25, 0.9].map(|v| v * (k as f64 + 1.0));
+                let w = [1.5, 0.5, if k % 4 == 0 { 0.0 } else { 2.0 }, 1.0, 3.0, 0.25];
+                g.add_rows6(&a, &b, &w).unwrap();
+                o.add_rows6_in_order(&a, &b).unwrap();
+                for (row, &br) in a.iter().zip(&b) {
+                    s.add_row_weighted(&row[..n], br, 1.0).unwrap();
+                }
+                // The reference: row by row, each entry's single-row expression.
+                for i in 0..n {
+                    let c: [f64; 6] = core::array::from_fn(|t| w[t] * a[t][i]);
+                    ratb[i] += c.iter().zip(b.iter()).map(|(x, y)| x * y).sum::<f64>();
+                    if c.iter().all(|&v| v == 0.0) {
+                        continue;
+                    }
+                    let rot = !(c[3] == 0.0 && c[4] == 0.0 && c[5] == 0.0);
+                    for j in i..n {
+                        let x: [f64; 6] = core::array::from_fn(|t| a[t][j]);
+                        r[i][j] += if rot { sum6(&c, &x) } else { sum3(&c, &x) };
+                    }
+                }
+            }
+            for i in 0..n {
+                for j in i..n {
+                    assert_eq!(g.gram()[i][j].to_bits(), r[i][j].to_bits(), "{n}: {i},{j}");
+                    let (u, v) = (o.gram()[i][j], s.gram()[i][j]);
+                    assert_eq!(u.to_bits(), v.to_bits(), "{n}: {i},{j}");
+                }
+                assert_eq!(g.atb()[i].to_bits(), ratb[i].to_bits(), "{n}: {i}");
+                assert_eq!(o.atb()[i].to_bits(), s.atb()[i].to_bits(), "{n}: {i}");
+            }
+            // Not vacuous: the zero column stays zero, the others fill.
+            assert_eq!(g.gram()[2][2], 0.0);
+            assert!(g.gram()[0][1] != 0.0 && g.gram()[3][4] != 0.0 && o.gram()[5][6] != 0.0);
+        }
+    }
+
     #[test]
     #[allow(clippy::unwrap_used)]
     fn gram_and_cholesky_match_the_givens_factor() {
