@@ -740,8 +740,8 @@ mod tests {
         let mut a = [[0.0; P]; 6];
         for (r, row) in a.iter_mut().enumerate() {
             for (j, v) in row.iter_mut().enumerate() {
-                let zero = j == 2 || (j == 9 && k % 3 == 0);
-                let length = matches!(j, 3 | 4 | 7) || (j == 8 && k % 2 == 1);
+                let zero = j == 2 || (j == 9 && k.is_multiple_of(3));
+                let length = matches!(j, 3 | 4 | 7) || (j == 8 && !k.is_multiple_of(2));
                 *v = if j >= n {
                     f64::NAN
                 } else if zero || (length && r >= 3) {
@@ -773,7 +773,14 @@ mod tests {
             for k in 0..30 {
                 let a = mixed_rows::<P>(k, n);
                 let b = [0.3, -1.1, 0.02, 0.5, -0.25, 0.9].map(|v| v * (k as f64 + 1.0));
-                let w = [1.5, 0.5, if k % 4 == 0 { 0.0 } else { 2.0 }, 1.0, 3.0, 0.25];
+                let w = [
+                    1.5,
+                    0.5,
+                    if k.is_multiple_of(4) { 0.0 } else { 2.0 },
+                    1.0,
+                    3.0,
+                    0.25,
+                ];
                 g.add_rows6(&a, &b, &w).unwrap();
                 o.add_rows6_in_order(&a, &b).unwrap();
                 for (row, &br) in a.iter().zip(&b) {
