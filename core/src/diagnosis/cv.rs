@@ -40,11 +40,16 @@ pub(crate) fn pose_rows<const N: usize, const P: usize>(
     })?;
     let t = m.model_jacobian(lin, jac)?;
     let e = pose_error(&m.pose, &t, OrientationError::Exact);
+    let w: [f64; 6] = core::array::from_fn(|k| if m.mask.has(k) { sw[k] } else { 0.0 });
     for k in 0..6 {
-        let w = if m.mask.has(k) { sw[k] } else { 0.0 };
-        ws.b[k] = w * e[k];
-        for c in 0..ws.n_u {
-            ws.a[k][c] = w * ws.jac[ws.u[c]][k];
+        ws.b[k] = w[k] * e[k];
+    }
+    // Column by column: one Jacobian column (six contiguous values) read once.
+    let n_u = ws.n_u.min(P);
+    for (c, &uc) in ws.u[..n_u].iter().enumerate() {
+        let jc = ws.jac.get(uc).copied().unwrap_or([0.0; 6]);
+        for (ak, (wk, jk)) in ws.a.iter_mut().zip(w.iter().zip(jc)) {
+            ak[c] = wk * jk;
         }
     }
     if ws.alt_harmonics {
