@@ -6,18 +6,19 @@
 //! `cargo bench -p kincal --bench diagnosis -- --noplot`
 //!
 //! Measured (CPU time per run from `cpu_time`, this and the previous code alternated in
-//! one session, three rounds each, on a 2-core machine at load 3.6–5.8, so ±25 % between
-//! rounds): 120 rows 15.6–20.9 ms (was 15.9–20.9), 1,000 rows 137.5–176.7 ms (was
-//! 135.4–217.5), 5,000 rows 585–747.5 ms (was 600–850). Scaled by the instruction
-//! counts, the earlier, quieter session's 13.85 ms and 520 ms would be 11.8 ms and 417 ms;
+//! one session, three rounds each, on a 2-core machine at load 2.7–3.5, so ±20 % between
+//! rounds): 120 rows 15.45–16.00 ms (was 17.45–18.60), 1,000 rows 112.5–148.3 ms (was
+//! 184.2–215.4), 5,000 rows 537.5–657.5 ms (was 695–850). Scaled by the instruction
+//! counts, the earlier, quieter session's 13.85 ms and 520 ms would be 11.5 ms and 403 ms;
 //! not measured, and at 120 rows an overstatement (callgrind counts the cleared array's
 //! `rep stosb` per byte). Outputs bit-identical (`tests/diagnosis_dump.rs`'s dump, `cmp`).
 //! Instructions of one diagnosis (callgrind, `tests/diagnosis_dump.rs`'s `one_size`,
-//! release, `diagnose` inclusive): 120 rows 167.1 → 142.0 M, 1,000 rows 1,593.0 →
-//! 1,250.7 M, 5,000 rows 6,300.7 → 5,046.8 M: the Gram kernels fold two rows of the
-//! triangle per pass over a pose's rows, the cross-validation's held-out residuals
-//! subtract a step column by column for the six rows together, and `add_rows` no longer
-//! clears a 6×P array per pose. Neither target is shown met on this loaded machine.
+//! release, `diagnose` inclusive): 120 rows 167.1 → 138.9 M, 1,000 rows 1,593.0 →
+//! 1,219.0 M, 5,000 rows 6,300.7 → 4,888.4 M: the Gram kernels fold two rows of the
+//! triangle per pass over a pose's rows, the cross-validation whitens a pose's rows and
+//! subtracts a model's step column by column for the six rows together, and `add_rows`
+//! no longer clears a 6×P array per pose. Neither target is shown met on this loaded
+//! machine.
 //! Shares of a 5,000-row diagnosis's instructions now: the two Gram kernels 32 %
 //! (`add_rows6_in_order`, the cross-validation's, 18 %; `add_rows6`, the fits', 14 %),
 //! the Jacobians (frames, columns, gravity torques) 23 %, rank sorts 5 %; at 120 rows
