@@ -5,19 +5,25 @@
 //! rank tests are O(G log G) in the pose groups.
 //! `cargo bench -p kincal --bench diagnosis -- --noplot`
 //!
-//! Measured (CPU time per run from `cpu_time`, loaded 2-core machine, this and the
-//! previous code alternated in one session, three runs each): 120 rows 13.80–13.90 ms (was
-//! 14.75–14.90), 1,000 rows 121.7–122.9 ms (was 122.9–124.2), 5,000 rows 520–527.5 ms
-//! (was 522.5–527.5): ×0.94, ×0.99, ×1.00 (within the noise), outputs bit-identical.
+//! Measured (CPU time per run from `cpu_time`, this and the previous code alternated in
+//! one session, three rounds each, on a 2-core machine at load 2.7–3.5, so ±20 % between
+//! rounds): 120 rows 15.45–16.00 ms (was 17.45–18.60), 1,000 rows 112.5–148.3 ms (was
+//! 184.2–215.4), 5,000 rows 537.5–657.5 ms (was 695–850). Scaled by the instruction
+//! counts, the earlier, quieter session's 13.85 ms and 520 ms would be 11.5 ms and 403 ms;
+//! not measured, and at 120 rows an overstatement (callgrind counts the cleared array's
+//! `rep stosb` per byte). Outputs bit-identical (`tests/diagnosis_dump.rs`'s dump, `cmp`).
 //! Instructions of one diagnosis (callgrind, `tests/diagnosis_dump.rs`'s `one_size`,
-//! release, `diagnose` inclusive): 120 rows 180.1 → 167.3 M, 1,000 rows 1,606.7 → 1,594.2 M,
-//! 5,000 rows 6,318 → 6,307 M (the smooth checks' inner ridge fits shared by fold pairs;
-//! they do not grow with the rows). Neither target is met yet. Shares of a 5,000-row
-//! diagnosis's instructions: the Gauss–Newton fits 34 %, the candidates' cross-validation
-//! 17 %, the outlier screen 12 %, the extrapolation check 11 %, the smooth checks
-//! (baseline's and verdict's, run together) 10 %; at 120 rows the smooth checks 18 % (their
-//! 48×48 ridge factorisations and solves 8.5 %), the fits and the cross-validation as many
-//! instructions as before (26 % and 22 % of the former 180 M).
+//! release, `diagnose` inclusive): 120 rows 167.1 → 138.9 M, 1,000 rows 1,593.0 →
+//! 1,219.0 M, 5,000 rows 6,300.7 → 4,888.4 M: the Gram kernels fold two rows of the
+//! triangle per pass over a pose's rows, the cross-validation whitens a pose's rows and
+//! subtracts a model's step column by column for the six rows together, and `add_rows`
+//! no longer clears a 6×P array per pose. Neither target is shown met on this loaded
+//! machine.
+//! Shares of a 5,000-row diagnosis's instructions now: the two Gram kernels 32 %
+//! (`add_rows6_in_order`, the cross-validation's, 18 %; `add_rows6`, the fits', 14 %),
+//! the Jacobians (frames, columns, gravity torques) 23 %, rank sorts 5 %; at 120 rows
+//! the Gram kernels 20 %, the cross-validation's greedy factors 9 % (a serial chain), the
+//! Jacobians 19 %, the smooth checks' ridge fits 16 %.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use kincal::diagnosis::{Config, DiagWorkspace, PoseDiagnosis, diagnose};

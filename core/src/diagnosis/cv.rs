@@ -40,11 +40,16 @@ pub(crate) fn pose_rows<const N: usize, const P: usize>(
     })?;
     let t = m.model_jacobian(lin, jac)?;
     let e = pose_error(&m.pose, &t, OrientationError::Exact);
+    let w: [f64; 6] = core::array::from_fn(|k| if m.mask.has(k) { sw[k] } else { 0.0 });
     for k in 0..6 {
-        let w = if m.mask.has(k) { sw[k] } else { 0.0 };
-        ws.b[k] = w * e[k];
-        for c in 0..ws.n_u {
-            ws.a[k][c] = w * ws.jac[ws.u[c]][k];
+        ws.b[k] = w[k] * e[k];
+    }
+    // Column by column: one Jacobian column (six contiguous values) read once.
+    let n_u = ws.n_u.min(P);
+    for (c, &uc) in ws.u[..n_u].iter().enumerate() {
+        let jc = ws.jac.get(uc).copied().unwrap_or([0.0; 6]);
+        for (ak, (wk, jk)) in ws.a.iter_mut().zip(w.iter().zip(jc)) {
+            ak[c] = wk * jk;
         }
     }
     if ws.alt_harmonics {
@@ -419,14 +424,23 @@ fn record<const N: usize, const P: usize>(
     let (n_pos, n_rot) = measured(m);
     let mut r = [0.0; 6];
     let (mut s, mut s_rot) = (0.0, 0.0);
-    for k in 0..6 {
-        let mut v = ws.b[k];
-        for j in 0..ws.model_n[model] {
-            let d = ws.delta[model][j];
-            if d != 0.0 {
-                v -= ws.a[k][ws.model_cols[model][j] as usize] * d;
+    // Column by column, the six rows together: each row's subtractions keep their order
+    // (the columns in model order, zero steps skipped), so every sum is the row-by-row one.
+    let mut vs = ws.b;
+    let n_cols = ws.model_n[model].min(P);
+    for (&d, &c) in ws.delta[model][..n_cols]
+        .iter()
+        .zip(ws.model_cols[model][..n_cols].iter())
+    {
+        if d != 0.0 {
+            let c = c as usize;
+            for (v, ak) in vs.iter_mut().zip(ws.a.iter()) {
+                *v -= ak[c] * d;
             }
         }
+    }
+    for k in 0..6 {
+        let v = vs[k];
         r[k] = if sw[k] > 0.0 && m.mask.has(k) {
             v / sw[k]
         } else {

@@ -509,7 +509,6 @@ pub(crate) fn add_rows<const N: usize, const P: usize>(
     };
     // The pose's six rows at once; an unmeasured row gets weight 0 (and zero entries).
     let mut c = 0.0;
-    let mut rows = [[0.0; P]; 6];
     let mut wk = [0.0; 6];
     let mut on = [false; 6];
     for k in 0..6 {
@@ -523,7 +522,10 @@ pub(crate) fn add_rows<const N: usize, const P: usize>(
     // Column by column: one Jacobian column (six contiguous values) per parameter, every
     // row written (no branch, no bounds check: `j < n <= P`); an unmeasured row is zeroed
     // afterwards, which leaves the same entries (0) as not scaling it.
+    // Only `[..n]` of each row is written, and only that is read (`add_rows6` of both
+    // accumulators): the rest of `ws.pose_rows` may hold anything.
     let n = cols.len().min(P);
+    let rows = &mut ws.pose_rows;
     for j in 0..n {
         let jc = jac.get(cols[j]).copied().unwrap_or([0.0; 6]);
         let scale = ws.colscale[j];
@@ -536,19 +538,20 @@ pub(crate) fn add_rows<const N: usize, const P: usize>(
             rows[k][..n].fill(0.0);
         }
     }
+    let rows = &ws.pose_rows;
     if ws.fold_both {
         // The analysis's rows (zero right-hand side) first, so that any error is the one the
         // analysis alone reports; then the first iteration's, and the pose's statistics
         // (`t` is `model_pose`'s transform bit for bit: the same chain).
         // A pose the first iteration cannot fold (a non-finite residual) is no error of the
         // analysis: the first pass is then not taken, and the fit's own passes report it.
-        ws.lsq.add_rows6(&rows, &[0.0; 6], &wk)?;
+        ws.lsq.add_rows6(rows, &[0.0; 6], &wk)?;
         if ws.first_pass {
-            ws.first_pass = ws.gram.add_rows6(&rows, &e, &wk).is_ok();
+            ws.first_pass = ws.gram.add_rows6(rows, &e, &wk).is_ok();
             ws.pass_stats.add(m, &t, opts);
         }
     } else if ws.to_gram {
-        ws.gram.add_rows6(&rows, &e, &wk)?;
+        ws.gram.add_rows6(rows, &e, &wk)?;
         if ws.last_pass {
             ws.pass_stats.add(m, &t, opts);
             for k in 0..6 {
@@ -558,7 +561,7 @@ pub(crate) fn add_rows<const N: usize, const P: usize>(
             }
         }
     } else {
-        ws.lsq.add_rows6(&rows, &e, &wk)?;
+        ws.lsq.add_rows6(rows, &e, &wk)?;
     }
     Ok(c)
 }

@@ -39,6 +39,9 @@ pub struct Workspace<const P: usize> {
     /// Scratch row: OPT1's damping scales, a prior row while folding (never held across a
     /// fold).
     pub(crate) row: [f64; P],
+    /// A pose's six scaled rows while `add_rows` folds them (only `[..n_cols]` of each is
+    /// written and read; kept here so no pose pays for clearing all `6·P` entries).
+    pub(crate) pose_rows: [[f64; P]; 6],
     pub(crate) diag: [f64; P],
     pub(crate) x: [f64; P],
     pub(crate) step: [f64; P],
@@ -94,6 +97,7 @@ impl<const P: usize> Workspace<P> {
             cols: [0; P],
             colscale: [0.0; P],
             row: [0.0; P],
+            pose_rows: [[0.0; P]; 6],
             diag: [0.0; P],
             x: [0.0; P],
             step: [0.0; P],

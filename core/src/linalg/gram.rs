@@ -90,30 +90,83 @@ impl<const P: usize> GramAccumulator<P> {
             });
         }
         let [a0, a1, a2, a3, a4, a5] = a;
-        let rows = self.g.iter_mut().zip(self.atb.iter_mut()).take(n);
-        for (i, (grow, atb)) in rows.enumerate() {
-            let c = [
+        let coef = |i: usize| {
+            [
                 w[0] * a0[i],
                 w[1] * a1[i],
                 w[2] * a2[i],
                 w[3] * a3[i],
                 w[4] * a4[i],
                 w[5] * a5[i],
-            ];
-            *atb += c.iter().zip(b.iter()).map(|(x, y)| x * y).sum::<f64>();
+            ]
+        };
+        let (g, atb) = (&mut self.g, &mut self.atb);
+        // Two rows of the triangle at a time where both have something to add: each entry
+        // gets the very sum `fold3`/`fold6` gives it (same products, same order), the
+        // pose's rows read once for both (half the loads of the hot loop).
+        let mut i = 0;
+        while i < n {
+            let c = coef(i);
+            atb[i] += c.iter().zip(b.iter()).map(|(x, y)| x * y).sum::<f64>();
             if c.iter().all(|&v| v == 0.0) {
                 // A structurally zero column of this pose (e.g. a parameter beyond the
                 // joints it moves): nothing to add.
+                i += 1;
                 continue;
             }
+            // Length columns have no rotation part: three terms suffice.
+            let rot_c = !(c[3] == 0.0 && c[4] == 0.0 && c[5] == 0.0);
+            let j = i + 1;
+            let d = if j < n { coef(j) } else { [0.0; 6] };
+            if j < n && d.iter().any(|&v| v != 0.0) {
+                atb[j] += d.iter().zip(b.iter()).map(|(x, y)| x * y).sum::<f64>();
+                let rot_d = !(d[3] == 0.0 && d[4] == 0.0 && d[5] == 0.0);
+                let (lo, hi) = g.split_at_mut(j);
+                let (Some(gi), Some(gj)) = (lo.last_mut(), hi.first_mut()) else {
+                    break;
+                };
+                let rows = [
+                    &a0[j..n],
+                    &a1[j..n],
+                    &a2[j..n],
+                    &a3[j..n],
+                    &a4[j..n],
+                    &a5[j..n],
+                ];
+                let at_i = [a0[i], a1[i], a2[i], a3[i], a4[i], a5[i]];
+                gi[i] += if rot_c {
+                    sum6(&c, &at_i)
+                } else {
+                    sum3(&c, &at_i)
+                };
+                match (rot_c, rot_d) {
+                    (true, true) => {
+                        fold_pair::<true, true>(&mut gi[j..n], &mut gj[j..n], &c, &d, rows)
+                    }
+                    (true, false) => {
+                        fold_pair::<true, false>(&mut gi[j..n], &mut gj[j..n], &c, &d, rows)
+                    }
+                    (false, true) => {
+                        fold_pair::<false, true>(&mut gi[j..n], &mut gj[j..n], &c, &d, rows)
+                    }
+                    (false, false) => {
+                        fold_pair::<false, false>(&mut gi[j..n], &mut gj[j..n], &c, &d, rows)
+                    }
+                }
+                i += 2;
+                continue;
+            }
+            let Some(grow) = g.get_mut(i) else {
+                break;
+            };
             let row = &mut grow[i..n];
-            if c[3] == 0.0 && c[4] == 0.0 && c[5] == 0.0 {
-                // Length columns have no rotation part: three terms suffice.
-                fold3(row, &c, [&a0[i..n], &a1[i..n], &a2[i..n]]);
-            } else {
+            if rot_c {
                 let rot = [&a3[i..n], &a4[i..n], &a5[i..n]];
                 fold6(row, &c, [&a0[i..n], &a1[i..n], &a2[i..n]], rot);
+            } else {
+                fold3(row, &c, [&a0[i..n], &a1[i..n], &a2[i..n]]);
             }
+            i += 1;
         }
         self.btb += (0..6).map(|r| w[r] * b[r] * b[r]).sum::<f64>();
         Ok(())
@@ -192,15 +245,50 @@ impl<const P: usize> GramAccumulator<P> {
             return Ok(());
         }
         let [a0, a1, a2, a3, a4, a5] = a;
-        let rows = self.g.iter_mut().zip(self.atb.iter_mut()).take(n);
-        for (i, (grow, atb)) in rows.enumerate() {
-            let c = [a0[i], a1[i], a2[i], a3[i], a4[i], a5[i]];
+        let coef = |i: usize| [a0[i], a1[i], a2[i], a3[i], a4[i], a5[i]];
+        let (g, atb) = (&mut self.g, &mut self.atb);
+        // Two rows at a time where both have something to add (the same sums in the same
+        // order per entry; the pose's rows read once for both).
+        let mut i = 0;
+        while i < n {
+            let c = coef(i);
             if c.iter().all(|&v| v == 0.0) {
+                i += 1;
                 continue;
             }
             for (ck, bk) in c.iter().zip(b) {
-                *atb += ck * bk;
+                atb[i] += ck * bk;
             }
+            let j = i + 1;
+            let d = if j < n { coef(j) } else { [0.0; 6] };
+            if j < n && d.iter().any(|&v| v != 0.0) {
+                for (dk, bk) in d.iter().zip(b) {
+                    atb[j] += dk * bk;
+                }
+                let (lo, hi) = g.split_at_mut(j);
+                let (Some(gi), Some(gj)) = (lo.last_mut(), hi.first_mut()) else {
+                    break;
+                };
+                let mut v = gi[i];
+                for (ck, ak) in c.iter().zip(c.iter()) {
+                    v += ck * ak;
+                }
+                gi[i] = v;
+                let rows = [
+                    &a0[j..n],
+                    &a1[j..n],
+                    &a2[j..n],
+                    &a3[j..n],
+                    &a4[j..n],
+                    &a5[j..n],
+                ];
+                in_order_pair(&mut gi[j..n], &mut gj[j..n], &c, &d, rows);
+                i += 2;
+                continue;
+            }
+            let Some(grow) = g.get_mut(i) else {
+                break;
+            };
             let (Some(row), Some(r0), Some(r1), Some(r2), Some(r3), Some(r4), Some(r5)) = (
                 grow.get_mut(i..n),
                 a0.get(i..n),
@@ -210,6 +298,7 @@ impl<const P: usize> GramAccumulator<P> {
                 a4.get(i..n),
                 a5.get(i..n),
             ) else {
+                i += 1;
                 continue;
             };
             for (j, g) in row.iter_mut().enumerate() {
@@ -222,6 +311,7 @@ impl<const P: usize> GramAccumulator<P> {
                 v += c[5] * r5[j];
                 *g = v;
             }
+            i += 1;
         }
         for &br in b {
             self.btb += br * br;
@@ -364,6 +454,78 @@ fn fold6(row: &mut [f64], c: &[f64; 6], p: [&[f64]; 3], r: [&[f64]; 3]) {
     for k in 0..m {
         row[k] +=
             c[0] * b0[k] + c[1] * b1[k] + c[2] * b2[k] + c[3] * b3[k] + c[4] * b4[k] + c[5] * b5[k];
+    }
+}
+
+/// `Σ_r c[r]·x[r]` over the three position rows, in `fold3`'s order.
+#[inline]
+fn sum3(c: &[f64; 6], x: &[f64; 6]) -> f64 {
+    c[0] * x[0] + c[1] * x[1] + c[2] * x[2]
+}
+
+/// `Σ_r c[r]·x[r]` over all six rows, in `fold6`'s order.
+#[inline]
+fn sum6(c: &[f64; 6], x: &[f64; 6]) -> f64 {
+    c[0] * x[0] + c[1] * x[1] + c[2] * x[2] + c[3] * x[3] + c[4] * x[4] + c[5] * x[5]
+}
+
+/// [`fold3`] or [`fold6`] (`R0`, `R1`: whether the row's coefficients have a rotation
+/// part) into two rows at once: `r0` with coefficients `c`, `r1` with `d`. Each entry gets
+/// the expression the single-row kernel gives it, term for term.
+#[inline]
+fn fold_pair<const R0: bool, const R1: bool>(
+    r0: &mut [f64],
+    r1: &mut [f64],
+    c: &[f64; 6],
+    d: &[f64; 6],
+    a: [&[f64]; 6],
+) {
+    let m = r0.len();
+    let [b0, b1, b2, b3, b4, b5] = a;
+    let (Some(r1), Some(b0), Some(b1), Some(b2), Some(b3), Some(b4), Some(b5)) = (
+        r1.get_mut(..m),
+        b0.get(..m),
+        b1.get(..m),
+        b2.get(..m),
+        b3.get(..m),
+        b4.get(..m),
+        b5.get(..m),
+    ) else {
+        return;
+    };
+    for k in 0..m {
+        let x = [b0[k], b1[k], b2[k], b3[k], b4[k], b5[k]];
+        r0[k] += if R0 { sum6(c, &x) } else { sum3(c, &x) };
+        r1[k] += if R1 { sum6(d, &x) } else { sum3(d, &x) };
+    }
+}
+
+/// The loop of [`GramAccumulator::add_rows6_in_order`] into two rows at once (`r0` with
+/// coefficients `c`, `r1` with `d`): each entry adds its six products one after the other.
+#[inline]
+fn in_order_pair(r0: &mut [f64], r1: &mut [f64], c: &[f64; 6], d: &[f64; 6], a: [&[f64]; 6]) {
+    let m = r0.len();
+    let [b0, b1, b2, b3, b4, b5] = a;
+    let (Some(r1), Some(b0), Some(b1), Some(b2), Some(b3), Some(b4), Some(b5)) = (
+        r1.get_mut(..m),
+        b0.get(..m),
+        b1.get(..m),
+        b2.get(..m),
+        b3.get(..m),
+        b4.get(..m),
+        b5.get(..m),
+    ) else {
+        return;
+    };
+    for k in 0..m {
+        let x = [b0[k], b1[k], b2[k], b3[k], b4[k], b5[k]];
+        let (mut u, mut v) = (r0[k], r1[k]);
+        for r in 0..6 {
+            u += c[r] * x[r];
+            v += d[r] * x[r];
+        }
+        r0[k] = u;
+        r1[k] = v;
     }
 }
 
@@ -568,6 +730,89 @@ mod tests {
             g3.add_rows3(&[[0.0; P]; 6], &[0.0; 3], &[-1.0, 1.0, 1.0])
                 .is_err()
         );
+    }
+
+    /// Rows of a pose whose columns mix every class the paired kernels tell apart: all
+    /// zero (column 2, and column 9 at every third pose), position only (3, 4, 7, and 8 at
+    /// odd poses) and full; entries beyond `n` are NaN and must not be read.
+    fn mixed_rows<const P: usize>(k: usize, n: usize) -> [[f64; P]; 6] {
+        let x = |r: usize, j: usize| libm::sin(0.41 * (k * 37 + r * 11 + j) as f64 + 0.7);
+        let mut a = [[0.0; P]; 6];
+        for (r, row) in a.iter_mut().enumerate() {
+            for (j, v) in row.iter_mut().enumerate() {
+                let zero = j == 2 || (j == 9 && k.is_multiple_of(3));
+                let length = matches!(j, 3 | 4 | 7) || (j == 8 && !k.is_multiple_of(2));
+                *v = if j >= n {
+                    f64::NAN
+                } else if zero || (length && r >= 3) {
+                    0.0
+                } else {
+                    x(r, j)
+                };
+            }
+        }
+        a
+    }
+
+    /// The paired kernels against their definitions, bit for bit: `add_rows6` against each
+    /// entry's `fold3`/`fold6` expression computed one row at a time, `add_rows6_in_order`
+    /// against six `add_row_weighted` calls of weight 1; odd and even `n`.
+    #[test]
+    #[allow(clippy::unwrap_used)]
+    fn paired_rows_give_each_entry_its_single_row_sum() {
+        const P: usize = 12;
+        for n in [11, 12] {
+            let mut g = GramAccumulator::<P>::new();
+            let mut o = GramAccumulator::<P>::new();
+            let mut s = GramAccumulator::<P>::new();
+            g.reset(n).unwrap();
+            o.reset(n).unwrap();
+            s.reset(n).unwrap();
+            let mut r = [[0.0f64; P]; P];
+            let mut ratb = [0.0f64; P];
+            for k in 0..30 {
+                let a = mixed_rows::<P>(k, n);
+                let b = [0.3, -1.1, 0.02, 0.5, -0.25, 0.9].map(|v| v * (k as f64 + 1.0));
+                let w = [
+                    1.5,
+                    0.5,
+                    if k.is_multiple_of(4) { 0.0 } else { 2.0 },
+                    1.0,
+                    3.0,
+                    0.25,
+                ];
+                g.add_rows6(&a, &b, &w).unwrap();
+                o.add_rows6_in_order(&a, &b).unwrap();
+                for (row, &br) in a.iter().zip(&b) {
+                    s.add_row_weighted(&row[..n], br, 1.0).unwrap();
+                }
+                // The reference: row by row, each entry's single-row expression.
+                for i in 0..n {
+                    let c: [f64; 6] = core::array::from_fn(|t| w[t] * a[t][i]);
+                    ratb[i] += c.iter().zip(b.iter()).map(|(x, y)| x * y).sum::<f64>();
+                    if c.iter().all(|&v| v == 0.0) {
+                        continue;
+                    }
+                    let rot = !(c[3] == 0.0 && c[4] == 0.0 && c[5] == 0.0);
+                    for j in i..n {
+                        let x: [f64; 6] = core::array::from_fn(|t| a[t][j]);
+                        r[i][j] += if rot { sum6(&c, &x) } else { sum3(&c, &x) };
+                    }
+                }
+            }
+            for i in 0..n {
+                for j in i..n {
+                    assert_eq!(g.gram()[i][j].to_bits(), r[i][j].to_bits(), "{n}: {i},{j}");
+                    let (u, v) = (o.gram()[i][j], s.gram()[i][j]);
+                    assert_eq!(u.to_bits(), v.to_bits(), "{n}: {i},{j}");
+                }
+                assert_eq!(g.atb()[i].to_bits(), ratb[i].to_bits(), "{n}: {i}");
+                assert_eq!(o.atb()[i].to_bits(), s.atb()[i].to_bits(), "{n}: {i}");
+            }
+            // Not vacuous: the zero column stays zero, the others fill.
+            assert_eq!(g.gram()[2][2], 0.0);
+            assert!(g.gram()[0][1] != 0.0 && g.gram()[3][4] != 0.0 && o.gram()[5][6] != 0.0);
+        }
     }
 
     #[test]
