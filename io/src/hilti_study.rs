@@ -1158,6 +1158,21 @@ mod tests {
         }
     }
 
+    /// Per session: `m`'s RMS with a free and with a level new frame, and the free frame's
+    /// tilt (prints).
+    fn print_new_frames(m: &Robot<N>, sessions: &[crate::datasets_hilti::Session], v: &Variant) {
+        for (s, _, rows) in sessions {
+            let tilt = new_frame_tilt(m, rows, v).unwrap();
+            println!(
+                "   {s:<16} free {:.3} level {:.3} | free frame tilt x {:+.3} y {:+.3} mrad",
+                new_base_rms_mm(m, rows, v).unwrap(),
+                level_base_rms_mm(m, rows, v).unwrap(),
+                tilt[0] * 1e3,
+                tilt[1] * 1e3
+            );
+        }
+    }
+
     /// Each floor calibrated on its own rows (in-sample, and held out over 5 folds as flat's
     /// figure): what the model class reaches when it may learn the floor itself, the ceiling
     /// of any transfer from flat (prints).
@@ -1421,16 +1436,7 @@ mod tests {
                     t.elapsed().as_secs_f64()
                 );
                 println!("   masses {:?}", m.mass());
-                for (s, _, rows) in &sessions {
-                    let tilt = new_frame_tilt(&m, rows, &v).unwrap();
-                    println!(
-                        "   {s:<16} free {:.3} level {:.3} | free frame tilt x {:+.3} y {:+.3} mrad",
-                        new_base_rms_mm(&m, rows, &v).unwrap(),
-                        level_base_rms_mm(&m, rows, &v).unwrap(),
-                        tilt[0] * 1e3,
-                        tilt[1] * 1e3
-                    );
-                }
+                print_new_frames(&m, &sessions, &v);
             }
         }
         if what.contains("bibt") {
@@ -1466,16 +1472,7 @@ mod tests {
                 &m.effect_params().compliance[5..],
                 t.elapsed().as_secs_f64()
             );
-            for (s, _, rows) in &sessions {
-                let tilt = new_frame_tilt(&m, rows, &v).unwrap();
-                println!(
-                    "   {s:<16} free {:.3} level {:.3} | free frame tilt x {:+.3} y {:+.3} mrad",
-                    new_base_rms_mm(&m, rows, &v).unwrap(),
-                    level_base_rms_mm(&m, rows, &v).unwrap(),
-                    tilt[0] * 1e3,
-                    tilt[1] * 1e3
-                );
-            }
+            print_new_frames(&m, &sessions, &v);
             match leave_one_session_out(&d, &sessions, &v) {
                 Ok(l) => {
                     for (s, mm, g) in l {
