@@ -539,18 +539,32 @@ pub(crate) fn add_rows<const N: usize, const P: usize>(
         }
     }
     let rows = &ws.pose_rows;
+    // Only `[..n]` of `ws.pose_rows` is this pose's: an accumulator reset for more columns
+    // would fold stale entries beyond it, a wrong sum, so that is refused.
+    let fits = |acc_n: usize| {
+        if acc_n > n {
+            Err(Error::DimensionMismatch {
+                expected: acc_n,
+                found: n,
+            })
+        } else {
+            Ok(())
+        }
+    };
     if ws.fold_both {
         // The analysis's rows (zero right-hand side) first, so that any error is the one the
         // analysis alone reports; then the first iteration's, and the pose's statistics
         // (`t` is `model_pose`'s transform bit for bit: the same chain).
         // A pose the first iteration cannot fold (a non-finite residual) is no error of the
         // analysis: the first pass is then not taken, and the fit's own passes report it.
+        fits(ws.lsq.n())?;
         ws.lsq.add_rows6(rows, &[0.0; 6], &wk)?;
         if ws.first_pass {
-            ws.first_pass = ws.gram.add_rows6(rows, &e, &wk).is_ok();
+            ws.first_pass = fits(ws.gram.n()).is_ok() && ws.gram.add_rows6(rows, &e, &wk).is_ok();
             ws.pass_stats.add(m, &t, opts);
         }
     } else if ws.to_gram {
+        fits(ws.gram.n())?;
         ws.gram.add_rows6(rows, &e, &wk)?;
         if ws.last_pass {
             ws.pass_stats.add(m, &t, opts);
@@ -561,6 +575,7 @@ pub(crate) fn add_rows<const N: usize, const P: usize>(
             }
         }
     } else {
+        fits(ws.lsq.n())?;
         ws.lsq.add_rows6(rows, &e, &wk)?;
     }
     Ok(c)
@@ -710,6 +725,30 @@ mod tests {
     use super::*;
     use crate::identify::Algorithm;
     use crate::params::ParamSet;
+
+    /// The pose rows kept in the workspace are written only for the pose's columns: an
+    /// accumulator reset for more columns is refused, never fed the stale entries beyond.
+    #[test]
+    fn an_accumulator_wider_than_the_pose_rows_is_refused() {
+        let robot = crate::aria::nominal();
+        let q = crate::aria::TOOL_SEED_Q;
+        let m = Measurement::new(q, robot.fk(&crate::JointState::new(q)).unwrap());
+        let opts = IdentifyOptions::new(Algorithm::Ols, ParamSet::default());
+        let mut ws = std::boxed::Box::<Workspace<32>>::default();
+        ws.cols[..3].copy_from_slice(&[0, 1, 2]);
+        ws.colscale = [1.0; 32];
+        ws.pose_rows = [[f64::NAN; 32]; 6];
+        ws.lsq.reset(5).unwrap();
+        assert_eq!(
+            add_rows(&robot, &m, true, &opts, 3, &mut ws),
+            Err(Error::DimensionMismatch {
+                expected: 5,
+                found: 3
+            })
+        );
+        ws.lsq.reset(3).unwrap();
+        assert!(add_rows(&robot, &m, true, &opts, 3, &mut ws).is_ok());
+    }
 
     /// A row giving only `x`, 2 mm off in x and far off in the unmeasured y and z, and a
     /// full position row 3, 4, 0 mm off: |e_p| is 2 mm and 5 mm, the RMS √((4 + 25)/2) mm,
