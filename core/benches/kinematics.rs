@@ -1,5 +1,6 @@
 //! Kinematics benchmarks on the nominal ARIA: six sines and cosines (libm against the core's
-//! bit-identical `kincal::sin_cos`), FK, FK + joint Jacobian, FK + identification Jacobian
+//! bit-identical `kincal::sin_cos`, one at a time, and `kincal::sin_cos_lanes`, all six
+//! together as FK takes them), FK, FK + joint Jacobian, FK + identification Jacobian
 //! (geometric columns and all columns), IK of a Table 2 pose and of random reachable targets
 //! (control-loop preset from 5° seeds, global search, default).
 //!
@@ -63,7 +64,7 @@ fn kinematics<M: Measurement + 'static>(c: &mut Criterion<M>, prefix: &str) {
         k
     };
     // Six sines and cosines (one FK's worth) of random angles over ±2π: libm against the
-    // core's bit-identical inlined version.
+    // core's bit-identical versions, one angle at a time and six at once.
     let mut rng = SplitMix64::new(0x5c05);
     let angles: Vec<[f64; 6]> = (0..TABLE)
         .map(|_| core::array::from_fn(|_| rng.range(-std::f64::consts::TAU, std::f64::consts::TAU)))
@@ -73,6 +74,9 @@ fn kinematics<M: Measurement + 'static>(c: &mut Criterion<M>, prefix: &str) {
     });
     c.bench_function(&format!("{prefix}sincos6_kincal"), |b| {
         b.iter(|| black_box(&angles[next()]).map(kincal::sin_cos))
+    });
+    c.bench_function(&format!("{prefix}sincos6_lanes"), |b| {
+        b.iter(|| kincal::sin_cos_lanes(black_box(&angles[next()])))
     });
     c.bench_function(&format!("{prefix}fk_aria"), |b| {
         b.iter(|| black_box(&robot).fk(black_box(&states[next()])))

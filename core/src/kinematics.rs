@@ -62,11 +62,12 @@ fn check_pose(t: &Transform) -> Result<()> {
 /// of the structure). `on_link(i, x_mid, R_i, p_i)` sees each link's intermediate x axis
 /// (after `Rz·Tz·Tx`, before `Rx(α)·Ry(β)`) and its frame.
 ///
-/// Speed (FK is dominated by this loop): every `sincos` is taken before the chain so the
-/// calls do not interleave with its dependent arithmetic; each link then turns column
-/// pairs of the running rotation (`Rz(θ)`, `Rx(α)`, and `Ry(β)` only where β ≠ 0, which
-/// gives the same result as turning by cos 0 = 1, sin 0 = 0) instead of multiplying 3×3
-/// matrices.
+/// Speed (FK is dominated by this loop): every sine and cosine is taken before the chain,
+/// all joints at once ([`crate::math::sin_cos_lanes`]: two per SSE2 register, libm's bits),
+/// so the trigonometry does not interleave with the chain's dependent arithmetic; each link
+/// then turns column pairs of the running rotation (`Rz(θ)`, `Rx(α)`, and `Ry(β)` only
+/// where β ≠ 0, which gives the same result as turning by cos 0 = 1, sin 0 = 0) instead of
+/// multiplying 3×3 matrices.
 #[inline(always)]
 fn chain<const N: usize>(
     g: &Geometry<N>,
@@ -75,13 +76,19 @@ fn chain<const N: usize>(
     scale: f64,
     on_link: impl FnMut(usize, &Vector3<f64>, &Matrix3<f64>, &Vector3<f64>),
 ) -> Transform {
-    let mut sc = [(0.0, 1.0); N];
+    let mut theta = [0.0; N];
     let mut slide = [0.0; N];
     for i in 0..N {
-        sc[i] = crate::math::sin_cos(disp[i] * turn[i] + g.links[i].theta0);
+        theta[i] = disp[i] * turn[i] + g.links[i].theta0;
         slide[i] = disp[i] * (1.0 - turn[i]);
     }
-    chain_sc(g, &sc, &slide, scale, on_link)
+    chain_sc(
+        g,
+        &crate::math::sin_cos_lanes(&theta),
+        &slide,
+        scale,
+        on_link,
+    )
 }
 
 /// [`chain`] from the sines and cosines `(sin θ_i, cos θ_i)` of the full joint angles

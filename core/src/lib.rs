@@ -43,7 +43,7 @@ pub mod view_point;
 pub use effects::{Effect, EffectSet};
 pub use error::{Error, JointIndex, ParamIndex, PoseIndex, Quantity, Result};
 pub use kinematics::{Frames, JacobianColumn};
-pub use math::sin_cos;
+pub use math::{sin_cos, sin_cos_lanes};
 pub use model::{JointKind, JointLimits, JointState, LengthParam, Link, MassModel, Robot};
 pub use params::{ParamId, ParamSet};
 pub use pose::{OrientationError, PoseError, Transform};

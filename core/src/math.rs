@@ -14,8 +14,9 @@ pub(crate) fn cos(x: f64) -> f64 {
 /// masks instead of branches (random joint angles make libm's quadrant branches mispredict)
 /// and the rare extra reduction rounds out of line. Measured on the loaded 2-core build
 /// machine (CPU time, random angles over ±2π): a plain loop 13–16 ns against libm's 16–19 ns
-/// per call, but criterion's `sincos6_*` bench 88 ns against 66 ns per six: not yet a proven
-/// gain (issue #18 asks for a faster, not bit-identical, polynomial). Arguments beyond `2^20·π/2` and non-finite ones go to libm.
+/// per call, but criterion's `sincos6_*` bench 88 ns against 66 ns per six: one at a time it
+/// is no gain; FK takes its angles together through [`sin_cos_lanes`], which is. Arguments
+/// beyond `2^20·π/2` and non-finite ones go to libm.
 /// `sin_cos_is_bit_identical_to_libm` (unit test) checks it on over 3·10^6 arguments; the
 /// `sincos6_*` benches compare the two.
 #[inline(always)]
@@ -40,6 +41,90 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
         f64::from_bits(first ^ sin_sign),
         f64::from_bits(second ^ cos_sign),
     )
+}
+
+/// `(sin x_i, cos x_i)` of every lane, bit for bit [`sin_cos`] of each (so bit-identical
+/// to libm), computed together so the compiler evaluates two lanes per SSE2 register: FK
+/// takes all its joint angles at once. Each of `sin_cos`'s branches becomes a select made on
+/// every lane: libm's reduction with n by magnitude thresholds below 9π/4 and by rounding
+/// `x·2/π` above, the unreduced kernel below π/4, the tiny-argument rule, the quadrant by bit
+/// masks. If any lane needs what the selects do not reproduce (|x| ≥ 2^20·π/2, a non-finite
+/// x, or a reduced argument that cancelled enough that libm may take its extra reduction
+/// rounds: `|y0| < |x|·2^-16`, a superset of libm's rule, about one lane in 10^4 over ±2π),
+/// every lane takes [`sin_cos`]; so does every lane on targets other than x86-64 and AArch64.
+/// `sin_cos_lanes_is_bit_identical_to_sin_cos` checks it on the arguments of `sin_cos`'s own
+/// libm test.
+#[inline(always)]
+pub fn sin_cos_lanes<const N: usize>(x: &[f64; N]) -> [(f64, f64); N] {
+    // Only where doubles have a vector unit: on a Cortex-M (software doubles) the selects
+    // would add work, and the results are the same bits either way.
+    #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
+    if let Some(out) = sin_cos_lanes_fast(x) {
+        return out;
+    }
+    x.map(sin_cos)
+}
+
+/// The select-only path of [`sin_cos_lanes`]; `None` when a lane needs [`sin_cos`]'s.
+#[inline(always)]
+#[cfg_attr(
+    not(any(target_arch = "x86_64", target_arch = "aarch64", test)),
+    allow(dead_code)
+)]
+fn sin_cos_lanes_fast<const N: usize>(x: &[f64; N]) -> Option<[(f64, f64); N]> {
+    const TO_INT: f64 = 1.5 / f64::EPSILON;
+    const INV_PIO2: f64 = f64::from_bits(0x3FE4_5F30_6DC9_C883);
+    const PIO2_1: f64 = f64::from_bits(0x3FF9_21FB_5440_0000);
+    const PIO2_1T: f64 = f64::from_bits(0x3DD0_B461_1A62_6331);
+    // `ix > H` for the high word ix of |x| is `|x| >= above(H)`.
+    const fn above(h: u64) -> f64 {
+        f64::from_bits((h + 1) << 32)
+    }
+    let mut out = [(0.0, 1.0); N];
+    let mut exact = true;
+    for (o, &x) in out.iter_mut().zip(x) {
+        let ax = x.abs();
+        // A NaN fails the comparison too.
+        exact &= ax < f64::from_bits(0x4139_21fb << 32);
+        let one = |m: bool| f64::from_bits(1f64.to_bits() & 0u64.wrapping_sub(u64::from(m)));
+        let count = one(ax >= above(0x3fe9_21fb))
+            + one(ax >= above(0x4002_d97c))
+            + one(ax >= above(0x400f_6a7a))
+            + one(ax >= above(0x4015_fdbc));
+        let by_threshold = select(x.is_sign_negative(), 0.0 - count, count);
+        let rounded = (x * INV_PIO2 + TO_INT) - TO_INT;
+        let f_n = select(ax < above(0x401c_463b), by_threshold, rounded);
+        let n = (f_n + TO_INT).to_bits();
+        let r = x - f_n * PIO2_1;
+        let w = f_n * PIO2_1T;
+        let y0 = r - w;
+        exact &= y0.abs() >= ax * f64::from_bits(0x3EF0_0000_0000_0000);
+        let y1 = (r - y0) - w;
+        // Below π/4, y1 is 0 and only the sine's kernel differs (libm's unreduced form).
+        let (s_direct, _) = sincos_kernels(y0, y1, true);
+        let (s_reduced, c) = sincos_kernels(y0, y1, false);
+        let s = select(ax < above(0x3fe9_21fb), s_direct, s_reduced);
+        let s = select(ax < f64::from_bits(0x3e46_a09e << 32), x, s);
+        // n mod 4: 0 → (s, c), 1 → (c, −s), 2 → (−s, −c), 3 → (−c, s).
+        let swap = 0u64.wrapping_sub(n & 1);
+        let (sb, cb) = (s.to_bits(), c.to_bits());
+        let first = (sb & !swap) | (cb & swap);
+        let second = (cb & !swap) | (sb & swap);
+        let sin_sign = (n & 2) << 62;
+        let cos_sign = (n.wrapping_add(1) & 2) << 62;
+        *o = (
+            f64::from_bits(first ^ sin_sign),
+            f64::from_bits(second ^ cos_sign),
+        );
+    }
+    exact.then_some(out)
+}
+
+/// `if m { a } else { b }` by bit masks, so a loop of them vectorises.
+#[inline(always)]
+fn select(m: bool, a: f64, b: f64) -> f64 {
+    let mask = 0u64.wrapping_sub(u64::from(m));
+    f64::from_bits((a.to_bits() & mask) | (b.to_bits() & !mask))
 }
 
 /// libm's `rem_pio2` for `|x| < 2^20·π/2` (`ix` = high word of `|x|`): `x = n·π/2 + y0 + y1`.
@@ -188,23 +273,20 @@ mod tests {
         s.to_bits() == ls.to_bits() && c.to_bits() == lc.to_bits()
     }
 
-    /// Bit for bit equal to libm (so every FK, Jacobian and calibration result is unchanged):
-    /// 10^6 uniform arguments over ±2π, 10^6 over ±100, 10^6 over ±2^21 (beyond the fast
-    /// range), every double within 200 ulps of k·π/2 for |k| ≤ 40 and of libm's thresholds,
-    /// log-uniform magnitudes from 1e-300, and the special values.
-    #[test]
-    fn sin_cos_is_bit_identical_to_libm() {
+    /// The arguments of the bit-identity tests: 10^6 uniform arguments over ±2π, 10^6 over
+    /// ±100, 10^6 over ±2^21 (beyond the fast range), every double within 200 ulps of k·π/2
+    /// for |k| ≤ 40 and of libm's thresholds, log-uniform magnitudes from 1e-300 (both
+    /// signs), and the special values.
+    fn arguments() -> std::vec::Vec<f64> {
         let mut rng = SplitMix64::new(0x51c0);
-        let mut checked = 0usize;
+        let mut args = std::vec::Vec::new();
         for (count, half_width) in [
             (1_000_000, 2.0 * core::f64::consts::PI),
             (1_000_000, 100.0),
             (1_000_000, 2.0f64.powi(21)),
         ] {
             for _ in 0..count {
-                let x = (2.0 * rng.uniform() - 1.0) * half_width;
-                assert!(same(x), "{x:e}");
-                checked += 1;
+                args.push((2.0 * rng.uniform() - 1.0) * half_width);
             }
         }
         let mut centres: std::vec::Vec<f64> = (-40..=40)
@@ -217,6 +299,7 @@ mod tests {
             0x4015_fdbc,
             0x401c_463b,
             0x4139_21fb,
+            0x3e46_a09e,
         ] {
             for lo in [0u64, 0xffff_ffff] {
                 let b = f64::from_bits((hi << 32) | lo);
@@ -227,29 +310,102 @@ mod tests {
             for d in -200i64..=200 {
                 let x = f64::from_bits(c.to_bits().wrapping_add_signed(d));
                 if x.is_finite() {
-                    assert!(same(x), "{x:e} ({:#x})", x.to_bits());
-                    checked += 1;
+                    args.push(x);
                 }
             }
         }
         for _ in 0..200_000 {
             let x = 10f64.powf(rng.uniform() * 306.0 - 300.0);
-            assert!(same(x) && same(-x), "{x:e}");
-            checked += 2;
+            args.extend([x, -x]);
         }
-        for x in [
+        args.extend([
             0.0,
             -0.0,
             f64::MIN_POSITIVE,
+            -f64::MIN_POSITIVE,
             5e-324,
+            -5e-324,
             1e-9,
+            -1e-9,
             f64::MAX,
+            -f64::MAX,
             f64::INFINITY,
-        ] {
-            assert!(same(x) && same(-x), "{x:e}");
+            f64::NEG_INFINITY,
+        ]);
+        args
+    }
+
+    /// Bit for bit equal to libm (so every FK, Jacobian and calibration result is unchanged)
+    /// on every argument of [`arguments`].
+    #[test]
+    fn sin_cos_is_bit_identical_to_libm() {
+        let args = arguments();
+        for &x in &args {
+            assert!(same(x), "{x:e} ({:#x})", x.to_bits());
         }
+        assert!(args.len() > 3_000_000);
         let (s, c) = sin_cos(f64::NAN);
         assert!(s.is_nan() && c.is_nan());
-        assert!(checked > 3_000_000);
+    }
+
+    fn same_as_sin_cos(x: f64, sc: (f64, f64)) -> bool {
+        let (s, c) = sin_cos(x);
+        (s.to_bits(), c.to_bits()) == (sc.0.to_bits(), sc.1.to_bits())
+            || (s.is_nan() && c.is_nan() && sc.0.is_nan() && sc.1.is_nan())
+    }
+
+    /// `sin_cos_lanes` equals `sin_cos` bit for bit on every argument of the libm test, each
+    /// taken as lane 0 to 5 beside ordinary angles (so one hard argument is checked on the
+    /// select-only path whenever that path takes it) and six at a time; the select-only path
+    /// must take almost every random six of joint angles (or this would test the fallback).
+    #[test]
+    fn sin_cos_lanes_is_bit_identical_to_sin_cos() {
+        use super::{sin_cos_lanes, sin_cos_lanes_fast};
+        let args = arguments();
+        let partners = [0.5, -1.25, 2.5, -3.0, 6.0, 1e-3];
+        let (mut fast, mut total) = (0usize, 0usize);
+        for (k, &x) in args.iter().enumerate() {
+            let mut lanes = partners;
+            lanes[k % 6] = x;
+            let got = sin_cos_lanes(&lanes);
+            for (i, &v) in lanes.iter().enumerate() {
+                assert!(
+                    same_as_sin_cos(v, got[i]),
+                    "{v:e} ({:#x}) in lane {i}",
+                    v.to_bits()
+                );
+            }
+            total += 1;
+            fast += usize::from(sin_cos_lanes_fast(&lanes).is_some());
+        }
+        for chunk in args.as_chunks::<6>().0 {
+            let got = sin_cos_lanes(chunk);
+            for (i, &v) in chunk.iter().enumerate() {
+                assert!(
+                    same_as_sin_cos(v, got[i]),
+                    "{v:e} ({:#x}) of six",
+                    v.to_bits()
+                );
+            }
+        }
+        // Over ±2π (the first 10^6 arguments), six at a time: nearly always select-only.
+        let mut rng = SplitMix64::new(0x1a9e);
+        let mut fast_joint = 0usize;
+        for _ in 0..100_000 {
+            let x: [f64; 6] = core::array::from_fn(|_| (2.0 * rng.uniform() - 1.0) * 6.3);
+            fast_joint += usize::from(sin_cos_lanes_fast(&x).is_some());
+        }
+        assert!(
+            fast_joint > 99_000,
+            "select-only path on {fast_joint} of 100000"
+        );
+        // Most single hard arguments too (all but the huge, non-finite and cancelling ones).
+        assert!(
+            fast * 10 > total * 6,
+            "select-only path on {fast} of {total}"
+        );
+        std::println!(
+            "select-only: {fast} of {total} single arguments, {fast_joint} of 100000 joint sixes"
+        );
     }
 }
