@@ -414,22 +414,43 @@ pub(crate) fn joint_jacobian<const N: usize>(
     state: &JointState<N>,
     f: &Frames<N>,
 ) -> SMatrix<f64, 6, N> {
-    let pe = f.t_base_ee.translation.vector;
-    let e = robot.effect_params();
+    // Frame j−1 of joint j: frame 0, then each link's frame but the last.
+    let preceding = core::iter::once(&f.t_base_0)
+        .chain(f.t_base_link.iter())
+        .map(|t| {
+            (
+                crate::math::column3(t.rotation.matrix(), 2),
+                t.translation.vector,
+            )
+        });
     let mut j = SMatrix::<f64, 6, N>::from_array_storage(ArrayStorage([[0.0; 6]; N]));
-    // Iterators over the joints and the Jacobian's column arrays (`data.0`, column-major)
-    // rather than `t_base_link[i - 1]`, `q[i]` and `fixed_view_mut(0, i)`: their bounds
-    // checks stay (as panic paths) where the optimiser does not inline (opt-level s/z).
-    let mut prev = &f.t_base_0;
-    let joints = f
-        .t_base_link
-        .iter()
+    joint_jacobian_columns(
+        robot,
+        state,
+        &f.t_base_ee.translation.vector,
+        preceding,
+        &mut j.data.0,
+    );
+    j
+}
+
+/// [`joint_jacobian`]'s columns from each joint's preceding frame `(z_{j−1}, p_{j−1})` (base
+/// axes) and the tool origin `pe`: callers that keep only those (not every [`Frames`] entry)
+/// get the same bits.
+pub(crate) fn joint_jacobian_columns<const N: usize>(
+    robot: &Robot<N>,
+    state: &JointState<N>,
+    pe: &Vector3<f64>,
+    preceding: impl Iterator<Item = (Vector3<f64>, Vector3<f64>)>,
+    columns: &mut [[f64; 6]; N],
+) {
+    let e = robot.effect_params();
+    // Iterators over the joints and the Jacobian's column arrays rather than indices: their
+    // bounds checks stay (as panic paths) where the optimiser does not inline (opt-level s/z).
+    let joints = preceding
         .zip(state.q.iter().zip(e.cyclic.iter()).zip(e.scale.iter()))
         .zip(robot.turn_mask());
-    for (column, ((ti, ((&q, c), &scale)), turn)) in j.data.0.iter_mut().zip(joints) {
-        let p_prev = prev.translation.vector;
-        let z_prev = crate::math::column3(prev.rotation.matrix(), 2);
-        prev = ti;
+    for (column, (((z_prev, p_prev), ((&q, c), &scale)), turn)) in columns.iter_mut().zip(joints) {
         let dcyclic = if c.iter().any(|&v| v != 0.0) {
             let (s1, c1) = crate::math::sin_cos(q);
             let [sin1, cos1, sin2, cos2] = *c;
@@ -443,5 +464,4 @@ pub(crate) fn joint_jacobian<const N: usize>(
         let ang = z_prev * (dtheta * turn);
         *column = [lin.x, lin.y, lin.z, ang.x, ang.y, ang.z];
     }
-    j
 }

@@ -211,10 +211,34 @@ impl<const N: usize> Robot<N> {
         state: &JointState<N>,
         jac: &mut [JacobianColumn; N],
     ) -> Result<Transform> {
-        let mut f = Frames::default();
-        self.fk_frames(state, &mut f)?;
-        *jac = crate::ik::joint_jacobian(self, state, &f).data.0;
-        Ok(f.t_base_ee)
+        let angles = self.joint_angles(state)?;
+        let scale = self.length_scale(state)?;
+        // Each joint's preceding frame (z axis, origin) straight from the chain: the columns
+        // need no more of [`Frames`], so none is built (same bits as through `fk_frames`).
+        let mut preceding = [(ZERO, ZERO); N];
+        let base = &self.geom.t_base;
+        let mut prev = (column3(base.rotation.matrix(), 2), base.translation.vector);
+        let t = chain(
+            &self.geom,
+            &self.turn_mask(),
+            &angles,
+            scale,
+            |i, _, r, p| {
+                if let Some(slot) = preceding.get_mut(i) {
+                    *slot = prev;
+                }
+                prev = (column3(r, 2), *p);
+            },
+        );
+        check_pose(&t)?;
+        crate::ik::joint_jacobian_columns(
+            self,
+            state,
+            &t.translation.vector,
+            preceding.into_iter(),
+            jac,
+        );
+        Ok(t)
     }
 
     /// FK with every intermediate frame written into `frames`.
@@ -530,6 +554,47 @@ fn col_at(jac: &[JacobianColumn], i: usize) -> JacobianColumn {
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
+
+    /// `Robot::joint_jacobian` takes each joint's preceding frame straight from the chain;
+    /// the IK builds the same columns from [`Frames`]: both must agree to the bit, with
+    /// effects (scale, cyclic: the dθ/dq factor) and with a prismatic joint.
+    #[test]
+    fn joint_jacobian_from_the_chain_equals_the_one_from_frames() {
+        let mut rng = 0x9E37_79B9_7F4A_7C15_u64;
+        let mut uniform = |lo: f64, hi: f64| {
+            rng = rng.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            lo + (hi - lo) * ((rng >> 11) as f64 / (1u64 << 53) as f64)
+        };
+        let plain = crate::aria::nominal();
+        let mut effects = plain;
+        let n_geom = Robot::<6>::NUM_GEOMETRIC_PARAMS;
+        for i in n_geom..Robot::<6>::NUM_PARAMS {
+            effects
+                .set_param(crate::error::ParamIndex(i), uniform(-1e-3, 1e-3))
+                .unwrap();
+        }
+        let mut slide = plain;
+        slide
+            .set_joint_kind(2, crate::JointKind::Prismatic)
+            .unwrap();
+        for robot in [plain, effects, slide] {
+            for _ in 0..200 {
+                let q = core::array::from_fn(|_| uniform(-3.0, 3.0));
+                let mut state = JointState::new(q);
+                state.approach = Some([1.0, -1.0, 0.0, 1.0, -1.0, 1.0]);
+                state.temp_c = Some(24.0);
+                let mut cols = [[0.0; 6]; 6];
+                let t = robot.joint_jacobian(&state, &mut cols).unwrap();
+                let mut f = Frames::default();
+                robot.fk_frames(&state, &mut f).unwrap();
+                let want = crate::ik::joint_jacobian(&robot, &state, &f).data.0;
+                for (a, b) in cols.iter().flatten().zip(want.iter().flatten()) {
+                    assert_eq!(a.to_bits(), b.to_bits(), "q {q:?}");
+                }
+                assert_eq!(t, f.t_base_ee);
+            }
+        }
+    }
 
     #[test]
     fn jacobian_without_frame_rotations_writes_the_rest_bit_for_bit() {

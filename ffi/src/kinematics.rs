@@ -47,7 +47,10 @@ pub(crate) const DATA_AUX: AuxNames = AuxNames {
     temp_c: c"data->aux->temp_c",
 };
 
-/// The core joint state of checked readings `q` (length N) and optional aux data.
+/// The core joint state of checked readings `q` (length N) and optional aux data. Inlined:
+/// returned through memory, the state's stores and the caller's wider loads stall the FK hot
+/// path (store forwarding fails).
+#[inline(always)]
 pub(crate) fn joint_state<const N: usize>(
     q: &[f64],
     aux: Option<&kincal_joint_aux>,
@@ -312,22 +315,6 @@ pub(crate) fn jacobian_of<const N: usize>(
     columns: &mut [[f64; 6]],
 ) -> FfiResult<Transform> {
     Ok(r.jacobian(&joint_state::<N>(q_n(q, N)?, aux, CALL_AUX)?, columns)?)
-}
-
-/// The joint Jacobian's N columns into the first N of `columns` (the caller sized it), and
-/// the pose.
-pub(crate) fn joint_jacobian_of<const N: usize>(
-    r: &Robot<N>,
-    q: &[f64; KINCAL_MAX_JOINTS],
-    aux: Option<&kincal_joint_aux>,
-    columns: &mut [[f64; 6]],
-) -> FfiResult<Transform> {
-    let mut jac = [[0.0; 6]; N];
-    let t = r.joint_jacobian(&joint_state::<N>(q_n(q, N)?, aux, CALL_AUX)?, &mut jac)?;
-    for (d, s) in columns.iter_mut().zip(jac.iter()) {
-        *d = *s;
-    }
-    Ok(t)
 }
 
 fn per_joint<const N: usize>(v: &[f64; N]) -> [f64; KINCAL_MAX_JOINTS] {

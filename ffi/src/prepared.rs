@@ -39,10 +39,10 @@
 use core::mem::{align_of, size_of};
 
 use kincal::ik::IkOptions;
-use kincal::{LengthParam, Robot, with_any_robot};
+use kincal::{JointState, LengthParam, Robot, Transform, with_any_robot};
 
 use crate::ik::{ik_of, kincal_ik_info, kincal_ik_options, options};
-use crate::kinematics::{angles_of, fk_of, jacobian_of, joint_jacobian_of, kincal_joint_aux};
+use crate::kinematics::{CALL_AUX, angles_of, jacobian_of, joint_state, kincal_joint_aux};
 use kincal::params::{num_geometric_params, num_params};
 
 use crate::robot::{KINCAL_MAX_JOINTS, kincal_robot, to_any};
@@ -316,6 +316,7 @@ unsafe fn view<'a, const N: usize>(base: *const u64, check: Check) -> FfiResult<
 ///
 /// # Safety
 /// `p` is NULL or points to a readable `kincal_prepared`, unmodified for `'a`.
+#[inline]
 pub(crate) unsafe fn prepared_robot<'a>(
     p: *const kincal_prepared,
     check: Check,
@@ -372,6 +373,46 @@ unsafe fn prepared_and_q<'a>(
     let (q, aux) =
         unsafe { crate::kinematics::joint_args(model.n_joints(), q, q_len, q_name, aux) }?;
     Ok((model, q, aux))
+}
+
+/// The checked joint state of a call on a prepared model of N joints: `q` (length N,
+/// finite) and `aux`, with the same checks in the same order as [`prepared_and_q`] but read
+/// straight from the caller's arrays. The FK and joint-Jacobian exports are a controller's
+/// inner loop: staging `q` and `aux` in fixed-size copies first cost them about a fifth of
+/// the call.
+///
+/// # Safety
+/// `q` and `aux` NULL or valid as the exports document.
+#[inline(always)]
+unsafe fn state_of<const N: usize>(
+    q: *const f64,
+    q_len: usize,
+    aux: *const kincal_joint_aux,
+) -> FfiResult<JointState<N>> {
+    // SAFETY: forwarded contract.
+    let q = unsafe { crate::args::slice(q, q_len, N, c"q") }?;
+    crate::args::finite(q, c"q")?;
+    let aux = arg_opt!(aux);
+    joint_state::<N>(q, aux, CALL_AUX)
+}
+
+/// The tool pose of a prepared model at the caller's `q`/`aux` ([`state_of`]), once `out`
+/// (checked after the readings, as the other exports order their checks) accepts it.
+///
+/// # Safety
+/// As [`state_of`].
+#[inline(always)]
+unsafe fn prepared_fk_at<const N: usize>(
+    r: &Robot<N>,
+    q: *const f64,
+    q_len: usize,
+    aux: *const kincal_joint_aux,
+    out: impl FnOnce() -> FfiResult<crate::args::Out<f64>>,
+) -> FfiResult<(Transform, crate::args::Out<f64>)> {
+    // SAFETY: forwarded contract.
+    let state = unsafe { state_of::<N>(q, q_len, aux) }?;
+    let out = out()?;
+    Ok((r.fk(&state)?, out))
 }
 
 /// `sizeof(kincal_prepared)` as the library was built (`KINCAL_PREPARED_SIZE`): compare with
@@ -471,12 +512,12 @@ pub unsafe extern "C" fn kincal_prepared_fk(
 ) -> kincal_status {
     ffi_boundary!(err = err; {
         // SAFETY: forwarded contract.
-        let (model, q, aux) = unsafe { prepared_and_q(prepared, q, q_len, c"q", aux) }?;
-        let out = arg_out!(t_base_tool_out, t_base_tool_len, 16);
-        let t = with_prepared_robot!(model, r => fk_of(r, &q, aux.as_ref()))?;
+        let model = unsafe { prepared_robot(prepared, Check::Guard) }?;
+        let out = || Ok(arg_out!(t_base_tool_out, t_base_tool_len, 16));
+        // SAFETY: forwarded contract.
+        let (t, out) = with_prepared_robot!(model, r => unsafe { prepared_fk_at(r, q, q_len, aux, out) })?;
         // SAFETY: checked by `arg_out!`; writable by contract.
-        unsafe { out.write_finite(&crate::pose::to_matrix(&t)) }?;
-        Ok(())
+        unsafe { out.write_finite(&crate::pose::to_matrix(&t)) }
     })
 }
 
@@ -497,12 +538,12 @@ pub unsafe extern "C" fn kincal_prepared_fk_pq(
 ) -> kincal_status {
     ffi_boundary!(err = err; {
         // SAFETY: forwarded contract.
-        let (model, q, aux) = unsafe { prepared_and_q(prepared, q, q_len, c"q", aux) }?;
-        let out = arg_out!(pq_out, pq_len, 7);
-        let t = with_prepared_robot!(model, r => fk_of(r, &q, aux.as_ref()))?;
+        let model = unsafe { prepared_robot(prepared, Check::Guard) }?;
+        let out = || Ok(arg_out!(pq_out, pq_len, 7));
+        // SAFETY: forwarded contract.
+        let (t, out) = with_prepared_robot!(model, r => unsafe { prepared_fk_at(r, q, q_len, aux, out) })?;
         // SAFETY: checked by `arg_out!`; writable by contract.
-        unsafe { out.write_finite(&crate::pose::to_pq(&t)) }?;
-        Ok(())
+        unsafe { out.write_finite(&crate::pose::to_pq(&t)) }
     })
 }
 
@@ -609,20 +650,52 @@ pub unsafe extern "C" fn kincal_prepared_joint_jacobian(
 ) -> kincal_status {
     ffi_boundary!(err = err; {
         // SAFETY: forwarded contract.
-        let (model, q, aux) = unsafe { prepared_and_q(prepared, q, q_len, c"q", aux) }?;
-        let mut jac = arg_out!(jac_out, jac_len, 6 * model.n_joints());
-        let t_out = arg_out_opt!(t_base_tool_out, t_base_tool_len, 16);
-        // SAFETY: checked by `arg_out!`; writable by contract, no other reference into it.
-        let flat = unsafe { jac.as_mut_slice() };
-        let (columns, _) = flat.as_chunks_mut::<6>();
-        let t = with_prepared_robot!(model, r => joint_jacobian_of(r, &q, aux.as_ref(), columns))?;
-        crate::args::finite_result(flat, c"jac_out")?;
+        let model = unsafe { prepared_robot(prepared, Check::Guard) }?;
+        let outs = || {
+            let jac = arg_out!(jac_out, jac_len, 6 * model.n_joints());
+            Ok((jac, arg_out_opt!(t_base_tool_out, t_base_tool_len, 16)))
+        };
+        // SAFETY: forwarded contract.
+        let (t, t_out) = with_prepared_robot!(model, r => unsafe {
+            prepared_joint_jacobian_at(r, q, q_len, aux, outs)
+        })?;
         if let Some(o) = t_out {
             // SAFETY: checked by `arg_out_opt!`; writable by contract.
             unsafe { o.write_finite(&crate::pose::to_matrix(&t)) }?;
         }
         Ok(())
     })
+}
+
+/// The joint Jacobian of a prepared model at the caller's `q`/`aux` ([`state_of`]), written
+/// straight into the caller's `jac_out` once `outs` accepts it (6N doubles, checked after the
+/// readings) and checked finite; returns the pose and the optional pose output.
+///
+/// # Safety
+/// As [`state_of`]; the buffer `outs` checks must be writable by the export's contract and not
+/// overlap the other arguments.
+#[inline(always)]
+unsafe fn prepared_joint_jacobian_at<const N: usize>(
+    r: &Robot<N>,
+    q: *const f64,
+    q_len: usize,
+    aux: *const kincal_joint_aux,
+    outs: impl FnOnce() -> FfiResult<(crate::args::Out<f64>, Option<crate::args::Out<f64>>)>,
+) -> FfiResult<(Transform, Option<crate::args::Out<f64>>)> {
+    // SAFETY: forwarded contract.
+    let state = unsafe { state_of::<N>(q, q_len, aux) }?;
+    let (mut jac, t_out) = outs()?;
+    // SAFETY: checked by `arg_out!` (6N doubles); writable by contract, no other reference
+    // into it.
+    let flat = unsafe { jac.as_mut_slice() };
+    let columns: &mut [[f64; 6]; N] = flat
+        .as_chunks_mut::<6>()
+        .0
+        .try_into()
+        .map_err(|_| kincal_error::new(kincal_status::Internal))?;
+    let t = r.joint_jacobian(&state, columns)?;
+    crate::args::finite_result(flat, c"jac_out")?;
+    Ok((t, t_out))
 }
 
 /// `kincal_jacobian` on a prepared model: the identification Jacobian (6 × P column-major in

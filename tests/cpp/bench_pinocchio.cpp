@@ -27,6 +27,20 @@
 // both), each PASSES passes over the table; the medians and their ratios are printed.
 // Exit status 1 when the check fails.
 //
+// Latest (session 14, quieter machine, load 3.3-3.7 with one other build; three invocations
+// of each binary alternated; kincal ns, ratio to Pinocchio): before (6996f1c) FK 148-150 ns,
+// 0.775-0.781; FK + joint Jacobian 237-240 ns, 0.831-0.850. With sin_cos_lanes (every
+// joint's sincos at once, bit for bit libm's) FK 118-122 ns, 0.618-0.621. With the lean
+// prepared path as well (the readings checked straight from the caller's arrays, no staged
+// copies returned through memory; the joint Jacobian's columns written from the chain
+// without building Frames, straight into jac_out) FK 105-108 ns, 0.548-0.552; FK + joint
+// Jacobian 168-177 ns, 0.596-0.604 (computeFrameJacobian) and 0.343-0.356 (FK +
+// updateFramePlacement + computeFrameJacobian). The goal (<= 0.5) is not met: the core FK
+// alone takes 91 ns (criterion cpu_time/fk_aria; its six sincos 38 ns), so what is left is
+// the chain's arithmetic, not the boundary. Tried and not kept: Robot::fk and
+// joint_angles_and_torques forced inline into the export (slower: 0.60-0.61).
+//
+// Earlier figures:
 // Measured on the shared 2-core build machine under heavy load (three invocations; kincal
 // ns / Pinocchio ns): FK 201-250 / 260-334 ns, ratio 0.75-0.77; FK + joint Jacobian
 // 300-381 / 397-460 ns (computeFrameJacobian), ratio 0.76-0.83, and 0.40-0.46 against
