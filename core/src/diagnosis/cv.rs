@@ -25,10 +25,35 @@ use crate::model::Robot;
 use crate::params::{CyclicTerm, LinkParam, ParamId};
 use crate::pose::{OrientationError, pose_error};
 
-/// Whitened rows of pose `m` at `lin` into `ws.a`/`ws.b` (`a[k][c] = √w_k·J_k[U_c]`,
-/// `b[k] = √w_k·e_k`; rows of unmeasured components are zero); returns the raw residual.
+/// The model a pass over the rows is linearised at, with the caches bound to it once for
+/// the pass (a key comparison per pose would cost a tenth of the pose's Jacobian).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Lin<'r, const N: usize> {
+    robot: &'r Robot<N>,
+    /// [`TorqueCache::generation`] right after binding it to `robot`.
+    ///
+    /// [`TorqueCache::generation`]: crate::identify::torques::TorqueCache::generation
+    torques: u64,
+}
+
+impl<'r, const N: usize> Lin<'r, N> {
+    /// `robot`, with the gravity-torque cache of `ws` bound to it.
+    pub(crate) fn bind<const P: usize>(robot: &'r Robot<N>, ws: &mut DiagWorkspace<P>) -> Self {
+        ws.id.torques.bind(robot);
+        Lin {
+            robot,
+            torques: ws.id.torques.generation(),
+        }
+    }
+}
+
+/// Whitened rows of pose `m` (row `l` of the data) at `lin` into `ws.a`/`ws.b`
+/// (`a[k][c] = √w_k·J_k[U_c]`, `b[k] = √w_k·e_k`; rows of unmeasured components are zero);
+/// returns the raw residual. The row's gravity torques come from the fits' cache
+/// (`ws.id.torques`, exact key) when kept there, and are kept there when computed.
 pub(crate) fn pose_rows<const N: usize, const P: usize>(
-    lin: &Robot<N>,
+    at: &Lin<'_, N>,
+    l: usize,
     m: &Measurement<N>,
     sw: &[f64; 6],
     ws: &mut DiagWorkspace<P>,
@@ -38,7 +63,18 @@ pub(crate) fn pose_rows<const N: usize, const P: usize>(
         needed: n_jac,
         capacity: crate::identify::MAX_MODEL_PARAMS,
     })?;
-    let t = m.model_jacobian(lin, jac)?;
+    let lin = at.robot;
+    let torques = &mut ws.id.torques;
+    if torques.generation() != at.torques {
+        // Rebound since the pass began (not within a diagnosis's passes): bind again.
+        torques.bind(lin);
+    }
+    let known = torques.get(l, &m.state.q);
+    let mut tau = known;
+    let t = m.model_jacobian_torques(lin, jac, true, &mut tau)?;
+    if let (None, Some(tau)) = (known, tau) {
+        torques.put(l, &m.state.q, &tau);
+    }
     let e = pose_error(&m.pose, &t, OrientationError::Exact);
     let w: [f64; 6] = core::array::from_fn(|k| if m.mask.has(k) { sw[k] } else { 0.0 });
     for k in 0..6 {
@@ -341,6 +377,7 @@ pub(crate) fn cross_validate<const N: usize, const P: usize>(
     tol: f64,
     ws: &mut DiagWorkspace<P>,
 ) -> Result<()> {
+    let at = Lin::bind(lin, ws);
     let lev_model = match pass {
         Pass::Candidates => 0,
         Pass::Final(m) => m,
@@ -365,7 +402,7 @@ pub(crate) fn cross_validate<const N: usize, const P: usize>(
         ws.g_fold.reset(ws.n_u)?;
         for (l, m) in data.iter().enumerate() {
             if usize::from(poses[l].fold) == f && !poses[l].suspect {
-                pose_rows(lin, m, sw, ws)?;
+                pose_rows(&at, l, m, sw, ws)?;
                 fold_rows(ws, true)?;
             }
         }
@@ -380,7 +417,7 @@ pub(crate) fn cross_validate<const N: usize, const P: usize>(
             if usize::from(poses[l].fold) != f || poses[l].suspect {
                 continue;
             }
-            pose_rows(lin, m, sw, ws)?;
+            pose_rows(&at, l, m, sw, ws)?;
             let (n_pos, n_rot) = measured(m);
             for model in order() {
                 let r = record(ws, model, m, sw, &mut poses[l]);
@@ -486,6 +523,7 @@ pub(crate) fn in_sample<const N: usize, const P: usize>(
     tol: f64,
     ws: &mut DiagWorkspace<P>,
 ) -> Result<()> {
+    let at = Lin::bind(lin, ws);
     let lev_model = match pass {
         Pass::Candidates => 0,
         Pass::Final(m) => m,
@@ -514,7 +552,7 @@ pub(crate) fn in_sample<const N: usize, const P: usize>(
         if poses[l].suspect {
             continue;
         }
-        pose_rows(lin, m, sw, ws)?;
+        pose_rows(&at, l, m, sw, ws)?;
         for model in order() {
             let r = record(ws, model, m, sw, &mut poses[l]);
             if model == lev_model {

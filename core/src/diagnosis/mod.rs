@@ -1790,8 +1790,9 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
         ws.g_all.reset(n_u)?;
     }
     let mut insample = ModelAcc::default();
+    let at = cv::Lin::bind(&lin, ws);
     for (l, m) in data.iter().enumerate() {
-        let mut e = cv::pose_rows(&lin, m, &sw, ws)?;
+        let mut e = cv::pose_rows(&at, l, m, &sw, ws)?;
         if !poses[l].suspect {
             if fold_again {
                 cv::fold_rows(ws, false)?;
@@ -2033,9 +2034,10 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
         let mut sorted = [0usize; P];
         narrowed = Some(cv::narrow_to_model(ws, mdl, &mut sorted));
         ws.g_all.reset(ws.n_u)?;
+        let at = cv::Lin::bind(&fit.robot, ws);
         for (l, m) in data.iter().enumerate() {
             if !poses[l].suspect {
-                cv::pose_rows(&fit.robot, m, &sw, ws)?;
+                cv::pose_rows(&at, l, m, &sw, ws)?;
                 cv::fold_rows(ws, false)?;
             }
         }
