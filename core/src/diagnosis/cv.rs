@@ -245,11 +245,61 @@ pub(crate) fn factor<const P: usize>(
     model: usize,
     fold: bool,
     tol: f64,
+    fate: Option<&mut [ColumnFate]>,
+) -> usize {
+    factor_from(ws, model, fold, tol, fate, Resume::START)
+}
+
+/// Where [`factor_from`] starts: after the first `cols` columns of the model, `kept` of
+/// them kept (their factor already in `ws.chol`, `ws.scale`, `ws.kept`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Resume {
+    cols: usize,
+    kept: usize,
+}
+
+impl Resume {
+    /// From the first column.
+    pub(crate) const START: Resume = Resume { cols: 0, kept: 0 };
+
+    /// Resuming model `next` from the factor model `prev` left (`n_prev` kept columns, the
+    /// same Gram): the greedy factor of a column depends only on the columns before it, so
+    /// over the leading columns both models share (the same positions of `U` in the same
+    /// order) it is the same, bit for bit, and only the rest needs factoring.
+    pub(crate) fn shared<const P: usize>(
+        ws: &DiagWorkspace<P>,
+        prev: usize,
+        n_prev: usize,
+        next: usize,
+    ) -> Resume {
+        let (Some(a), Some(b)) = (ws.model_cols.get(prev), ws.model_cols.get(next)) else {
+            return Resume::START;
+        };
+        let na = ws.model_n.get(prev).copied().unwrap_or(0).min(P);
+        let nb = ws.model_n.get(next).copied().unwrap_or(0).min(P);
+        let cols = a[..na]
+            .iter()
+            .zip(&b[..nb])
+            .take_while(|(x, y)| x == y)
+            .count();
+        let kept = ws.kept[..n_prev.min(P)].partition_point(|&j| j < cols);
+        Resume { cols, kept }
+    }
+}
+
+/// [`factor`] from `start` (columns before it already factored, see [`Resume`]); `fate`
+/// receives the fates of the columns from `start.cols` on.
+fn factor_from<const P: usize>(
+    ws: &mut DiagWorkspace<P>,
+    model: usize,
+    fold: bool,
+    tol: f64,
     mut fate: Option<&mut [ColumnFate]>,
+    start: Resume,
 ) -> usize {
     let n_cols = ws.model_n[model];
-    let mut n = 0;
-    for j in 0..n_cols {
+    let mut n = start.kept;
+    for j in start.cols..n_cols {
         let cj = ws.model_cols[model][j] as usize;
         let djj = gram(ws, cj, cj, fold);
         let mut f = ColumnFate {
@@ -398,6 +448,8 @@ pub(crate) fn cross_validate<const N: usize, const P: usize>(
         }
         ws.acc[m] = ModelAcc::default();
     }
+    let mut factor_order = [0usize; MAX_MODELS];
+    let n_order = sharing_order(ws, order(), lev_model, &mut factor_order);
     for f in 0..folds {
         ws.g_fold.reset(ws.n_u)?;
         for (l, m) in data.iter().enumerate() {
@@ -406,12 +458,19 @@ pub(crate) fn cross_validate<const N: usize, const P: usize>(
                 fold_rows(ws, true)?;
             }
         }
-        // The leverage model last, so its factor stays in `ws.chol`.
+        // The leverage model last, so its factor stays in `ws.chol`; each model resumes the
+        // factor of the one before over their shared leading columns.
         let mut n_lev = 0;
-        for model in order() {
-            let n = factor(ws, model, true, tol, None);
+        let mut prev: Option<(usize, usize)> = None;
+        for &model in &factor_order[..n_order] {
+            let start = match prev {
+                Some((pm, pn)) => Resume::shared(ws, pm, pn, model),
+                None => Resume::START,
+            };
+            let n = factor_from(ws, model, true, tol, None, start);
             solve(ws, model, n, true);
             n_lev = n;
+            prev = Some((model, n));
         }
         for (l, m) in data.iter().enumerate() {
             if usize::from(poses[l].fold) != f || poses[l].suspect {
@@ -438,6 +497,45 @@ pub(crate) fn cross_validate<const N: usize, const P: usize>(
         }
     }
     Ok(())
+}
+
+/// The models of `models` (each once, `lev` among them) into `out`, in an order in which
+/// neighbours' factors share many leading columns: sorted by their column lists (a pair
+/// follows the single effect it extends; every candidate starts with the geometric
+/// columns), and `lev` last (its factor must stay in `ws.chol`; it shares the geometric
+/// columns with the model before it). Returns the number written. The order changes no
+/// result: each model's step depends on its own columns only.
+fn sharing_order<const P: usize>(
+    ws: &DiagWorkspace<P>,
+    models: impl Iterator<Item = usize>,
+    lev: usize,
+    out: &mut [usize; MAX_MODELS],
+) -> usize {
+    let cols = |m: usize| {
+        let n = ws.model_n.get(m).copied().unwrap_or(0).min(P);
+        ws.model_cols.get(m).map_or(&[][..], |c| &c[..n])
+    };
+    let mut n = 0;
+    for m in models.filter(|&m| m != lev) {
+        // Insertion (at most MAX_MODELS models, once per cross-validation): every entry
+        // after `m`'s place moves up one, carried along by swaps.
+        let Some((last, sorted)) = out.get_mut(..=n).and_then(|h| h.split_last_mut()) else {
+            break;
+        };
+        let mut carry = m;
+        for slot in sorted.iter_mut() {
+            if cols(*slot) > cols(carry) {
+                core::mem::swap(slot, &mut carry);
+            }
+        }
+        *last = carry;
+        n += 1;
+    }
+    if let Some(slot) = out.get_mut(n) {
+        *slot = lev;
+        n += 1;
+    }
+    n
 }
 
 /// Numbers of measured position and rotation components of `m`.
