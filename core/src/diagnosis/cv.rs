@@ -675,3 +675,85 @@ pub(crate) fn in_sample<const N: usize, const P: usize>(
     }
     Ok(())
 }
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::rng::SplitMix64;
+    use std::boxed::Box;
+
+    const P: usize = 12;
+
+    /// A Gram over 10 columns of random rows, column 7 = column 2 + column 3 (so the greedy
+    /// factor drops it after both), and models with shared and unshared leading columns.
+    fn workspace() -> Box<DiagWorkspace<P>> {
+        let mut ws = Box::new(DiagWorkspace::<P>::new());
+        let mut rng = SplitMix64::new(18);
+        ws.g_all.reset(10).unwrap();
+        for _ in 0..40 {
+            let mut a = [0.0; 10];
+            for v in &mut a {
+                *v = rng.normal();
+            }
+            a[7] = a[2] + a[3];
+            ws.g_all.add_row_weighted(&a, rng.normal(), 1.0).unwrap();
+        }
+        let models: [&[u8]; 4] = [
+            &[0, 1, 2, 3, 4, 7, 5],
+            &[0, 1, 2, 3, 4, 7, 8, 9],
+            &[0, 1, 2, 6],
+            &[1, 0, 2, 3],
+        ];
+        for (m, cols) in models.iter().enumerate() {
+            ws.model_cols[m][..cols.len()].copy_from_slice(cols);
+            ws.model_n[m] = cols.len();
+        }
+        ws
+    }
+
+    /// What a factor and its solve leave: kept count, factor, scales, kept positions, step.
+    fn state(ws: &DiagWorkspace<P>, model: usize, n: usize) -> std::vec::Vec<u64> {
+        let mut out = std::vec![n as u64];
+        for r in 0..n {
+            out.extend(ws.chol[r][..=r].iter().map(|v| v.to_bits()));
+            out.push(ws.scale[r].to_bits());
+            out.push(ws.kept[r] as u64);
+        }
+        out.extend(
+            ws.delta[model][..ws.model_n[model]]
+                .iter()
+                .map(|v| v.to_bits()),
+        );
+        out
+    }
+
+    #[test]
+    fn a_factor_resumed_over_shared_columns_is_the_fresh_factor_bit_for_bit() {
+        let tol = 1e-6;
+        let mut ws = workspace();
+        for prev in 0..4 {
+            for next in 0..4 {
+                let n = factor(&mut ws, next, false, tol, None);
+                solve(&mut ws, next, n, false);
+                let fresh = state(&ws, next, n);
+                let n_prev = factor(&mut ws, prev, false, tol, None);
+                solve(&mut ws, prev, n_prev, false);
+                let start = Resume::shared(&ws, prev, n_prev, next);
+                let n = factor_from(&mut ws, next, false, tol, None, start);
+                solve(&mut ws, next, n, false);
+                assert_eq!(
+                    state(&ws, next, n),
+                    fresh,
+                    "{prev} -> {next} from {start:?}"
+                );
+            }
+        }
+        // The dependent column is dropped, and the resumed factors did skip work.
+        let n = factor(&mut ws, 0, false, tol, None);
+        assert_eq!(n, 6);
+        assert_eq!(Resume::shared(&ws, 0, n, 1), Resume { cols: 6, kept: 5 });
+        assert_eq!(Resume::shared(&ws, 0, n, 3), Resume::START);
+    }
+}

@@ -235,8 +235,7 @@ pub(crate) fn is_active<const N: usize>(
     m: &Measurement<N>,
     opts: &IdentifyOptions<'_>,
 ) -> bool {
-    m.weight > 0.0
-        && u32::try_from(l).map_or(true, |l| opts.excluded.binary_search(&l).is_err())
+    m.weight > 0.0 && u32::try_from(l).map_or(true, |l| opts.excluded.binary_search(&l).is_err())
 }
 
 /// Row weight of component `k`.

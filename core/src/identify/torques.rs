@@ -100,9 +100,11 @@ impl TorqueCache {
         if N > MAX_JOINTS || self.key_len > KEY_CAPACITY {
             return;
         }
-        let (Some(kq), Some(kt), Some(f)) =
-            (self.q.get_mut(l), self.tau.get_mut(l), self.filled.get_mut(l))
-        else {
+        let (Some(kq), Some(kt), Some(f)) = (
+            self.q.get_mut(l),
+            self.tau.get_mut(l),
+            self.filled.get_mut(l),
+        ) else {
             return;
         };
         for (k, v) in kq.iter_mut().zip(q) {
@@ -112,5 +114,56 @@ impl TorqueCache {
             *k = v;
         }
         *f = true;
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+    use crate::error::ParamIndex;
+
+    fn bits(t: [f64; 6]) -> [u64; 6] {
+        t.map(f64::to_bits)
+    }
+
+    #[test]
+    fn an_entry_serves_only_its_row_readings_and_gravity_key() {
+        let robot = crate::aria::nominal();
+        let q = [0.3, -0.7, 1.1, 0.2, -0.5, 0.9];
+        let tau = robot.gravity_torques(&q);
+        let mut c = TorqueCache::new();
+        c.bind(&robot);
+        assert_eq!(c.get(3, &q), None);
+        c.put(3, &q, &tau);
+        assert_eq!(c.get(3, &q).map(bits), Some(bits(tau)));
+        // Another row, or readings one ulp away, miss.
+        assert_eq!(c.get(4, &q), None);
+        let mut q2 = q;
+        q2[5] = f64::from_bits(q[5].to_bits() + 1);
+        assert_eq!(c.get(3, &q2), None);
+        // A fitted geometry or effect (what a fit changes) keeps the entries: the torques
+        // come from the nominal geometry and the mass model only.
+        let generation = c.generation();
+        let mut fitted = robot;
+        fitted.set_param(ParamIndex(0), 0.01).unwrap();
+        let compliance = crate::params::ParamId::Compliance(1).index(6);
+        fitted.set_param(compliance, 1e-4).unwrap();
+        assert_eq!(fitted.gravity_torques(&q).map(f64::to_bits), bits(tau));
+        c.bind(&fitted);
+        assert_eq!(c.generation(), generation);
+        assert_eq!(c.get(3, &q).map(bits), Some(bits(tau)));
+        // Another mass model forgets them, and binding back does not revive them.
+        let mut heavy = robot;
+        heavy.mass.tool_mass_kg += 1.0;
+        assert_ne!(heavy.gravity_torques(&q).map(f64::to_bits), bits(tau));
+        c.bind(&heavy);
+        assert_ne!(c.generation(), generation);
+        assert_eq!(c.get(3, &q), None);
+        c.bind(&robot);
+        assert_eq!(c.get(3, &q), None);
+        // Rows beyond the cache are never kept.
+        c.put(TORQUE_ROWS, &q, &tau);
+        assert_eq!(c.get(TORQUE_ROWS, &q), None);
     }
 }
