@@ -34,23 +34,30 @@ pub(crate) struct Lin<'r, const N: usize> {
     ///
     /// [`TorqueCache::generation`]: crate::identify::torques::TorqueCache::generation
     torques: u64,
+    /// The row cache's generation right after binding it to `robot` and the union `U`.
+    rows: u64,
 }
 
 impl<'r, const N: usize> Lin<'r, N> {
-    /// `robot`, with the gravity-torque cache of `ws` bound to it.
+    /// `robot`, with the gravity-torque cache and the row cache of `ws` bound to it (the
+    /// row cache also to the current union `U`: narrow or restore it before binding).
     pub(crate) fn bind<const P: usize>(robot: &'r Robot<N>, ws: &mut DiagWorkspace<P>) -> Self {
         ws.id.torques.bind(robot);
+        let n_u = ws.n_u.min(P);
+        ws.rows.bind(robot, &ws.u[..n_u]);
         Lin {
             robot,
             torques: ws.id.torques.generation(),
+            rows: ws.rows.generation(),
         }
     }
 }
 
 /// Whitened rows of pose `m` (row `l` of the data) at `lin` into `ws.a`/`ws.b`
 /// (`a[k][c] = √w_k·J_k[U_c]`, `b[k] = √w_k·e_k`; rows of unmeasured components are zero);
-/// returns the raw residual. The row's gravity torques come from the fits' cache
-/// (`ws.id.torques`, exact key) when kept there, and are kept there when computed.
+/// returns the raw residual. The row's Jacobian columns and residual come from the row
+/// cache (`ws.rows`, `rows.rs`) when kept there, and are kept there when computed; its
+/// gravity torques from the fits' cache (`ws.id.torques`, exact key) likewise.
 pub(crate) fn pose_rows<const N: usize, const P: usize>(
     at: &Lin<'_, N>,
     l: usize,
@@ -58,6 +65,16 @@ pub(crate) fn pose_rows<const N: usize, const P: usize>(
     sw: &[f64; 6],
     ws: &mut DiagWorkspace<P>,
 ) -> Result<[f64; 6]> {
+    let w: [f64; 6] = core::array::from_fn(|k| if m.mask.has(k) { sw[k] } else { 0.0 });
+    // The form check's alternative columns need the whole Jacobian in `ws.jac`.
+    let cached = !ws.alt_harmonics && ws.rows.generation() == at.rows;
+    if cached {
+        let DiagWorkspace { rows, a, b, .. } = &mut *ws;
+        if let Some((e, cols)) = rows.get(l) {
+            whiten(&w, &e, cols.chunks_exact(6), a, b);
+            return Ok(e);
+        }
+    }
     let n_jac = Robot::<N>::NUM_PARAMS;
     let jac = ws.jac.get_mut(..n_jac).ok_or(Error::CapacityExceeded {
         needed: n_jac,
@@ -76,23 +93,45 @@ pub(crate) fn pose_rows<const N: usize, const P: usize>(
         torques.put(l, &m.state.q, &tau);
     }
     let e = pose_error(&m.pose, &t, OrientationError::Exact);
-    let w: [f64; 6] = core::array::from_fn(|k| if m.mask.has(k) { sw[k] } else { 0.0 });
-    for k in 0..6 {
-        ws.b[k] = w[k] * e[k];
+    if cached {
+        ws.rows.put(l, &e, ws.jac.get(..n_jac).unwrap_or(&[]));
     }
-    // Column by column: one Jacobian column (six contiguous values) read once.
-    let n_u = ws.n_u.min(P);
-    for (c, &uc) in ws.u[..n_u].iter().enumerate() {
-        let jc = ws.jac.get(uc).copied().unwrap_or([0.0; 6]);
-        for (ak, (wk, jk)) in ws.a.iter_mut().zip(w.iter().zip(jc)) {
-            ak[c] = wk * jk;
-        }
-    }
+    let DiagWorkspace {
+        u, n_u, jac, a, b, ..
+    } = &mut *ws;
+    let cols = u[..(*n_u).min(P)]
+        .iter()
+        .map(|&uc| jac.get(uc).map_or(&ZERO_COLUMN[..], |j| &j[..]));
+    whiten(&w, &e, cols, a, b);
     if ws.alt_harmonics {
         alternative_harmonics(m, sw, ws);
     }
     Ok(e)
 }
+
+/// `ws.b = w·e` and `ws.a[k][c] = w_k·J_k[U_c]` from the union's Jacobian columns `cols`
+/// (six numbers each, in the union's order): the same products whether the columns come
+/// from the Jacobian just evaluated or from the row cache. Column by column: one column
+/// (six contiguous values) read once.
+fn whiten<'c, const P: usize>(
+    w: &[f64; 6],
+    e: &[f64; 6],
+    cols: impl Iterator<Item = &'c [f64]>,
+    a: &mut [[f64; P]; 6],
+    b: &mut [f64; 6],
+) {
+    for k in 0..6 {
+        b[k] = w[k] * e[k];
+    }
+    for (c, jc) in cols.enumerate().take(P) {
+        for (ak, (wk, jk)) in a.iter_mut().zip(w.iter().zip(jc)) {
+            ak[c] = wk * jk;
+        }
+    }
+}
+
+/// The column of a parameter outside the Jacobian (none: `U` holds model parameters).
+const ZERO_COLUMN: [f64; 6] = [0.0; 6];
 
 /// The form check's alternative (`form.rs`): every `joint_cyclic` column of `U` replaced by
 /// the 3rd and 4th harmonics of its joint (`sin 3q, cos 3q, sin 4q, cos 4q` for the terms

@@ -136,7 +136,9 @@
 //! per-pose outputs ([`PoseDiagnosis`]), and a caller-provided [`DiagWorkspace`] of
 //! capacity `P` columns (the union of all models' parameters: 71 for a 6-joint arm with
 //! every effect, so `P = 80` suffices there; `P = 144` for 9 joints), which includes the
-//! fixed ~321 KiB of the smooth check ([`SmoothWorkspace`]).
+//! fixed ~321 KiB of the smooth check ([`SmoothWorkspace`]) and ~124 KiB of caches (the
+//! first rows' Jacobian columns, `rows.rs`, and their gravity torques): 1,042,544 bytes
+//! at `P = 80`.
 
 pub mod contacts;
 mod cv;
@@ -146,6 +148,7 @@ mod form;
 mod locate;
 mod noise;
 mod rank;
+mod rows;
 mod screen;
 mod sessions;
 mod smooth;
@@ -774,6 +777,9 @@ pub struct DiagWorkspace<const P: usize> {
     pub(crate) smooth: SmoothWorkspace,
     /// The form check's alternative columns are being built (`form.rs`).
     pub(crate) alt_harmonics: bool,
+    /// The first rows' Jacobian columns and residuals at the model of the passes
+    /// (`rows.rs`).
+    pub(crate) rows: rows::RowCache<P>,
 }
 
 impl<const P: usize> DiagWorkspace<P> {
@@ -813,6 +819,7 @@ impl<const P: usize> DiagWorkspace<P> {
             b: [0.0; 6],
             smooth: SmoothWorkspace::new(),
             alt_harmonics: false,
+            rows: rows::RowCache::new(),
         }
     }
 }
@@ -1596,6 +1603,8 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
     for p in poses.iter_mut() {
         *p = PoseDiagnosis::EMPTY;
     }
+    // Rows kept by an earlier diagnosis are of other data.
+    ws.rows.clear();
 
     // 1–2. Groups, folds, method, noise floor.
     let n_groups = folds::assign(groups, cfg.folds, cfg.fold_seed, poses)?;
