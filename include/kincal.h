@@ -4252,7 +4252,7 @@ kincal_status kincal_diagnose_options_default(struct kincal_diagnose_options *op
 
 /*
  Bytes of caller memory `kincal_diagnose` needs for `n_poses` measurements of an
- `n_joints` robot (the diagnosis workspace, about 2.4 MB, plus about 2.1 KB per pose and the
+ `n_joints` robot (the diagnosis workspace, about 2.54 MB, plus about 2.1 KB per pose and the
  result). Returns 0 for an invalid joint count or an overflowing size.
  */
 size_t kincal_diagnose_workspace_size(size_t n_joints,

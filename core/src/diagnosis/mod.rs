@@ -136,8 +136,8 @@
 //! per-pose outputs ([`PoseDiagnosis`]), and a caller-provided [`DiagWorkspace`] of
 //! capacity `P` columns (the union of all models' parameters: 71 for a 6-joint arm with
 //! every effect, so `P = 80` suffices there; `P = 144` for 9 joints), which includes the
-//! fixed ~321 KiB of the smooth check ([`SmoothWorkspace`]) and ~124 KiB of caches (the
-//! first rows' Jacobian columns, `rows.rs`, and their gravity torques): 1,042,544 bytes
+//! fixed ~321 KiB of the smooth check ([`SmoothWorkspace`]) and ~112 KiB of caches (the
+//! first rows' Jacobian columns, `rows.rs`, and their gravity torques): 1,030,256 bytes
 //! at `P = 80`.
 
 pub mod contacts;

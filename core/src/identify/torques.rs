@@ -9,13 +9,18 @@
 //! 120-row diagnosis computed them about 5,200 times where 120 would do. An entry is used
 //! only for the robot key it was computed under and for readings equal bit for bit, so a
 //! hit returns exactly what [`Robot::gravity_torques`] would compute.
+//!
+//! Memory: 13.7 KiB of the identification workspace (a 12 KiB pool of readings and
+//! torques, the key of a 12-joint robot).
 
 use crate::any::MAX_JOINTS;
 use crate::model::{Robot, gravity_key_words};
 
-/// Rows (the first of the data, by index) whose torques are kept: 120-row sessions fit
-/// whole; larger sets gain on their first rows only (the cache costs 18 KiB of workspace).
+/// Rows (the first of the data, by index) whose torques are kept at most.
 pub(crate) const TORQUE_ROWS: usize = 128;
+/// Numbers in the pool: per row its readings and its torques, `2·N` (128 rows of a 6-joint
+/// arm, 64 of a 12-joint one; 12 KiB).
+const POOL: usize = 1_536;
 
 /// Words of the largest key (a robot of [`MAX_JOINTS`] joints).
 const KEY_CAPACITY: usize = gravity_key_words(MAX_JOINTS);
@@ -25,10 +30,8 @@ const KEY_CAPACITY: usize = gravity_key_words(MAX_JOINTS);
 pub(crate) struct TorqueCache {
     key: [u64; KEY_CAPACITY],
     key_len: usize,
-    /// Readings of each row's entry (bits), `[..N]`.
-    q: [[u64; MAX_JOINTS]; TORQUE_ROWS],
-    /// Torques of each row's entry, `[..N]`.
-    tau: [[f64; MAX_JOINTS]; TORQUE_ROWS],
+    /// Row `l`'s readings and torques at `[2N·l, 2N·(l+1))`.
+    pool: [f64; POOL],
     filled: [bool; TORQUE_ROWS],
     /// Changes whenever the key does: a pass that bound the cache once can check with one
     /// comparison that nothing rebound it meanwhile ([`TorqueCache::generation`]).
@@ -41,8 +44,7 @@ impl TorqueCache {
         TorqueCache {
             key: [0; KEY_CAPACITY],
             key_len: 0,
-            q: [[0; MAX_JOINTS]; TORQUE_ROWS],
-            tau: [[0.0; MAX_JOINTS]; TORQUE_ROWS],
+            pool: [0.0; POOL],
             filled: [false; TORQUE_ROWS],
             generation: 0,
         }
@@ -79,13 +81,21 @@ impl TorqueCache {
         self.generation
     }
 
+    /// Row `l`'s readings and torques in the pool, for `N` joints, when they fit.
+    fn slot<const N: usize>(&self, l: usize) -> Option<core::ops::Range<usize>> {
+        let start = l.checked_mul(2 * N)?;
+        let end = start.checked_add(2 * N)?;
+        (l < TORQUE_ROWS && end <= POOL && N <= MAX_JOINTS && self.key_len <= KEY_CAPACITY)
+            .then_some(start..end)
+    }
+
     /// The torques of row `l` at readings `q`, when kept (for the bound key).
     pub(crate) fn get<const N: usize>(&self, l: usize, q: &[f64; N]) -> Option<[f64; N]> {
-        if N > MAX_JOINTS || !*self.filled.get(l)? {
+        if !*self.filled.get(l)? {
             return None;
         }
-        let (kq, kt) = (self.q.get(l)?, self.tau.get(l)?);
-        if q.iter().zip(kq).any(|(a, &b)| a.to_bits() != b) {
+        let (kq, kt) = self.pool.get(self.slot::<N>(l)?)?.split_at_checked(N)?;
+        if q.iter().zip(kq).any(|(a, b)| a.to_bits() != b.to_bits()) {
             return None;
         }
         let mut out = [0.0; N];
@@ -97,21 +107,14 @@ impl TorqueCache {
 
     /// Keeps `tau`, computed at readings `q` (under the bound key), for row `l`.
     pub(crate) fn put<const N: usize>(&mut self, l: usize, q: &[f64; N], tau: &[f64; N]) {
-        if N > MAX_JOINTS || self.key_len > KEY_CAPACITY {
-            return;
-        }
-        let (Some(kq), Some(kt), Some(f)) = (
-            self.q.get_mut(l),
-            self.tau.get_mut(l),
-            self.filled.get_mut(l),
-        ) else {
+        let Some(range) = self.slot::<N>(l) else {
             return;
         };
-        for (k, v) in kq.iter_mut().zip(q) {
-            *k = v.to_bits();
-        }
-        for (k, &v) in kt.iter_mut().zip(tau) {
-            *k = v;
+        let (Some(row), Some(f)) = (self.pool.get_mut(range), self.filled.get_mut(l)) else {
+            return;
+        };
+        for (k, v) in row.iter_mut().zip(q.iter().chain(tau)) {
+            *k = *v;
         }
         *f = true;
     }
