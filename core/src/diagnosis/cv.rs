@@ -316,19 +316,23 @@ impl Resume {
         };
         let na = ws.model_n.get(prev).copied().unwrap_or(0).min(P);
         let nb = ws.model_n.get(next).copied().unwrap_or(0).min(P);
-        let cols = a[..na]
-            .iter()
-            .zip(&b[..nb])
-            .take_while(|(x, y)| x == y)
-            .count();
-        let kept = ws.kept[..n_prev.min(P)].partition_point(|&j| j < cols);
+        Resume::between(&a[..na], &ws.kept[..n_prev.min(P)], &b[..nb])
+    }
+
+    /// Resuming a model of columns `next` from the factor of one of columns `prev` whose
+    /// kept positions are `kept` (as [`Resume::shared`], for a caller that kept `prev`'s
+    /// list itself).
+    pub(crate) fn between(prev: &[u8], kept: &[usize], next: &[u8]) -> Resume {
+        let cols = prev.iter().zip(next).take_while(|(x, y)| x == y).count();
+        let kept = kept.partition_point(|&j| j < cols);
         Resume { cols, kept }
     }
 }
 
 /// [`factor`] from `start` (columns before it already factored, see [`Resume`]); `fate`
-/// receives the fates of the columns from `start.cols` on.
-fn factor_from<const P: usize>(
+/// receives the fates of the columns from `start.cols` on (those before are the earlier
+/// model's, which the caller keeps).
+pub(crate) fn factor_from<const P: usize>(
     ws: &mut DiagWorkspace<P>,
     model: usize,
     fold: bool,
@@ -768,24 +772,49 @@ mod tests {
         out
     }
 
+    /// Column fates with their numbers as bits.
+    #[allow(clippy::type_complexity)]
+    fn fate_bits(f: &[ColumnFate]) -> std::vec::Vec<(bool, u64, Option<(usize, u64)>)> {
+        f.iter()
+            .map(|c| {
+                let partner = c.partner.map(|(j, v)| (j, v.to_bits()));
+                (c.kept, c.distinct.to_bits(), partner)
+            })
+            .collect()
+    }
+
     #[test]
     fn a_factor_resumed_over_shared_columns_is_the_fresh_factor_bit_for_bit() {
         let tol = 1e-6;
         let mut ws = workspace();
         for prev in 0..4 {
             for next in 0..4 {
-                let n = factor(&mut ws, next, false, tol, None);
+                let blank = ColumnFate {
+                    kept: false,
+                    distinct: f64::NAN,
+                    partner: None,
+                };
+                let mut fresh_fate = [blank; P];
+                let n = factor(&mut ws, next, false, tol, Some(&mut fresh_fate));
                 solve(&mut ws, next, n, false);
                 let fresh = state(&ws, next, n);
-                let n_prev = factor(&mut ws, prev, false, tol, None);
+                // The earlier model's fates stand for the shared columns (as in step 5b).
+                let mut fate = [blank; P];
+                let n_prev = factor(&mut ws, prev, false, tol, Some(&mut fate));
                 solve(&mut ws, prev, n_prev, false);
                 let start = Resume::shared(&ws, prev, n_prev, next);
-                let n = factor_from(&mut ws, next, false, tol, None, start);
+                let n = factor_from(&mut ws, next, false, tol, Some(&mut fate), start);
                 solve(&mut ws, next, n, false);
                 assert_eq!(
                     state(&ws, next, n),
                     fresh,
                     "{prev} -> {next} from {start:?}"
+                );
+                let n_cols = ws.model_n[next];
+                assert_eq!(
+                    fate_bits(&fate[..n_cols]),
+                    fate_bits(&fresh_fate[..n_cols]),
+                    "{prev} -> {next}"
                 );
             }
         }

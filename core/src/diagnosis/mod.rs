@@ -1826,15 +1826,33 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
         }
         poses[l].residual = e;
     }
-    // 5b. What the poses determine, per model; keep only those columns.
+    // 5b. What the poses determine, per model; keep only those columns. Each model's
+    // factor resumes the one before it over their shared leading columns (the geometric
+    // ones at least; `cv::Resume`), whose fates are then the earlier model's, still in
+    // `fate`.
+    let mut fate = [cv::ColumnFate {
+        kept: false,
+        distinct: 0.0,
+        partner: None,
+    }; P];
+    let (mut prev_cols, mut prev_n, mut prev_kept) = ([0u8; P], 0usize, 0usize);
     for mdl in 0..=n_cand {
         let n_cols = ws.model_n[mdl];
-        let mut fate = [cv::ColumnFate {
-            kept: false,
-            distinct: 0.0,
-            partner: None,
-        }; P];
-        let n_kept = cv::factor(ws, mdl, false, cfg.rank_tol, Some(&mut fate[..n_cols]));
+        let cols = ws.model_cols[mdl];
+        let start = cv::Resume::between(
+            &prev_cols[..prev_n.min(P)],
+            &ws.kept[..prev_kept.min(P)],
+            &cols[..n_cols.min(P)],
+        );
+        let n_kept = cv::factor_from(
+            ws,
+            mdl,
+            false,
+            cfg.rank_tol,
+            Some(&mut fate[..n_cols]),
+            start,
+        );
+        (prev_cols, prev_n, prev_kept) = (cols, n_cols, n_kept);
         let s = score(out, mdl);
         let mut k = 0;
         let mut n_dropped = 0;
@@ -1869,7 +1887,6 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
                 }
             }
         }
-        let _ = n_kept;
         ws.model_n[mdl] = k;
         s.fitted_params = k;
         s.evaluated = mdl == 0 || any_effect;
