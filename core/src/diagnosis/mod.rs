@@ -1829,67 +1829,70 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
     // 5b. What the poses determine, per model; keep only those columns. Each model's
     // factor resumes the one before it over their shared leading columns (the geometric
     // ones at least; `cv::Resume`), whose fates are then the earlier model's, still in
-    // `fate`.
-    let mut fate = [cv::ColumnFate {
-        kept: false,
-        distinct: 0.0,
-        partner: None,
-    }; P];
-    let (mut prev_cols, mut prev_n, mut prev_kept) = ([0u8; P], 0usize, 0usize);
-    for mdl in 0..=n_cand {
-        let n_cols = ws.model_n[mdl];
-        let cols = ws.model_cols[mdl];
-        let start = cv::Resume::between(
-            &prev_cols[..prev_n.min(P)],
-            &ws.kept[..prev_kept.min(P)],
-            &cols[..n_cols.min(P)],
-        );
-        let n_kept = cv::factor_from(
-            ws,
-            mdl,
-            false,
-            cfg.rank_tol,
-            Some(&mut fate[..n_cols]),
-            start,
-        );
-        (prev_cols, prev_n, prev_kept) = (cols, n_cols, n_kept);
-        let s = score(out, mdl);
-        let mut k = 0;
-        let mut n_dropped = 0;
-        let mut any_effect = false;
-        for j in 0..n_cols {
-            let col = ws.model_cols[mdl][j];
-            let flat = ws.u[col as usize];
-            let is_effect = !geometric.contains(flat);
-            if fate[j].kept {
-                ws.model_cols[mdl][k] = col;
-                k += 1;
-                s.identifiable.insert(flat)?;
-                if is_effect {
-                    any_effect = true;
-                    if fate[j].distinct < s.distinctness {
-                        s.distinctness = fate[j].distinct;
-                        s.least_distinct = Some(ParamIndex(flat));
+    // `fate` (in a block, so that its stack slot is free again after it: the diagnosis's
+    // stack bound is tight).
+    {
+        let mut fate = [cv::ColumnFate {
+            kept: false,
+            distinct: 0.0,
+            partner: None,
+        }; P];
+        let (mut prev_cols, mut prev_n, mut prev_kept) = ([0u8; P], 0usize, 0usize);
+        for mdl in 0..=n_cand {
+            let n_cols = ws.model_n[mdl];
+            let cols = ws.model_cols[mdl];
+            let start = cv::Resume::between(
+                &prev_cols[..prev_n.min(P)],
+                &ws.kept[..prev_kept.min(P)],
+                &cols[..n_cols.min(P)],
+            );
+            let n_kept = cv::factor_from(
+                ws,
+                mdl,
+                false,
+                cfg.rank_tol,
+                Some(&mut fate[..n_cols]),
+                start,
+            );
+            (prev_cols, prev_n, prev_kept) = (cols, n_cols, n_kept);
+            let s = score(out, mdl);
+            let mut k = 0;
+            let mut n_dropped = 0;
+            let mut any_effect = false;
+            for j in 0..n_cols {
+                let col = ws.model_cols[mdl][j];
+                let flat = ws.u[col as usize];
+                let is_effect = !geometric.contains(flat);
+                if fate[j].kept {
+                    ws.model_cols[mdl][k] = col;
+                    k += 1;
+                    s.identifiable.insert(flat)?;
+                    if is_effect {
+                        any_effect = true;
+                        if fate[j].distinct < s.distinctness {
+                            s.distinctness = fate[j].distinct;
+                            s.least_distinct = Some(ParamIndex(flat));
+                        }
+                    }
+                } else {
+                    s.data_deficient.insert(flat)?;
+                    if n_dropped < MAX_DROPPED {
+                        s.dropped[n_dropped] = Some(Dropped {
+                            param: ParamIndex(flat),
+                            // Partner positions index the model's columns before compaction.
+                            partner: fate[j]
+                                .partner
+                                .map(|(pj, _)| ParamIndex(ws.u[ws.model_cols[mdl][pj] as usize])),
+                            cosine: fate[j].partner.map_or(0.0, |(_, c)| c),
+                        });
+                        n_dropped += 1;
                     }
                 }
-            } else {
-                s.data_deficient.insert(flat)?;
-                if n_dropped < MAX_DROPPED {
-                    s.dropped[n_dropped] = Some(Dropped {
-                        param: ParamIndex(flat),
-                        // Partner positions index the model's columns before compaction.
-                        partner: fate[j]
-                            .partner
-                            .map(|(pj, _)| ParamIndex(ws.u[ws.model_cols[mdl][pj] as usize])),
-                        cosine: fate[j].partner.map_or(0.0, |(_, c)| c),
-                    });
-                    n_dropped += 1;
-                }
             }
+            ws.model_n[mdl] = k;
+            s.fitted_params = k;
+            s.evaluated = mdl == 0 || any_effect;
         }
-        ws.model_n[mdl] = k;
-        s.fitted_params = k;
-        s.evaluated = mdl == 0 || any_effect;
     }
 
     // 5c. Cross-validation of every evaluated model.
