@@ -6,23 +6,25 @@
 //! `cargo bench -p kincal --bench diagnosis -- --noplot`
 //!
 //! Measured (CPU time per run from `cpu_time`, this and the previous code alternated in
-//! one session, three rounds each, on a 2-core machine shared with another build, load
-//! 2.8): 120 rows 7.85–8.20 ms (was 8.45–9.30), 1,000 rows 71.3–75.8 ms (was 70.8–76.7),
-//! 5,000 rows 315–338 ms (was 310–328); the earlier sessions' figures (13.3–13.9 ms at
-//! 120 rows for the previous code) were taken under a heavier load. Outputs bit-identical
-//! (`tests/diagnosis_dump.rs`'s dump, `cmp`).
+//! one session, three rounds each, on a 2-core machine shared with another engineer's
+//! builds, load 1.3): 120 rows 7.20–7.30 ms (was 8.25–8.45), 1,000 rows 69.2–71.3 ms (was
+//! 70.4–70.8), 5,000 rows 300–310 ms (was 300–323); an earlier round at load 2.8 gave
+//! 7.85–8.20 ms at 120 rows for an intermediate state against 8.45–9.30. The earlier
+//! sessions' 13.3–13.9 ms at 120 rows for the previous code were taken under a heavier
+//! load. Outputs bit-identical (`tests/diagnosis_dump.rs`'s dump, `cmp`).
 //! Instructions of one diagnosis (callgrind, `tests/diagnosis_dump.rs`'s `one_size`,
-//! release, `diagnose` inclusive): 120 rows 167.1 → 138.9 → 123.4 M, 1,000 rows 1,593.0 →
-//! 1,219.0 → 1,206.6 M, 5,000 rows 6,300.7 → 4,888.4 → 4,879.9 M. The last step: gravity
+//! release, `diagnose` inclusive): 120 rows 167.1 → 138.9 → 122.5 M, 1,000 rows 1,593.0 →
+//! 1,219.0 → 1,206.3 M, 5,000 rows 6,300.7 → 4,888.4 → 4,882.2 M. The last step: gravity
 //! torques kept per row across passes and fits (`identify::torques`), the first rows'
 //! Jacobian columns kept across the diagnosis's passes at one model (`diagnosis::rows`,
-//! 27 rows of the 71-column union in a 96,000-byte pool), the cross-validation's greedy
-//! factors resumed over the columns neighbouring models share (`cv::Resume`). Both caches
-//! hold the first rows only, so 5,000 rows gain little.
+//! 27 rows of the 71-column union in a 96,000-byte pool), the greedy factors of the
+//! cross-validation and of the data's identifiability step resumed over the columns
+//! neighbouring models share (`cv::Resume`). Both caches hold the first rows only, so
+//! 1,000 and 5,000 rows gain little.
 //! Shares of a 120-row diagnosis's instructions now: the two Gram kernels 25 %
 //! (`add_rows6_in_order`, the cross-validation's, 13 %; `add_rows6`, the fits', 12 %), the
 //! smooth checks 24 % (their ridge fits' factor, solve, predict and accumulate 20 %), the
-//! identification Jacobians 13 %, the cross-validation's greedy factors 7 %; by step, the
+//! identification Jacobians 13 %, the greedy factors 6 %; by step, the
 //! nonlinear fits 30 % (the geometric calibration 19 %, the verdict's 11 %), the smooth
 //! checks 24 %, the cross-validation 17 %, the extrapolation check 7 %, the outlier
 //! screen 6 %.
