@@ -2871,7 +2871,7 @@ kincal_status kincal_robot_clear_effects(struct kincal_robot *robot,
  Bytes of caller memory `kincal_identify` and `kincal_analyze_identifiability` need for
  `n_poses` measurements of an `n_joints` robot when `n_requested` parameters are
  requested (the count of non-zero `requested` entries; the size is that of the smallest
- capacity, 32 or `KINCAL_MAX_PARAMS`, that holds them: about 66 KB or 840 KB,
+ capacity, 32 or `KINCAL_MAX_PARAMS`, that holds them: about 92 KB or 1.45 MB,
  plus about 0.25 KB per pose). Returns 0 for an invalid joint count, more than
  `KINCAL_MAX_PARAMS` parameters, or an overflowing size.
  */
@@ -4174,8 +4174,8 @@ kincal_status kincal_moved_to_point(const double *t,
  Bytes of caller memory `kincal_identify_constraints` needs: `n_rows` rows of an
  `n_joints` robot with `n_targets + n_planes` groups, `n_distances` distances,
  `n_sessions` sessions (0 without a session array) and `n_requested` requested parameters
- (the identification workspace of capacity 32 or `KINCAL_MAX_PARAMS`, about 66 KB or
- 840 KB, plus about 0.5 KB per row). Returns 0 for an invalid joint count, more than
+ (the identification workspace of capacity 32 or `KINCAL_MAX_PARAMS`, about 92 KB or
+ 1.45 MB, plus about 0.5 KB per row). Returns 0 for an invalid joint count, more than
  `KINCAL_MAX_PARAMS` parameters, or an overflowing size.
  */
 size_t kincal_identify_constraints_workspace_size(size_t n_joints,
@@ -4252,7 +4252,7 @@ kincal_status kincal_diagnose_options_default(struct kincal_diagnose_options *op
 
 /*
  Bytes of caller memory `kincal_diagnose` needs for `n_poses` measurements of an
- `n_joints` robot (the diagnosis workspace, about 2.4 MB, plus about 2.1 KB per pose and the
+ `n_joints` robot (the diagnosis workspace, about 2.54 MB, plus about 2.1 KB per pose and the
  result). Returns 0 for an invalid joint count or an overflowing size.
  */
 size_t kincal_diagnose_workspace_size(size_t n_joints,

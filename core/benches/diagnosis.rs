@@ -6,24 +6,28 @@
 //! `cargo bench -p kincal --bench diagnosis -- --noplot`
 //!
 //! Measured (CPU time per run from `cpu_time`, this and the previous code alternated in
-//! one session, three rounds each, on a 2-core machine at load 2.7–3.5, so ±20 % between
-//! rounds): 120 rows 15.45–16.00 ms (was 17.45–18.60), 1,000 rows 112.5–148.3 ms (was
-//! 184.2–215.4), 5,000 rows 537.5–657.5 ms (was 695–850). Scaled by the instruction
-//! counts, the earlier, quieter session's 13.85 ms and 520 ms would be 11.5 ms and 403 ms;
-//! not measured, and at 120 rows an overstatement (callgrind counts the cleared array's
-//! `rep stosb` per byte). Outputs bit-identical (`tests/diagnosis_dump.rs`'s dump, `cmp`).
+//! one session, three rounds each, on a 2-core machine shared with another engineer's
+//! builds, load 1.3): 120 rows 7.20–7.30 ms (was 8.25–8.45), 1,000 rows 69.2–71.3 ms (was
+//! 70.4–70.8), 5,000 rows 300–310 ms (was 300–323); an earlier round at load 2.8 gave
+//! 7.85–8.20 ms at 120 rows for an intermediate state against 8.45–9.30. The earlier
+//! sessions' 13.3–13.9 ms at 120 rows for the previous code were taken under a heavier
+//! load. Outputs bit-identical (`tests/diagnosis_dump.rs`'s dump, `cmp`).
 //! Instructions of one diagnosis (callgrind, `tests/diagnosis_dump.rs`'s `one_size`,
-//! release, `diagnose` inclusive): 120 rows 167.1 → 138.9 M, 1,000 rows 1,593.0 →
-//! 1,219.0 M, 5,000 rows 6,300.7 → 4,888.4 M: the Gram kernels fold two rows of the
-//! triangle per pass over a pose's rows, the cross-validation whitens a pose's rows and
-//! subtracts a model's step column by column for the six rows together, and `add_rows`
-//! no longer clears a 6×P array per pose. Neither target is shown met on this loaded
-//! machine.
-//! Shares of a 5,000-row diagnosis's instructions now: the two Gram kernels 32 %
-//! (`add_rows6_in_order`, the cross-validation's, 18 %; `add_rows6`, the fits', 14 %),
-//! the Jacobians (frames, columns, gravity torques) 23 %, rank sorts 5 %; at 120 rows
-//! the Gram kernels 20 %, the cross-validation's greedy factors 9 % (a serial chain), the
-//! Jacobians 19 %, the smooth checks' ridge fits 16 %.
+//! release, `diagnose` inclusive): 120 rows 167.1 → 138.9 → 122.5 M, 1,000 rows 1,593.0 →
+//! 1,219.0 → 1,206.3 M, 5,000 rows 6,300.7 → 4,888.4 → 4,882.2 M. The last step: gravity
+//! torques kept per row across passes and fits (`identify::torques`), the first rows'
+//! Jacobian columns kept across the diagnosis's passes at one model (`diagnosis::rows`,
+//! 27 rows of the 71-column union in a 96,000-byte pool), the greedy factors of the
+//! cross-validation and of the data's identifiability step resumed over the columns
+//! neighbouring models share (`cv::Resume`). Both caches hold the first rows only, so
+//! 1,000 and 5,000 rows gain little.
+//! Shares of a 120-row diagnosis's instructions now: the two Gram kernels 25 %
+//! (`add_rows6_in_order`, the cross-validation's, 13 %; `add_rows6`, the fits', 12 %), the
+//! smooth checks 24 % (their ridge fits' factor, solve, predict and accumulate 20 %), the
+//! identification Jacobians 13 %, the greedy factors 6 %; by step, the
+//! nonlinear fits 30 % (the geometric calibration 19 %, the verdict's 11 %), the smooth
+//! checks 24 %, the cross-validation 17 %, the extrapolation check 7 %, the outlier
+//! screen 6 %.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use kincal::diagnosis::{Config, DiagWorkspace, PoseDiagnosis, diagnose};

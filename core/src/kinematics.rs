@@ -142,7 +142,21 @@ impl<const N: usize> Robot<N> {
     /// assert!((t.translation.z - (0.205 + 0.41 + 0.03 + 0.336 + 0.202 - 0.03)).abs() < 1.0);
     /// ```
     pub fn fk(&self, state: &JointState<N>) -> Result<Transform> {
-        let angles = self.joint_angles(state)?;
+        self.fk_with_torques(state, &mut None)
+    }
+
+    /// [`Robot::fk`] with the gravity torques at the readings in `tau` when known (bit for
+    /// bit [`Robot::gravity_torques`]'s: the same pose); when unknown and the compliance
+    /// needed them, they are computed and left in `tau` for the caller to keep.
+    pub(crate) fn fk_with_torques(
+        &self,
+        state: &JointState<N>,
+        tau: &mut Option<[f64; N]>,
+    ) -> Result<Transform> {
+        let (angles, torques) = self.joint_angles_with_torques(state, tau.as_ref())?;
+        if tau.is_none() {
+            *tau = torques;
+        }
         let scale = self.length_scale(state)?;
         let t = chain(
             &self.geom,
@@ -334,6 +348,20 @@ impl<const N: usize> Robot<N> {
         jac: &mut [JacobianColumn],
         frame_rotations: bool,
     ) -> Result<Transform> {
+        self.jacobian_with_torques(state, jac, frame_rotations, &mut None)
+    }
+
+    /// [`Robot::jacobian_with`] with the gravity torques at the readings in `tau` when
+    /// known (as [`Robot::fk_with_torques`]: every column and the pose bit for bit the
+    /// same); when unknown and computed (compliance in the model, or the effect columns
+    /// written), they are left in `tau`.
+    pub(crate) fn jacobian_with_torques(
+        &self,
+        state: &JointState<N>,
+        jac: &mut [JacobianColumn],
+        frame_rotations: bool,
+        tau: &mut Option<[f64; N]>,
+    ) -> Result<Transform> {
         let links_only = jac.len() == 5 * N;
         let full = if jac.len() == Self::NUM_PARAMS {
             true
@@ -345,7 +373,10 @@ impl<const N: usize> Robot<N> {
                 found: jac.len(),
             });
         };
-        let (angles, torques) = self.joint_angles_and_torques(state)?;
+        let (angles, torques) = self.joint_angles_with_torques(state, tau.as_ref())?;
+        if tau.is_none() {
+            *tau = torques;
+        }
         let scale = self.length_scale(state)?;
         let mut f = Frames::default();
         self.frames_at(&angles, scale, &mut f);
@@ -380,8 +411,12 @@ impl<const N: usize> Robot<N> {
         self.frame_columns(&f, jac, frame_rotations);
         if full {
             // The torques the compliance's angles used, bit for bit those computed again.
-            let tau = torques.unwrap_or_else(|| self.gravity_torques(&state.q));
-            self.effect_columns(state, scale, &f, &tau, jac);
+            let t = match *tau {
+                Some(t) => t,
+                None => self.gravity_torques(&state.q),
+            };
+            *tau = Some(t);
+            self.effect_columns(state, scale, &f, &t, jac);
         }
         check_pose(&f.t_base_ee)?;
         Ok(f.t_base_ee)

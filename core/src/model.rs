@@ -823,14 +823,25 @@ impl<const N: usize> Robot<N> {
         &self,
         state: &JointState<N>,
     ) -> Result<([f64; N], Option<[f64; N]>)> {
+        self.joint_angles_with_torques(state, None)
+    }
+
+    /// [`Robot::joint_angles_and_torques`] with the gravity torques at the readings already
+    /// `known` (from a cache: [`Robot::gravity_torques`]'s values bit for bit, so the angles
+    /// are too), computed only when not given.
+    pub(crate) fn joint_angles_with_torques(
+        &self,
+        state: &JointState<N>,
+        known: Option<&[f64; N]>,
+    ) -> Result<([f64; N], Option<[f64; N]>)> {
         state.validate()?;
         let e = &self.effects;
         let mut out = state.q;
         let has_compliance = e.compliance.iter().any(|&c| c != 0.0);
-        let tau = if has_compliance {
-            self.gravity_torques(&state.q)
-        } else {
-            [0.0; N]
+        let tau = match (has_compliance, known) {
+            (false, _) => [0.0; N],
+            (true, Some(t)) => *t,
+            (true, None) => self.gravity_torques(&state.q),
         };
         let has_backlash = e.backlash.iter().any(|&b| b != 0.0);
         let approach = match (has_backlash, state.approach) {
@@ -966,6 +977,31 @@ impl<const N: usize> Robot<N> {
         cyclic.iter().flatten().for_each(|v| f(v.to_bits()));
         backlash.iter().for_each(|v| f(v.to_bits()));
         f(thermal_kappa.to_bits());
+    }
+}
+
+/// Number of words [`Robot::for_each_gravity_key_word`] gives for `n` joints.
+pub(crate) const fn gravity_key_words(n: usize) -> usize {
+    (11 * n + 36) + 1 + (n + 4)
+}
+
+impl<const N: usize> Robot<N> {
+    /// Feeds every number [`Robot::gravity_torques`] depends on to `f`, bit for bit: the
+    /// nominal geometry, the joint kinds and the mass model. Two robots giving the same
+    /// words have the same gravity torques at every reading, whatever their calibrated
+    /// geometry and effects: the key of the per-row torque cache of a fit, whose models
+    /// change every iteration while their torques do not (`identify::torques`).
+    pub(crate) fn for_each_gravity_key_word(&self, f: &mut impl FnMut(u64)) {
+        self.nominal.for_each_key_word(f);
+        f(self.kind_bits);
+        let MassModel {
+            link_masses_kg,
+            tool_mass_kg,
+            gravity,
+        } = &self.mass;
+        link_masses_kg.iter().for_each(|v| f(v.to_bits()));
+        f(tool_mass_kg.to_bits());
+        gravity.iter().for_each(|v| f(v.to_bits()));
     }
 }
 

@@ -307,8 +307,8 @@ fn workspace_size(
 /// Bytes of caller memory `kincal_identify_constraints` needs: `n_rows` rows of an
 /// `n_joints` robot with `n_targets + n_planes` groups, `n_distances` distances,
 /// `n_sessions` sessions (0 without a session array) and `n_requested` requested parameters
-/// (the identification workspace of capacity 32 or `KINCAL_MAX_PARAMS`, about 66 KB or
-/// 840 KB, plus about 0.5 KB per row). Returns 0 for an invalid joint count, more than
+/// (the identification workspace of capacity 32 or `KINCAL_MAX_PARAMS`, about 92 KB or
+/// 1.45 MB, plus about 0.5 KB per row). Returns 0 for an invalid joint count, more than
 /// `KINCAL_MAX_PARAMS` parameters, or an overflowing size.
 #[unsafe(no_mangle)]
 pub extern "C" fn kincal_identify_constraints_workspace_size(

@@ -586,7 +586,7 @@ fn workspace_size(n_joints: usize, n_poses: usize) -> Option<usize> {
 }
 
 /// Bytes of caller memory `kincal_diagnose` needs for `n_poses` measurements of an
-/// `n_joints` robot (the diagnosis workspace, about 2.4 MB, plus about 2.1 KB per pose and the
+/// `n_joints` robot (the diagnosis workspace, about 2.54 MB, plus about 2.1 KB per pose and the
 /// result). Returns 0 for an invalid joint count or an overflowing size.
 #[unsafe(no_mangle)]
 pub extern "C" fn kincal_diagnose_workspace_size(n_joints: usize, n_poses: usize) -> usize {

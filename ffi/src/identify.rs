@@ -278,7 +278,7 @@ fn workspace_size(n_joints: usize, n_poses: usize, n_requested: usize) -> Option
 /// Bytes of caller memory `kincal_identify` and `kincal_analyze_identifiability` need for
 /// `n_poses` measurements of an `n_joints` robot when `n_requested` parameters are
 /// requested (the count of non-zero `requested` entries; the size is that of the smallest
-/// capacity, 32 or `KINCAL_MAX_PARAMS`, that holds them: about 66 KB or 840 KB,
+/// capacity, 32 or `KINCAL_MAX_PARAMS`, that holds them: about 92 KB or 1.45 MB,
 /// plus about 0.25 KB per pose). Returns 0 for an invalid joint count, more than
 /// `KINCAL_MAX_PARAMS` parameters, or an overflowing size.
 #[unsafe(no_mangle)]

@@ -25,38 +25,113 @@ use crate::model::Robot;
 use crate::params::{CyclicTerm, LinkParam, ParamId};
 use crate::pose::{OrientationError, pose_error};
 
-/// Whitened rows of pose `m` at `lin` into `ws.a`/`ws.b` (`a[k][c] = √w_k·J_k[U_c]`,
-/// `b[k] = √w_k·e_k`; rows of unmeasured components are zero); returns the raw residual.
+/// The model a pass over the rows is linearised at, with the caches bound to it once for
+/// the pass (a key comparison per pose would cost a tenth of the pose's Jacobian).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Lin<'r, const N: usize> {
+    robot: &'r Robot<N>,
+    /// [`TorqueCache::generation`] right after binding it to `robot`.
+    ///
+    /// [`TorqueCache::generation`]: crate::identify::torques::TorqueCache::generation
+    torques: u64,
+    /// The row cache's generation right after binding it to `robot` and the union `U`.
+    rows: u64,
+}
+
+impl<'r, const N: usize> Lin<'r, N> {
+    /// `robot`, with the gravity-torque cache and the row cache of `ws` bound to it (the
+    /// row cache also to the current union `U`: narrow or restore it before binding).
+    pub(crate) fn bind<const P: usize>(robot: &'r Robot<N>, ws: &mut DiagWorkspace<P>) -> Self {
+        ws.id.torques.bind(robot);
+        let n_u = ws.n_u.min(P);
+        ws.rows.bind(robot, &ws.u[..n_u]);
+        Lin {
+            robot,
+            torques: ws.id.torques.generation(),
+            rows: ws.rows.generation(),
+        }
+    }
+}
+
+/// Whitened rows of pose `m` (row `l` of the data) at `lin` into `ws.a`/`ws.b`
+/// (`a[k][c] = √w_k·J_k[U_c]`, `b[k] = √w_k·e_k`; rows of unmeasured components are zero);
+/// returns the raw residual. The row's Jacobian columns and residual come from the row
+/// cache (`ws.rows`, `rows.rs`) when kept there, and are kept there when computed; its
+/// gravity torques from the fits' cache (`ws.id.torques`, exact key) likewise.
 pub(crate) fn pose_rows<const N: usize, const P: usize>(
-    lin: &Robot<N>,
+    at: &Lin<'_, N>,
+    l: usize,
     m: &Measurement<N>,
     sw: &[f64; 6],
     ws: &mut DiagWorkspace<P>,
 ) -> Result<[f64; 6]> {
+    let w: [f64; 6] = core::array::from_fn(|k| if m.mask.has(k) { sw[k] } else { 0.0 });
+    // The form check's alternative columns need the whole Jacobian in `ws.jac`.
+    let cached = !ws.alt_harmonics && ws.rows.generation() == at.rows;
+    if cached {
+        let DiagWorkspace { rows, a, b, .. } = &mut *ws;
+        if let Some((e, cols)) = rows.get(l) {
+            whiten(&w, &e, cols.chunks_exact(6), a, b);
+            return Ok(e);
+        }
+    }
     let n_jac = Robot::<N>::NUM_PARAMS;
     let jac = ws.jac.get_mut(..n_jac).ok_or(Error::CapacityExceeded {
         needed: n_jac,
         capacity: crate::identify::MAX_MODEL_PARAMS,
     })?;
-    let t = m.model_jacobian(lin, jac)?;
+    let lin = at.robot;
+    let torques = &mut ws.id.torques;
+    if torques.generation() != at.torques {
+        // Rebound since the pass began (not within a diagnosis's passes): bind again.
+        torques.bind(lin);
+    }
+    let known = torques.get(l, &m.state.q);
+    let mut tau = known;
+    let t = m.model_jacobian_torques(lin, jac, true, &mut tau)?;
+    if let (None, Some(tau)) = (known, tau) {
+        torques.put(l, &m.state.q, &tau);
+    }
     let e = pose_error(&m.pose, &t, OrientationError::Exact);
-    let w: [f64; 6] = core::array::from_fn(|k| if m.mask.has(k) { sw[k] } else { 0.0 });
-    for k in 0..6 {
-        ws.b[k] = w[k] * e[k];
+    if cached {
+        ws.rows.put(l, &e, ws.jac.get(..n_jac).unwrap_or(&[]));
     }
-    // Column by column: one Jacobian column (six contiguous values) read once.
-    let n_u = ws.n_u.min(P);
-    for (c, &uc) in ws.u[..n_u].iter().enumerate() {
-        let jc = ws.jac.get(uc).copied().unwrap_or([0.0; 6]);
-        for (ak, (wk, jk)) in ws.a.iter_mut().zip(w.iter().zip(jc)) {
-            ak[c] = wk * jk;
-        }
-    }
+    let DiagWorkspace {
+        u, n_u, jac, a, b, ..
+    } = &mut *ws;
+    let cols = u[..(*n_u).min(P)]
+        .iter()
+        .map(|&uc| jac.get(uc).map_or(&ZERO_COLUMN[..], |j| &j[..]));
+    whiten(&w, &e, cols, a, b);
     if ws.alt_harmonics {
         alternative_harmonics(m, sw, ws);
     }
     Ok(e)
 }
+
+/// `ws.b = w·e` and `ws.a[k][c] = w_k·J_k[U_c]` from the union's Jacobian columns `cols`
+/// (six numbers each, in the union's order): the same products whether the columns come
+/// from the Jacobian just evaluated or from the row cache. Column by column: one column
+/// (six contiguous values) read once.
+fn whiten<'c, const P: usize>(
+    w: &[f64; 6],
+    e: &[f64; 6],
+    cols: impl Iterator<Item = &'c [f64]>,
+    a: &mut [[f64; P]; 6],
+    b: &mut [f64; 6],
+) {
+    for k in 0..6 {
+        b[k] = w[k] * e[k];
+    }
+    for (c, jc) in cols.enumerate().take(P) {
+        for (ak, (wk, jk)) in a.iter_mut().zip(w.iter().zip(jc)) {
+            ak[c] = wk * jk;
+        }
+    }
+}
+
+/// The column of a parameter outside the Jacobian (none: `U` holds model parameters).
+const ZERO_COLUMN: [f64; 6] = [0.0; 6];
 
 /// The form check's alternative (`form.rs`): every `joint_cyclic` column of `U` replaced by
 /// the 3rd and 4th harmonics of its joint (`sin 3q, cos 3q, sin 4q, cos 4q` for the terms
@@ -209,11 +284,65 @@ pub(crate) fn factor<const P: usize>(
     model: usize,
     fold: bool,
     tol: f64,
+    fate: Option<&mut [ColumnFate]>,
+) -> usize {
+    factor_from(ws, model, fold, tol, fate, Resume::START)
+}
+
+/// Where [`factor_from`] starts: after the first `cols` columns of the model, `kept` of
+/// them kept (their factor already in `ws.chol`, `ws.scale`, `ws.kept`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Resume {
+    cols: usize,
+    kept: usize,
+}
+
+impl Resume {
+    /// From the first column.
+    pub(crate) const START: Resume = Resume { cols: 0, kept: 0 };
+
+    /// Resuming model `next` from the factor model `prev` left (`n_prev` kept columns, the
+    /// same Gram): the greedy factor of a column depends only on the columns before it, so
+    /// over the leading columns both models share (the same positions of `U` in the same
+    /// order) it is the same, bit for bit, and only the rest needs factoring.
+    pub(crate) fn shared<const P: usize>(
+        ws: &DiagWorkspace<P>,
+        prev: usize,
+        n_prev: usize,
+        next: usize,
+    ) -> Resume {
+        let (Some(a), Some(b)) = (ws.model_cols.get(prev), ws.model_cols.get(next)) else {
+            return Resume::START;
+        };
+        let na = ws.model_n.get(prev).copied().unwrap_or(0).min(P);
+        let nb = ws.model_n.get(next).copied().unwrap_or(0).min(P);
+        Resume::between(&a[..na], &ws.kept[..n_prev.min(P)], &b[..nb])
+    }
+
+    /// Resuming a model of columns `next` from the factor of one of columns `prev` whose
+    /// kept positions are `kept` (as [`Resume::shared`], for a caller that kept `prev`'s
+    /// list itself).
+    pub(crate) fn between(prev: &[u8], kept: &[usize], next: &[u8]) -> Resume {
+        let cols = prev.iter().zip(next).take_while(|(x, y)| x == y).count();
+        let kept = kept.partition_point(|&j| j < cols);
+        Resume { cols, kept }
+    }
+}
+
+/// [`factor`] from `start` (columns before it already factored, see [`Resume`]); `fate`
+/// receives the fates of the columns from `start.cols` on (those before are the earlier
+/// model's, which the caller keeps).
+pub(crate) fn factor_from<const P: usize>(
+    ws: &mut DiagWorkspace<P>,
+    model: usize,
+    fold: bool,
+    tol: f64,
     mut fate: Option<&mut [ColumnFate]>,
+    start: Resume,
 ) -> usize {
     let n_cols = ws.model_n[model];
-    let mut n = 0;
-    for j in 0..n_cols {
+    let mut n = start.kept;
+    for j in start.cols..n_cols {
         let cj = ws.model_cols[model][j] as usize;
         let djj = gram(ws, cj, cj, fold);
         let mut f = ColumnFate {
@@ -341,6 +470,7 @@ pub(crate) fn cross_validate<const N: usize, const P: usize>(
     tol: f64,
     ws: &mut DiagWorkspace<P>,
 ) -> Result<()> {
+    let at = Lin::bind(lin, ws);
     let lev_model = match pass {
         Pass::Candidates => 0,
         Pass::Final(m) => m,
@@ -361,26 +491,35 @@ pub(crate) fn cross_validate<const N: usize, const P: usize>(
         }
         ws.acc[m] = ModelAcc::default();
     }
+    let mut factor_order = [0usize; MAX_MODELS];
+    let n_order = sharing_order(ws, order(), lev_model, &mut factor_order);
     for f in 0..folds {
         ws.g_fold.reset(ws.n_u)?;
         for (l, m) in data.iter().enumerate() {
             if usize::from(poses[l].fold) == f && !poses[l].suspect {
-                pose_rows(lin, m, sw, ws)?;
+                pose_rows(&at, l, m, sw, ws)?;
                 fold_rows(ws, true)?;
             }
         }
-        // The leverage model last, so its factor stays in `ws.chol`.
+        // The leverage model last, so its factor stays in `ws.chol`; each model resumes the
+        // factor of the one before over their shared leading columns.
         let mut n_lev = 0;
-        for model in order() {
-            let n = factor(ws, model, true, tol, None);
+        let mut prev: Option<(usize, usize)> = None;
+        for &model in &factor_order[..n_order] {
+            let start = match prev {
+                Some((pm, pn)) => Resume::shared(ws, pm, pn, model),
+                None => Resume::START,
+            };
+            let n = factor_from(ws, model, true, tol, None, start);
             solve(ws, model, n, true);
             n_lev = n;
+            prev = Some((model, n));
         }
         for (l, m) in data.iter().enumerate() {
             if usize::from(poses[l].fold) != f || poses[l].suspect {
                 continue;
             }
-            pose_rows(lin, m, sw, ws)?;
+            pose_rows(&at, l, m, sw, ws)?;
             let (n_pos, n_rot) = measured(m);
             for model in order() {
                 let r = record(ws, model, m, sw, &mut poses[l]);
@@ -401,6 +540,45 @@ pub(crate) fn cross_validate<const N: usize, const P: usize>(
         }
     }
     Ok(())
+}
+
+/// The models of `models` (each once, `lev` among them) into `out`, in an order in which
+/// neighbours' factors share many leading columns: sorted by their column lists (a pair
+/// follows the single effect it extends; every candidate starts with the geometric
+/// columns), and `lev` last (its factor must stay in `ws.chol`; it shares the geometric
+/// columns with the model before it). Returns the number written. The order changes no
+/// result: each model's step depends on its own columns only.
+fn sharing_order<const P: usize>(
+    ws: &DiagWorkspace<P>,
+    models: impl Iterator<Item = usize>,
+    lev: usize,
+    out: &mut [usize; MAX_MODELS],
+) -> usize {
+    let cols = |m: usize| {
+        let n = ws.model_n.get(m).copied().unwrap_or(0).min(P);
+        ws.model_cols.get(m).map_or(&[][..], |c| &c[..n])
+    };
+    let mut n = 0;
+    for m in models.filter(|&m| m != lev) {
+        // Insertion (at most MAX_MODELS models, once per cross-validation): every entry
+        // after `m`'s place moves up one, carried along by swaps.
+        let Some((last, sorted)) = out.get_mut(..=n).and_then(|h| h.split_last_mut()) else {
+            break;
+        };
+        let mut carry = m;
+        for slot in sorted.iter_mut() {
+            if cols(*slot) > cols(carry) {
+                core::mem::swap(slot, &mut carry);
+            }
+        }
+        *last = carry;
+        n += 1;
+    }
+    if let Some(slot) = out.get_mut(n) {
+        *slot = lev;
+        n += 1;
+    }
+    n
 }
 
 /// Numbers of measured position and rotation components of `m`.
@@ -486,6 +664,7 @@ pub(crate) fn in_sample<const N: usize, const P: usize>(
     tol: f64,
     ws: &mut DiagWorkspace<P>,
 ) -> Result<()> {
+    let at = Lin::bind(lin, ws);
     let lev_model = match pass {
         Pass::Candidates => 0,
         Pass::Final(m) => m,
@@ -514,7 +693,7 @@ pub(crate) fn in_sample<const N: usize, const P: usize>(
         if poses[l].suspect {
             continue;
         }
-        pose_rows(lin, m, sw, ws)?;
+        pose_rows(&at, l, m, sw, ws)?;
         for model in order() {
             let r = record(ws, model, m, sw, &mut poses[l]);
             if model == lev_model {
@@ -538,4 +717,111 @@ pub(crate) fn in_sample<const N: usize, const P: usize>(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::rng::SplitMix64;
+    use std::boxed::Box;
+
+    const P: usize = 12;
+
+    /// A Gram over 10 columns of random rows, column 7 = column 2 + column 3 (so the greedy
+    /// factor drops it after both), and models with shared and unshared leading columns.
+    fn workspace() -> Box<DiagWorkspace<P>> {
+        let mut ws = Box::new(DiagWorkspace::<P>::new());
+        let mut rng = SplitMix64::new(18);
+        ws.g_all.reset(10).unwrap();
+        for _ in 0..40 {
+            let mut a = [0.0; 10];
+            for v in &mut a {
+                *v = rng.normal();
+            }
+            a[7] = a[2] + a[3];
+            ws.g_all.add_row_weighted(&a, rng.normal(), 1.0).unwrap();
+        }
+        let models: [&[u8]; 4] = [
+            &[0, 1, 2, 3, 4, 7, 5],
+            &[0, 1, 2, 3, 4, 7, 8, 9],
+            &[0, 1, 2, 6],
+            &[1, 0, 2, 3],
+        ];
+        for (m, cols) in models.iter().enumerate() {
+            ws.model_cols[m][..cols.len()].copy_from_slice(cols);
+            ws.model_n[m] = cols.len();
+        }
+        ws
+    }
+
+    /// What a factor and its solve leave: kept count, factor, scales, kept positions, step.
+    fn state(ws: &DiagWorkspace<P>, model: usize, n: usize) -> std::vec::Vec<u64> {
+        let mut out = std::vec![n as u64];
+        for r in 0..n {
+            out.extend(ws.chol[r][..=r].iter().map(|v| v.to_bits()));
+            out.push(ws.scale[r].to_bits());
+            out.push(ws.kept[r] as u64);
+        }
+        out.extend(
+            ws.delta[model][..ws.model_n[model]]
+                .iter()
+                .map(|v| v.to_bits()),
+        );
+        out
+    }
+
+    /// Column fates with their numbers as bits.
+    #[allow(clippy::type_complexity)]
+    fn fate_bits(f: &[ColumnFate]) -> std::vec::Vec<(bool, u64, Option<(usize, u64)>)> {
+        f.iter()
+            .map(|c| {
+                let partner = c.partner.map(|(j, v)| (j, v.to_bits()));
+                (c.kept, c.distinct.to_bits(), partner)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_factor_resumed_over_shared_columns_is_the_fresh_factor_bit_for_bit() {
+        let tol = 1e-6;
+        let mut ws = workspace();
+        for prev in 0..4 {
+            for next in 0..4 {
+                let blank = ColumnFate {
+                    kept: false,
+                    distinct: f64::NAN,
+                    partner: None,
+                };
+                let mut fresh_fate = [blank; P];
+                let n = factor(&mut ws, next, false, tol, Some(&mut fresh_fate));
+                solve(&mut ws, next, n, false);
+                let fresh = state(&ws, next, n);
+                // The earlier model's fates stand for the shared columns (as in step 5b).
+                let mut fate = [blank; P];
+                let n_prev = factor(&mut ws, prev, false, tol, Some(&mut fate));
+                solve(&mut ws, prev, n_prev, false);
+                let start = Resume::shared(&ws, prev, n_prev, next);
+                let n = factor_from(&mut ws, next, false, tol, Some(&mut fate), start);
+                solve(&mut ws, next, n, false);
+                assert_eq!(
+                    state(&ws, next, n),
+                    fresh,
+                    "{prev} -> {next} from {start:?}"
+                );
+                let n_cols = ws.model_n[next];
+                assert_eq!(
+                    fate_bits(&fate[..n_cols]),
+                    fate_bits(&fresh_fate[..n_cols]),
+                    "{prev} -> {next}"
+                );
+            }
+        }
+        // The dependent column is dropped, and the resumed factors did skip work.
+        let n = factor(&mut ws, 0, false, tol, None);
+        assert_eq!(n, 6);
+        assert_eq!(Resume::shared(&ws, 0, n, 1), Resume { cols: 6, kept: 5 });
+        assert_eq!(Resume::shared(&ws, 0, n, 3), Resume::START);
+    }
 }

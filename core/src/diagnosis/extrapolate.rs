@@ -255,6 +255,7 @@ fn splits<const N: usize, const P: usize>(
         .sum();
     let mut best = f64::NEG_INFINITY;
     let min_groups = cfg.min_groups_per_fold.max(2);
+    let lin = cv::Lin::bind(lin, ws);
     for j in 0..N {
         let Some(cut) = median_q(data, poses, j) else {
             continue;
@@ -267,9 +268,9 @@ fn splits<const N: usize, const P: usize>(
             }
             ws.g_fold.reset(ws.n_u)?;
             let mut m_rows = 0usize;
-            for (m, pd) in data.iter().zip(poses.iter()) {
+            for (l, (m, pd)) in data.iter().zip(poses.iter()).enumerate() {
                 if held_out(m, pd, j, cut, upper) {
-                    cv::pose_rows(lin, m, sw, ws)?;
+                    cv::pose_rows(&lin, l, m, sw, ws)?;
                     cv::fold_rows(ws, true)?;
                     m_rows += (0..6).filter(|&k| m.mask.has(k)).count();
                 }

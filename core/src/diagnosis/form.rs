@@ -135,9 +135,10 @@ fn alternative<const N: usize, const P: usize>(
     ws: &mut DiagWorkspace<P>,
 ) -> Result<()> {
     ws.g_all.reset(ws.n_u)?;
-    for (m, p) in data.iter().zip(poses.iter()) {
+    let at = cv::Lin::bind(geometric, ws);
+    for (l, (m, p)) in data.iter().zip(poses.iter()).enumerate() {
         if !p.suspect {
-            cv::pose_rows(geometric, m, sw, ws)?;
+            cv::pose_rows(&at, l, m, sw, ws)?;
             cv::fold_rows(ws, false)?;
         }
     }

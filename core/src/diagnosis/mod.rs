@@ -136,7 +136,9 @@
 //! per-pose outputs ([`PoseDiagnosis`]), and a caller-provided [`DiagWorkspace`] of
 //! capacity `P` columns (the union of all models' parameters: 71 for a 6-joint arm with
 //! every effect, so `P = 80` suffices there; `P = 144` for 9 joints), which includes the
-//! fixed ~321 KiB of the smooth check ([`SmoothWorkspace`]).
+//! fixed ~321 KiB of the smooth check ([`SmoothWorkspace`]) and ~112 KiB of caches (the
+//! first rows' Jacobian columns, `rows.rs`, and their gravity torques): 1,030,256 bytes
+//! at `P = 80`.
 
 pub mod contacts;
 mod cv;
@@ -146,6 +148,7 @@ mod form;
 mod locate;
 mod noise;
 mod rank;
+mod rows;
 mod screen;
 mod sessions;
 mod smooth;
@@ -774,6 +777,9 @@ pub struct DiagWorkspace<const P: usize> {
     pub(crate) smooth: SmoothWorkspace,
     /// The form check's alternative columns are being built (`form.rs`).
     pub(crate) alt_harmonics: bool,
+    /// The first rows' Jacobian columns and residuals at the model of the passes
+    /// (`rows.rs`).
+    pub(crate) rows: rows::RowCache<P>,
 }
 
 impl<const P: usize> DiagWorkspace<P> {
@@ -813,6 +819,7 @@ impl<const P: usize> DiagWorkspace<P> {
             b: [0.0; 6],
             smooth: SmoothWorkspace::new(),
             alt_harmonics: false,
+            rows: rows::RowCache::new(),
         }
     }
 }
@@ -1596,6 +1603,8 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
     for p in poses.iter_mut() {
         *p = PoseDiagnosis::EMPTY;
     }
+    // Rows kept by an earlier diagnosis are of other data.
+    ws.rows.clear();
 
     // 1–2. Groups, folds, method, noise floor.
     let n_groups = folds::assign(groups, cfg.folds, cfg.fold_seed, poses)?;
@@ -1790,8 +1799,9 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
         ws.g_all.reset(n_u)?;
     }
     let mut insample = ModelAcc::default();
+    let at = cv::Lin::bind(&lin, ws);
     for (l, m) in data.iter().enumerate() {
-        let mut e = cv::pose_rows(&lin, m, &sw, ws)?;
+        let mut e = cv::pose_rows(&at, l, m, &sw, ws)?;
         if !poses[l].suspect {
             if fold_again {
                 cv::fold_rows(ws, false)?;
@@ -1816,53 +1826,73 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
         }
         poses[l].residual = e;
     }
-    // 5b. What the poses determine, per model; keep only those columns.
-    for mdl in 0..=n_cand {
-        let n_cols = ws.model_n[mdl];
+    // 5b. What the poses determine, per model; keep only those columns. Each model's
+    // factor resumes the one before it over their shared leading columns (the geometric
+    // ones at least; `cv::Resume`), whose fates are then the earlier model's, still in
+    // `fate` (in a block, so that its stack slot is free again after it: the diagnosis's
+    // stack bound is tight).
+    {
         let mut fate = [cv::ColumnFate {
             kept: false,
             distinct: 0.0,
             partner: None,
         }; P];
-        let n_kept = cv::factor(ws, mdl, false, cfg.rank_tol, Some(&mut fate[..n_cols]));
-        let s = score(out, mdl);
-        let mut k = 0;
-        let mut n_dropped = 0;
-        let mut any_effect = false;
-        for j in 0..n_cols {
-            let col = ws.model_cols[mdl][j];
-            let flat = ws.u[col as usize];
-            let is_effect = !geometric.contains(flat);
-            if fate[j].kept {
-                ws.model_cols[mdl][k] = col;
-                k += 1;
-                s.identifiable.insert(flat)?;
-                if is_effect {
-                    any_effect = true;
-                    if fate[j].distinct < s.distinctness {
-                        s.distinctness = fate[j].distinct;
-                        s.least_distinct = Some(ParamIndex(flat));
+        let (mut prev_cols, mut prev_n, mut prev_kept) = ([0u8; P], 0usize, 0usize);
+        for mdl in 0..=n_cand {
+            let n_cols = ws.model_n[mdl];
+            let cols = ws.model_cols[mdl];
+            let start = cv::Resume::between(
+                &prev_cols[..prev_n.min(P)],
+                &ws.kept[..prev_kept.min(P)],
+                &cols[..n_cols.min(P)],
+            );
+            let n_kept = cv::factor_from(
+                ws,
+                mdl,
+                false,
+                cfg.rank_tol,
+                Some(&mut fate[..n_cols]),
+                start,
+            );
+            (prev_cols, prev_n, prev_kept) = (cols, n_cols, n_kept);
+            let s = score(out, mdl);
+            let mut k = 0;
+            let mut n_dropped = 0;
+            let mut any_effect = false;
+            for j in 0..n_cols {
+                let col = ws.model_cols[mdl][j];
+                let flat = ws.u[col as usize];
+                let is_effect = !geometric.contains(flat);
+                if fate[j].kept {
+                    ws.model_cols[mdl][k] = col;
+                    k += 1;
+                    s.identifiable.insert(flat)?;
+                    if is_effect {
+                        any_effect = true;
+                        if fate[j].distinct < s.distinctness {
+                            s.distinctness = fate[j].distinct;
+                            s.least_distinct = Some(ParamIndex(flat));
+                        }
+                    }
+                } else {
+                    s.data_deficient.insert(flat)?;
+                    if n_dropped < MAX_DROPPED {
+                        s.dropped[n_dropped] = Some(Dropped {
+                            param: ParamIndex(flat),
+                            // Partner positions index the model's columns before compaction.
+                            partner: fate[j]
+                                .partner
+                                .map(|(pj, _)| ParamIndex(ws.u[ws.model_cols[mdl][pj] as usize])),
+                            cosine: fate[j].partner.map_or(0.0, |(_, c)| c),
+                        });
+                        n_dropped += 1;
                     }
                 }
-            } else {
-                s.data_deficient.insert(flat)?;
-                if n_dropped < MAX_DROPPED {
-                    s.dropped[n_dropped] = Some(Dropped {
-                        param: ParamIndex(flat),
-                        // Partner positions index the model's columns before compaction.
-                        partner: fate[j]
-                            .partner
-                            .map(|(pj, _)| ParamIndex(ws.u[ws.model_cols[mdl][pj] as usize])),
-                        cosine: fate[j].partner.map_or(0.0, |(_, c)| c),
-                    });
-                    n_dropped += 1;
-                }
             }
+            ws.model_n[mdl] = k;
+            s.fitted_params = k;
+            s.evaluated = mdl == 0 || any_effect;
         }
-        let _ = n_kept;
-        ws.model_n[mdl] = k;
-        s.fitted_params = k;
-        s.evaluated = mdl == 0 || any_effect;
     }
 
     // 5c. Cross-validation of every evaluated model.
@@ -2033,9 +2063,10 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
         let mut sorted = [0usize; P];
         narrowed = Some(cv::narrow_to_model(ws, mdl, &mut sorted));
         ws.g_all.reset(ws.n_u)?;
+        let at = cv::Lin::bind(&fit.robot, ws);
         for (l, m) in data.iter().enumerate() {
             if !poses[l].suspect {
-                cv::pose_rows(&fit.robot, m, &sw, ws)?;
+                cv::pose_rows(&at, l, m, &sw, ws)?;
                 cv::fold_rows(ws, false)?;
             }
         }

@@ -53,11 +53,12 @@ pub(crate) fn screen<const N: usize, const P: usize>(
     let cap = cap(max_suspects, n);
     let mut outcome = Screening::Suspects(0);
     let mut current = false;
+    let lin = cv::Lin::bind(lin, ws);
     for _ in 0..MAX_PASSES {
         ws.g_all.reset(ws.n_u)?;
         for (l, m) in data.iter().enumerate() {
             if !poses[l].suspect {
-                cv::pose_rows(lin, m, sw, ws)?;
+                cv::pose_rows(&lin, l, m, sw, ws)?;
                 cv::fold_rows(ws, false)?;
             }
         }
@@ -67,7 +68,7 @@ pub(crate) fn screen<const N: usize, const P: usize>(
         // `heldout_final` slot, which the diagnosis overwrites later).
         let mut rows = 0usize;
         for (l, m) in data.iter().enumerate() {
-            cv::pose_rows(lin, m, sw, ws)?;
+            cv::pose_rows(&lin, l, m, sw, ws)?;
             let mut rec = [0.0; 6];
             for k in 0..6 {
                 if !m.mask.has(k) {

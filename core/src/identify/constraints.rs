@@ -1192,9 +1192,10 @@ impl<const N: usize> ConstraintData<'_, N> {
                 .any(|k| c == ParamId::Base(k).index(N).0 || c == ParamId::Tool(k).index(N).0)
         });
         let mut c = 0.0;
+        ws.torques.bind(robot);
         for (l, m) in self.instrument.iter().enumerate() {
             if m.weight > 0.0 && !self.in_session(l) {
-                c += add_rows(robot, m, with_rhs, opts, n_cols, ws)?;
+                c += add_rows(robot, l, m, with_rhs, opts, n_cols, ws)?;
             }
         }
         for s in 0..self.sessions.len() {

@@ -75,6 +75,16 @@ impl<const N: usize> Measurement<N> {
         Ok(self.at_point(robot.fk(&self.state)?))
     }
 
+    /// [`Measurement::model_pose`] with the gravity torques at the readings in `tau` when
+    /// known, left there when computed ([`Robot::fk_with_torques`]).
+    pub(crate) fn model_pose_torques(
+        &self,
+        robot: &Robot<N>,
+        tau: &mut Option<[f64; N]>,
+    ) -> Result<Transform> {
+        Ok(self.at_point(robot.fk_with_torques(&self.state, tau)?))
+    }
+
     /// [`Measurement::model_pose`] and its identification Jacobian (as
     /// [`Robot::jacobian`]): with a point `r` (in the base frame `R_e·point`) each column's
     /// position rows gain `Δφ × r`, the rotation rows are unchanged.
@@ -99,7 +109,19 @@ impl<const N: usize> Measurement<N> {
         jac: &mut [JacobianColumn],
         frame_rotations: bool,
     ) -> Result<Transform> {
-        let t = robot.jacobian_with(&self.state, jac, frame_rotations)?;
+        self.model_jacobian_torques(robot, jac, frame_rotations, &mut None)
+    }
+
+    /// [`Measurement::model_jacobian_with`] with the gravity torques at the readings in
+    /// `tau` when known, left there when computed ([`Robot::jacobian_with_torques`]).
+    pub(crate) fn model_jacobian_torques(
+        &self,
+        robot: &Robot<N>,
+        jac: &mut [JacobianColumn],
+        frame_rotations: bool,
+        tau: &mut Option<[f64; N]>,
+    ) -> Result<Transform> {
+        let t = robot.jacobian_with_torques(&self.state, jac, frame_rotations, tau)?;
         if let Some(p) = self.point.filter(|p| *p != [0.0; 3]) {
             let r = t.rotation * nalgebra::Vector3::new(p[0], p[1], p[2]);
             for c in jac.iter_mut() {
@@ -202,12 +224,18 @@ pub(crate) fn active_rows<'d, const N: usize>(
     data: &'d [Measurement<N>],
     opts: &IdentifyOptions<'_>,
 ) -> impl Iterator<Item = &'d Measurement<N>> {
-    let excluded = opts.excluded;
-    data.iter().enumerate().filter_map(move |(l, m)| {
-        let out = m.weight > 0.0
-            && u32::try_from(l).map_or(true, |l| excluded.binary_search(&l).is_err());
-        out.then_some(m)
-    })
+    data.iter()
+        .enumerate()
+        .filter_map(move |(l, m)| is_active(l, m, opts).then_some(m))
+}
+
+/// Whether row `l` takes part in a fit (see [`active_rows`]).
+pub(crate) fn is_active<const N: usize>(
+    l: usize,
+    m: &Measurement<N>,
+    opts: &IdentifyOptions<'_>,
+) -> bool {
+    m.weight > 0.0 && u32::try_from(l).map_or(true, |l| opts.excluded.binary_search(&l).is_err())
 }
 
 /// Row weight of component `k`.
@@ -408,6 +436,26 @@ pub(crate) trait RowSource<const N: usize> {
     ) -> Result<f64>;
     /// The weighted cost `Σ w·e²`.
     fn cost(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<f64>;
+    /// [`RowSource::cost`] bit for bit, with what `ws` keeps between passes (the rows'
+    /// gravity torques) where the source uses it.
+    fn cost_ws<const P: usize>(
+        &self,
+        robot: &Robot<N>,
+        opts: &IdentifyOptions<'_>,
+        _ws: &mut Workspace<P>,
+    ) -> Result<f64> {
+        self.cost(robot, opts)
+    }
+    /// [`RowSource::stats`] bit for bit, with what `ws` keeps between passes (as
+    /// [`RowSource::cost_ws`]).
+    fn stats_ws<const P: usize>(
+        &self,
+        robot: &Robot<N>,
+        opts: &IdentifyOptions<'_>,
+        _ws: &mut Workspace<P>,
+    ) -> Result<ResidualStats> {
+        self.stats(robot, opts)
+    }
     /// The cost [`RowSource::fold`] into `ws.gram` returns, bit for bit, from forward
     /// kinematics alone (no Jacobian, nothing folded; `ws.gram` is left alone), or `None`
     /// where the source has no such pass. The solvers use it to reject a trial step
@@ -465,8 +513,11 @@ impl<const N: usize> RowSource<N> for [Measurement<N>] {
         ws: &mut Workspace<P>,
     ) -> Result<f64> {
         let mut c = 0.0;
-        for m in active_rows(self, opts) {
-            c += add_rows(robot, m, with_rhs, opts, n_cols, ws)?;
+        ws.torques.bind(robot);
+        for (l, m) in self.iter().enumerate() {
+            if is_active(l, m, opts) {
+                c += add_rows(robot, l, m, with_rhs, opts, n_cols, ws)?;
+            }
         }
         Ok(c)
     }
@@ -476,16 +527,74 @@ impl<const N: usize> RowSource<N> for [Measurement<N>] {
     fn stats(&self, robot: &Robot<N>, opts: &IdentifyOptions<'_>) -> Result<ResidualStats> {
         residual_stats(robot, self, opts)
     }
+    fn cost_ws<const P: usize>(
+        &self,
+        robot: &Robot<N>,
+        opts: &IdentifyOptions<'_>,
+        ws: &mut Workspace<P>,
+    ) -> Result<f64> {
+        // `cost`'s terms in its order, each pose by the same chain.
+        ws.torques.bind(robot);
+        let mut c = 0.0;
+        for (l, m) in self.iter().enumerate() {
+            if !is_active(l, m, opts) {
+                continue;
+            }
+            let t = model_pose_cached(robot, l, m, &mut ws.torques)?;
+            let e = pose_error(&m.pose, &t, opts.orientation);
+            for (k, v) in e.iter().enumerate() {
+                if m.mask.has(k) {
+                    c += m.weight * weight(opts, k) * v * v;
+                }
+            }
+        }
+        Ok(c)
+    }
+    fn stats_ws<const P: usize>(
+        &self,
+        robot: &Robot<N>,
+        opts: &IdentifyOptions<'_>,
+        ws: &mut Workspace<P>,
+    ) -> Result<ResidualStats> {
+        // `residual_stats`'s poses in its order.
+        ws.torques.bind(robot);
+        let mut acc = StatsAcc::default();
+        for (l, m) in self.iter().enumerate() {
+            if is_active(l, m, opts) {
+                acc.add(m, &model_pose_cached(robot, l, m, &mut ws.torques)?, opts);
+            }
+        }
+        Ok(acc.finish())
+    }
     fn instrument_rows(&self) -> Option<&[Measurement<N>]> {
         Some(self)
     }
 }
 
+/// [`Measurement::model_pose`] of row `l`, its gravity torques taken from `torques` (bound
+/// to `robot`'s key by the caller) when kept there, and kept there when computed.
+fn model_pose_cached<const N: usize>(
+    robot: &Robot<N>,
+    l: usize,
+    m: &Measurement<N>,
+    torques: &mut super::torques::TorqueCache,
+) -> Result<Transform> {
+    let known = torques.get(l, &m.state.q);
+    let mut tau = known;
+    let t = m.model_pose_torques(robot, &mut tau)?;
+    if let (None, Some(tau)) = (known, tau) {
+        torques.put(l, &m.state.q, &tau);
+    }
+    Ok(t)
+}
+
 /// Folds the rows of one pose (weighted by its weight) into `ws.lsq` or `ws.gram`; with
 /// `with_rhs = false` the right-hand side is zero (only the Jacobian matters, as in the
-/// identifiability analysis). Returns the cost.
+/// identifiability analysis). Returns the cost. `l` is the row's index in its data, for
+/// the gravity torques kept in `ws.torques` (bound to `robot` by the caller's pass).
 pub(crate) fn add_rows<const N: usize, const P: usize>(
     robot: &Robot<N>,
+    l: usize,
     m: &Measurement<N>,
     with_rhs: bool,
     opts: &IdentifyOptions<'_>,
@@ -501,7 +610,12 @@ pub(crate) fn add_rows<const N: usize, const P: usize>(
         needed: n_jac,
         capacity: super::MAX_MODEL_PARAMS,
     })?;
-    let t = m.model_jacobian(robot, jac)?;
+    let known = ws.torques.get(l, &m.state.q);
+    let mut tau = known;
+    let t = m.model_jacobian_torques(robot, jac, true, &mut tau)?;
+    if let (None, Some(tau)) = (known, tau) {
+        ws.torques.put(l, &m.state.q, &tau);
+    }
     let e = if with_rhs {
         pose_error(&m.pose, &t, opts.orientation)
     } else {
@@ -740,14 +854,14 @@ mod tests {
         ws.pose_rows = [[f64::NAN; 32]; 6];
         ws.lsq.reset(5).unwrap();
         assert_eq!(
-            add_rows(&robot, &m, true, &opts, 3, &mut ws),
+            add_rows(&robot, usize::MAX, &m, true, &opts, 3, &mut ws),
             Err(Error::DimensionMismatch {
                 expected: 5,
                 found: 3
             })
         );
         ws.lsq.reset(3).unwrap();
-        assert!(add_rows(&robot, &m, true, &opts, 3, &mut ws).is_ok());
+        assert!(add_rows(&robot, usize::MAX, &m, true, &opts, 3, &mut ws).is_ok());
     }
 
     /// A row giving only `x`, 2 mm off in x and far off in the unmeasured y and z, and a

@@ -413,7 +413,8 @@ pub(crate) fn structural_step_with<const N: usize, const P: usize>(
                 weight: 1.0,
                 point,
             };
-            add_rows(robot, &m, false, opts, p, ws)?;
+            // Generic configurations, not rows of the data: no torque cache slot.
+            add_rows(robot, usize::MAX, &m, false, opts, p, ws)?;
         }
     }
     let kept = greedy(ws, p, STRUCTURAL_TOL, partner)?;

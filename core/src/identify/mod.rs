@@ -26,6 +26,7 @@ mod prior;
 pub mod robust;
 mod sessions;
 mod solvers;
+pub(crate) mod torques;
 mod workspace;
 
 pub use constraints::{

@@ -213,7 +213,7 @@ fn fit_set<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
     out.initial = if ws.first_pass {
         ws.pass_stats.finish()
     } else {
-        data.stats(&out.robot, opts)?
+        data.stats_ws(&out.robot, opts, ws)?
     };
     let finish = match opts.algorithm {
         Algorithm::Ols => gauss_newton(&mut out.robot, data, opts, n, ws)?,
@@ -224,7 +224,7 @@ fn fit_set<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
     out.fitted = if core::mem::take(&mut ws.fitted_stats) {
         ws.pass_stats.finish()
     } else {
-        data.stats(&out.robot, opts)?
+        data.stats_ws(&out.robot, opts, ws)?
     };
     out.sigma2 = 0.0;
     out.std_errors = [0.0; MAX_MODEL_PARAMS];
@@ -504,7 +504,7 @@ fn gauss_newton<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
                         ws.fitted_stats = gram_current;
                         c2
                     }
-                    None => data.cost(&trial, opts)?,
+                    None => data.cost_ws(&trial, opts, ws)?,
                 }
             } else {
                 gram_current = false;
@@ -523,7 +523,7 @@ fn gauss_newton<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
                 // The Gauss–Newton direction is this far off: the damped step of the same
                 // length instead, if it lowers the cost.
                 apply(&mut trial, n, ws, None)?;
-                let c_damped = data.cost(&trial, opts)?;
+                let c_damped = data.cost_ws(&trial, opts, ws)?;
                 // Taken only when it gains a fair part of what the model predicts: at the
                 // rounding floor (noise-free data) a damped step "gains" rounding noise.
                 if c_damped <= c && c - c_damped >= 0.25 * model_gain(ws, n) {
@@ -819,7 +819,7 @@ fn levenberg_marquardt<const N: usize, const P: usize, D: RowSource<N> + ?Sized>
                 delta = delta.min(pnorm);
             }
             apply(&mut trial, n, ws, None)?;
-            let fnorm1 = sqrt(data.cost(&trial, opts)?);
+            let fnorm1 = sqrt(data.cost_ws(&trial, opts, ws)?);
             let actred = if 0.1 * fnorm1 < fnorm {
                 1.0 - (fnorm1 / fnorm) * (fnorm1 / fnorm)
             } else {
@@ -967,7 +967,7 @@ fn bounded<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
                     step[k] = target - x[k];
                 }
                 apply(&mut trial, n, ws, Some(b))?;
-                let c2 = data.cost(&trial, opts)?;
+                let c2 = data.cost_ws(&trial, opts, ws)?;
                 if c2 < c {
                     let dx = scaled_norm(ws, n, &ws.step);
                     let xn = scaled_norm(ws, n, &ws.x);

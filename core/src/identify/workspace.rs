@@ -76,6 +76,8 @@ pub struct Workspace<const P: usize> {
     pub(crate) last_cost: f64,
     /// Whether `pass_stats` are the residual statistics of the model the solver returned.
     pub(crate) fitted_stats: bool,
+    /// Gravity torques of the first rows, kept across passes and fits under an exact key.
+    pub(crate) torques: super::torques::TorqueCache,
 }
 
 impl<const P: usize> Workspace<P> {
@@ -114,6 +116,7 @@ impl<const P: usize> Workspace<P> {
             last_pass: false,
             last_cost: 0.0,
             fitted_stats: false,
+            torques: super::torques::TorqueCache::new(),
         }
     }
 
