@@ -15,6 +15,7 @@ extern crate std;
 pub mod any;
 pub mod aria;
 pub mod axis_chain;
+mod cache_key;
 pub mod diagnosis;
 pub mod effects;
 pub mod error;

@@ -20,6 +20,7 @@
 //! 420 KB more (the first attempt's 537 KB for 128 rows of 80 columns).
 
 use crate::any::MAX_JOINTS;
+use crate::cache_key::KeyWriter;
 use crate::kinematics::JacobianColumn;
 use crate::model::{Robot, key_words};
 
@@ -69,23 +70,12 @@ impl<const P: usize> RowCache<P> {
     /// Binds the cache to `robot` and the union `u`: the entries are kept when both are
     /// the ones they were filled under, all forgotten otherwise.
     pub(crate) fn bind<const N: usize>(&mut self, robot: &Robot<N>, u: &[usize]) {
-        let mut pos = 0usize;
-        let mut same = true;
-        let key = &mut self.key;
-        robot.for_each_key_word(&mut |w| {
-            match key.get_mut(pos) {
-                Some(k) if *k == w => {}
-                Some(k) => {
-                    *k = w;
-                    same = false;
-                }
-                None => same = false,
-            }
-            pos += 1;
-        });
+        let mut key = KeyWriter::new(&mut self.key);
+        robot.for_each_key_word(&mut |w| key.put(w));
+        let (key_len, same) = key.finish(self.key_len);
         let same_u = self.cols.get(..self.n_cols) == Some(u);
-        if !same || !same_u || pos != self.key_len || pos > KEY_CAPACITY || u.len() > P {
-            self.key_len = pos;
+        if !same || !same_u || u.len() > P {
+            self.key_len = key_len;
             self.n_cols = u.len().min(P);
             for (c, &i) in self.cols.iter_mut().zip(u) {
                 *c = i;

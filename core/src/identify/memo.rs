@@ -12,6 +12,7 @@
 
 use super::identifiability::{Partner, StructuralSel};
 use super::{IdentifyOptions, MAX_MODEL_PARAMS};
+use crate::cache_key::KeyWriter;
 use crate::error::{ParamIndex, Result};
 use crate::model::{Robot, key_words};
 use crate::params::ParamSet;
@@ -74,48 +75,33 @@ impl<const P: usize> StructuralMemo<P> {
         sel: &StructuralSel<'_>,
         opts: &IdentifyOptions<'_>,
     ) -> bool {
-        let old_len = self.key_len;
-        let mut pos = 0usize;
-        let mut same = self.valid;
-        let mut overflow = false;
-        let key = &mut self.key;
-        let mut put = |w: u64| {
-            match key.get_mut(pos) {
-                Some(slot) => {
-                    if *slot != w || pos >= old_len {
-                        same = false;
-                        *slot = w;
-                    }
-                }
-                None => overflow = true,
-            }
-            pos += 1;
-        };
-        put(N as u64);
-        robot.for_each_key_word(&mut put);
-        put(u64::from(sel.mask.0));
-        put(u64::from(sel.any_approach));
-        put(u64::from(sel.any_temp));
-        put(u64::from(sel.base_first));
+        let mut key = KeyWriter::new(&mut self.key);
+        key.put(N as u64);
+        robot.for_each_key_word(&mut |w| key.put(w));
+        key.put(u64::from(sel.mask.0));
+        key.put(u64::from(sel.any_approach));
+        key.put(u64::from(sel.any_temp));
+        key.put(u64::from(sel.base_first));
         // The structural rows carry the component weights (their right-hand side is zero,
         // so the orientation error and the data's poses do not enter).
-        put(opts.weight_pos.to_bits());
-        put(opts.weight_rot.to_bits());
-        put(sel.points.len() as u64);
+        key.put(opts.weight_pos.to_bits());
+        key.put(opts.weight_rot.to_bits());
+        key.put(sel.points.len() as u64);
         for p in sel.points {
             match p {
-                None => put(0),
+                None => key.put(0),
                 Some(v) => {
-                    put(1);
-                    v.iter().for_each(|x| put(x.to_bits()));
+                    key.put(1);
+                    v.iter().for_each(|x| key.put(x.to_bits()));
                 }
             }
         }
-        opts.requested.words().iter().for_each(|&w| put(w));
-        let hit = same && !overflow && pos == old_len;
+        opts.requested.words().iter().for_each(|&w| key.put(w));
+        let (key_len, same) = key.finish(self.key_len);
+        let hit = self.valid && same;
         if !hit {
             self.valid = false;
-            self.key_len = if overflow { 0 } else { pos };
+            self.key_len = key_len;
             self.n_kept = 0;
             self.n_dropped = 0;
         }

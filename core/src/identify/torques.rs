@@ -14,6 +14,7 @@
 //! torques, the key of a 12-joint robot).
 
 use crate::any::MAX_JOINTS;
+use crate::cache_key::KeyWriter;
 use crate::model::{Robot, gravity_key_words};
 
 /// Rows (the first of the data, by index) whose torques are kept at most.
@@ -54,22 +55,11 @@ impl TorqueCache {
     /// were computed under, all forgotten otherwise (and the key replaced). Call before
     /// [`TorqueCache::get`]/[`TorqueCache::put`] with a robot whose key may differ.
     pub(crate) fn bind<const N: usize>(&mut self, robot: &Robot<N>) {
-        let mut pos = 0usize;
-        let mut same = true;
-        let key = &mut self.key;
-        robot.for_each_gravity_key_word(&mut |w| {
-            match key.get_mut(pos) {
-                Some(k) if *k == w => {}
-                Some(k) => {
-                    *k = w;
-                    same = false;
-                }
-                None => same = false,
-            }
-            pos += 1;
-        });
-        if !same || pos != self.key_len || pos > KEY_CAPACITY {
-            self.key_len = pos;
+        let mut key = KeyWriter::new(&mut self.key);
+        robot.for_each_gravity_key_word(&mut |w| key.put(w));
+        let (key_len, same) = key.finish(self.key_len);
+        if !same {
+            self.key_len = key_len;
             self.filled = [false; TORQUE_ROWS];
             self.generation = self.generation.wrapping_add(1);
         }
