@@ -2872,7 +2872,7 @@ kincal_status kincal_robot_clear_effects(struct kincal_robot *robot,
  `n_poses` measurements of an `n_joints` robot when `n_requested` parameters are
  requested (the count of non-zero `requested` entries; the size is that of the smallest
  capacity, 32 or `KINCAL_MAX_PARAMS`, that holds them: about 92 KB or 1.45 MB,
- plus about 0.25 KB per pose). Returns 0 for an invalid joint count, more than
+ plus about 0.26 KB per pose). Returns 0 for an invalid joint count, more than
  `KINCAL_MAX_PARAMS` parameters, or an overflowing size.
  */
 size_t kincal_identify_workspace_size(size_t n_joints,

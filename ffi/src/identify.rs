@@ -4,7 +4,7 @@
 //!
 //! Memory: the core needs a p×p workspace (p = requested parameters, rounded up to one of the
 //! capacities 32 or `KINCAL_MAX_PARAMS`) and the measurements in its own form (about
-//! 0.25 KB per pose). Both live in one caller buffer of `kincal_identify_workspace_size`
+//! 0.26 KB per pose). Both live in one caller buffer of `kincal_identify_workspace_size`
 //! bytes: `malloc` on a host, a static array on a controller. Nothing is allocated here.
 
 use core::ffi::c_void;
@@ -279,7 +279,7 @@ fn workspace_size(n_joints: usize, n_poses: usize, n_requested: usize) -> Option
 /// `n_poses` measurements of an `n_joints` robot when `n_requested` parameters are
 /// requested (the count of non-zero `requested` entries; the size is that of the smallest
 /// capacity, 32 or `KINCAL_MAX_PARAMS`, that holds them: about 92 KB or 1.45 MB,
-/// plus about 0.25 KB per pose). Returns 0 for an invalid joint count, more than
+/// plus about 0.26 KB per pose). Returns 0 for an invalid joint count, more than
 /// `KINCAL_MAX_PARAMS` parameters, or an overflowing size.
 #[unsafe(no_mangle)]
 pub extern "C" fn kincal_identify_workspace_size(

@@ -86,12 +86,9 @@ pub(crate) fn pose_rows<const N: usize, const P: usize>(
         // Rebound since the pass began (not within a diagnosis's passes): bind again.
         torques.bind(lin);
     }
-    let known = torques.get(l, &m.state.q);
-    let mut tau = known;
-    let t = m.model_jacobian_torques(lin, jac, true, &mut tau)?;
-    if let (None, Some(tau)) = (known, tau) {
-        torques.put(l, &m.state.q, &tau);
-    }
+    let t = torques.through(l, &m.state.q, |tau| {
+        m.model_jacobian_torques(lin, jac, true, tau)
+    })?;
     let e = pose_error(&m.pose, &t, OrientationError::Exact);
     if cached {
         ws.rows.put(l, &e, ws.jac.get(..n_jac).unwrap_or(&[]));

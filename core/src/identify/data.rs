@@ -4,7 +4,7 @@ use super::{IdentifyOptions, Workspace};
 use crate::error::{Error, Quantity, Result, check_finite};
 use crate::kinematics::JacobianColumn;
 use crate::model::{JointState, Robot};
-use crate::pose::{OrientationError, PoseError, Transform, pose_error};
+use crate::pose::{OrientationError, Transform, pose_error};
 
 /// Which of the six pose components `[x, y, z, φx, φy, φz]` a measurement carries (bit k =
 /// component k). Position-only data (mocap points, laser-tracker reflectors) use
@@ -209,16 +209,6 @@ pub(crate) fn validate<const N: usize>(data: &[Measurement<N>]) -> Result<()> {
     Ok(())
 }
 
-/// Measured minus modelled pose of one measurement.
-pub(crate) fn residual<const N: usize>(
-    robot: &Robot<N>,
-    m: &Measurement<N>,
-    form: OrientationError,
-) -> Result<PoseError> {
-    let t = m.model_pose(robot)?;
-    Ok(pose_error(&m.pose, &t, form))
-}
-
 /// The rows that take part in a fit: positive weight, not excluded by `opts`.
 pub(crate) fn active_rows<'d, const N: usize>(
     data: &'d [Measurement<N>],
@@ -253,9 +243,21 @@ pub(crate) fn cost<const N: usize>(
     data: &[Measurement<N>],
     opts: &IdentifyOptions<'_>,
 ) -> Result<f64> {
+    cost_by(data, opts, |_, m| m.model_pose(robot))
+}
+
+/// [`cost`] with row `l`'s model pose from `pose(l, m)` (e.g. through the torque cache).
+fn cost_by<const N: usize>(
+    data: &[Measurement<N>],
+    opts: &IdentifyOptions<'_>,
+    mut pose: impl FnMut(usize, &Measurement<N>) -> Result<Transform>,
+) -> Result<f64> {
     let mut c = 0.0;
-    for m in active_rows(data, opts) {
-        let e = residual(robot, m, opts.orientation)?;
+    for (l, m) in data.iter().enumerate() {
+        if !is_active(l, m, opts) {
+            continue;
+        }
+        let e = pose_error(&m.pose, &pose(l, m)?, opts.orientation);
         for (k, v) in e.iter().enumerate() {
             if m.mask.has(k) {
                 c += m.weight * weight(opts, k) * v * v;
@@ -533,22 +535,9 @@ impl<const N: usize> RowSource<N> for [Measurement<N>] {
         opts: &IdentifyOptions<'_>,
         ws: &mut Workspace<P>,
     ) -> Result<f64> {
-        // `cost`'s terms in its order, each pose by the same chain.
         ws.torques.bind(robot);
-        let mut c = 0.0;
-        for (l, m) in self.iter().enumerate() {
-            if !is_active(l, m, opts) {
-                continue;
-            }
-            let t = model_pose_cached(robot, l, m, &mut ws.torques)?;
-            let e = pose_error(&m.pose, &t, opts.orientation);
-            for (k, v) in e.iter().enumerate() {
-                if m.mask.has(k) {
-                    c += m.weight * weight(opts, k) * v * v;
-                }
-            }
-        }
-        Ok(c)
+        let torques = &mut ws.torques;
+        cost_by(self, opts, |l, m| model_pose_cached(robot, l, m, torques))
     }
     fn stats_ws<const P: usize>(
         &self,
@@ -556,15 +545,9 @@ impl<const N: usize> RowSource<N> for [Measurement<N>] {
         opts: &IdentifyOptions<'_>,
         ws: &mut Workspace<P>,
     ) -> Result<ResidualStats> {
-        // `residual_stats`'s poses in its order.
         ws.torques.bind(robot);
-        let mut acc = StatsAcc::default();
-        for (l, m) in self.iter().enumerate() {
-            if is_active(l, m, opts) {
-                acc.add(m, &model_pose_cached(robot, l, m, &mut ws.torques)?, opts);
-            }
-        }
-        Ok(acc.finish())
+        let torques = &mut ws.torques;
+        stats_by(self, opts, |l, m| model_pose_cached(robot, l, m, torques))
     }
     fn instrument_rows(&self) -> Option<&[Measurement<N>]> {
         Some(self)
@@ -579,13 +562,7 @@ fn model_pose_cached<const N: usize>(
     m: &Measurement<N>,
     torques: &mut super::torques::TorqueCache,
 ) -> Result<Transform> {
-    let known = torques.get(l, &m.state.q);
-    let mut tau = known;
-    let t = m.model_pose_torques(robot, &mut tau)?;
-    if let (None, Some(tau)) = (known, tau) {
-        torques.put(l, &m.state.q, &tau);
-    }
-    Ok(t)
+    torques.through(l, &m.state.q, |tau| m.model_pose_torques(robot, tau))
 }
 
 /// Folds the rows of one pose (weighted by its weight) into `ws.lsq` or `ws.gram`; with
@@ -610,12 +587,9 @@ pub(crate) fn add_rows<const N: usize, const P: usize>(
         needed: n_jac,
         capacity: super::MAX_MODEL_PARAMS,
     })?;
-    let known = ws.torques.get(l, &m.state.q);
-    let mut tau = known;
-    let t = m.model_jacobian_torques(robot, jac, true, &mut tau)?;
-    if let (None, Some(tau)) = (known, tau) {
-        ws.torques.put(l, &m.state.q, &tau);
-    }
+    let t = ws.torques.through(l, &m.state.q, |tau| {
+        m.model_jacobian_torques(robot, jac, true, tau)
+    })?;
     let e = if with_rhs {
         pose_error(&m.pose, &t, opts.orientation)
     } else {
@@ -743,9 +717,20 @@ pub fn residual_stats<const N: usize>(
     data: &[Measurement<N>],
     opts: &IdentifyOptions<'_>,
 ) -> Result<ResidualStats> {
+    stats_by(data, opts, |_, m| m.model_pose(robot))
+}
+
+/// [`residual_stats`] with row `l`'s model pose from `pose(l, m)` (as [`cost_by`]).
+fn stats_by<const N: usize>(
+    data: &[Measurement<N>],
+    opts: &IdentifyOptions<'_>,
+    mut pose: impl FnMut(usize, &Measurement<N>) -> Result<Transform>,
+) -> Result<ResidualStats> {
     let mut acc = StatsAcc::default();
-    for m in active_rows(data, opts) {
-        acc.add(m, &m.model_pose(robot)?, opts);
+    for (l, m) in data.iter().enumerate() {
+        if is_active(l, m, opts) {
+            acc.add(m, &pose(l, m)?, opts);
+        }
     }
     Ok(acc.finish())
 }

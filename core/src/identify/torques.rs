@@ -15,6 +15,7 @@
 
 use crate::any::MAX_JOINTS;
 use crate::cache_key::KeyWriter;
+use crate::error::Result;
 use crate::model::{Robot, gravity_key_words};
 
 /// Rows (the first of the data, by index) whose torques are kept at most.
@@ -95,6 +96,24 @@ impl TorqueCache {
         Some(out)
     }
 
+    /// Runs `compute` with row `l`'s torques at readings `q` when kept (`Some`), else with
+    /// `None` for it to fill in as it computes them, and keeps what it computed: the one
+    /// way the fits and the diagnosis use the cache (bound to their robot's key first).
+    pub(crate) fn through<const N: usize, T>(
+        &mut self,
+        l: usize,
+        q: &[f64; N],
+        compute: impl FnOnce(&mut Option<[f64; N]>) -> Result<T>,
+    ) -> Result<T> {
+        let known = self.get(l, q);
+        let mut tau = known;
+        let out = compute(&mut tau)?;
+        if let (None, Some(tau)) = (known, tau) {
+            self.put(l, q, &tau);
+        }
+        Ok(out)
+    }
+
     /// Keeps `tau`, computed at readings `q` (under the bound key), for row `l`.
     pub(crate) fn put<const N: usize>(&mut self, l: usize, q: &[f64; N], tau: &[f64; N]) {
         let Some(range) = self.slot::<N>(l) else {
@@ -158,5 +177,34 @@ mod tests {
         // Rows beyond the cache are never kept.
         c.put(TORQUE_ROWS, &q, &tau);
         assert_eq!(c.get(TORQUE_ROWS, &q), None);
+    }
+
+    /// `through` hands a kept row's torques to the computation and keeps what a computation
+    /// of a new row left, so the second pass over a row computes nothing.
+    #[test]
+    fn through_keeps_what_was_computed_and_serves_it_next_time() {
+        let robot = crate::aria::nominal();
+        let q = [0.3, -0.7, 1.1, 0.2, -0.5, 0.9];
+        let tau = robot.gravity_torques(&q);
+        let mut c = TorqueCache::new();
+        c.bind(&robot);
+        let first = c.through(2, &q, |t| {
+            assert!(t.is_none());
+            *t = Some(tau);
+            Ok(7)
+        });
+        assert_eq!(first, Ok(7));
+        let second = c.through(2, &q, |t| Ok(t.map(bits)));
+        assert_eq!(second, Ok(Some(bits(tau))));
+        // A failed computation keeps nothing.
+        let failed: Result<()> = c.through(5, &q, |t| {
+            *t = Some(tau);
+            Err(crate::Error::NonFinite {
+                what: crate::Quantity::JointReading,
+                index: 0,
+            })
+        });
+        assert!(failed.is_err());
+        assert_eq!(c.get(5, &q), None);
     }
 }

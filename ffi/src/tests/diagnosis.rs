@@ -458,3 +458,44 @@ fn the_workspace_is_checked() {
     };
     assert_eq!(s, kincal_status::BadLength);
 }
+
+/// The workspace sizes ffi/README.md and the size functions' docs state ("about 92 KB for up
+/// to 32 parameters, 1.45 MB for more, plus 0.26 KB per pose"; the diagnosis "about 2.54 MB
+/// plus 2.1 KB per pose"), within the rounding of "about": a workspace that grows fails
+/// here until the docs say so (firmware reserves these bytes statically).
+#[test]
+fn the_documented_workspace_sizes_hold() {
+    let about = |found: usize, stated: f64, what: &str| {
+        let ratio = found as f64 / stated;
+        assert!(
+            (0.97..=1.03).contains(&ratio),
+            "{what}: {found} bytes, docs say about {stated}"
+        );
+    };
+    let per_pose = |size: &dyn Fn(usize) -> usize| (size(100) - size(0)) as f64 / 100.0;
+    about(
+        crate::identify::kincal_identify_workspace_size(6, 0, 10),
+        92e3,
+        "identify, 32",
+    );
+    about(
+        crate::identify::kincal_identify_workspace_size(6, 0, 60),
+        1.45e6,
+        "identify, max",
+    );
+    about(
+        per_pose(&|n| crate::identify::kincal_identify_workspace_size(6, n, 10)) as usize,
+        260.0,
+        "identify per pose",
+    );
+    about(
+        crate::diagnosis::kincal_diagnose_workspace_size(6, 0),
+        2.54e6,
+        "diagnose",
+    );
+    about(
+        per_pose(&|n| crate::diagnosis::kincal_diagnose_workspace_size(6, n)) as usize,
+        2.1e3,
+        "diagnose per pose",
+    );
+}
