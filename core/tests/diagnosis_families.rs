@@ -413,7 +413,8 @@ fn silent_choice(d: &Diagnosis<6>, poses: &[PoseDiagnosis], groups: &[u32]) -> b
     })
 }
 
-/// RMS position error of `model` against the true poses at `st`.
+/// RMS position error of `model` at the reported readings against the true poses at the
+/// true states `st`.
 fn rms_against(
     model: &Robot<6>,
     truth: &Robot<6>,
@@ -424,7 +425,8 @@ fn rms_against(
         .iter()
         .map(|(q, _)| {
             let t = outside::true_pose(truth, out, q);
-            (t.translation.vector - model.fk(q).unwrap().translation.vector).norm_squared()
+            let m = model.fk(&outside::reported(out, q)).unwrap();
+            (t.translation.vector - m.translation.vector).norm_squared()
         })
         .sum();
     (s / st.len() as f64).sqrt()
