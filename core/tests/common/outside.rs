@@ -157,6 +157,17 @@ pub trait PoseEffect {
     /// The pose the instrument reports (before noise) at `state` on `truth` with this
     /// effect; `t` is the row's place in the session in [0, 1] (`None`: mid-session).
     fn pose(&self, truth: &Robot<6>, state: &JointState<6>, t: Option<f64>) -> Transform;
+    /// The joint state the controller reports when the arm's true state is `state` (a
+    /// readings-side effect, such as encoder quantisation, changes it; the pose is always
+    /// that of the true state). Default: `state` itself.
+    fn reported(&self, state: &JointState<6>) -> JointState<6> {
+        *state
+    }
+}
+
+/// The joint state reported at the true state `st` with every effect in `outside`.
+pub fn reported<E: PoseEffect>(outside: &[E], st: &JointState<6>) -> JointState<6> {
+    outside.iter().fold(*st, |s, e| e.reported(&s))
 }
 
 impl PoseEffect for OutsideEffect {
@@ -252,8 +263,8 @@ pub fn states(truth: &Robot<6>, design: Design, rng: &mut SplitMix64) -> Vec<(Jo
     }
 }
 
-/// Measured poses at `states` on `truth` with the out-of-library effects `outside`,
-/// instrument noise and mask.
+/// Measured poses at `states` (the arm's true states) on `truth` with the out-of-library
+/// effects `outside`, instrument noise and mask, with the readings the effects report.
 pub fn measure<E: PoseEffect>(
     truth: &Robot<6>,
     outside: &[E],
@@ -273,7 +284,7 @@ pub fn measure<E: PoseEffect>(
             pose
         };
         data.push(Measurement {
-            state: *st,
+            state: reported(outside, st),
             pose,
             mask: inst.mask,
             weight: 1.0,
