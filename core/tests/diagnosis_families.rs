@@ -40,10 +40,11 @@
 //! contains `text` (same seeds; the targets of the families left out read NaN and fail);
 //! `FAM_CASES=n` runs `n` cases per family in `families_long` (the first 60 as by default).
 //!
-//! `families_short` (default run: 10 cases per family, about 10–30 s in a debug build)
-//! prints the table and asserts the targets that hold today; `families_long` (`#[ignore]`,
-//! run in release: `cargo test -p kincal --release --test diagnosis_families --
-//! --ignored --nocapture`, about a minute) prints the table over 60 cases per family.
+//! `families_short` (default run: 10 cases per family, about 2 s in a test build, where
+//! the core is optimised) prints the table and asserts the targets that hold today;
+//! `families_long` (`#[ignore]`, run in release: `cargo test -p kincal --release --test
+//! diagnosis_families -- --ignored --nocapture`, about a minute) prints the table over 60
+//! cases per family.
 
 #[path = "common/outside.rs"]
 mod outside;
