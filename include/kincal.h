@@ -963,6 +963,12 @@ enum kincal_diagnosis_warning_code
      `too_many_suspects`: `count` rows failed the outlier test; none excluded.
      */
     KINCAL_DIAGNOSIS_WARNING_CODE_TOO_MANY_SUSPECTS = 4,
+    /*
+     `repeats_drift`: the repeats' differences follow the order of the rows (serial `z`,
+     `part`; `ratio` their σ over the stated one, NaN when none was stated): the stated
+     σ stays the floor.
+     */
+    KINCAL_DIAGNOSIS_WARNING_CODE_REPEATS_DRIFT = 5,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L

@@ -364,6 +364,78 @@ fn misstated_sigma_does_not_hide_a_clear_effect_and_is_flagged() {
     );
 }
 
+/// A set-up that drifts during the session (a random walk of 0.06 mm per row and axis,
+/// the repeats measured after all first poses) on an arm with clear joint compliance:
+/// the repeats span the drift, so they scatter several times the stated 0.1 mm. Before
+/// the drift test they overruled the stated σ, the raised floor swallowed the drift's gap
+/// and the verdict was `explained` joint_compliance with the held-out position error
+/// three times the stated floor. Now the drift is named, the stated σ stays the floor and
+/// the verdict is not `explained`; without the drift nothing changes.
+#[test]
+fn repeats_that_drift_keep_the_stated_floor_and_are_named() {
+    let mut truth = geometric_truth(61);
+    add_effect(
+        &mut truth,
+        Effect::JointCompliance,
+        0.5,
+        &mut SplitMix64::new(62),
+    )
+    .unwrap();
+    let (clean, groups) = noisy_session(&truth, 63, |_| {});
+    let mut drifted = clean.clone();
+    let mut rng = SplitMix64::new(64);
+    let mut walk = [0.0; 3];
+    for m in drifted.iter_mut() {
+        for (k, w) in walk.iter_mut().enumerate() {
+            *w += 6e-5 * rng.normal();
+            m.pose.translation.vector[k] += *w;
+        }
+    }
+    let cfg = Config {
+        sigma_pos_m: Some(1e-4),
+        sigma_rot_rad: Some(0.02f64.to_radians()),
+        ..Config::default()
+    };
+    let drift_warning = |d: &Diagnosis<6>| {
+        d.warnings().find_map(|w| match w {
+            Warning::RepeatsDrift {
+                part: Part::Position,
+                ratio,
+                z,
+            } => Some((*ratio, *z)),
+            _ => None,
+        })
+    };
+    let (d, _) = run_diag(&drifted, &groups, &cfg);
+    let s = summary(&d);
+    eprintln!("drifting set-up: {s}");
+    let (ratio, z) = drift_warning(&d).unwrap_or_else(|| panic!("drift not named: {s}"));
+    assert!(z > 3.0 && ratio > 2.0, "ratio {ratio} z {z}: {s}");
+    assert_eq!(d.noise.sigma_pos_m, 1e-4, "{s}");
+    assert_eq!(d.noise.overruled_pos, None, "{s}");
+    assert!(
+        !d.warnings().any(|w| matches!(
+            w,
+            Warning::NoiseVsRepeats {
+                part: Part::Position,
+                ..
+            }
+        )),
+        "{s}"
+    );
+    assert_ne!(d.verdict.status, Status::Explained, "{s}");
+    assert_ne!(d.verdict.status, Status::NoGap, "{s}");
+    let (d, _) = run_diag(&clean, &groups, &cfg);
+    let s = summary(&d);
+    assert!(drift_warning(&d).is_none(), "{s}");
+    assert_eq!(d.verdict.status, Status::Explained, "{s}");
+    assert_eq!(
+        d.verdict.effects,
+        EffectSet::of(Effect::JointCompliance),
+        "{s}"
+    );
+}
+
 /// Issue #12 item 5: gross outliers (5 mm on one pose, a wrong joint row on another, a
 /// 3 mm one on a third) in a clear joint-compliance case: still `explained`
 /// joint_compliance, and the rows are named.

@@ -132,6 +132,10 @@ pub enum kincal_diagnosis_warning_code {
     GapDespiteGapTest = 3,
     /// `too_many_suspects`: `count` rows failed the outlier test; none excluded.
     TooManySuspects = 4,
+    /// `repeats_drift`: the repeats' differences follow the order of the rows (serial `z`,
+    /// `part`; `ratio` their σ over the stated one, NaN when none was stated): the stated
+    /// σ stays the floor.
+    RepeatsDrift = 5,
 }
 
 /// Options of `kincal_diagnose`; fill with `kincal_diagnose_options_default`, then edit.
@@ -670,6 +674,12 @@ fn warning(w: &Warning) -> kincal_diagnosis_warning {
             out.code = kincal_diagnosis_warning_code::GapDespiteGapTest as u32;
             out.z_gap = z_gap;
             out.z_candidate = z_candidate;
+        }
+        Warning::RepeatsDrift { part: p, ratio, z } => {
+            out.code = kincal_diagnosis_warning_code::RepeatsDrift as u32;
+            out.part = part(p);
+            out.ratio = ratio;
+            out.z = z;
         }
         Warning::TooManySuspects { count, .. } => {
             out.code = kincal_diagnosis_warning_code::TooManySuspects as u32;

@@ -1116,6 +1116,22 @@ pub fn warning_text(w: &Warning) -> String {
         Warning::GapDespiteGapTest { z_gap, z_candidate } => format!(
             "the gap test finds no gap at the stated noise (z = {z_gap:.1}) but a candidate improves significantly (z = {z_candidate:.1}): there is a gap; the stated noise is probably too large"
         ),
+        Warning::RepeatsDrift { part, ratio, z } => format!(
+            "the differences between repeats of the same pose follow the order of the rows ({} serial z = {z:.1}{}): something drifted during the session (the instrument or its mount, the base, or a temperature the file does not record), so the repeats measure the drift as well as the noise; {}",
+            noise(part),
+            if ratio.is_finite() {
+                format!(", repeats {} than stated", factor(ratio))
+            } else {
+                String::new()
+            },
+            if ratio.is_finite() {
+                "the stated sigma stays the noise floor"
+            } else if part == Part::Rotation {
+                "the noise floor taken from them is too high: state --sigma-rot-deg"
+            } else {
+                "the noise floor taken from them is too high: state --sigma-pos-mm"
+            }
+        ),
         Warning::TooManySuspects { count, cap } => format!(
             "{count} rows fail the outlier test, {} more than the {cap} the screen may exclude (at most {} or a tenth of the rows): too many to be gross outliers (heavy-tailed residuals, or an effect outside the library); none excluded",
             count.saturating_sub(cap),

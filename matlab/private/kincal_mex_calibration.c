@@ -470,8 +470,9 @@ static const char *part_name(uint32_t p)
 static const char *warning_name(uint32_t w)
 {
     static const char *const names[] = {"?", "noise_vs_repeats", "noise_vs_residuals",
-                                        "gap_despite_gap_test", "too_many_suspects"};
-    return w < 5 ? names[w] : "?";
+                                        "gap_despite_gap_test", "too_many_suspects",
+                                        "repeats_drift"};
+    return w < 6 ? names[w] : "?";
 }
 
 /* NaN for a statistic the report leaves out (REPORT.json: null). */

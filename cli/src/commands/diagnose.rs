@@ -52,7 +52,10 @@ model is extended by that effect?
    Gross outliers are screened first (suspect rows, named by CSV line, are left out: at
    most 64 or a tenth of the rows; more rows over the threshold are heavy tails, none is
    left out, and REPORT.json's outlier_screen and a warning say how many); the
-   stated σ is checked against the repeats and the residuals. With fewer than 5 pose
+   stated σ is checked against the repeats and the residuals. Repeats noisier than the
+   stated σ raise the floor to theirs, unless their differences follow the order of the
+   rows (the set-up drifted during the session: the repeats measure the drift too; a
+   repeats_drift warning, and the stated σ stays the floor). With fewer than 5 pose
    groups per fold, in-sample nested tests replace cross-validation (method in the report).
 6. Sessions: with a `session` column naming several set-ups, each session's rows are
    registered into the robot's base frame (rigid fit, alternating with the geometric

@@ -130,6 +130,15 @@
 //! - **Stated σ checked**: against the repeats (either way) and against the geometric
 //!   calibration's in-sample χ² per degree of freedom (significantly below 1: the data are
 //!   quieter than stated) — [`Warning::NoiseVsRepeats`], [`Warning::NoiseVsResiduals`].
+//! - **Repeats checked for drift**: repeats overrule a smaller stated σ (the floor cannot
+//!   lie below the repeatability) only when their differences do not follow the order of
+//!   the rows. When the set-up drifts during a session and the repeats come after the first
+//!   measurements, the repeats measure the drift too; letting them overrule raised the
+//!   floor above the gap the drift leaves, and a candidate that closed a little of it
+//!   (thermal, whose recorded temperature rises with the session) was `explained` with
+//!   its held-out position error unchanged (`common/outside3.rs`'s random-walk drift:
+//!   5 of 47 detectable cases). The serial test ([`Warning::RepeatsDrift`], z above
+//!   [`NOISE_CHECK_Z`] over at least [`MIN_DRIFT_PAIRS`] pairs) keeps the stated σ then.
 //!
 //! # Memory
 //! No heap: fixed-capacity results ([`MAX_CANDIDATES`] candidates), caller slices for the
@@ -298,6 +307,11 @@ pub struct NoiseFloor {
     pub overruled_pos: Option<f64>,
     /// The same for σ_rot \[rad\].
     pub overruled_rot: Option<f64>,
+    /// Serial z of the position differences between repeats in measurement order
+    /// ([`Warning::RepeatsDrift`]); `None` with fewer than [`MIN_DRIFT_PAIRS`] repeat pairs.
+    pub drift_pos: Option<f64>,
+    /// The same for the rotation differences.
+    pub drift_rot: Option<f64>,
 }
 
 impl NoiseFloor {
@@ -628,6 +642,20 @@ pub enum Warning {
         /// The best candidate improvement z.
         z_candidate: f64,
     },
+    /// The differences between repeats of the same pose follow the order of the rows
+    /// (serial z above [`NOISE_CHECK_Z`]: each repeat pair's difference resembles the next
+    /// pair's): something drifted during the session, so the repeats measure that drift as
+    /// well as the noise. A stated σ is then kept as the floor (the repeats do not overrule
+    /// it, and [`Warning::NoiseVsRepeats`] is not given for this part); without one the
+    /// floor from these repeats is too high.
+    RepeatsDrift {
+        /// Position or rotation.
+        part: Part,
+        /// σ of the repeats over the stated σ (`NaN` when none was stated).
+        ratio: f64,
+        /// The serial z.
+        z: f64,
+    },
     /// More rows failed the outlier test (`count`) than gross outliers can be (`cap`:
     /// [`MAX_SUSPECTS`] or a tenth of the rows, whichever is less): none excluded.
     TooManySuspects {
@@ -640,7 +668,7 @@ pub enum Warning {
 
 impl Warning {
     /// A short code (`noise_vs_repeats`, `noise_vs_residuals`, `gap_despite_gap_test`,
-    /// `too_many_suspects`).
+    /// `too_many_suspects`, `repeats_drift`).
     #[must_use]
     pub const fn code(&self) -> &'static str {
         match self {
@@ -648,6 +676,7 @@ impl Warning {
             Warning::NoiseVsResiduals { .. } => "noise_vs_residuals",
             Warning::GapDespiteGapTest { .. } => "gap_despite_gap_test",
             Warning::TooManySuspects { .. } => "too_many_suspects",
+            Warning::RepeatsDrift { .. } => "repeats_drift",
         }
     }
 }
@@ -950,6 +979,8 @@ impl<const N: usize> Diagnosis<N> {
                 repeat_rot: None,
                 overruled_pos: None,
                 overruled_rot: None,
+                drift_pos: None,
+                drift_rot: None,
             },
             geometric: *robot,
             model: *robot,
@@ -2254,12 +2285,16 @@ fn rms_axis<const N: usize>(data: &[Measurement<N>], poses: &[PoseDiagnosis]) ->
     out
 }
 
-/// |z| beyond which a stated σ disagrees with the data.
+/// |z| beyond which a stated σ disagrees with the data (and beyond which the repeats
+/// drift: [`Warning::RepeatsDrift`]).
 pub(crate) const NOISE_CHECK_Z: f64 = 3.0;
+/// Repeat pairs below which the drift of the repeats is not tested.
+pub const MIN_DRIFT_PAIRS: usize = 8;
 /// … and only when it is off by more than this factor either way.
 pub(crate) const NOISE_CHECK_RATIO: f64 = 1.25;
 
-/// Checks a stated σ against the repeats (either way) and against the geometric
+/// Warns when the repeats drift with the order of the rows; checks a stated σ against
+/// repeats that do not (either way) and against the geometric
 /// calibration's in-sample residuals (`insample`, whitened at the stated σ; `p` fitted
 /// parameters): residuals significantly below the stated noise mean the data are quieter
 /// than stated (a gap can only add to them).
@@ -2284,20 +2319,36 @@ fn check_stated_noise<const N: usize>(out: &mut Diagnosis<N>, insample: &ModelAc
         ),
     ];
     let overruled = [noise.overruled_pos, noise.overruled_rot];
-    for ((part, stated, repeats, sigma, chi2, rows), overruled) in parts.into_iter().zip(overruled)
+    let drift = [noise.drift_pos, noise.drift_rot];
+    for (((part, stated, repeats, sigma, chi2, rows), overruled), drift) in
+        parts.into_iter().zip(overruled).zip(drift)
     {
-        if !stated || rows == 0 {
+        if rows == 0 {
             continue;
         }
         // Judged against what the user stated, also when the floor overruled it.
         let sigma = overruled.unwrap_or(sigma);
         let off = |ratio: f64| !(1.0 / NOISE_CHECK_RATIO..=NOISE_CHECK_RATIO).contains(&ratio);
-        if let Some((s, dof)) = repeats {
-            let ratio = s / sigma;
-            let z = ln(ratio * ratio) / sqrt(2.0 / dof);
-            if z.abs() > NOISE_CHECK_Z && off(ratio) {
-                out.warn(Warning::NoiseVsRepeats { part, ratio, z });
+        let drift = drift.filter(|&z| z > NOISE_CHECK_Z);
+        match (drift, repeats) {
+            (Some(z), _) => {
+                let ratio = match repeats {
+                    Some((s, _)) if stated => s / sigma,
+                    _ => f64::NAN,
+                };
+                out.warn(Warning::RepeatsDrift { part, ratio, z });
             }
+            (None, Some((s, dof))) if stated => {
+                let ratio = s / sigma;
+                let z = ln(ratio * ratio) / sqrt(2.0 / dof);
+                if z.abs() > NOISE_CHECK_Z && off(ratio) {
+                    out.warn(Warning::NoiseVsRepeats { part, ratio, z });
+                }
+            }
+            _ => {}
+        }
+        if !stated {
+            continue;
         }
         let dof = rows as f64 * (1.0 - p as f64 / insample.rows.max(1) as f64);
         if dof > 0.0 {
