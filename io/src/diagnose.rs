@@ -1264,3 +1264,32 @@ fn status_reason_text<const N: usize>(d: &Diagnosis<N>) -> String {
         ),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The drift warning says what the floor became: the stated σ when there is one, else
+    /// which flag to state.
+    #[test]
+    fn repeats_drift_text_names_the_floor_it_leaves() {
+        let stated = warning_text(&Warning::RepeatsDrift {
+            part: Part::Position,
+            ratio: 3.9,
+            z: 4.0,
+        });
+        assert!(stated.contains("position serial z = 4.0"), "{stated}");
+        assert!(stated.contains("3.9x noisier than stated"), "{stated}");
+        assert!(
+            stated.contains("the stated sigma stays the noise floor"),
+            "{stated}"
+        );
+        let unstated = warning_text(&Warning::RepeatsDrift {
+            part: Part::Rotation,
+            ratio: f64::NAN,
+            z: 3.5,
+        });
+        assert!(unstated.contains("state --sigma-rot-deg"), "{unstated}");
+        assert!(!unstated.contains("than stated"), "{unstated}");
+    }
+}
