@@ -172,10 +172,12 @@ fn random_approach<const N: usize>(rng: &mut SplitMix64) -> [f64; N] {
 /// Simulates a session on the true arm `truth`: for each commanded pose, a target drawn in
 /// the region is solved by inverse kinematics on `truth` from `seed_q` (effects
 /// compensated, so the readings are those at which the true arm reaches the target), and
-/// measured with noise; the first `cfg.repeated` poses are measured again right after.
-/// Writes `cfg.measurements()` measurements into `out` and their `pose_id`s (1-based) into
-/// `groups`; returns the number written. Measurement order: all first measurements, then
-/// the repeats.
+/// measured with noise; the first `cfg.repeated` poses are measured again right after
+/// (the same readings and temperature; new approach directions with probability
+/// 1 − `same_approach_probability`). Writes `cfg.measurements()` measurements into `out`
+/// and their `pose_id`s (1-based) into `groups`; returns the number written. Stored order:
+/// all first measurements, then the repeats, so the row order is not the simulated time
+/// order (the temperature ramp follows the first measurements).
 pub fn simulate_session<const N: usize>(
     truth: &Robot<N>,
     seed_q: &[f64; N],
