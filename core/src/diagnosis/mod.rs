@@ -138,7 +138,7 @@
 //!   (thermal, whose recorded temperature rises with the session) was `explained` with
 //!   its held-out position error unchanged (`common/outside3.rs`'s random-walk drift:
 //!   5 of 47 detectable cases). The serial test ([`Warning::RepeatsDrift`], z above
-//!   [`NOISE_CHECK_Z`] over at least [`MIN_DRIFT_PAIRS`] pairs) keeps the stated σ then.
+//!   3 over at least [`MIN_DRIFT_PAIRS`] pairs) keeps the stated σ then.
 //!
 //! # Memory
 //! No heap: fixed-capacity results ([`MAX_CANDIDATES`] candidates), caller slices for the
@@ -643,7 +643,7 @@ pub enum Warning {
         z_candidate: f64,
     },
     /// The differences between repeats of the same pose follow the order of the rows
-    /// (serial z above [`NOISE_CHECK_Z`]: each repeat pair's difference resembles the next
+    /// (serial z above 3: each repeat pair's difference resembles the next
     /// pair's): something drifted during the session, so the repeats measure that drift as
     /// well as the noise. A stated σ is then kept as the floor (the repeats do not overrule
     /// it, and [`Warning::NoiseVsRepeats`] is not given for this part); without one the
