@@ -2290,6 +2290,12 @@ fn rms_axis<const N: usize>(data: &[Measurement<N>], poses: &[PoseDiagnosis]) ->
 pub(crate) const NOISE_CHECK_Z: f64 = 3.0;
 /// Repeat pairs below which the drift of the repeats is not tested.
 pub const MIN_DRIFT_PAIRS: usize = 8;
+
+/// The serial z of [`NoiseFloor::drift_pos`] / `drift_rot` when it says the repeats drift
+/// (above [`NOISE_CHECK_Z`]): the one rule for the floor (`noise.rs`) and the warning.
+pub(crate) fn drifting(z: Option<f64>) -> Option<f64> {
+    z.filter(|&z| z > NOISE_CHECK_Z)
+}
 /// … and only when it is off by more than this factor either way.
 pub(crate) const NOISE_CHECK_RATIO: f64 = 1.25;
 
@@ -2329,8 +2335,7 @@ fn check_stated_noise<const N: usize>(out: &mut Diagnosis<N>, insample: &ModelAc
         // Judged against what the user stated, also when the floor overruled it.
         let sigma = overruled.unwrap_or(sigma);
         let off = |ratio: f64| !(1.0 / NOISE_CHECK_RATIO..=NOISE_CHECK_RATIO).contains(&ratio);
-        let drift = drift.filter(|&z| z > NOISE_CHECK_Z);
-        match (drift, repeats) {
+        match (drifting(drift), repeats) {
             (Some(z), _) => {
                 let ratio = match repeats {
                     Some((s, _)) if stated => s / sigma,

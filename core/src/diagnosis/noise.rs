@@ -19,12 +19,6 @@ fn pooled<const N: usize>(
     poses: &mut [PoseDiagnosis],
     temp_tol_c: f64,
 ) -> Result<RepeatScatter> {
-    let next = |poses: &[PoseDiagnosis], m: usize| {
-        poses.get(m).map_or(usize::MAX, |p| match p.next {
-            NO_NEXT => usize::MAX,
-            k => k as usize,
-        })
-    };
     for l in 0..data.len() {
         let first = poses[l].leader as usize;
         let members = core::iter::successors(Some(first), |&m| Some(next(poses, m)));
@@ -44,11 +38,24 @@ fn pooled<const N: usize>(
         },
         |l| next(poses, l),
         |l| data[l].mask,
-        |l| {
-            let t = data[l].model_pose(reference)?;
-            Ok(pose_error(&data[l].pose, &t, OrientationError::Exact))
-        },
+        |l| residual(reference, &data[l]),
     )
+}
+
+/// A row's residual against `reference`, `[Δp (m); Δφ (rad)]`, as the repeat statistics
+/// take it.
+fn residual<const N: usize>(reference: &Robot<N>, m: &Measurement<N>) -> Result<[f64; 6]> {
+    let t = m.model_pose(reference)?;
+    Ok(pose_error(&m.pose, &t, OrientationError::Exact))
+}
+
+/// The row after `m` in its group's member list ([`PoseDiagnosis::next`]); `usize::MAX`
+/// after the last (what the estimator's walks take as the end).
+fn next(poses: &[PoseDiagnosis], m: usize) -> usize {
+    poses.get(m).map_or(usize::MAX, |p| match p.next {
+        NO_NEXT => usize::MAX,
+        k => k as usize,
+    })
 }
 
 /// Serial z of the repeats' differences in the order of the rows, per part (position,
@@ -67,30 +74,26 @@ fn repeat_drift<const N: usize>(
     data: &[Measurement<N>],
     poses: &[PoseDiagnosis],
 ) -> Result<[Option<f64>; 2]> {
-    let residual = |l: usize| -> Result<[f64; 6]> {
-        let t = data[l].model_pose(reference)?;
-        Ok(pose_error(&data[l].pose, &t, OrientationError::Exact))
-    };
     let mut prev: Option<[f64; 6]> = None;
     let (mut sum, mut sum_sq, mut pairs) = ([0.0; 2], [0.0; 2], 0usize);
     for (l, p) in poses.iter().enumerate().take(data.len()) {
         if p.suspect || p.sub_leader as usize != l {
             continue;
         }
-        let second = core::iter::successors(Some(l), |&m| match poses.get(m).map(|q| q.next) {
-            Some(NO_NEXT) | None => None,
-            Some(k) => Some(k as usize),
-        })
-        .skip(1)
-        .find(|&m| {
-            poses
-                .get(m)
-                .is_some_and(|q| !q.suspect && q.sub_leader as usize == l)
-        });
+        let second = core::iter::successors(Some(next(poses, l)), |&m| Some(next(poses, m)))
+            .take_while(|&m| m < data.len())
+            .find(|&m| {
+                poses
+                    .get(m)
+                    .is_some_and(|q| !q.suspect && q.sub_leader as usize == l)
+            });
         let Some(m) = second else {
             continue;
         };
-        let (el, em) = (residual(l)?, residual(m)?);
+        let (el, em) = (
+            residual(reference, &data[l])?,
+            residual(reference, &data[m])?,
+        );
         let mut d = [0.0; 6];
         for (k, slot) in d.iter_mut().enumerate() {
             if data[l].mask.has(k) && data[m].mask.has(k) {
@@ -179,15 +182,14 @@ pub(crate) fn noise_floor<const N: usize>(
     };
     let [drift_pos, drift_rot] = repeat_drift(reference, data, poses)?;
     // Repeats that drift with the rows measure the drift too: they do not overrule.
-    let steady = |drift: Option<f64>| drift.is_none_or(|z| z <= super::NOISE_CHECK_Z);
     let (sp, np, overruled_pos) = overrule(
-        cfg.sigma_pos_m.is_some() && steady(drift_pos),
+        cfg.sigma_pos_m.is_some() && super::drifting(drift_pos).is_none(),
         sp,
         np,
         repeats(ss_p, dof_p),
     );
     let (sr, nr, overruled_rot) = overrule(
-        cfg.sigma_rot_rad.is_some() && steady(drift_rot),
+        cfg.sigma_rot_rad.is_some() && super::drifting(drift_rot).is_none(),
         sr,
         nr,
         repeats(ss_r, dof_r),
