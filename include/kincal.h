@@ -859,7 +859,8 @@ enum kincal_diagnosis_reason
     KINCAL_DIAGNOSIS_REASON_DOES_NOT_EXTRAPOLATE = 7,
     /*
      `form_not_determined` (`reason_z`: the out-of-library alternative's paired z, below
-     the equivalence threshold: the library's form is not singled out by the data).
+     the equivalence threshold: the library's form is not singled out by the data;
+     `reason_effects`: whose form).
      */
     KINCAL_DIAGNOSIS_REASON_FORM_NOT_DETERMINED = 8,
     /*
@@ -2447,6 +2448,11 @@ typedef struct kincal_diagnosis_report {
      `KINCAL_NO_INDEX` otherwise.
      */
     size_t reason_joint;
+    /*
+     For `form_not_determined`: the effect whose form the data do not determine
+     (`joint_cyclic` or `thermal`, as a mask of `kincal_effect` bits); 0 otherwise.
+     */
+    uint32_t reason_effects;
     /*
      The verdict's effects (the winner; mask of `kincal_effect` bits; 0 for none).
      */

@@ -326,7 +326,7 @@ fn report(results: &[CaseResult]) -> Summary {
         median_closed_withheld: median(strong.iter().map(|r| r.gap_closed_withheld).collect()),
     };
     println!(
-        "\nPer hidden effect (strong cases): right / right-or-confounded / n, median gap closed (withheld), median size factor"
+        "\nPer hidden effect (strong cases): right / right-or-confounded / n, right and explained, median gap closed (withheld), median size factor"
     );
     for kind in kinds().into_iter().skip(1) {
         let rows: Vec<&&CaseResult> = strong.iter().filter(|r| r.hidden == kind).collect();
@@ -344,11 +344,14 @@ fn report(results: &[CaseResult]) -> Summary {
             })
             .collect();
         println!(
-            "  {:32} {:>3} / {:>3} / {:>3}   closed {:.3}   sizes {}",
+            "  {:32} {:>3} / {:>3} / {:>3}   explained {:>3}   closed {:.3}   sizes {}",
             names(kind),
             rows.iter().filter(|r| r.right()).count(),
             rows.iter().filter(|r| r.right_or_confounded()).count(),
             rows.len(),
+            rows.iter()
+                .filter(|r| r.right() && r.status == Status::Explained)
+                .count(),
             median(rows.iter().map(|r| r.gap_closed_withheld).collect()),
             sizes.join(" ")
         );

@@ -685,6 +685,7 @@ fn run_case(fam: &Family, k: usize, seed: u64, ws: &mut DiagWorkspace<80>) -> Ou
             d.verdict.gap_closed_fraction
         );
         println!("      extrapolation check: {:?}", d.extrapolation);
+        println!("      form check: {:?}", d.form);
         debug_overclaim(&d, &data, &groups, &out_effects, &nominal);
     }
     if std::env::var("FAM_DEBUG").is_ok()

@@ -83,7 +83,8 @@ pub enum kincal_diagnosis_reason {
     /// `does_not_extrapolate` (`reason_z`: the worst half-range split's z; `reason_joint`).
     DoesNotExtrapolate = 7,
     /// `form_not_determined` (`reason_z`: the out-of-library alternative's paired z, below
-    /// the equivalence threshold: the library's form is not singled out by the data).
+    /// the equivalence threshold: the library's form is not singled out by the data;
+    /// `reason_effects`: whose form).
     FormNotDetermined = 8,
     /// `confounded_with_sessions`: the candidates that improve significantly are all
     /// confounded with the sessions (the C ABI diagnoses one session: not produced there).
@@ -353,6 +354,9 @@ pub struct kincal_diagnosis_report {
     /// For `does_not_extrapolate`: the joint (zero-based) whose half range was held out;
     /// `KINCAL_NO_INDEX` otherwise.
     pub reason_joint: usize,
+    /// For `form_not_determined`: the effect whose form the data do not determine
+    /// (`joint_cyclic` or `thermal`, as a mask of `kincal_effect` bits); 0 otherwise.
+    pub reason_effects: u32,
     /// The verdict's effects (the winner; mask of `kincal_effect` bits; 0 for none).
     pub effects: u32,
     /// Union of the effects of every confounded candidate (REPORT.json `confounded_with`).
@@ -690,12 +694,16 @@ fn warning(w: &Warning) -> kincal_diagnosis_warning {
 }
 
 /// The C report of a diagnosis.
-fn report_of<const N: usize>(d: &Diagnosis<N>, cfg: &Config) -> kincal_diagnosis_report {
+pub(crate) fn report_of<const N: usize>(d: &Diagnosis<N>, cfg: &Config) -> kincal_diagnosis_report {
     let v = &d.verdict;
     let winner = v.candidate.and_then(|c| d.candidates().get(c));
     let reason_joint = match v.reason {
         Reason::DoesNotExtrapolate { joint, .. } => joint,
         _ => KINCAL_NO_INDEX,
+    };
+    let reason_effects = match v.reason {
+        Reason::FormNotDetermined { effect, .. } => mask(EffectSet::of(effect)),
+        _ => 0,
     };
     let (reason, reason_part, reason_z) = match v.reason {
         Reason::AtNoiseFloor => (kincal_diagnosis_reason::AtNoiseFloor, 0, f64::NAN),
@@ -708,7 +716,7 @@ fn report_of<const N: usize>(d: &Diagnosis<N>, cfg: &Config) -> kincal_diagnosis
             (kincal_diagnosis_reason::NoSignificantCandidate, 0, f64::NAN)
         }
         Reason::DoesNotExtrapolate { z, .. } => (kincal_diagnosis_reason::DoesNotExtrapolate, 0, z),
-        Reason::FormNotDetermined { z } => (kincal_diagnosis_reason::FormNotDetermined, 0, z),
+        Reason::FormNotDetermined { z, .. } => (kincal_diagnosis_reason::FormNotDetermined, 0, z),
         Reason::ConfoundedWithSessions => {
             (kincal_diagnosis_reason::ConfoundedWithSessions, 0, f64::NAN)
         }
@@ -741,6 +749,7 @@ fn report_of<const N: usize>(d: &Diagnosis<N>, cfg: &Config) -> kincal_diagnosis
         reason_part,
         reason_z,
         reason_joint,
+        reason_effects,
         effects: mask(v.effects),
         confounded_effects: mask(v.confounded_effects()),
         winner: v.candidate.unwrap_or(KINCAL_NO_INDEX),

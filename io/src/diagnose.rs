@@ -595,8 +595,10 @@ pub struct ExplainableJson {
 #[derive(Debug, Clone, Serialize)]
 pub struct FormJson {
     pub evaluated: bool,
-    /// Paired z of the alternative (3rd and 4th harmonics in place of joint_cyclic's 1st
-    /// and 2nd) against the verdict's model (positive: the alternative is worse).
+    /// The effect whose form was checked (`joint_cyclic` or `thermal`).
+    pub effect: Option<&'static str>,
+    /// Paired z of the alternative (module `kincal::diagnosis::form`) against the
+    /// verdict's model (positive: the alternative is worse).
     pub z: Option<f64>,
     pub heldout_rms_pos_mm: f64,
     pub heldout_rms_rot_deg: f64,
@@ -954,15 +956,28 @@ fn verdict_json<const N: usize>(d: &Diagnosis<N>) -> VerdictJson {
     }
 }
 
-/// The form check of a verdict with `joint_cyclic`.
+/// The form check of a verdict with `joint_cyclic` or `thermal`.
 fn form_json(f: &diagnosis::FormCheck) -> FormJson {
     FormJson {
         evaluated: f.evaluated,
+        effect: f.effect.map(Effect::name),
         z: if f.evaluated { finite(f.z) } else { None },
         heldout_rms_pos_mm: f.heldout_rms_pos_m * 1e3,
         heldout_rms_rot_deg: f.heldout_rms_rot_rad.to_degrees(),
         equivalent: f.equivalent,
-        method: "the verdict's model cross-validated with each joint's 3rd and 4th harmonics in place of joint_cyclic's 1st and 2nd; paired Wilcoxon z over pose groups against the verdict",
+        method: "the verdict's model cross-validated with the effect's columns replaced by a model of another form outside the library with as many parameters (joint_cyclic: each joint's 3rd and 4th harmonics in place of its 1st and 2nd; thermal: a translation proportional to T - 20 °C, the part of thermal's column common to every pose); paired Wilcoxon z over pose groups against the verdict",
+    }
+}
+
+/// What the form check put in place of `effect`, for the verdict's reason.
+fn form_alternative_text(effect: Effect) -> &'static str {
+    match effect {
+        Effect::Thermal => {
+            "a translation that follows the temperature and not the arm's configuration (what a slow drift of the instrument or of the arm's mount does while the arm warms up)"
+        }
+        _ => {
+            "a function of the same joints outside the library (3rd and 4th harmonics in place of joint_cyclic's 1st and 2nd)"
+        }
     }
 }
 
@@ -1247,8 +1262,10 @@ fn status_reason_text<const N: usize>(d: &Diagnosis<N>) -> String {
             joint + 1,
             if upper { "upper" } else { "lower" }
         ),
-        Reason::FormNotDetermined { z } => format!(
-            "the chosen effects fit, but a function of the same joints outside the library (3rd and 4th harmonics in place of joint_cyclic's 1st and 2nd) explains the data as well held out (paired z = {z:.1}): the data do not determine the effect's form, so part of the gap may come from an effect outside the library"
+        Reason::FormNotDetermined { z, effect } => format!(
+            "the chosen effects fit, but {} explains the data as well held out (paired z = {z:.1}): the data do not determine {}'s form, so part of the gap may come from an effect outside the library",
+            form_alternative_text(effect),
+            effect.name()
         ),
         Reason::Worsens { z, part } => format!(
             "the chosen effects make the {} significantly worse (z = {z:.1})",

@@ -17,12 +17,10 @@
 //! and one small factorisation per model and fold.
 
 use super::{DiagWorkspace, MAX_MODELS, ModelAcc, PoseDiagnosis};
-use crate::error::ParamIndex;
 use crate::error::{Error, Result};
 use crate::identify::Measurement;
-use crate::math::{cos, sin, sqrt};
+use crate::math::sqrt;
 use crate::model::Robot;
-use crate::params::{CyclicTerm, LinkParam, ParamId};
 use crate::pose::{OrientationError, pose_error};
 
 /// The model a pass over the rows is linearised at, with the caches bound to it once for
@@ -67,7 +65,8 @@ pub(crate) fn pose_rows<const N: usize, const P: usize>(
 ) -> Result<[f64; 6]> {
     let w: [f64; 6] = core::array::from_fn(|k| if m.mask.has(k) { sw[k] } else { 0.0 });
     // The form check's alternative columns need the whole Jacobian in `ws.jac`.
-    let cached = !ws.alt_harmonics && ws.rows.generation() == at.rows;
+    let cached =
+        ws.alternative == super::form::Alternative::None && ws.rows.generation() == at.rows;
     if cached {
         let DiagWorkspace { rows, a, b, .. } = &mut *ws;
         if let Some((e, cols)) = rows.get(l) {
@@ -100,8 +99,8 @@ pub(crate) fn pose_rows<const N: usize, const P: usize>(
         .iter()
         .map(|&uc| jac.get(uc).map_or(&ZERO_COLUMN[..], |j| &j[..]));
     whiten(&w, &e, cols, a, b);
-    if ws.alt_harmonics {
-        alternative_harmonics(m, sw, ws);
+    if ws.alternative != super::form::Alternative::None {
+        super::form::alternative_columns(m, sw, ws);
     }
     Ok(e)
 }
@@ -129,41 +128,6 @@ fn whiten<'c, const P: usize>(
 
 /// The column of a parameter outside the Jacobian (none: `U` holds model parameters).
 const ZERO_COLUMN: [f64; 6] = [0.0; 6];
-
-/// The form check's alternative (`form.rs`): every `joint_cyclic` column of `U` replaced by
-/// the 3rd and 4th harmonics of its joint (`sin 3q, cos 3q, sin 4q, cos 4q` for the terms
-/// `sin q, cos q, sin 2q, cos 2q`) times the column of the joint's offset θ0_j.
-fn alternative_harmonics<const N: usize, const P: usize>(
-    m: &Measurement<N>,
-    sw: &[f64; 6],
-    ws: &mut DiagWorkspace<P>,
-) {
-    for c in 0..ws.n_u {
-        let Ok(ParamId::Cyclic(j, t)) = ParamId::from_index(ParamIndex(ws.u[c]), N) else {
-            continue;
-        };
-        let theta = ParamId::Link {
-            link: j,
-            kind: LinkParam::Theta0,
-        }
-        .index(N)
-        .0;
-        let q = m.state.q.get(j).copied().unwrap_or(0.0);
-        let f = match t {
-            CyclicTerm::Sin1 => sin(3.0 * q),
-            CyclicTerm::Cos1 => cos(3.0 * q),
-            CyclicTerm::Sin2 => sin(4.0 * q),
-            CyclicTerm::Cos2 => cos(4.0 * q),
-        };
-        let Some(col) = ws.jac.get(theta).copied() else {
-            continue;
-        };
-        for k in 0..6 {
-            let w = if m.mask.has(k) { sw[k] } else { 0.0 };
-            ws.a[k][c] = w * col[k] * f;
-        }
-    }
-}
 
 /// The union `U` as it was before [`narrow_to_model`]: restore it with [`restore_union`].
 #[derive(Debug)]

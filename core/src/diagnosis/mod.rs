@@ -126,7 +126,10 @@
 //!   the library's form: `partially_explained`. This also applies to a true cyclic
 //!   error on narrow joint ranges, where the library's harmonics and the next ones are
 //!   equally good: the data cannot tell it from an effect outside the library, so
-//!   `explained` would claim more than they show.
+//!   `explained` would claim more than they show. A verdict containing `thermal` is
+//!   checked the same way against a translation that follows the temperature (`(T −
+//!   20 °C)·ḡ`, the part of thermal's column common to every pose): where the arm warms
+//!   over the session, a drift of the instrument in time fits thermal's column as well.
 //! - **Stated σ checked**: against the repeats (either way) and against the geometric
 //!   calibration's in-sample χ² per degree of freedom (significantly below 1: the data are
 //!   quieter than stated) — [`Warning::NoiseVsRepeats`], [`Warning::NoiseVsResiduals`].
@@ -559,13 +562,16 @@ pub enum Reason {
         /// Whether the upper half of its range was held out.
         upper: bool,
     },
-    /// `partially_explained`: a function of the same joints outside the library (the 3rd
-    /// and 4th harmonics in place of `joint_cyclic`'s 1st and 2nd, `form.rs`) explains the
-    /// data as well: they do not determine the effect's form.
+    /// `partially_explained`: a function of another form outside the library explains the
+    /// data as well as `effect` (`form.rs`: the 3rd and 4th harmonics in place of
+    /// `joint_cyclic`'s 1st and 2nd; a translation that follows the temperature in place of
+    /// `thermal`'s length expansion): they do not determine the effect's form.
     FormNotDetermined {
         /// Paired z of the alternative against the chosen effects (below
         /// [`Config::z_equivalence`]).
         z: f64,
+        /// The effect whose form is not determined (`joint_cyclic` or `thermal`).
+        effect: Effect,
     },
     /// `partially_explained`: the chosen effects make position or rotation significantly
     /// worse (paired z, negative).
@@ -804,8 +810,9 @@ pub struct DiagWorkspace<const P: usize> {
     pub(crate) a: [[f64; P]; 6],
     pub(crate) b: [f64; 6],
     pub(crate) smooth: SmoothWorkspace,
-    /// The form check's alternative columns are being built (`form.rs`).
-    pub(crate) alt_harmonics: bool,
+    /// The columns the form check's alternative replaces while it is cross-validated
+    /// (`form.rs`).
+    pub(crate) alternative: form::Alternative,
     /// The first rows' Jacobian columns and residuals at the model of the passes
     /// (`rows.rs`).
     pub(crate) rows: rows::RowCache<P>,
@@ -847,7 +854,7 @@ impl<const P: usize> DiagWorkspace<P> {
             a: [[0.0; P]; 6],
             b: [0.0; 6],
             smooth: SmoothWorkspace::new(),
-            alt_harmonics: false,
+            alternative: form::Alternative::None,
             rows: rows::RowCache::new(),
         }
     }
@@ -2234,12 +2241,18 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
         cv::restore_union(ws, &saved);
     }
     // 11. Do the data single out the library's form? (`joint_cyclic` against a function of
-    // the same joints outside the library.)
-    if out.verdict.status == Status::Explained
-        && method == Method::CrossValidation
-        && out.verdict.effects.contains(Effect::JointCyclic)
-        && let Some(c) = out.verdict.candidate
-    {
+    // the same joints, `thermal` against a translation that follows the temperature, both
+    // outside the library.)
+    for effect in [Effect::JointCyclic, Effect::Thermal] {
+        if out.verdict.status != Status::Explained
+            || method != Method::CrossValidation
+            || !out.verdict.effects.contains(effect)
+        {
+            continue;
+        }
+        let Some(c) = out.verdict.candidate else {
+            break;
+        };
         let geometric = out.geometric;
         let x = form::check(
             &geometric,
@@ -2247,6 +2260,7 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
             &sw,
             poses,
             c + 1,
+            effect,
             cfg.folds,
             cfg.z_equivalence,
             cfg.rank_tol,
@@ -2255,7 +2269,7 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
         out.form = x;
         if x.equivalent {
             out.verdict.status = Status::PartiallyExplained;
-            out.verdict.reason = Reason::FormNotDetermined { z: x.z };
+            out.verdict.reason = Reason::FormNotDetermined { z: x.z, effect };
         }
     }
     Ok(())

@@ -235,6 +235,7 @@ fn planted_compliance_is_explained_and_the_report_equals_the_core() {
     assert_eq!(r.status, kincal_diagnosis_status::Explained as u32);
     assert_eq!(r.effects, compliance_mask());
     assert_eq!(r.reason, kincal_diagnosis_reason::Closed as u32);
+    assert_eq!(r.reason_effects, 0);
     assert_eq!(r.method, kincal_diagnosis_method::CrossValidation as u32);
     assert_eq!(r.remaining_gap_significant, 0);
     assert_eq!(r.noise.stated_pos, 1);
@@ -286,6 +287,29 @@ fn planted_compliance_is_explained_and_the_report_equals_the_core() {
         assert_eq!(p.residual, k.residual);
         assert_eq!(p.heldout_final, k.heldout_final);
         assert_eq!(p.fold, u32::from(k.fold));
+    }
+}
+
+/// `form_not_determined` names whose form in `reason_effects` (the verdict may hold both
+/// effects the form check tests): the core's reason, set on a real diagnosis, as the ABI
+/// reports it.
+#[test]
+fn form_not_determined_names_the_effect_whose_form() {
+    let set = compliance_session(51);
+    let cfg = Config::default();
+    let (mut d, _) = core_diagnosis(&set, &cfg);
+    for (effect, bit) in [
+        (Effect::Thermal, crate::effects::kincal_effect::Thermal),
+        (
+            Effect::JointCyclic,
+            crate::effects::kincal_effect::JointCyclic,
+        ),
+    ] {
+        d.verdict.reason = kincal::diagnosis::Reason::FormNotDetermined { z: 1.5, effect };
+        let r = crate::diagnosis::report_of(&d, &cfg);
+        assert_eq!(r.reason, kincal_diagnosis_reason::FormNotDetermined as u32);
+        assert_eq!(r.reason_z, 1.5);
+        assert_eq!(r.reason_effects, 1 << bit as u32, "{effect:?}");
     }
 }
 
