@@ -980,6 +980,47 @@ typedef uint32_t kincal_diagnosis_warning_code;
 #endif // __cplusplus
 
 /*
+ Which code `kincal_diagnosis_name` names.
+ */
+enum kincal_diagnosis_name_kind
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+    /*
+     A `kincal_diagnosis_status`.
+     */
+    KINCAL_DIAGNOSIS_NAME_KIND_STATUS = 0,
+    /*
+     A `kincal_diagnosis_reason`.
+     */
+    KINCAL_DIAGNOSIS_NAME_KIND_REASON = 1,
+    /*
+     A `kincal_diagnosis_part`.
+     */
+    KINCAL_DIAGNOSIS_NAME_KIND_PART = 2,
+    /*
+     A `kincal_diagnosis_warning_code`.
+     */
+    KINCAL_DIAGNOSIS_NAME_KIND_WARNING = 3,
+    /*
+     A `kincal_diagnosis_method`.
+     */
+    KINCAL_DIAGNOSIS_NAME_KIND_METHOD = 4,
+    /*
+     A `kincal_beyond_library`.
+     */
+    KINCAL_DIAGNOSIS_NAME_KIND_BEYOND_LIBRARY = 5,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum kincal_diagnosis_name_kind kincal_diagnosis_name_kind;
+#else
+typedef uint32_t kincal_diagnosis_name_kind;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/*
  Where and why a call failed: a caller-owned plain struct (pass NULL when the detail is not
  wanted; it need not be initialised). Every export that takes one overwrites all of it before
  returning: `status` = the returned code, the fields that code documents set, the others
@@ -4269,6 +4310,18 @@ kincal_status kincal_diagnose_options_default(struct kincal_diagnose_options *op
  */
 size_t kincal_diagnose_workspace_size(size_t n_joints,
                                       size_t n_poses);
+
+/*
+ The public name of code `code` of the diagnosis enum `kind` (a
+ `kincal_diagnosis_name_kind`): the string REPORT.json shows, e.g. `"partially_explained"`
+ for (STATUS, `KINCAL_DIAGNOSIS_STATUS_PARTIALLY_EXPLAINED`) or `"repeats_drift"` for
+ (WARNING, `KINCAL_DIAGNOSIS_WARNING_CODE_REPEATS_DRIFT`); `""` for
+ `KINCAL_DIAGNOSIS_PART_NONE`. The text is the Rust library's own, so C callers need no
+ table of their own. A static NUL-terminated string (never free it), or NULL for an unknown
+ kind or code.
+ */
+const char *kincal_diagnosis_name(uint32_t kind,
+                                  uint32_t code);
 
 /*
  The sim-to-real gap diagnosis (`kincal diagnose`, spec/effects.md) of instrument

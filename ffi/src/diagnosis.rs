@@ -7,7 +7,7 @@
 //! Only instrument data (`kincal_measurements`): the diagnosis of contact data
 //! (targets, planes, sessions) cross-validates by session in the CLI and is not in the ABI.
 
-use core::ffi::c_void;
+use core::ffi::{CStr, c_char, c_void};
 
 use kincal::diagnosis::{
     BeyondLibrary, Config, DiagWorkspace, Diagnosis, GapTest, MAX_CANDIDATES, MAX_SUSPECTS,
@@ -15,7 +15,7 @@ use kincal::diagnosis::{
     diagnose_into,
 };
 use kincal::identify::Measurement;
-use kincal::{EffectSet, Robot, with_any_robot};
+use kincal::{Effect, EffectSet, Robot, with_any_robot};
 
 use crate::identify::{Data, KINCAL_WORKSPACE_ALIGN, data_view, kincal_measurements, round_up};
 use crate::robot::{KINCAL_MAX_PARAMS, from_robot, kincal_robot, to_any};
@@ -137,6 +137,25 @@ pub enum kincal_diagnosis_warning_code {
     /// `part`; `ratio` their σ over the stated one, NaN when none was stated): the stated
     /// σ stays the floor.
     RepeatsDrift = 5,
+}
+
+/// Which code `kincal_diagnosis_name` names.
+#[repr(u32)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[allow(non_camel_case_types)]
+pub enum kincal_diagnosis_name_kind {
+    /// A `kincal_diagnosis_status`.
+    Status = 0,
+    /// A `kincal_diagnosis_reason`.
+    Reason = 1,
+    /// A `kincal_diagnosis_part`.
+    Part = 2,
+    /// A `kincal_diagnosis_warning_code`.
+    Warning = 3,
+    /// A `kincal_diagnosis_method`.
+    Method = 4,
+    /// A `kincal_beyond_library`.
+    BeyondLibrary = 5,
 }
 
 /// Options of `kincal_diagnose`; fill with `kincal_diagnose_options_default`, then edit.
@@ -651,44 +670,262 @@ fn smooth(s: &SmoothCheck) -> kincal_smooth_check {
     }
 }
 
-fn part(p: Part) -> u32 {
-    match p {
-        Part::Position => kincal_diagnosis_part::Position as u32,
-        Part::Rotation => kincal_diagnosis_part::Rotation as u32,
-        Part::Both => kincal_diagnosis_part::Both as u32,
+// The C codes of the core's enums: the report and `kincal_diagnosis_name` both map through
+// these, so a name always belongs to the code the report gives.
+
+const fn status_code(s: Status) -> kincal_diagnosis_status {
+    match s {
+        Status::NoGap => kincal_diagnosis_status::NoGap,
+        Status::Explained => kincal_diagnosis_status::Explained,
+        Status::PartiallyExplained => kincal_diagnosis_status::PartiallyExplained,
+        Status::Unexplained => kincal_diagnosis_status::Unexplained,
     }
 }
 
+const fn method_code(m: Method) -> kincal_diagnosis_method {
+    match m {
+        Method::CrossValidation => kincal_diagnosis_method::CrossValidation,
+        Method::InSampleNested => kincal_diagnosis_method::InSampleNested,
+    }
+}
+
+const fn reason_code(r: Reason) -> kincal_diagnosis_reason {
+    match r {
+        Reason::AtNoiseFloor => kincal_diagnosis_reason::AtNoiseFloor,
+        Reason::Closed => kincal_diagnosis_reason::Closed,
+        Reason::RemainingGap { .. } => kincal_diagnosis_reason::RemainingGap,
+        Reason::RemainingStructure { .. } => kincal_diagnosis_reason::RemainingStructure,
+        Reason::Worsens { .. } => kincal_diagnosis_reason::Worsens,
+        Reason::SmallShare => kincal_diagnosis_reason::SmallShare,
+        Reason::NoSignificantCandidate => kincal_diagnosis_reason::NoSignificantCandidate,
+        Reason::DoesNotExtrapolate { .. } => kincal_diagnosis_reason::DoesNotExtrapolate,
+        Reason::FormNotDetermined { .. } => kincal_diagnosis_reason::FormNotDetermined,
+        Reason::ConfoundedWithSessions => kincal_diagnosis_reason::ConfoundedWithSessions,
+    }
+}
+
+const fn part_code(p: Part) -> kincal_diagnosis_part {
+    match p {
+        Part::Position => kincal_diagnosis_part::Position,
+        Part::Rotation => kincal_diagnosis_part::Rotation,
+        Part::Both => kincal_diagnosis_part::Both,
+    }
+}
+
+const fn beyond_code(b: BeyondLibrary) -> kincal_beyond_library {
+    match b {
+        BeyondLibrary::NotApplicable => kincal_beyond_library::NotApplicable,
+        BeyondLibrary::SmoothEffect { .. } => kincal_beyond_library::SmoothEffect,
+        BeyondLibrary::NotAFunctionOfQ => kincal_beyond_library::NotAFunctionOfQ,
+    }
+}
+
+const fn warning_code(w: Warning) -> kincal_diagnosis_warning_code {
+    match w {
+        Warning::NoiseVsRepeats { .. } => kincal_diagnosis_warning_code::NoiseVsRepeats,
+        Warning::NoiseVsResiduals { .. } => kincal_diagnosis_warning_code::NoiseVsResiduals,
+        Warning::GapDespiteGapTest { .. } => kincal_diagnosis_warning_code::GapDespiteGapTest,
+        Warning::TooManySuspects { .. } => kincal_diagnosis_warning_code::TooManySuspects,
+        Warning::RepeatsDrift { .. } => kincal_diagnosis_warning_code::RepeatsDrift,
+    }
+}
+
+/// `s` and a NUL, for a `const` (its length `N` is `s.len() + 1`; a wrong `N` fails the build).
+#[allow(clippy::indexing_slicing)] // evaluated at compile time only: no runtime panic path
+const fn nul_terminated<const N: usize>(s: &str) -> [u8; N] {
+    let b = s.as_bytes();
+    assert!(N == b.len() + 1);
+    let mut out = [0; N];
+    let mut i = 0;
+    while i < b.len() {
+        out[i] = b[i];
+        i += 1;
+    }
+    out
+}
+
+/// A name-table entry: the C code of the core value `$v` (through `$code`, as in the report)
+/// and the core's name of it (`$v.$name()`) as a C string built at compile time, so that the
+/// C text is the core's text and not a copy of it.
+macro_rules! core_name {
+    ($code:ident, $v:expr, $name:ident) => {{
+        const NAME: &str = $v.$name();
+        const BYTES: [u8; NAME.len() + 1] = nul_terminated(NAME);
+        const ENTRY: (u32, &CStr) = (
+            $code($v) as u32,
+            match CStr::from_bytes_with_nul(&BYTES) {
+                Ok(c) => c,
+                Err(_) => panic!("a core name holds a NUL"),
+            },
+        );
+        ENTRY
+    }};
+}
+
+/// Codes and names of one `kincal_diagnosis_name_kind`.
+type Names = &'static [(u32, &'static CStr)];
+
+const STATUS_NAMES: Names = &[
+    core_name!(status_code, Status::NoGap, name),
+    core_name!(status_code, Status::Explained, name),
+    core_name!(status_code, Status::PartiallyExplained, name),
+    core_name!(status_code, Status::Unexplained, name),
+];
+
+const REASON_NAMES: Names = &[
+    core_name!(reason_code, Reason::AtNoiseFloor, name),
+    core_name!(reason_code, Reason::Closed, name),
+    core_name!(
+        reason_code,
+        Reason::RemainingGap {
+            z: 0.0,
+            part: Part::Both
+        },
+        name
+    ),
+    core_name!(reason_code, Reason::RemainingStructure { z: 0.0 }, name),
+    core_name!(
+        reason_code,
+        Reason::Worsens {
+            z: 0.0,
+            part: Part::Both
+        },
+        name
+    ),
+    core_name!(reason_code, Reason::SmallShare, name),
+    core_name!(reason_code, Reason::NoSignificantCandidate, name),
+    core_name!(
+        reason_code,
+        Reason::DoesNotExtrapolate {
+            z: 0.0,
+            joint: 0,
+            upper: false
+        },
+        name
+    ),
+    core_name!(
+        reason_code,
+        Reason::FormNotDetermined {
+            z: 0.0,
+            effect: Effect::JointCyclic
+        },
+        name
+    ),
+    core_name!(reason_code, Reason::ConfoundedWithSessions, name),
+];
+
+const PART_NAMES: Names = &[
+    (kincal_diagnosis_part::None as u32, c""),
+    core_name!(part_code, Part::Position, name),
+    core_name!(part_code, Part::Rotation, name),
+    core_name!(part_code, Part::Both, name),
+];
+
+const WARNING_NAMES: Names = &[
+    core_name!(
+        warning_code,
+        Warning::NoiseVsRepeats {
+            part: Part::Both,
+            ratio: 0.0,
+            z: 0.0
+        },
+        code
+    ),
+    core_name!(
+        warning_code,
+        Warning::NoiseVsResiduals {
+            part: Part::Both,
+            ratio: 0.0,
+            z: 0.0
+        },
+        code
+    ),
+    core_name!(
+        warning_code,
+        Warning::GapDespiteGapTest {
+            z_gap: 0.0,
+            z_candidate: 0.0
+        },
+        code
+    ),
+    core_name!(
+        warning_code,
+        Warning::TooManySuspects { count: 0, cap: 0 },
+        code
+    ),
+    core_name!(
+        warning_code,
+        Warning::RepeatsDrift {
+            part: Part::Both,
+            ratio: 0.0,
+            z: 0.0
+        },
+        code
+    ),
+];
+
+const METHOD_NAMES: Names = &[
+    core_name!(method_code, Method::CrossValidation, name),
+    core_name!(method_code, Method::InSampleNested, name),
+];
+
+const BEYOND_NAMES: Names = &[
+    core_name!(beyond_code, BeyondLibrary::NotApplicable, name),
+    core_name!(
+        beyond_code,
+        BeyondLibrary::SmoothEffect { share: 0.0 },
+        name
+    ),
+    core_name!(beyond_code, BeyondLibrary::NotAFunctionOfQ, name),
+];
+
+/// The public name of code `code` of the diagnosis enum `kind` (a
+/// `kincal_diagnosis_name_kind`): the string REPORT.json shows, e.g. `"partially_explained"`
+/// for (STATUS, `KINCAL_DIAGNOSIS_STATUS_PARTIALLY_EXPLAINED`) or `"repeats_drift"` for
+/// (WARNING, `KINCAL_DIAGNOSIS_WARNING_CODE_REPEATS_DRIFT`); `""` for
+/// `KINCAL_DIAGNOSIS_PART_NONE`. The text is the Rust library's own, so C callers need no
+/// table of their own. A static NUL-terminated string (never free it), or NULL for an unknown
+/// kind or code.
+#[unsafe(no_mangle)]
+pub extern "C" fn kincal_diagnosis_name(kind: u32, code: u32) -> *const c_char {
+    ffi_boundary!(on_panic = core::ptr::null(); {
+        [
+            (kincal_diagnosis_name_kind::Status, STATUS_NAMES),
+            (kincal_diagnosis_name_kind::Reason, REASON_NAMES),
+            (kincal_diagnosis_name_kind::Part, PART_NAMES),
+            (kincal_diagnosis_name_kind::Warning, WARNING_NAMES),
+            (kincal_diagnosis_name_kind::Method, METHOD_NAMES),
+            (kincal_diagnosis_name_kind::BeyondLibrary, BEYOND_NAMES),
+        ]
+        .into_iter()
+        .find(|(k, _)| *k as u32 == kind)
+        .and_then(|(_, names)| names.iter().find(|(c, _)| *c == code))
+        .map_or(core::ptr::null(), |(_, name)| name.as_ptr())
+    })
+}
+
+fn part(p: Part) -> u32 {
+    part_code(p) as u32
+}
+
 fn warning(w: &Warning) -> kincal_diagnosis_warning {
-    let mut out = kincal_diagnosis_warning::default();
+    let mut out = kincal_diagnosis_warning {
+        code: warning_code(*w) as u32,
+        ..kincal_diagnosis_warning::default()
+    };
     match *w {
-        Warning::NoiseVsRepeats { part: p, ratio, z } => {
-            out.code = kincal_diagnosis_warning_code::NoiseVsRepeats as u32;
-            out.part = part(p);
-            out.ratio = ratio;
-            out.z = z;
-        }
-        Warning::NoiseVsResiduals { part: p, ratio, z } => {
-            out.code = kincal_diagnosis_warning_code::NoiseVsResiduals as u32;
+        Warning::NoiseVsRepeats { part: p, ratio, z }
+        | Warning::NoiseVsResiduals { part: p, ratio, z }
+        | Warning::RepeatsDrift { part: p, ratio, z } => {
             out.part = part(p);
             out.ratio = ratio;
             out.z = z;
         }
         Warning::GapDespiteGapTest { z_gap, z_candidate } => {
-            out.code = kincal_diagnosis_warning_code::GapDespiteGapTest as u32;
             out.z_gap = z_gap;
             out.z_candidate = z_candidate;
         }
-        Warning::RepeatsDrift { part: p, ratio, z } => {
-            out.code = kincal_diagnosis_warning_code::RepeatsDrift as u32;
-            out.part = part(p);
-            out.ratio = ratio;
-            out.z = z;
-        }
-        Warning::TooManySuspects { count, .. } => {
-            out.code = kincal_diagnosis_warning_code::TooManySuspects as u32;
-            out.count = count;
-        }
+        Warning::TooManySuspects { count, .. } => out.count = count,
     }
     out
 }
@@ -705,26 +942,21 @@ pub(crate) fn report_of<const N: usize>(d: &Diagnosis<N>, cfg: &Config) -> kinca
         Reason::FormNotDetermined { effect, .. } => mask(EffectSet::of(effect)),
         _ => 0,
     };
-    let (reason, reason_part, reason_z) = match v.reason {
-        Reason::AtNoiseFloor => (kincal_diagnosis_reason::AtNoiseFloor, 0, f64::NAN),
-        Reason::Closed => (kincal_diagnosis_reason::Closed, 0, f64::NAN),
-        Reason::RemainingGap { z, part: p } => (kincal_diagnosis_reason::RemainingGap, part(p), z),
-        Reason::RemainingStructure { z } => (kincal_diagnosis_reason::RemainingStructure, 0, z),
-        Reason::Worsens { z, part: p } => (kincal_diagnosis_reason::Worsens, part(p), z),
-        Reason::SmallShare => (kincal_diagnosis_reason::SmallShare, 0, f64::NAN),
-        Reason::NoSignificantCandidate => {
-            (kincal_diagnosis_reason::NoSignificantCandidate, 0, f64::NAN)
-        }
-        Reason::DoesNotExtrapolate { z, .. } => (kincal_diagnosis_reason::DoesNotExtrapolate, 0, z),
-        Reason::FormNotDetermined { z, .. } => (kincal_diagnosis_reason::FormNotDetermined, 0, z),
-        Reason::ConfoundedWithSessions => {
-            (kincal_diagnosis_reason::ConfoundedWithSessions, 0, f64::NAN)
-        }
+    let (reason_part, reason_z) = match v.reason {
+        Reason::RemainingGap { z, part: p } | Reason::Worsens { z, part: p } => (part(p), z),
+        Reason::RemainingStructure { z }
+        | Reason::DoesNotExtrapolate { z, .. }
+        | Reason::FormNotDetermined { z, .. } => (0, z),
+        Reason::AtNoiseFloor
+        | Reason::Closed
+        | Reason::SmallShare
+        | Reason::NoSignificantCandidate
+        | Reason::ConfoundedWithSessions => (0, f64::NAN),
     };
-    let (beyond, beyond_share) = match d.beyond_library() {
-        BeyondLibrary::NotApplicable => (kincal_beyond_library::NotApplicable, f64::NAN),
-        BeyondLibrary::SmoothEffect { share } => (kincal_beyond_library::SmoothEffect, share),
-        BeyondLibrary::NotAFunctionOfQ => (kincal_beyond_library::NotAFunctionOfQ, f64::NAN),
+    let beyond = d.beyond_library();
+    let beyond_share = match beyond {
+        BeyondLibrary::SmoothEffect { share } => share,
+        BeyondLibrary::NotApplicable | BeyondLibrary::NotAFunctionOfQ => f64::NAN,
     };
     let n = &d.noise;
     // A component type no row measures, with no σ stated, has only the core's placeholder
@@ -735,17 +967,9 @@ pub(crate) fn report_of<const N: usize>(d: &Diagnosis<N>, cfg: &Config) -> kinca
     );
     let known = |v: f64, known: bool| if known { v } else { 0.0 };
     let mut out = kincal_diagnosis_report {
-        status: match v.status {
-            Status::NoGap => kincal_diagnosis_status::NoGap,
-            Status::Explained => kincal_diagnosis_status::Explained,
-            Status::PartiallyExplained => kincal_diagnosis_status::PartiallyExplained,
-            Status::Unexplained => kincal_diagnosis_status::Unexplained,
-        } as u32,
-        method: match d.method {
-            Method::CrossValidation => kincal_diagnosis_method::CrossValidation,
-            Method::InSampleNested => kincal_diagnosis_method::InSampleNested,
-        } as u32,
-        reason: reason as u32,
+        status: status_code(v.status) as u32,
+        method: method_code(d.method) as u32,
+        reason: reason_code(v.reason) as u32,
         reason_part,
         reason_z,
         reason_joint,
@@ -762,7 +986,7 @@ pub(crate) fn report_of<const N: usize>(d: &Diagnosis<N>, cfg: &Config) -> kinca
         heldout_rms_rot_rad: d.final_heldout_rms_rot_rad,
         remaining: gap(&d.remaining),
         remaining_gap_significant: u32::from(d.remaining.z > cfg.z_gap),
-        beyond_library: beyond as u32,
+        beyond_library: beyond_code(beyond) as u32,
         beyond_library_share: beyond_share,
         remaining_rms_axis: d.final_rms_axis,
         explainable: smooth(&d.explainable),

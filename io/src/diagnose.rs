@@ -940,7 +940,7 @@ fn verdict_json<const N: usize>(d: &Diagnosis<N>) -> VerdictJson {
         gap_closed_fraction: d.verdict.gap_closed_fraction,
         gap_closed_rot_fraction: winner.map_or(0.0, |c| c.gap_closed_rot_fraction),
         gap_closed_total_fraction: winner.map_or(0.0, |c| c.gap_closed_total_fraction),
-        reason: reason_code(&d.verdict.reason),
+        reason: d.verdict.reason.name(),
         reason_text: reason_text(d),
         beyond_library: d.beyond_library().name(),
         heldout_rms_pos_mm: d.final_heldout_rms_pos_m * 1e3,
@@ -1182,21 +1182,6 @@ fn extrapolation_json(x: &diagnosis::ExtrapolationCheck) -> ExtrapolationJson {
         threshold: x.threshold,
         significant: x.significant,
         method: "leave-one-range-out: the verdict's model fitted on one half of each joint's range (split at the median) and judged on the other; exact moments of the held-out total, Satterthwaite/Wilson-Hilferty z, Bonferroni over the splits",
-    }
-}
-
-fn reason_code(r: &Reason) -> &'static str {
-    match r {
-        Reason::AtNoiseFloor => "at_noise_floor",
-        Reason::Closed => "closed",
-        Reason::RemainingGap { .. } => "remaining_gap",
-        Reason::RemainingStructure { .. } => "remaining_structure",
-        Reason::DoesNotExtrapolate { .. } => "does_not_extrapolate",
-        Reason::FormNotDetermined { .. } => "form_not_determined",
-        Reason::Worsens { .. } => "worsens",
-        Reason::SmallShare => "small_share",
-        Reason::NoSignificantCandidate => "no_significant_candidate",
-        Reason::ConfoundedWithSessions => "confounded_with_sessions",
     }
 }
 

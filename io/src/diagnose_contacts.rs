@@ -24,6 +24,7 @@
 
 use std::path::Path;
 
+use kincal::diagnosis::Status;
 use kincal::diagnosis::contacts::{contact_gap_z, signed_rank_z};
 use kincal::identify::{distance_estimate, group_estimate};
 use kincal::{Effect, EffectSet, ParamSet, Robot};
@@ -457,12 +458,15 @@ fn verdict(models: &[Model], sigma_m: Option<f64>) -> Option<Report> {
     let (chosen, confounded) = choose(models, &z);
     let status = match gap {
         None => None,
-        Some((gz, _)) if gz <= Z && chosen.is_none() => Some("no_gap"),
-        Some(_) => Some(match chosen.and_then(|c| closed(&models[c])) {
-            Some(f) if f >= 0.8 => "explained",
-            Some(f) if f >= 0.25 => "partially_explained",
-            _ => "unexplained",
-        }),
+        Some((gz, _)) if gz <= Z && chosen.is_none() => Some(Status::NoGap.name()),
+        Some(_) => Some(
+            match chosen.and_then(|c| closed(&models[c])) {
+                Some(f) if f >= 0.8 => Status::Explained,
+                Some(f) if f >= 0.25 => Status::PartiallyExplained,
+                _ => Status::Unexplained,
+            }
+            .name(),
+        ),
     };
     let reports = models
         .iter()

@@ -445,34 +445,13 @@ static int get_diagnose_options(kc_ctx *c, const mxArray *a, kincal_diagnose_opt
 #define KC_MM(x) ((x) * 1e3)
 #define KC_DEG(x) ((x) * 57.29577951308232)
 
-static const char *status_name(uint32_t s)
+/* Field `field` of s(i) = the public name (REPORT.json's text) of report code `code` of
+ * `kind`, from the library: the Rust diagnosis's own names, so this file keeps no table that
+ * could drift; "?" for a code the library does not know. */
+static void set_name(mxArray *s, mwIndex i, const char *field, uint32_t kind, uint32_t code)
 {
-    static const char *const names[] = {"no_gap", "explained", "partially_explained",
-                                        "unexplained"};
-    return s < 4 ? names[s] : "?";
-}
-
-static const char *reason_name(uint32_t r)
-{
-    static const char *const names[] = {"at_noise_floor", "closed", "remaining_gap",
-                                        "remaining_structure", "worsens", "small_share",
-                                        "no_significant_candidate", "does_not_extrapolate",
-                                        "form_not_determined", "confounded_with_sessions"};
-    return r < 10 ? names[r] : "?";
-}
-
-static const char *part_name(uint32_t p)
-{
-    static const char *const names[] = {"", "position", "rotation", "position and rotation"};
-    return p < 4 ? names[p] : "?";
-}
-
-static const char *warning_name(uint32_t w)
-{
-    static const char *const names[] = {"?", "noise_vs_repeats", "noise_vs_residuals",
-                                        "gap_despite_gap_test", "too_many_suspects",
-                                        "repeats_drift"};
-    return w < 6 ? names[w] : "?";
+    const char *name = kincal_diagnosis_name(kind, code);
+    mxSetField(s, i, field, mxCreateString(name != NULL ? name : "?"));
 }
 
 /* NaN for a statistic the report leaves out (REPORT.json: null). */
@@ -617,13 +596,12 @@ static mxArray *diagnosis_struct(const kincal_diagnosis_report *r)
     size_t nw = r->n_warnings < KINCAL_DIAG_MAX_WARNINGS ? r->n_warnings
                                                          : KINCAL_DIAG_MAX_WARNINGS;
     const kincal_model_score *base = &r->baseline;
-    mxSetField(s, 0, "method",
-               mxCreateString(r->method == 0 ? "cross_validation" : "in_sample_nested"));
+    set_name(s, 0, "method", KINCAL_DIAGNOSIS_NAME_KIND_METHOD, r->method);
     warn = mxCreateStructMatrix(1, (mwSize)nw, 7, (const char **)WARNING_FIELDS);
     for (k = 0; k < nw; ++k) {
         const kincal_diagnosis_warning *w = &r->warnings[k];
-        mxSetField(warn, (mwIndex)k, "code", mxCreateString(warning_name(w->code)));
-        mxSetField(warn, (mwIndex)k, "part", mxCreateString(part_name(w->part)));
+        set_name(warn, (mwIndex)k, "code", KINCAL_DIAGNOSIS_NAME_KIND_WARNING, w->code);
+        set_name(warn, (mwIndex)k, "part", KINCAL_DIAGNOSIS_NAME_KIND_PART, w->part);
         set_num(warn, (mwIndex)k, "ratio", w->ratio);
         set_num(warn, (mwIndex)k, "z", w->z);
         set_num(warn, (mwIndex)k, "z_gap", w->z_gap);
@@ -652,7 +630,7 @@ static mxArray *diagnosis_struct(const kincal_diagnosis_report *r)
     mxSetField(s, 0, "baseline", b);
     mxSetField(s, 0, "candidates", candidates_struct(r));
     mxSetField(v, 0, "effects", effect_names(r->effects));
-    mxSetField(v, 0, "status", mxCreateString(status_name(r->status)));
+    set_name(v, 0, "status", KINCAL_DIAGNOSIS_NAME_KIND_STATUS, r->status);
     mxSetField(v, 0, "confounded_with", effect_names(r->confounded_effects));
     conf = mxCreateCellMatrix(1, (mwSize)nc);
     for (k = 0; k < nc; ++k) {
@@ -662,13 +640,11 @@ static mxArray *diagnosis_struct(const kincal_diagnosis_report *r)
     set_num(v, 0, "gap_closed_fraction", r->gap_closed_fraction);
     set_num(v, 0, "gap_closed_rot_fraction", r->gap_closed_rot_fraction);
     set_num(v, 0, "gap_closed_total_fraction", r->gap_closed_total_fraction);
-    mxSetField(v, 0, "reason", mxCreateString(reason_name(r->reason)));
-    mxSetField(v, 0, "reason_part", mxCreateString(part_name(r->reason_part)));
+    set_name(v, 0, "reason", KINCAL_DIAGNOSIS_NAME_KIND_REASON, r->reason);
+    set_name(v, 0, "reason_part", KINCAL_DIAGNOSIS_NAME_KIND_PART, r->reason_part);
     set_num(v, 0, "reason_z", r->reason_z);
-    mxSetField(v, 0, "beyond_library",
-               mxCreateString(r->beyond_library == 1   ? "smooth_effect"
-                              : r->beyond_library == 2 ? "not_a_function_of_q"
-                                                       : "not_applicable"));
+    set_name(v, 0, "beyond_library", KINCAL_DIAGNOSIS_NAME_KIND_BEYOND_LIBRARY,
+             r->beyond_library);
     set_num(v, 0, "beyond_library_share", r->beyond_library_share);
     set_num(v, 0, "heldout_rms_pos_mm", KC_MM(r->heldout_rms_pos_m));
     set_num(v, 0, "heldout_rms_rot_deg", KC_DEG(r->heldout_rms_rot_rad));

@@ -20,7 +20,8 @@
 // - instrument-free calibration (kincal_identify_constraints): contacts made by IK on a
 //   perturbed ARIA recover its parameters, targets, plane and distance to 1e-9; bad rows
 //   are named;
-// - the diagnosis (kincal_diagnose): a planted joint compliance is `explained` by it;
+// - the diagnosis (kincal_diagnose): a planted joint compliance is `explained` by it; the
+//   report's codes named by kincal_diagnosis_name;
 // - a model file the CLI wrote (KINCAL_TEST_MODEL, from run.sh) read by kincal_model_read:
 //   kincal_fk_pq equals the CLI's `kincal predict` (KINCAL_TEST_PREDICT) on every row, and a
 //   broken copy is refused with its line and column; the same predictions read back through
@@ -1172,6 +1173,18 @@ void test_diagnosis() {
     CHECK(report->winner < report->n_candidates &&
           report->candidates[report->winner].effects == compliance);
     CHECK(report->n_suspects == 0 && report->groups == 60 && report->folds == 5);
+    // The codes' public names (REPORT.json's text) from the library, not a table of our own.
+    const auto named = [](uint32_t kind, uint32_t code, const char *expected) {
+        const char *name = kincal_diagnosis_name(kind, code);
+        return name != nullptr && std::strcmp(name, expected) == 0;
+    };
+    CHECK(named(KINCAL_DIAGNOSIS_NAME_KIND_STATUS, report->status, "explained"));
+    CHECK(named(KINCAL_DIAGNOSIS_NAME_KIND_REASON, report->reason, "closed"));
+    CHECK(named(KINCAL_DIAGNOSIS_NAME_KIND_METHOD, report->method, "cross_validation"));
+    CHECK(named(KINCAL_DIAGNOSIS_NAME_KIND_WARNING, KINCAL_DIAGNOSIS_WARNING_CODE_REPEATS_DRIFT,
+                "repeats_drift"));
+    CHECK(kincal_diagnosis_name(KINCAL_DIAGNOSIS_NAME_KIND_WARNING, 0) == nullptr);
+    CHECK(kincal_diagnosis_name(KINCAL_DIAGNOSIS_NAME_KIND_BEYOND_LIBRARY + 1, 0) == nullptr);
     // The identified compliance is the planted one within 15 %.
     double c2 = 0.0;
     CHECK_STATUS(kincal_robot_get_param_by_label(&model, "compliance_2", &c2, &err),

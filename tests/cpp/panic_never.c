@@ -31,6 +31,12 @@ static int failures = 0;
         }                                                            \
     } while (0)
 
+/* Whether kincal_diagnosis_name(kind, code) is `expected` (NULL: whether it is NULL). */
+static int diagnosis_name_is(uint32_t kind, uint32_t code, const char *expected) {
+    const char *name = kincal_diagnosis_name(kind, code);
+    return expected == NULL ? name == NULL : name != NULL && strcmp(name, expected) == 0;
+}
+
 int main(void) {
     kincal_robot robot;
     kincal_error err;
@@ -163,6 +169,25 @@ int main(void) {
         CHECK(kincal_fk(&robot, q2, 2, NULL, t, 16, &err) == KINCAL_STATUS_OK);
         CHECK(fabs(t[12] - 0.8) < 1e-12 && fabs(t[13]) < 1e-12);
     }
+    /* The diagnosis's public names (REPORT.json's text) of the report's codes. */
+    CHECK(diagnosis_name_is(KINCAL_DIAGNOSIS_NAME_KIND_WARNING,
+                            KINCAL_DIAGNOSIS_WARNING_CODE_REPEATS_DRIFT, "repeats_drift"));
+    CHECK(diagnosis_name_is(KINCAL_DIAGNOSIS_NAME_KIND_STATUS,
+                            KINCAL_DIAGNOSIS_STATUS_PARTIALLY_EXPLAINED, "partially_explained"));
+    CHECK(diagnosis_name_is(KINCAL_DIAGNOSIS_NAME_KIND_REASON,
+                            KINCAL_DIAGNOSIS_REASON_CONFOUNDED_WITH_SESSIONS,
+                            "confounded_with_sessions"));
+    CHECK(diagnosis_name_is(KINCAL_DIAGNOSIS_NAME_KIND_PART, KINCAL_DIAGNOSIS_PART_BOTH,
+                            "position and rotation"));
+    CHECK(diagnosis_name_is(KINCAL_DIAGNOSIS_NAME_KIND_PART, KINCAL_DIAGNOSIS_PART_NONE, ""));
+    CHECK(diagnosis_name_is(KINCAL_DIAGNOSIS_NAME_KIND_METHOD,
+                            KINCAL_DIAGNOSIS_METHOD_IN_SAMPLE_NESTED, "in_sample_nested"));
+    CHECK(diagnosis_name_is(KINCAL_DIAGNOSIS_NAME_KIND_BEYOND_LIBRARY,
+                            KINCAL_BEYOND_LIBRARY_NOT_A_FUNCTION_OF_Q, "not_a_function_of_q"));
+    CHECK(diagnosis_name_is(KINCAL_DIAGNOSIS_NAME_KIND_WARNING, 0, NULL));
+    CHECK(diagnosis_name_is(KINCAL_DIAGNOSIS_NAME_KIND_WARNING,
+                            KINCAL_DIAGNOSIS_WARNING_CODE_REPEATS_DRIFT + 1, NULL));
+    CHECK(diagnosis_name_is(KINCAL_DIAGNOSIS_NAME_KIND_BEYOND_LIBRARY + 1, 0, NULL));
 #if defined(KINCAL_PANIC_CANARY)
     CHECK(kincal_test_panic(&err) == KINCAL_STATUS_PANIC);
 #endif

@@ -592,6 +592,26 @@ pub enum Reason {
     ConfoundedWithSessions,
 }
 
+impl Reason {
+    /// The public name (REPORT.json `verdict.reason`: `at_noise_floor`, `closed`,
+    /// `remaining_gap`, ...), here so the CLI's report and the C ABI share one spelling.
+    #[must_use]
+    pub const fn name(&self) -> &'static str {
+        match self {
+            Reason::AtNoiseFloor => "at_noise_floor",
+            Reason::Closed => "closed",
+            Reason::RemainingGap { .. } => "remaining_gap",
+            Reason::RemainingStructure { .. } => "remaining_structure",
+            Reason::DoesNotExtrapolate { .. } => "does_not_extrapolate",
+            Reason::FormNotDetermined { .. } => "form_not_determined",
+            Reason::Worsens { .. } => "worsens",
+            Reason::SmallShare => "small_share",
+            Reason::NoSignificantCandidate => "no_significant_candidate",
+            Reason::ConfoundedWithSessions => "confounded_with_sessions",
+        }
+    }
+}
+
 /// How the candidates were judged.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Method {

@@ -7,7 +7,10 @@
 use core::ffi::{CStr, c_void};
 use core::ptr::{null, null_mut};
 
-use kincal::diagnosis::{Config, DiagWorkspace, Diagnosis, PoseDiagnosis, Status, diagnose};
+use kincal::diagnosis::{
+    BeyondLibrary, Config, DiagWorkspace, Diagnosis, Method, Part, PoseDiagnosis, Reason, Status,
+    Warning, diagnose,
+};
 use kincal::identify::Measurement;
 use kincal::rng::SplitMix64;
 use kincal::sim::{SessionConfig, add_effect, measure, perturb_geometry, simulate_session};
@@ -521,5 +524,178 @@ fn the_documented_workspace_sizes_hold() {
         per_pose(&|n| crate::diagnosis::kincal_diagnose_workspace_size(6, n)) as usize,
         2.1e3,
         "diagnose per pose",
+    );
+}
+
+// ---------------------------------------------------------------- names
+
+/// `kincal_diagnosis_name` as Rust text (`None` for NULL).
+fn c_name(kind: u32, code: u32) -> Option<&'static str> {
+    let p = kincal_diagnosis_name(kind, code);
+    (!p.is_null()).then(|| unsafe { CStr::from_ptr(p) }.to_str().unwrap())
+}
+
+/// Checks every code of one kind, in code order from `first`, against the core name this
+/// test pairs it with, and that the codes just outside the range have no name.
+fn check_kind(kind: kincal_diagnosis_name_kind, first: u32, codes: &[(u32, &str)]) {
+    let k = kind as u32;
+    for (i, &(code, name)) in codes.iter().enumerate() {
+        assert_eq!(code, first + i as u32, "{kind:?}: codes are contiguous");
+        assert_eq!(c_name(k, code), Some(name), "{kind:?} code {code}");
+    }
+    assert_eq!(
+        c_name(k, first + codes.len() as u32),
+        None,
+        "{kind:?}: one past the last"
+    );
+    if first > 0 {
+        assert_eq!(c_name(k, first - 1), None, "{kind:?}: one before the first");
+    }
+    assert_eq!(c_name(k, u32::MAX), None, "{kind:?}: u32::MAX");
+}
+
+/// Every value of every C enum the report uses names the core value the report maps to it,
+/// with the core's text. The pairs are written here by hand against the C enums (each match
+/// is exhaustive: a new C value fails to compile until it is listed), independently of the
+/// ABI's tables, which derive code and text from the core value.
+#[test]
+fn every_diagnosis_code_has_the_core_name() {
+    use kincal_diagnosis_name_kind as K;
+
+    use kincal_diagnosis_status as S;
+    let status = |c: S| match c {
+        S::NoGap => Status::NoGap,
+        S::Explained => Status::Explained,
+        S::PartiallyExplained => Status::PartiallyExplained,
+        S::Unexplained => Status::Unexplained,
+    };
+    let all = [
+        S::NoGap,
+        S::Explained,
+        S::PartiallyExplained,
+        S::Unexplained,
+    ];
+    let codes: Vec<_> = all.map(|c| (c as u32, status(c).name())).into();
+    check_kind(K::Status, 0, &codes);
+
+    use kincal_diagnosis_reason as R;
+    let reason = |c: R| match c {
+        R::AtNoiseFloor => Reason::AtNoiseFloor,
+        R::Closed => Reason::Closed,
+        R::RemainingGap => Reason::RemainingGap {
+            z: 4.0,
+            part: Part::Rotation,
+        },
+        R::RemainingStructure => Reason::RemainingStructure { z: 4.0 },
+        R::Worsens => Reason::Worsens {
+            z: -4.0,
+            part: Part::Position,
+        },
+        R::SmallShare => Reason::SmallShare,
+        R::NoSignificantCandidate => Reason::NoSignificantCandidate,
+        R::DoesNotExtrapolate => Reason::DoesNotExtrapolate {
+            z: 5.0,
+            joint: 2,
+            upper: true,
+        },
+        R::FormNotDetermined => Reason::FormNotDetermined {
+            z: 1.0,
+            effect: Effect::Thermal,
+        },
+        R::ConfoundedWithSessions => Reason::ConfoundedWithSessions,
+    };
+    let all = [
+        R::AtNoiseFloor,
+        R::Closed,
+        R::RemainingGap,
+        R::RemainingStructure,
+        R::Worsens,
+        R::SmallShare,
+        R::NoSignificantCandidate,
+        R::DoesNotExtrapolate,
+        R::FormNotDetermined,
+        R::ConfoundedWithSessions,
+    ];
+    let codes: Vec<_> = all.map(|c| (c as u32, reason(c).name())).into();
+    check_kind(K::Reason, 0, &codes);
+
+    use kincal_diagnosis_part as P;
+    // 0: not applicable, the empty string (no core value).
+    let part = |c: P| match c {
+        P::None => "",
+        P::Position => Part::Position.name(),
+        P::Rotation => Part::Rotation.name(),
+        P::Both => Part::Both.name(),
+    };
+    let all = [P::None, P::Position, P::Rotation, P::Both];
+    let codes: Vec<_> = all.map(|c| (c as u32, part(c))).into();
+    check_kind(K::Part, 0, &codes);
+
+    use kincal_diagnosis_warning_code as W;
+    let warning = |c: W| match c {
+        W::NoiseVsRepeats => Warning::NoiseVsRepeats {
+            part: Part::Position,
+            ratio: 2.0,
+            z: 5.0,
+        },
+        W::NoiseVsResiduals => Warning::NoiseVsResiduals {
+            part: Part::Rotation,
+            ratio: 0.5,
+            z: -5.0,
+        },
+        W::GapDespiteGapTest => Warning::GapDespiteGapTest {
+            z_gap: 1.0,
+            z_candidate: 4.0,
+        },
+        W::TooManySuspects => Warning::TooManySuspects { count: 9, cap: 3 },
+        W::RepeatsDrift => Warning::RepeatsDrift {
+            part: Part::Position,
+            ratio: f64::NAN,
+            z: 4.0,
+        },
+    };
+    let all = [
+        W::NoiseVsRepeats,
+        W::NoiseVsResiduals,
+        W::GapDespiteGapTest,
+        W::TooManySuspects,
+        W::RepeatsDrift,
+    ];
+    let codes: Vec<_> = all.map(|c| (c as u32, warning(c).code())).into();
+    check_kind(K::Warning, 1, &codes);
+
+    use kincal_diagnosis_method as M;
+    let method = |c: M| match c {
+        M::CrossValidation => Method::CrossValidation,
+        M::InSampleNested => Method::InSampleNested,
+    };
+    let all = [M::CrossValidation, M::InSampleNested];
+    let codes: Vec<_> = all.map(|c| (c as u32, method(c).name())).into();
+    check_kind(K::Method, 0, &codes);
+
+    use kincal_beyond_library as B;
+    let beyond = |c: B| match c {
+        B::NotApplicable => BeyondLibrary::NotApplicable,
+        B::SmoothEffect => BeyondLibrary::SmoothEffect { share: 0.3 },
+        B::NotAFunctionOfQ => BeyondLibrary::NotAFunctionOfQ,
+    };
+    let all = [B::NotApplicable, B::SmoothEffect, B::NotAFunctionOfQ];
+    let codes: Vec<_> = all.map(|c| (c as u32, beyond(c).name())).into();
+    check_kind(K::BeyondLibrary, 0, &codes);
+
+    // The kinds themselves: one past the last, and far off.
+    for kind in [K::BeyondLibrary as u32 + 1, u32::MAX] {
+        for code in 0..8 {
+            assert_eq!(c_name(kind, code), None, "kind {kind} code {code}");
+        }
+    }
+    // Two of the texts the MEX showed from its own tables before it called this.
+    assert_eq!(
+        c_name(K::Warning as u32, W::RepeatsDrift as u32),
+        Some("repeats_drift")
+    );
+    assert_eq!(
+        c_name(K::Part as u32, P::Both as u32),
+        Some("position and rotation")
     );
 }
