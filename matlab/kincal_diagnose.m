@@ -22,7 +22,8 @@ function [model, report, geometric] = kincal_diagnose(robot, varargin)
 %   (code, part, ratio, z, ...), suspect_rows (1-based), noise_floor, baseline, candidates,
 %   verdict (effects, status, confounded_with, confounded_candidates, gap_closed_fraction,
 %   gap_closed_rot_fraction, gap_closed_total_fraction, reason, reason_part, reason_z,
-%   beyond_library, beyond_library_share, heldout_rms_pos_mm, heldout_rms_rot_deg,
+%   reason_effects (for form_not_determined: the effect whose form the data do not
+%   determine, REPORT.json's form.effect), beyond_library, beyond_library_share, heldout_rms_pos_mm, heldout_rms_rot_deg,
 %   remaining_gap_z[_pos|_rot], remaining_gap_significant, remaining_rms_axis),
 %   explainable and remaining_structure (the library-free smooth check), groups, folds.
 %   REPORT.json's where, per-pose rows, reason_text, parameters and files are not here

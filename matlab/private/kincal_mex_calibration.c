@@ -568,7 +568,7 @@ static const char *const BASELINE_FIELDS[] = {
 static const char *const VERDICT_FIELDS[] = {
     "effects", "status", "confounded_with", "confounded_candidates", "gap_closed_fraction",
     "gap_closed_rot_fraction", "gap_closed_total_fraction", "reason", "reason_part",
-    "reason_z", "beyond_library", "beyond_library_share", "heldout_rms_pos_mm",
+    "reason_z", "reason_effects", "beyond_library", "beyond_library_share", "heldout_rms_pos_mm",
     "heldout_rms_rot_deg", "remaining_gap_z", "remaining_gap_z_pos", "remaining_gap_z_rot",
     "remaining_gap_significant", "remaining_rms_axis", NULL,
 };
@@ -643,6 +643,7 @@ static mxArray *diagnosis_struct(const kincal_diagnosis_report *r)
     set_name(v, 0, "reason", KINCAL_DIAGNOSIS_NAME_KIND_REASON, r->reason);
     set_name(v, 0, "reason_part", KINCAL_DIAGNOSIS_NAME_KIND_PART, r->reason_part);
     set_num(v, 0, "reason_z", r->reason_z);
+    mxSetField(v, 0, "reason_effects", effect_names(r->reason_effects));
     set_name(v, 0, "beyond_library", KINCAL_DIAGNOSIS_NAME_KIND_BEYOND_LIBRARY,
              r->beyond_library);
     set_num(v, 0, "beyond_library_share", r->beyond_library_share);

@@ -189,6 +189,7 @@ v = rep.verdict;
 expect_true(strcmp(v.status, 'explained'), 'status %s', v.status);
 expect_true(isequal(v.effects, {'joint_compliance'}), 'effects %s', strjoin(v.effects, ' '));
 expect_true(strcmp(v.reason, 'closed') && ~v.remaining_gap_significant, 'reason %s', v.reason);
+expect_true(iscell(v.reason_effects) && isempty(v.reason_effects), 'no form reason');
 expect_true(strcmp(rep.method, 'cross_validation') && rep.folds == 5 && rep.groups == 60, ...
     'method');
 expect_true(rep.baseline.gap && rep.baseline.gap_z > 3, 'gap z %g', rep.baseline.gap_z);
@@ -208,7 +209,8 @@ for f = {'method', 'warnings', 'suspect_rows', 'noise_floor', 'baseline', 'candi
     expect_true(isfield(rep, f{1}), 'REPORT.json field %s', f{1});
 end
 for f = {'effects', 'status', 'confounded_with', 'gap_closed_fraction', ...
-        'gap_closed_rot_fraction', 'gap_closed_total_fraction', 'reason', 'beyond_library', ...
+        'gap_closed_rot_fraction', 'gap_closed_total_fraction', 'reason', 'reason_effects', ...
+        'beyond_library', ...
         'remaining_gap_z', 'remaining_gap_significant', 'remaining_rms_axis'}
     expect_true(isfield(v, f{1}), 'REPORT.json verdict field %s', f{1});
 end
