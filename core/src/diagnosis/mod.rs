@@ -2117,7 +2117,20 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
         // The fit and its analysis built in one place (no separate copies on the stack).
         let mut fit = Identification::start(&lin, o.algorithm, None);
         model_analysis(ws, mdl, score(out, mdl), cfg.rank_tol, &mut fit.analysis)?;
-        crate::identify::identify_into(data, &o, &mut ws.id, &mut fit)?;
+        match crate::identify::identify_into(data, &o, &mut ws.id, &mut fit) {
+            Ok(()) => {}
+            // From the geometric calibration the fit of the verdict's model can crawl
+            // without end on position-only rows (seen with base_frame, joint_compliance
+            // and joint_cyclic; with base_frame the model's analysis there keeps 27
+            // parameters, condition numbers 1e4–1e5, where `calibrate`'s analysis at the
+            // description keeps 24, condition number 140): the whole
+            // diagnosis failed (13 of 5,700 cases of tests/diagnosis_families.rs). Fitted
+            // from the description, as `calibrate` fits, the same model converges.
+            Err(Error::NotConverged { .. }) => {
+                crate::identify::identify_in_place(robot, data, &o, &mut ws.id, &mut fit)?;
+            }
+            Err(e) => return Err(e),
+        }
         let mut sorted = [0usize; P];
         narrowed = Some(cv::narrow_to_model(ws, mdl, &mut sorted));
         ws.g_all.reset(ws.n_u)?;
