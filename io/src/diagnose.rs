@@ -969,6 +969,15 @@ fn form_json(f: &diagnosis::FormCheck) -> FormJson {
     }
 }
 
+/// The reason of a verdict whose form check found `effect`'s form not determined.
+fn form_reason_text(z: f64, effect: Effect) -> String {
+    format!(
+        "the chosen effects fit, but {} explains the data as well held out (paired z = {z:.1}): the data do not determine {}'s form, so part of the gap may come from an effect outside the library",
+        form_alternative_text(effect),
+        effect.name()
+    )
+}
+
 /// What the form check put in place of `effect`, for the verdict's reason.
 fn form_alternative_text(effect: Effect) -> &'static str {
     match effect {
@@ -1247,11 +1256,7 @@ fn status_reason_text<const N: usize>(d: &Diagnosis<N>) -> String {
             joint + 1,
             if upper { "upper" } else { "lower" }
         ),
-        Reason::FormNotDetermined { z, effect } => format!(
-            "the chosen effects fit, but {} explains the data as well held out (paired z = {z:.1}): the data do not determine {}'s form, so part of the gap may come from an effect outside the library",
-            form_alternative_text(effect),
-            effect.name()
-        ),
+        Reason::FormNotDetermined { z, effect } => form_reason_text(z, effect),
         Reason::Worsens { z, part } => format!(
             "the chosen effects make the {} significantly worse (z = {z:.1})",
             part_text(part)
@@ -1293,5 +1298,18 @@ mod tests {
         });
         assert!(unstated.contains("state --sigma-rot-deg"), "{unstated}");
         assert!(!unstated.contains("than stated"), "{unstated}");
+    }
+
+    /// `form_not_determined` says whose form and what explained the data as well.
+    #[test]
+    fn form_reason_names_the_effect_and_its_alternative() {
+        let thermal = form_reason_text(1.24, Effect::Thermal);
+        assert!(thermal.contains("determine thermal's form"), "{thermal}");
+        assert!(thermal.contains("follows the temperature"), "{thermal}");
+        assert!(thermal.contains("paired z = 1.2"), "{thermal}");
+        let cyclic = form_reason_text(-0.5, Effect::JointCyclic);
+        assert!(cyclic.contains("determine joint_cyclic's form"), "{cyclic}");
+        assert!(cyclic.contains("3rd and 4th harmonics"), "{cyclic}");
+        assert!(!cyclic.contains("temperature"), "{cyclic}");
     }
 }
