@@ -75,10 +75,7 @@ pub(crate) fn pose_rows<const N: usize, const P: usize>(
         }
     }
     let n_jac = Robot::<N>::NUM_PARAMS;
-    let jac = ws.jac.get_mut(..n_jac).ok_or(Error::CapacityExceeded {
-        needed: n_jac,
-        capacity: crate::identify::MAX_MODEL_PARAMS,
-    })?;
+    let jac = super::jacobian_slots::<N>(&mut ws.jac)?;
     let lin = at.robot;
     let torques = &mut ws.id.torques;
     if torques.generation() != at.torques {

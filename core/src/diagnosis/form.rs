@@ -49,7 +49,7 @@
 
 use super::{DiagWorkspace, MAX_MODELS, ModelAcc, PoseDiagnosis, Rows, SCREEN_MODEL, cv, paired_z};
 use crate::effects::Effect;
-use crate::error::{Error, ParamIndex, Result};
+use crate::error::{ParamIndex, Result};
 use crate::identify::Measurement;
 use crate::math::{cos, sin, sqrt};
 use crate::model::{Robot, THERMAL_REFERENCE_C};
@@ -203,17 +203,13 @@ fn common_translation<const N: usize, const P: usize>(
     poses: &[PoseDiagnosis],
     ws: &mut DiagWorkspace<P>,
 ) -> Result<[f64; 3]> {
-    let n_jac = Robot::<N>::NUM_PARAMS;
     let thermal = ParamId::Thermal.index(N).0;
     let (mut num, mut den) = ([0.0; 3], [0.0; 3]);
     for (m, p) in data.iter().zip(poses) {
         let Some(t) = m.state.temp_c.filter(|_| !p.suspect) else {
             continue;
         };
-        let jac = ws.jac.get_mut(..n_jac).ok_or(Error::CapacityExceeded {
-            needed: n_jac,
-            capacity: crate::identify::MAX_MODEL_PARAMS,
-        })?;
+        let jac = super::jacobian_slots::<N>(&mut ws.jac)?;
         m.model_jacobian(geometric, jac)?;
         let col = jac.get(thermal).copied().unwrap_or([0.0; 6]);
         let dt = t - THERMAL_REFERENCE_C;

@@ -2308,6 +2308,18 @@ pub fn diagnose_sessions_into<const N: usize, const P: usize>(
     Ok(())
 }
 
+/// The first `Robot::<N>::NUM_PARAMS` columns of the workspace's Jacobian (`ws.jac`), where
+/// a pose's whole identification Jacobian goes; capacity exceeded for a larger model.
+pub(crate) fn jacobian_slots<const N: usize>(
+    jac: &mut [[f64; 6]; MAX_MODEL_PARAMS],
+) -> Result<&mut [[f64; 6]]> {
+    let n = Robot::<N>::NUM_PARAMS;
+    jac.get_mut(..n).ok_or(Error::CapacityExceeded {
+        needed: n,
+        capacity: MAX_MODEL_PARAMS,
+    })
+}
+
 /// Row weights `1/σ²` and their square roots per component for the noise floor.
 fn whitening(noise: &NoiseFloor) -> (f64, f64, [f64; 6]) {
     let wp = 1.0 / (noise.sigma_pos_m * noise.sigma_pos_m);

@@ -26,7 +26,7 @@
 
 use super::{DiagWorkspace, PoseDiagnosis};
 use crate::effects::Effect;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::identify::Measurement;
 use crate::math::sqrt;
 use crate::model::Robot;
@@ -193,15 +193,11 @@ pub(crate) fn test<const N: usize, const P: usize>(
             *v = 0.0;
         }
     }
-    let n_jac = Robot::<N>::NUM_PARAMS;
     for ((m, &s), p) in data.iter().zip(sessions).zip(poses) {
         if p.suspect {
             continue;
         }
-        let jac = ws.jac.get_mut(..n_jac).ok_or(Error::CapacityExceeded {
-            needed: n_jac,
-            capacity: crate::identify::MAX_MODEL_PARAMS,
-        })?;
+        let jac = super::jacobian_slots::<N>(&mut ws.jac)?;
         m.model_jacobian(lin, jac)?;
         for k in (0..6).filter(|&k| m.mask.has(k)) {
             for c in 0..n_cols {
