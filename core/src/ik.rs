@@ -415,20 +415,20 @@ pub(crate) fn joint_jacobian<const N: usize>(
     f: &Frames<N>,
 ) -> SMatrix<f64, 6, N> {
     // Frame j−1 of joint j: frame 0, then each link's frame but the last.
-    let preceding = core::iter::once(&f.t_base_0)
-        .chain(f.t_base_link.iter())
-        .map(|t| {
-            (
-                crate::math::column3(t.rotation.matrix(), 2),
-                t.translation.vector,
-            )
-        });
+    let mut preceding = [(Vector3::zeros(), Vector3::zeros()); N];
+    let frames = core::iter::once(&f.t_base_0).chain(f.t_base_link.iter());
+    for (slot, t) in preceding.iter_mut().zip(frames) {
+        *slot = (
+            crate::math::column3(t.rotation.matrix(), 2),
+            t.translation.vector,
+        );
+    }
     let mut j = SMatrix::<f64, 6, N>::from_array_storage(ArrayStorage([[0.0; 6]; N]));
     joint_jacobian_columns(
         robot,
         state,
         &f.t_base_ee.translation.vector,
-        preceding,
+        &preceding,
         &mut j.data.0,
     );
     j
@@ -441,27 +441,40 @@ pub(crate) fn joint_jacobian_columns<const N: usize>(
     robot: &Robot<N>,
     state: &JointState<N>,
     pe: &Vector3<f64>,
-    preceding: impl Iterator<Item = (Vector3<f64>, Vector3<f64>)>,
+    preceding: &[(Vector3<f64>, Vector3<f64>); N],
     columns: &mut [[f64; 6]; N],
 ) {
-    let e = robot.effect_params();
-    // Iterators over the joints and the Jacobian's column arrays rather than indices: their
-    // bounds checks stay (as panic paths) where the optimiser does not inline (opt-level s/z).
-    let joints = preceding
-        .zip(state.q.iter().zip(e.cyclic.iter()).zip(e.scale.iter()))
-        .zip(robot.turn_mask());
-    for (column, (((z_prev, p_prev), ((&q, c), &scale)), turn)) in columns.iter_mut().zip(joints) {
-        let dcyclic = if c.iter().any(|&v| v != 0.0) {
-            let (s1, c1) = crate::math::sin_cos(q);
-            let [sin1, cos1, sin2, cos2] = *c;
-            sin1 * c1 - cos1 * s1 + 2.0 * sin2 * (c1 * c1 - s1 * s1) - 4.0 * cos2 * s1 * c1
-        } else {
-            0.0
-        };
-        let dtheta = 1.0 + scale + dcyclic;
+    let rates = joint_rates(robot, &state.q);
+    let turn = robot.turn_mask();
+    // Plain loops over fixed-size arrays: no bounds checks, and the joints' effects are
+    // looked at once ([`joint_rates`]), not per column (a controller's inner loop).
+    for j in 0..N {
+        let (z_prev, p_prev) = preceding[j];
+        let dtheta = rates[j];
         // Revolute: [z × (p_e − p); z]·dθ/dq; prismatic: [z; 0]·(1 + scale).
-        let lin = (z_prev.cross(&(pe - p_prev)) * turn + z_prev * (1.0 - turn)) * dtheta;
-        let ang = z_prev * (dtheta * turn);
-        *column = [lin.x, lin.y, lin.z, ang.x, ang.y, ang.z];
+        let lin = (z_prev.cross(&(pe - p_prev)) * turn[j] + z_prev * (1.0 - turn[j])) * dtheta;
+        let ang = z_prev * (dtheta * turn[j]);
+        columns[j] = [lin.x, lin.y, lin.z, ang.x, ang.y, ang.z];
     }
+}
+
+/// dθ_j/dq_j at the readings `q`: 1 + the scale effect + the cyclic effect's derivative.
+/// Without cyclic terms (the usual model) no joint's derivative is evaluated; with them,
+/// every joint's is (a joint without terms adds a zero, which leaves the sum's bits as they
+/// are), so no branch per joint.
+fn joint_rates<const N: usize>(robot: &Robot<N>, q: &[f64; N]) -> [f64; N] {
+    let e = robot.effect_params();
+    let mut rates = [1.0; N];
+    for j in 0..N {
+        rates[j] = 1.0 + e.scale[j];
+    }
+    if crate::model::any_non_zero(e.cyclic.as_flattened()) {
+        for j in 0..N {
+            let (s1, c1) = crate::math::sin_cos(q[j]);
+            let [sin1, cos1, sin2, cos2] = e.cyclic[j];
+            rates[j] +=
+                sin1 * c1 - cos1 * s1 + 2.0 * sin2 * (c1 * c1 - s1 * s1) - 4.0 * cos2 * s1 * c1;
+        }
+    }
+    rates
 }

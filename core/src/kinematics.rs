@@ -245,13 +245,7 @@ impl<const N: usize> Robot<N> {
             },
         );
         check_pose(&t)?;
-        crate::ik::joint_jacobian_columns(
-            self,
-            state,
-            &t.translation.vector,
-            preceding.into_iter(),
-            jac,
-        );
+        crate::ik::joint_jacobian_columns(self, state, &t.translation.vector, &preceding, jac);
         Ok(t)
     }
 

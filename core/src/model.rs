@@ -837,13 +837,13 @@ impl<const N: usize> Robot<N> {
         state.validate()?;
         let e = &self.effects;
         let mut out = state.q;
-        let has_compliance = e.compliance.iter().any(|&c| c != 0.0);
+        let has_compliance = any_non_zero(&e.compliance);
         let tau = match (has_compliance, known) {
             (false, _) => [0.0; N],
             (true, Some(t)) => *t,
             (true, None) => self.gravity_torques(&state.q),
         };
-        let has_backlash = e.backlash.iter().any(|&b| b != 0.0);
+        let has_backlash = any_non_zero(&e.backlash);
         let approach = match (has_backlash, state.approach) {
             (true, None) => {
                 return Err(Error::MissingInput {
@@ -852,8 +852,8 @@ impl<const N: usize> Robot<N> {
             }
             (_, s) => s.unwrap_or([0.0; N]),
         };
-        let has_scale = e.scale.iter().any(|&k| k != 0.0);
-        let has_cyclic = e.cyclic.iter().any(|c| c.iter().any(|&v| v != 0.0));
+        let has_scale = any_non_zero(&e.scale);
+        let has_cyclic = any_non_zero(e.cyclic.as_flattened());
         let torques = has_compliance.then_some(tau);
         if !(has_compliance || has_backlash || has_scale || has_cyclic) {
             // The geometric model: the readings are the angles.
@@ -1046,4 +1046,12 @@ fn set_at<const N: usize>(arr: &mut [f64; N], j: usize, value: f64) {
     if let Some(v) = arr.get_mut(j) {
         *v = value;
     }
+}
+
+/// Whether any value is `!= 0.0` (NaN included), without a branch per value: FK asks it of
+/// every effect's parameters on every call, and the usual model has none.
+#[inline(always)]
+pub(crate) fn any_non_zero(values: &[f64]) -> bool {
+    // The bits without the sign are zero exactly for ±0.
+    values.iter().fold(0, |acc, v| acc | (v.to_bits() << 1)) != 0
 }
