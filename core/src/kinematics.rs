@@ -63,11 +63,11 @@ fn check_pose(t: &Transform) -> Result<()> {
 /// (after `Rz·Tz·Tx`, before `Rx(α)·Ry(β)`) and its frame.
 ///
 /// Speed (FK is dominated by this loop): every sine and cosine is taken before the chain,
-/// all joints at once ([`crate::math::sin_cos_lanes`]: two per SSE2 register, libm's bits),
-/// so the trigonometry does not interleave with the chain's dependent arithmetic; each link
-/// then turns column pairs of the running rotation (`Rz(θ)`, `Rx(α)`, and `Ry(β)` only
-/// where β ≠ 0, which gives the same result as turning by cos 0 = 1, sin 0 = 0) instead of
-/// multiplying 3×3 matrices.
+/// all joints at once ([`crate::math::sin_cos_lanes`]: two per SSE2 register, within 1 ulp
+/// of libm), so the trigonometry does not interleave with the chain's dependent arithmetic;
+/// each link then turns column pairs of the running rotation (`Rz(θ)`, `Rx(α)`, and `Ry(β)`
+/// only where β ≠ 0, which gives the same result as turning by cos 0 = 1, sin 0 = 0) instead
+/// of multiplying 3×3 matrices.
 #[inline(always)]
 fn chain<const N: usize>(
     g: &Geometry<N>,

@@ -27,7 +27,23 @@
 // both), each PASSES passes over the table; the medians and their ratios are printed.
 // Exit status 1 when the check fails.
 //
-// Latest (session 14, quieter machine, load 3.3-3.7 with one other build; three invocations
+// Latest (session 17, load about 1; four invocations of the binary, each alternating kincal
+// and Pinocchio; kincal ns, ratio to Pinocchio): FK 91.9-95.0 ns, 0.497-0.502 (median of
+// the four 0.498); FK + joint Jacobian 122.1-138.4 ns, 0.442-0.486 (computeFrameJacobian)
+// and 0.256-0.285 (FK + updateFramePlacement + computeFrameJacobian). The goal (<= 0.5) is
+// met for FK + Jacobian and at its edge for FK. What changed since session 14: the joint
+// Jacobian's columns from arrays with the joint rates computed once (criterion
+// fk_joint_jacobian_aria 148.6 -> 117.6 ns, bit-identical), and sin_cos_lanes' one-round
+// path (libm's algorithm without its branches, within 1 ulp of libm: sincos6_lanes
+// 37 -> 21 ns, fk_aria 88.7 -> 76.3 ns, fk_joint_jacobian_aria 117.6 -> 105.5 ns).
+// Tried and not kept this session: the chain's Rx step re-associated with the angle
+// products formed off the critical path (fk_aria 76 -> 80 ns); FK compiled for AVX2
+// without FMA behind a CPUID check (same bits, but 76 -> 116 ns: the auto-vectorised chain
+// and the calls back into baseline code); a branch-free turn mask (76 -> 79 ns); a
+// fixed-size pose copy in the export (no change); a branch-free check_finite (it vectorised
+// the readings' check and stalled on store forwarding: prepared FK 91.5 -> 95 ns).
+//
+// Session 14 (quieter machine, load 3.3-3.7 with one other build; three invocations
 // of each binary alternated; kincal ns, ratio to Pinocchio): before (6996f1c) FK 148-150 ns,
 // 0.775-0.781; FK + joint Jacobian 237-240 ns, 0.831-0.850. With sin_cos_lanes (every
 // joint's sincos at once, bit for bit libm's) FK 118-122 ns, 0.618-0.621. With the lean
