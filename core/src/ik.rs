@@ -9,11 +9,12 @@ use core::num::NonZeroU32;
 use nalgebra::{ArrayStorage, SMatrix, Vector3, Vector6};
 
 use crate::error::{Error, Quantity, Result, check_finite};
+use crate::fixed3::ZERO;
 use crate::kinematics::Frames;
 use crate::model::{JointState, Robot};
 use crate::params::CyclicTerm;
 
-// `joint_jacobian` destructures a joint's cyclic terms in this order.
+// `joint_rates` destructures a joint's cyclic terms in this order.
 const _: () = assert!(
     CyclicTerm::Sin1 as usize == 0
         && CyclicTerm::Cos1 as usize == 1
@@ -415,7 +416,7 @@ pub(crate) fn joint_jacobian<const N: usize>(
     f: &Frames<N>,
 ) -> SMatrix<f64, 6, N> {
     // Frame j−1 of joint j: frame 0, then each link's frame but the last.
-    let mut preceding = [(Vector3::zeros(), Vector3::zeros()); N];
+    let mut preceding = [(ZERO, ZERO); N];
     let frames = core::iter::once(&f.t_base_0).chain(f.t_base_link.iter());
     for (slot, t) in preceding.iter_mut().zip(frames) {
         *slot = (
@@ -445,16 +446,15 @@ pub(crate) fn joint_jacobian_columns<const N: usize>(
     columns: &mut [[f64; 6]; N],
 ) {
     let rates = joint_rates(robot, &state.q);
-    let turn = robot.turn_mask();
-    // Plain loops over fixed-size arrays: no bounds checks, and the joints' effects are
-    // looked at once ([`joint_rates`]), not per column (a controller's inner loop).
-    for j in 0..N {
-        let (z_prev, p_prev) = preceding[j];
-        let dtheta = rates[j];
+    // Iterators over fixed-size arrays rather than indices: no per-column look at the
+    // joints' effects ([`joint_rates`]), and no bounds checks to stay as panic paths where
+    // the optimiser does not inline (opt-level s/z, the firmware target).
+    let joints = preceding.iter().zip(rates).zip(robot.turn_mask());
+    for (column, ((&(z_prev, p_prev), dtheta), turn)) in columns.iter_mut().zip(joints) {
         // Revolute: [z × (p_e − p); z]·dθ/dq; prismatic: [z; 0]·(1 + scale).
-        let lin = (z_prev.cross(&(pe - p_prev)) * turn[j] + z_prev * (1.0 - turn[j])) * dtheta;
-        let ang = z_prev * (dtheta * turn[j]);
-        columns[j] = [lin.x, lin.y, lin.z, ang.x, ang.y, ang.z];
+        let lin = (z_prev.cross(&(pe - p_prev)) * turn + z_prev * (1.0 - turn)) * dtheta;
+        let ang = z_prev * (dtheta * turn);
+        *column = [lin.x, lin.y, lin.z, ang.x, ang.y, ang.z];
     }
 }
 
@@ -465,14 +465,14 @@ pub(crate) fn joint_jacobian_columns<const N: usize>(
 fn joint_rates<const N: usize>(robot: &Robot<N>, q: &[f64; N]) -> [f64; N] {
     let e = robot.effect_params();
     let mut rates = [1.0; N];
-    for j in 0..N {
-        rates[j] = 1.0 + e.scale[j];
+    for (rate, &scale) in rates.iter_mut().zip(&e.scale) {
+        *rate = 1.0 + scale;
     }
     if crate::model::any_non_zero(e.cyclic.as_flattened()) {
-        for j in 0..N {
-            let (s1, c1) = crate::math::sin_cos(q[j]);
-            let [sin1, cos1, sin2, cos2] = e.cyclic[j];
-            rates[j] +=
+        for ((rate, &q), c) in rates.iter_mut().zip(q).zip(&e.cyclic) {
+            let (s1, c1) = crate::math::sin_cos(q);
+            let [sin1, cos1, sin2, cos2] = *c;
+            *rate +=
                 sin1 * c1 - cos1 * s1 + 2.0 * sin2 * (c1 * c1 - s1 * s1) - 4.0 * cos2 * s1 * c1;
         }
     }
