@@ -148,11 +148,11 @@ fn cases() -> Vec<(String, String)> {
 /// fingerprint (0xd0fb_e7c2_d835_60fd) was reproduced, so nothing else changed. Against the
 /// old texts (`scripts/compare_fingerprint_dumps.py`): the residual figures above 1e-9
 /// within 3.3e-8 relative; well-determined parameters within 1e-7 relative (their last
-/// steps differ below the convergence tolerance); the near-redundant base-frame cases
-/// ("with base" on tool and position data: the identifiability report names the base's x
-/// and link 1's a partners, cosine 1.0) move along that unobservable combination (a₁ from
-/// 2.3 to 5.9 mm, the base's x by the opposite amount) and take 1 to 9 iterations more or
-/// fewer.
+/// steps differ below the convergence tolerance). The "with base" fits of the tool data
+/// move along one combination: link 6's a and the base's x together (a₆ = −p_x, 2.3 mm in
+/// the old OPT2 fits, 5.9 mm in the new), both at zero residual (cost 7e-29 and 4e-28):
+/// the ten tool poses do not separate the two, although the analysis keeps both
+/// (condition number 102). They take 1 to 9 iterations more or fewer.
 const FINGERPRINT: u64 = 0xf7b1_6c1e_0b45_91c2;
 
 #[test]
