@@ -32,6 +32,11 @@
 //! Jacobian 2.9 k, Gram fold 5.9 k, row building 1.3 k); the analysis's pass 297 k (its
 //! Givens factor 17.7 k per pose) and its 24×24 singular values 177 k; five 24×24 Cholesky
 //! factorisations and solves, 28 k each; the covariance's factor and inverse, 78 k.
+//!
+//! 5 Dec 2026 (quiet machine, after FK's sines and cosines took `sin_cos_lanes`' one-round
+//! path): `fk_aria_random` 77.6 ns; OLS `with_analysis` 79.5 µs (1,025 FK), `no_covariance`
+//! 71.5 µs (922 FK), `analysis_reused` 49.0 µs (632 FK). FK became faster than the
+//! calibration did, so the ratio of goal 2 rose; the calibration's own time fell.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use kincal::identify::{

@@ -27,11 +27,14 @@
 // both), each PASSES passes over the table; the medians and their ratios are printed.
 // Exit status 1 when the check fails.
 //
-// Latest (session 17, load about 1; four invocations of the binary, each alternating kincal
-// and Pinocchio; kincal ns, ratio to Pinocchio): FK 91.9-95.0 ns, 0.497-0.502 (median of
-// the four 0.498); FK + joint Jacobian 122.1-138.4 ns, 0.442-0.486 (computeFrameJacobian)
-// and 0.256-0.285 (FK + updateFramePlacement + computeFrameJacobian). The goal (<= 0.5) is
-// met for FK + Jacobian and at its edge for FK. What changed since session 14: the joint
+// Latest (session 17, load about 1; each invocation alternates kincal and Pinocchio; kincal
+// ns, ratio to Pinocchio). Final build (199b78c), three invocations: FK 93.1-94.4 ns,
+// 0.502, 0.502, 0.497; FK + joint Jacobian 123.4-124.4 ns, 0.445-0.451
+// (computeFrameJacobian) and 0.259-0.260 (FK + updateFramePlacement +
+// computeFrameJacobian). The build before it (7e66afc, the same arithmetic), two
+// invocations: FK 0.497, 0.497; FK + joint Jacobian 0.442, 0.486. The goal (<= 0.5) is met
+// for FK + Jacobian and at its edge for FK.
+// What changed since session 14: the joint
 // Jacobian's columns from arrays with the joint rates computed once (criterion
 // fk_joint_jacobian_aria 148.6 -> 117.6 ns, bit-identical), and sin_cos_lanes' one-round
 // path (libm's algorithm without its branches, within 1 ulp of libm: sincos6_lanes
