@@ -52,7 +52,7 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
 /// `k_cos(y0, y1)` (below π/4 libm calls `k_sin(x, 0, 0)`, which rounds differently), and the
 /// quadrant by bit masks. Against libm's branchy path this halves the six sines and cosines
 /// of an FK (criterion `sincos6_lanes` 37 → 21 ns against `sincos6_libm`'s 58 ns on the build
-/// machine), which is what brings the prepared FK of the C ABI to half Pinocchio's time.
+/// machine), which brings the prepared FK of the C ABI to about half Pinocchio's time.
 ///
 /// If any lane needs what one round does not give (|x| ≥ 2^20·π/2, a non-finite x, or a
 /// reduced argument that cancelled by more than 16 bits, `|y0| < |x|·2^-16`, where libm takes
