@@ -37,6 +37,12 @@
 //! path): `fk_aria_random` 77.6 ns; OLS `with_analysis` 79.5 µs (1,025 FK), `no_covariance`
 //! 71.5 µs (922 FK), `analysis_reused` 49.0 µs (632 FK). FK became faster than the
 //! calibration did, so the ratio of goal 2 rose; the calibration's own time fell.
+//!
+//! 5 Dec 2026, after the analysis's data step became confirmed at the fitted model
+//! (`core/src/identify/at_fit.rs`; a screen on the Cholesky factor of the normal equations
+//! at the fit, which the covariance needs anyway): `with_analysis` 79.1 µs (79.0 before),
+//! `analysis_reused` 49.0 µs (49.1). Without covariance the factor is new work:
+//! `no_covariance` 75.2 µs (72.0), `analysis_reused_no_covariance` 45.9 µs (41.6).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use kincal::identify::{

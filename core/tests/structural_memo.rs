@@ -67,6 +67,9 @@ fn remembered_structural_step_gives_bit_identical_fits() {
     for alg in Algorithm::ALL {
         let mut opts = IdentifyOptions::new(alg, with_base_frame(&nominal));
         opts.bounds = Some(&bounds);
+        // The tool poses leave the base's x to link 6's a at the fitted model: it is held
+        // and the rest refitted (`core/tests/identifiable_at_fit.rs`), on both paths.
+        opts.allow_data_deficiency = true;
         let r = check_same(
             &format!("aria tool {}", alg.name()),
             &nominal,
@@ -103,7 +106,10 @@ fn remembered_structural_step_is_not_replayed_for_a_changed_problem() {
     let mut ws = Box::<Workspace<32>>::default();
     let nominal = aria::nominal();
     let data = aria_tool_data();
-    let opts = IdentifyOptions::new(Algorithm::Ols, with_base_frame(&nominal));
+    let opts = IdentifyOptions {
+        allow_data_deficiency: true,
+        ..IdentifyOptions::new(Algorithm::Ols, with_base_frame(&nominal))
+    };
     let base = check_same("aria", &nominal, &data, &opts, &mut ws);
     assert!(!base.analysis.structural.is_empty());
 

@@ -52,7 +52,9 @@ pub struct Identifiability {
     pub identifiable: ParamSet,
     /// Redundant in the model for the measured components, whatever the poses.
     pub structural: ParamSet,
-    /// Identifiable in general but not from these poses.
+    /// Identifiable in general but not from these poses: at the initial model, or (in an
+    /// [`super::Identification`]) at the fitted one, which then reports the rank and
+    /// condition number of the parameters fitted, at the fitted model.
     pub data_deficient: ParamSet,
     /// Not observable because the data have no external reference (instrument-free
     /// constraint data, [`super::constraints`]): the base-frame parameters when no row
@@ -276,9 +278,26 @@ fn data_step_folded<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
     // is that of the identifiable columns unless some were dropped.
     for k in 0..n_id {
         ws.cols[k] = ws.free[k];
+    }
+    conditioning(robot, data, opts, ws, out, n_id, n_id < n_struct)
+}
+
+/// Step 3 of [`analyze`]: the singular values (into `ws.sv`) and condition number of the
+/// unit-scaled Jacobian of the columns `ws.cols[..n_id]` at `robot`, folded first when
+/// `fold` (otherwise `ws.lsq` must hold their factor).
+pub(super) fn conditioning<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
+    robot: &Robot<N>,
+    data: &D,
+    opts: &IdentifyOptions<'_>,
+    ws: &mut Workspace<P>,
+    out: &mut Identifiability,
+    n_id: usize,
+    fold: bool,
+) -> Result<()> {
+    for k in 0..n_id {
         ws.colscale[k] = 1.0;
     }
-    if n_id < n_struct {
+    if fold {
         super::data::accumulate_jacobian(robot, data, opts, n_id, ws)?;
     }
     copy_r_unit_scaled(ws, n_id);

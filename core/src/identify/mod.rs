@@ -16,7 +16,13 @@
 //! others keep their initial values and are reported. Optionally with Gaussian priors
 //! around the initial model ([`Prior`], [`IdentifyOptions::prior`]): one whitened row per
 //! parameter, in every algorithm and in the covariance, for directions the data leave weak.
+//!
+//! The analysis runs at the initial model, and its data step is confirmed at the fitted
+//! one: a parameter the data determine at the start but not at the fit (ARIA's tool poses
+//! and the base's x) is reported data-deficient, held at its initial value, and the rest
+//! refitted from the start (`core/src/identify/at_fit.rs`).
 
+mod at_fit;
 pub mod constraints;
 mod data;
 mod identifiability;
@@ -177,7 +183,8 @@ pub struct IdentifyOptions<'a> {
     /// OPT1's intervals (required for OPT1, ignored otherwise).
     pub bounds: Option<&'a Bounds>,
     /// Fit the identifiable subset even when the data leave some generically identifiable
-    /// parameters undetermined (otherwise that is [`crate::Error::RankDeficient`]).
+    /// parameters undetermined, at the initial or at the fitted model (otherwise that is
+    /// [`crate::Error::RankDeficient`]).
     pub allow_data_deficiency: bool,
     /// Compute σ², standard errors and correlations of the result (a p×p inverse, and one
     /// more Jacobian pass unless the solver ended holding the normal equations of the

@@ -1,6 +1,7 @@
 //! The three identification algorithms on the identifiable parameter set, and the
 //! parameter covariance of the result.
 
+use super::at_fit::{all_kept_by_factor, dropped_at};
 use super::data::{
     ResidualStats, RowSource, accumulate, accumulate_gram, accumulate_trial_gram, first_gram,
     fold_last_trial,
@@ -150,7 +151,7 @@ pub(crate) fn identify_into<const N: usize, const P: usize, D: RowSource<N> + ?S
     out.prior_held = ParamSet::new();
     let Some(prior) = opts.prior else {
         let fitted = out.analysis.identifiable;
-        return fit_set(data, opts, fitted, ws, out);
+        return fit_set(data, opts, fitted, ws, out).map(|_| ());
     };
     prior.validate()?;
     // Data-deficient parameters with a prior are fitted: the prior holds them.
@@ -164,7 +165,7 @@ pub(crate) fn identify_into<const N: usize, const P: usize, D: RowSource<N> + ?S
         prior,
         fitted,
     };
-    fit_set(&with, opts, fitted, ws, out)?;
+    let fitted = fit_set(&with, opts, fitted, ws, out)?;
     out.prior_rows = fitted.iter().filter(|&i| prior.has(i)).count();
     out.prior_chi2 = prior.chi2(&out.robot, &fitted)?;
     Ok(())
@@ -178,7 +179,7 @@ fn fit_set<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
     fitted: ParamSet,
     ws: &mut Workspace<P>,
     out: &mut Identification<N>,
-) -> Result<()> {
+) -> Result<ParamSet> {
     let analysis = &out.analysis;
     let n = fitted.len();
     if n > P || analysis.identifiable.len() != analysis.rank {
@@ -215,17 +216,9 @@ fn fit_set<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
     } else {
         data.stats_ws(&out.robot, opts, ws)?
     };
-    let finish = match opts.algorithm {
-        Algorithm::Ols => gauss_newton(&mut out.robot, data, opts, n, ws)?,
-        Algorithm::Opt2 => levenberg_marquardt(&mut out.robot, data, opts, n, ws)?,
-        Algorithm::Opt1 => bounded(&mut out.robot, data, opts, n, ws)?,
-    };
-    out.iterations = finish.iterations;
-    out.fitted = if core::mem::take(&mut ws.fitted_stats) {
-        ws.pass_stats.finish()
-    } else {
-        data.stats_ws(&out.robot, opts, ws)?
-    };
+    let fit = solve_confirmed(data, opts, fitted, ws, out)?;
+    let n = fit.fitted.len();
+    out.iterations = fit.iterations;
     out.sigma2 = 0.0;
     out.std_errors = [0.0; MAX_MODEL_PARAMS];
     out.at_bound = ParamSet::new();
@@ -240,7 +233,117 @@ fn fit_set<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
         }
     }
     if opts.covariance {
-        covariance(data, opts, n, rows, finish.gram_current, ws, out)?;
+        covariance(data, opts, n, rows, fit.factor, ws, out)?;
+    }
+    if fit.refitted {
+        // The conditioning reported is that of the parameters fitted, at the final model.
+        super::identifiability::conditioning(
+            &out.robot,
+            data,
+            opts,
+            ws,
+            &mut out.analysis,
+            n,
+            true,
+        )?;
+    }
+    Ok(fit.fitted)
+}
+
+/// What [`solve_confirmed`] fitted.
+struct ConfirmedFit {
+    /// The parameters fitted (without those found data-deficient at the fit).
+    fitted: ParamSet,
+    /// The normal equations at the fitted model.
+    factor: NormalFactor,
+    /// Iterations, of both fits when a refit followed.
+    iterations: u32,
+    /// Whether a parameter was found data-deficient at the fit.
+    refitted: bool,
+}
+
+/// Runs `opts.algorithm` on the columns `ws.cols[..]` of `fitted` from `out.robot`, and
+/// confirms the data step of the analysis at the fitted model ([`super::at_fit`]): a
+/// parameter data-deficient there is held at its starting value, reported in
+/// `out.analysis`, and the others are refitted from the start (an error unless
+/// `opts.allow_data_deficiency`). Sets `out.fitted`.
+fn solve_confirmed<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
+    data: &D,
+    opts: &IdentifyOptions<'_>,
+    mut fitted: ParamSet,
+    ws: &mut Workspace<P>,
+    out: &mut Identification<N>,
+) -> Result<ConfirmedFit> {
+    let (mut refitted, mut iterations) = (false, 0u32);
+    loop {
+        let n = fitted.len();
+        for k in 0..n {
+            ws.start[k] = out.robot.param(ParamIndex(ws.cols[k]))?;
+        }
+        let finish = match opts.algorithm {
+            Algorithm::Ols => gauss_newton(&mut out.robot, data, opts, n, ws)?,
+            Algorithm::Opt2 => levenberg_marquardt(&mut out.robot, data, opts, n, ws)?,
+            Algorithm::Opt1 => bounded(&mut out.robot, data, opts, n, ws)?,
+        };
+        iterations = iterations.saturating_add(finish.iterations);
+        out.fitted = if core::mem::take(&mut ws.fitted_stats) {
+            ws.pass_stats.finish()
+        } else {
+            data.stats_ws(&out.robot, opts, ws)?
+        };
+        let mut factor = normal_factor_at_fit(&out.robot, data, opts, n, finish.gram_current, ws)?;
+        let mut dropped = ParamSet::new();
+        if !(factor.factored && all_kept_by_factor(ws, n, opts.rank_tol)) {
+            dropped = dropped_at(&out.robot, data, opts, n, ws, &mut out.analysis.partner)?;
+            // The test overwrote `ws.mat`: the covariance needs the factor again.
+            factor.factored = factor_gram(ws, n, GramSel::All).is_ok();
+        }
+        if let Some(prior) = data.prior() {
+            // A parameter with a prior stays fitted: its prior holds it (as
+            // `identify_into` fits the data-deficient ones that carry one).
+            for i in fitted.iter().filter(|&i| prior.has(i)) {
+                dropped.remove(i);
+            }
+        }
+        if dropped.is_empty() {
+            return Ok(ConfirmedFit {
+                fitted,
+                factor,
+                iterations,
+                refitted,
+            });
+        }
+        for k in 0..n {
+            out.robot.set_param(ParamIndex(ws.cols[k]), ws.start[k])?;
+        }
+        hold_data_deficient(&mut out.analysis, dropped, &mut fitted, opts)?;
+        for (k, i) in fitted.iter().enumerate() {
+            ws.cols[k] = i;
+        }
+        ws.first_pass = false;
+        refitted = true;
+    }
+}
+
+/// Moves `dropped` from the fitted and identifiable parameters to the data-deficient ones;
+/// [`Error::RankDeficient`] unless `opts.allow_data_deficiency` and something is left.
+fn hold_data_deficient(
+    analysis: &mut super::Identifiability,
+    dropped: ParamSet,
+    fitted: &mut ParamSet,
+    opts: &IdentifyOptions<'_>,
+) -> Result<()> {
+    for i in dropped.iter() {
+        fitted.remove(i);
+        analysis.identifiable.remove(i);
+        analysis.data_deficient.insert(i)?;
+    }
+    analysis.rank = analysis.identifiable.len();
+    if fitted.is_empty() || !opts.allow_data_deficiency {
+        return Err(Error::RankDeficient {
+            rank: analysis.rank,
+            required: analysis.requested.len() - analysis.structural.len(),
+        });
     }
     Ok(())
 }
@@ -492,12 +595,11 @@ fn gauss_newton<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
         for halving in 0..30u32 {
             apply(&mut trial, n, ws, None)?;
             let c2 = if last {
-                // The covariance will need the normal equations of the model this step
-                // ends at: the full step's trial is folded (its cost is `cost`'s bit for
-                // bit), which spares the covariance its pass and the fitted residuals theirs.
-                let rows = data
-                    .instrument_rows()
-                    .filter(|_| halving == 0 && opts.covariance);
+                // The check at the fit and the covariance need the normal equations of the
+                // model this step ends at: the full step's trial is folded (its cost is
+                // `cost`'s bit for bit), which spares them their pass and the fitted
+                // residuals theirs.
+                let rows = data.instrument_rows().filter(|_| halving == 0);
                 match rows.and_then(|rows| fold_last_trial(&trial, rows, opts, n, ws)) {
                     Some(c2) => {
                         gram_current = c2 <= c;
@@ -1041,37 +1143,64 @@ fn posterior_sigma2<const N: usize, const P: usize>(
     })
 }
 
-/// σ², standard errors and strong correlations at the fitted model. With `gram_current`
-/// (see [`Finish`]) the normal equations the solver left are used as they are; otherwise
-/// they are accumulated at the fitted model.
+/// The normal equations at the fitted model, factored by [`normal_factor_at_fit`].
+#[derive(Clone, Copy)]
+struct NormalFactor {
+    /// The cost at the fitted model.
+    cost: f64,
+    /// Whether `ws.mat` holds their Cholesky factor (they are not numerically singular).
+    factored: bool,
+}
+
+/// Factors the normal equations at the fitted model `robot` into `ws.mat`: for the check at
+/// the fit ([`all_kept_by_factor`]) and the covariance. With `gram_current` (see
+/// [`Finish`]) the normal equations the solver left are used as they are; otherwise they
+/// are accumulated at the fitted model.
+fn normal_factor_at_fit<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
+    robot: &Robot<N>,
+    data: &D,
+    opts: &IdentifyOptions<'_>,
+    n: usize,
+    gram_current: bool,
+    ws: &mut Workspace<P>,
+) -> Result<NormalFactor> {
+    unit_scale(ws, n);
+    // `btb` is the cost accumulated the same way, term for term, as `accumulate_gram`'s.
+    let cost = if gram_current && ws.gram.n() == n {
+        ws.gram.btb()
+    } else {
+        accumulate_gram(robot, data, opts, n, ws)?
+    };
+    Ok(NormalFactor {
+        cost,
+        factored: factor_gram(ws, n, GramSel::All).is_ok(),
+    })
+}
+
+/// σ², standard errors and strong correlations at the fitted model `out.robot`, from the
+/// factor [`normal_factor_at_fit`] left.
 fn covariance<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
     data: &D,
     opts: &IdentifyOptions<'_>,
     n: usize,
     rows: usize,
-    gram_current: bool,
+    factor: NormalFactor,
     ws: &mut Workspace<P>,
     out: &mut Identification<N>,
 ) -> Result<()> {
     let robot = &out.robot;
-    unit_scale(ws, n);
-    // `btb` is the cost accumulated the same way, term for term, as `accumulate_gram`'s.
-    let c = if gram_current && ws.gram.n() == n {
-        ws.gram.btb()
-    } else {
-        accumulate_gram(robot, data, opts, n, ws)?
-    };
+    let c = factor.cost;
     out.sigma2 = if rows > n { c / (rows - n) as f64 } else { 0.0 };
     // Covariance (RᵀR)⁻¹ from the normal equations (2–3 digits suffice for standard
     // errors); the backward-stable Givens factor when they are numerically singular. The
     // inverse goes to `ws.v`, read straight from the factor.
-    let inverted = if factor_gram(ws, n, GramSel::All).is_err() {
+    let inverted = if factor.factored {
+        let Workspace { mat, v, .. } = ws;
+        upper_inverse_gram(mat, n, v)
+    } else {
         accumulate(robot, data, opts, n, ws)?;
         let Workspace { lsq, v, .. } = ws;
         upper_inverse_gram(lsq.r(), n, v)
-    } else {
-        let Workspace { mat, v, .. } = ws;
-        upper_inverse_gram(mat, n, v)
     };
     if inverted.is_err() {
         // Identifiable at the start but singular at the optimum: report no errors.

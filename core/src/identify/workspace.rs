@@ -47,6 +47,9 @@ pub struct Workspace<const P: usize> {
     pub(crate) step: [f64; P],
     pub(crate) tmp: [f64; P],
     pub(crate) free: [usize; P],
+    /// The fitted parameters' starting values (order of `cols`), for the refit after a
+    /// parameter is found data-deficient at the fitted model ([`super::at_fit`]).
+    pub(crate) start: [f64; P],
     pub(crate) n_sv: usize,
     /// Means of the last few constraint groups folded (for known distances).
     pub(crate) means: [super::constraints::GroupMean<P>; super::constraints::MEAN_CACHE],
@@ -105,6 +108,7 @@ impl<const P: usize> Workspace<P> {
             step: [0.0; P],
             tmp: [0.0; P],
             free: [0; P],
+            start: [0.0; P],
             n_sv: 0,
             means: [super::constraints::GroupMean::EMPTY; super::constraints::MEAN_CACHE],
             memo: super::memo::StructuralMemo::new(),
