@@ -594,6 +594,42 @@ fn demo_runs_and_writes_its_files() {
             "{name}"
         );
     }
+    // The calibration tool's poses cannot separate the base's x from link 6's a (the
+    // flange's x axis is the base's x in all ten); the analysis at the nominal model keeps
+    // both, the test at the fitted model does not: exit 4 naming the pair, and with
+    // --allow-data-deficiency the base's x held at its nominal 0.
+    let base = [
+        "calibrate",
+        "out/calibration_noise_free.csv",
+        "--robot",
+        "aria",
+        "--effects",
+        "base_frame",
+        "--out",
+        "base.json",
+    ];
+    let o = kincal(&base, dir.path());
+    assert_eq!(code(&o), 4, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("base_px         aligned with a_6"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!dir.path().join("base.json").exists());
+    let o = kincal(
+        &[&base[..], &["--allow-data-deficiency"]].concat(),
+        dir.path(),
+    );
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let m: Value =
+        serde_json::from_str(&fs::read_to_string(dir.path().join("base.json")).unwrap()).unwrap();
+    let deficient = &m["calibration"]["identifiability"]["data_deficient"];
+    assert_eq!(
+        deficient,
+        &serde_json::json!([{"label": "base_px", "aligned_with": "a_6", "cosine": 1.0}]),
+        "{deficient}"
+    );
+
     // The noise-free model recovers the truth; its files feed the other commands.
     let m: Value =
         serde_json::from_str(&fs::read_to_string(d.join("model_noise_free.json")).unwrap())

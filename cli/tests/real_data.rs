@@ -205,8 +205,11 @@ fn ur10e_held_out_orientation_improves_position_stays_at_the_noise() {
     // 4.974 mm while fold 2's OLS fit stopped "converged" at cost 135.66 on a crawl (every
     // cut of a step 1857 times the parameters' norm failed); OLS now hands such a fit to
     // OPT2's trust region and reaches the fold's minimum, 62.54 (kincal::identify solvers,
-    // core/tests/ols_stop.rs). Every fold is still OLS's own fit.
-    close(cal_p, 4.246, "UR10e calibrated held-out RMS position [mm]");
+    // core/tests/ols_stop.rs). Every fold is still OLS's own fit. At that fold's minimum
+    // the tool's rx is data-deficient (the analysis's test repeated at the fitted model,
+    // core/src/identify/at_fit.rs): held, the fold's held-out error 4.6995 → 4.7040 mm, all
+    // folds 4.2462 → 4.2473 mm and 0.4485° → 0.4494°.
+    close(cal_p, 4.247, "UR10e calibrated held-out RMS position [mm]");
     let algorithms: Vec<&str> = cv["per_fold"]
         .as_array()
         .unwrap()
@@ -217,7 +220,7 @@ fn ur10e_held_out_orientation_improves_position_stays_at_the_noise() {
     close(nom_r, 0.6006, "UR10e nominal held-out RMS rotation [deg]");
     close(
         cal_r,
-        0.4485,
+        0.4494,
         "UR10e calibrated held-out RMS rotation [deg]",
     );
     assert_eq!(cv["outliers"]["suspects"].as_array().unwrap().len(), 2);

@@ -352,7 +352,7 @@ fn run_all<const N: usize>(
     let analysis = rows.analyze(start, &opts, &mut ws).map_err(core(None))?;
     let singular_values = ws.singular_values().to_vec();
     refuse_deficient(&analysis, &singular_values, settings, prior.as_deref())?;
-    let results: Vec<Result<Run<N>, Failure>> = settings
+    let results: Vec<Result<(Run<N>, Vec<f64>), Failure>> = settings
         .algorithms
         .par_iter()
         .map(|&algorithm| {
@@ -362,19 +362,34 @@ fn run_all<const N: usize>(
                 settings.bounds_length_m,
                 settings.bounds_angle_rad,
             ));
-            let opts = settings.options(algorithm, requested, Some(&bounds), prior.as_deref());
+            let mut opts = settings.options(algorithm, requested, Some(&bounds), prior.as_deref());
+            // The core repeats the analysis's data test at the fitted model; what it finds
+            // there is refused below as the start's finding is, with the report.
+            opts.allow_data_deficiency = true;
             let mut ws = new_workspace();
             let (ident, robust) = rows
                 .fit(start, &opts, settings.robust.as_ref(), &mut ws)
                 .map_err(core(Some(algorithm)))?;
-            Ok(Run {
+            let run = Run {
                 ident,
                 seconds: t0.elapsed().as_secs_f64(),
                 robust,
-            })
+            };
+            Ok((run, ws.singular_values().to_vec()))
         })
         .collect();
-    let runs = results.into_iter().collect::<Result<Vec<_>, _>>()?;
+    let fits = results.into_iter().collect::<Result<Vec<_>, _>>()?;
+    // Parameters the data determine only while the model is off: the fits' analysis.
+    let (mut analysis, mut singular_values) = (analysis, singular_values);
+    if let Some((run, sv)) = fits
+        .iter()
+        .find(|(run, _)| run.ident.analysis.data_deficient != analysis.data_deficient)
+    {
+        analysis = run.ident.analysis;
+        singular_values = sv.clone();
+        refuse_deficient(&analysis, &singular_values, settings, prior.as_deref())?;
+    }
+    let runs: Vec<Run<N>> = fits.into_iter().map(|(run, _)| run).collect();
     let consensus = (runs.len() >= 2).then(|| Consensus::check(&runs, &analysis.identifiable));
     Ok(Calibration {
         start: *start,

@@ -21,8 +21,11 @@ Identifies the robot's parameters from measured poses: the geometric (modified D
 parameters θ0, a, α and d or β of every link, plus the parameters of the effects named with
 --effects. The identifiability analysis runs first: structurally redundant parameters (no
 data could separate them) and data-deficient ones (these poses cannot) are reported with the
-identified parameter their Jacobian column is most aligned with. Data-deficient parameters
-are an error (exit 4, report on stderr) unless --allow-data-deficiency.
+identified parameter their Jacobian column is most aligned with. The data test is repeated
+at the fitted model: a parameter the poses separate only while the model is off (ARIA's tool
+poses and the base's x, with --effects base_frame) is data-deficient too, held at its initial
+value while the rest is refitted. Data-deficient parameters are an error (exit 4, report on
+stderr) unless --allow-data-deficiency.
 
 Prints the identifiability report (rank, condition number), the parameter table (nominal,
 identified, change and standard error; lengths in mm, angles in degrees), residuals before
