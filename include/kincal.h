@@ -1165,7 +1165,8 @@ typedef struct kincal_identify_options {
     uint32_t max_iterations;
     /*
      Non-zero: fit the identifiable subset even when the data leave some generically
-     identifiable parameters undetermined (otherwise `KINCAL_STATUS_RANK_DEFICIENT`).
+     identifiable parameters undetermined, at the initial or at the fitted model
+     (otherwise `KINCAL_STATUS_RANK_DEFICIENT`).
      */
     uint32_t allow_data_deficiency;
     /*
@@ -2985,7 +2986,9 @@ kincal_status kincal_identify_options_set_prior(const struct kincal_robot *robot
  with `pose` set for a bad measurement, INVALID_ARGUMENT for an option, MISSING_INPUT when a
  requested effect's input is missing, TOO_FEW_DATA, CAPACITY_EXCEEDED, any status of
  `kincal_robot_validate`); RANK_DEFICIENT (the data leave requested parameters undetermined;
- see `kincal_analyze_identifiability`, or set `allow_data_deficiency`), NOT_CONVERGED (`iterations`),
+ see `kincal_analyze_identifiability`, or set `allow_data_deficiency`: a parameter found
+ undetermined only at the fitted model is then held and listed in the result's analysis),
+ NOT_CONVERGED (`iterations`),
  INVALID_PARAMETER (OPT1 with an initial value outside its interval). Outputs are written on
  success only.
 

@@ -87,7 +87,8 @@ pub struct kincal_identify_options {
     /// Iteration limit (default 200); reaching it is `KINCAL_STATUS_NOT_CONVERGED`.
     pub max_iterations: u32,
     /// Non-zero: fit the identifiable subset even when the data leave some generically
-    /// identifiable parameters undetermined (otherwise `KINCAL_STATUS_RANK_DEFICIENT`).
+    /// identifiable parameters undetermined, at the initial or at the fitted model
+    /// (otherwise `KINCAL_STATUS_RANK_DEFICIENT`).
     pub allow_data_deficiency: u32,
     /// Orientation error of the cost, a `kincal_orientation_error` (default exact).
     pub orientation: u32,
@@ -868,7 +869,9 @@ unsafe fn entry(
 /// with `pose` set for a bad measurement, INVALID_ARGUMENT for an option, MISSING_INPUT when a
 /// requested effect's input is missing, TOO_FEW_DATA, CAPACITY_EXCEEDED, any status of
 /// `kincal_robot_validate`); RANK_DEFICIENT (the data leave requested parameters undetermined;
-/// see `kincal_analyze_identifiability`, or set `allow_data_deficiency`), NOT_CONVERGED (`iterations`),
+/// see `kincal_analyze_identifiability`, or set `allow_data_deficiency`: a parameter found
+/// undetermined only at the fitted model is then held and listed in the result's analysis),
+/// NOT_CONVERGED (`iterations`),
 /// INVALID_PARAMETER (OPT1 with an initial value outside its interval). Outputs are written on
 /// success only.
 ///
