@@ -19,7 +19,9 @@ use kincal::identify::{Algorithm, IdentifyOptions, Workspace, identify};
 /// failed. A damped rescue (commit 387882d, reverted) ran from there into `NotConverged`
 /// after 200 iterations. OLS now hands such a fit to OPT2's trust region: it must end
 /// converged, within the iteration cap, at the minimum OPT2 finds on its own (the
-/// independent check), far below the old stop.
+/// independent check), far below the old stop. At that minimum (12 rows, non-zero cost)
+/// the Jacobian is singular: both fits also hold alpha_4, found data-deficient there
+/// (`core/src/identify/at_fit.rs`), and refit the other 11.
 #[test]
 fn two_poses_reach_the_minimum_opt2_finds() {
     let nominal = aria::nominal();
@@ -36,6 +38,8 @@ fn two_poses_reach_the_minimum_opt2_finds() {
     let mut o2 = opts;
     o2.algorithm = Algorithm::Opt2;
     let lm = identify(&nominal, data, &o2, &mut ws).expect("OPT2 converges");
+    assert_eq!(r.analysis.data_deficient, lm.analysis.data_deficient);
+    assert_eq!(r.analysis.rank, 11);
     let (c, c_lm) = (r.fitted.cost, lm.fitted.cost);
     assert!((c - c_lm).abs() <= 1e-6 * c_lm, "OLS {c} vs OPT2 {c_lm}");
     assert!(c < 0.1 * 0.0714, "{c}");
