@@ -12,9 +12,10 @@
 //! same greedy test and tolerance. Usually a cheap screen settles it: the Cholesky factor
 //! of the normal equations at the fit, which the covariance needs anyway, gives every
 //! column's distance from the ones before it ([`all_kept_by_factor`]). Only when that is
-//! near the tolerance, the Givens factor at the fit is formed and tested ([`dropped_at`]). A parameter dropped there is
-//! reported as data-deficient and held at its starting value, and the others are refitted
-//! from the start (in `solvers::solve_confirmed`).
+//! near the tolerance, the Givens factor at the fit is formed and tested
+//! ([`dropped_at`]). A parameter dropped there is reported as data-deficient and held at
+//! its starting value, and the others are refitted from the start (in
+//! `solvers::solve_confirmed`).
 
 use super::data::{RowSource, accumulate_jacobian};
 use super::identifiability::{Partner, ZERO_COLUMN_REL, greedy};

@@ -292,11 +292,10 @@ fn solve_confirmed<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
             data.stats_ws(&out.robot, opts, ws)?
         };
         let mut factor = normal_factor_at_fit(&out.robot, data, opts, n, finish.gram_current, ws)?;
+        let screened = factor.factored && all_kept_by_factor(ws, n, opts.rank_tol);
         let mut dropped = ParamSet::new();
-        if !(factor.factored && all_kept_by_factor(ws, n, opts.rank_tol)) {
+        if !screened {
             dropped = dropped_at(&out.robot, data, opts, n, ws, &mut out.analysis.partner)?;
-            // The test overwrote `ws.mat`: the covariance needs the factor again.
-            factor.factored = factor_gram(ws, n, GramSel::All).is_ok();
         }
         if let Some(prior) = data.prior() {
             // A parameter with a prior stays fitted: its prior holds it (as
@@ -306,6 +305,10 @@ fn solve_confirmed<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
             }
         }
         if dropped.is_empty() {
+            if !screened {
+                // The test overwrote `ws.mat`: the covariance needs the factor again.
+                factor.factored = factor_gram(ws, n, GramSel::All).is_ok();
+            }
             return Ok(ConfirmedFit {
                 fitted,
                 factor,
