@@ -17,7 +17,7 @@ use crate::effects::{Effect, EffectSet};
 use crate::error::{Error, ParamIndex, Result};
 use crate::identify::Measurement;
 use crate::ik::{IkOptions, solve_ik};
-use crate::model::{JointState, Robot};
+use crate::model::{JointKind, JointState, Robot};
 use crate::params::{CyclicTerm, FrameParam, ParamId};
 use crate::pose::{Transform, rot_x, rotation_exp, transform};
 use crate::rng::SplitMix64;
@@ -303,14 +303,25 @@ pub mod magnitude {
     pub const BACKLASH_RAD: f64 = 1.5e-3;
     /// Thermal expansion [1/K] (aluminium).
     pub const THERMAL_PER_K: f64 = 2.3e-5;
+    /// Compliance of a prismatic joint along its axis \[m/N\] (a lifting column: 0.4 mm
+    /// under 200 N).
+    pub const PRISMATIC_COMPLIANCE_M_PER_N: f64 = 2e-6;
+    /// Scale error of a prismatic joint's reading \[1\] (screw lead or rack pitch error).
+    pub const PRISMATIC_SCALE: f64 = 5e-4;
+    /// Lost motion of a prismatic joint \[m\] (a screw drive's 50 µm).
+    pub const PRISMATIC_BACKLASH_M: f64 = 5e-5;
 }
 
 /// Gives `robot` the effect `effect` with random parameters of realistic size times `size`
 /// (see [`magnitude`]): frame translations and rotations uniform in ±magnitude per axis;
 /// compliance, backlash uniform in [0.2, 1]·magnitude per joint (non-negative, as
 /// physically); scale ±[0.2, 1]·magnitude per joint; cyclic coefficients normal with σ =
-/// magnitude; thermal κ = magnitude (times `size`). Parameters of the effect already set
-/// are replaced.
+/// magnitude; thermal κ = magnitude (times `size`). A prismatic joint takes the
+/// magnitudes of a slide (`PRISMATIC_*`: the angular ones would move a column by
+/// decimetres) and no cyclic terms; a sensor joint no cyclic or backlash terms (the core
+/// does not apply them there: non-zero values would be parameters without a column).
+/// The random draws are the same whatever the joint kinds, so a revolute arm's effects do
+/// not depend on this. Parameters of the effect already set are replaced.
 pub fn add_effect<const N: usize>(
     robot: &mut Robot<N>,
     effect: Effect,
@@ -318,6 +329,7 @@ pub fn add_effect<const N: usize>(
     rng: &mut SplitMix64,
 ) -> Result<()> {
     use magnitude as m;
+    let kinds = robot.joint_kinds();
     let mut set = |id: ParamId, v: f64| robot.set_param(id.index(N), v * size);
     let signed = |rng: &mut SplitMix64| {
         let v = rng.range(0.2, 1.0);
@@ -340,25 +352,46 @@ pub fn add_effect<const N: usize>(
             }
         }
         Effect::JointCompliance => {
-            for j in 0..N {
-                set(ParamId::Compliance(j), rng.range(0.2, 1.0) * m::COMPLIANCE)?;
+            for (j, k) in kinds.iter().enumerate() {
+                let mag = match k {
+                    JointKind::Prismatic => m::PRISMATIC_COMPLIANCE_M_PER_N,
+                    _ => m::COMPLIANCE,
+                };
+                set(ParamId::Compliance(j), rng.range(0.2, 1.0) * mag)?;
             }
         }
         Effect::JointScale => {
-            for j in 0..N {
-                set(ParamId::Scale(j), signed(rng) * m::SCALE)?;
+            for (j, k) in kinds.iter().enumerate() {
+                let mag = match k {
+                    JointKind::Prismatic => m::PRISMATIC_SCALE,
+                    _ => m::SCALE,
+                };
+                set(ParamId::Scale(j), signed(rng) * mag)?;
             }
         }
         Effect::JointCyclic => {
-            for j in 0..N {
+            for (j, k) in kinds.iter().enumerate() {
+                let mag = match k {
+                    JointKind::Revolute => m::CYCLIC_RAD,
+                    _ => 0.0,
+                };
                 for t in CyclicTerm::ALL {
-                    set(ParamId::Cyclic(j, t), rng.normal() * m::CYCLIC_RAD)?;
+                    let draw = rng.normal();
+                    set(
+                        ParamId::Cyclic(j, t),
+                        if mag > 0.0 { draw * mag } else { 0.0 },
+                    )?;
                 }
             }
         }
         Effect::Backlash => {
-            for j in 0..N {
-                set(ParamId::Backlash(j), rng.range(0.2, 1.0) * m::BACKLASH_RAD)?;
+            for (j, k) in kinds.iter().enumerate() {
+                let mag = match k {
+                    JointKind::Revolute => m::BACKLASH_RAD,
+                    JointKind::Prismatic => m::PRISMATIC_BACKLASH_M,
+                    JointKind::Sensor => 0.0,
+                };
+                set(ParamId::Backlash(j), rng.range(0.2, 1.0) * mag)?;
             }
         }
         Effect::Thermal => set(ParamId::Thermal, m::THERMAL_PER_K)?,
