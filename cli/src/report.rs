@@ -244,12 +244,14 @@ fn unit<const N: usize>(i: usize) -> &'static str {
     id::<N>(i).map_or("", |id| display_unit(id).0)
 }
 
-fn list<const N: usize>(set: &ParamSet, a: &Identifiability, out: &mut String) {
+/// One line per member of `set`: its label and partner, and for members of `at_fit` that
+/// the partner was found at the fitted model.
+fn list<const N: usize>(set: &ParamSet, a: &Identifiability, at_fit: &ParamSet, out: &mut String) {
     for i in set.iter() {
         let _ = write!(out, "    {:<16}", label::<N>(i));
         match a.partner.get(i).copied().flatten() {
             Some(p) => {
-                let _ = writeln!(
+                let _ = write!(
                     out,
                     "aligned with {} (|cos| = {:.6})",
                     label::<N>(p.param.0),
@@ -257,16 +259,30 @@ fn list<const N: usize>(set: &ParamSet, a: &Identifiability, out: &mut String) {
                 );
             }
             None => {
-                let _ = writeln!(out, "no effect on the measured pose");
+                let _ = write!(out, "no effect on the measured pose");
             }
         }
+        let _ = writeln!(
+            out,
+            "{}",
+            if at_fit.contains(i) {
+                " at the fitted model (kept at the starting model)"
+            } else {
+                ""
+            }
+        );
     }
 }
 
 /// The identifiability report: what the data determine, what is redundant and why.
+///
+/// `found_at_fit`: the data-deficient parameters that the analysis at the starting model
+/// kept and the check at the fitted model dropped (`Calibration::found_at_fit`), marked
+/// as such.
 pub fn identifiability<const N: usize>(
     a: &Identifiability,
     singular_values: &[f64],
+    found_at_fit: &ParamSet,
     poses: usize,
     rows: usize,
 ) -> String {
@@ -305,7 +321,7 @@ pub fn identifiability<const N: usize>(
             " (redundant in the model whatever the poses; kept at their values)"
         }
     );
-    list::<N>(&a.structural, a, &mut out);
+    list::<N>(&a.structural, a, &ParamSet::new(), &mut out);
     let _ = writeln!(
         out,
         "  data-deficient:         {}{}",
@@ -316,7 +332,7 @@ pub fn identifiability<const N: usize>(
             " (identifiable in general, not from these poses)"
         }
     );
-    list::<N>(&a.data_deficient, a, &mut out);
+    list::<N>(&a.data_deficient, a, found_at_fit, &mut out);
     if !a.gauge.is_empty() {
         let _ = writeln!(
             out,

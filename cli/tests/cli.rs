@@ -611,7 +611,10 @@ fn demo_runs_and_writes_its_files() {
     let o = kincal(&base, dir.path());
     assert_eq!(code(&o), 4, "{}", stderr(&o));
     assert!(
-        stderr(&o).contains("base_px         aligned with a_6"),
+        stderr(&o).contains(
+            "base_px         aligned with a_6 (|cos| = 1.000000) at the fitted model \
+             (kept at the starting model)"
+        ),
         "{}",
         stderr(&o)
     );
@@ -621,12 +624,18 @@ fn demo_runs_and_writes_its_files() {
         dir.path(),
     );
     assert_eq!(code(&o), 0, "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("a_6 (|cos| = 1.000000) at the fitted model (kept at the starting"),
+        "{}",
+        stdout(&o)
+    );
     let m: Value =
         serde_json::from_str(&fs::read_to_string(dir.path().join("base.json")).unwrap()).unwrap();
     let deficient = &m["calibration"]["identifiability"]["data_deficient"];
     assert_eq!(
         deficient,
-        &serde_json::json!([{"label": "base_px", "aligned_with": "a_6", "cosine": 1.0}]),
+        &serde_json::json!([{"label": "base_px", "aligned_with": "a_6", "cosine": 1.0,
+            "found_at_fit": true}]),
         "{deficient}"
     );
 

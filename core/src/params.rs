@@ -405,4 +405,25 @@ impl ParamSet {
         }
         out
     }
+    /// The members of `self` not in `other`.
+    ///
+    /// ```
+    /// use kincal::ParamSet;
+    /// let mut a = ParamSet::new();
+    /// let mut b = ParamSet::new();
+    /// for i in [1, 70, 100] {
+    ///     a.insert(i).unwrap();
+    /// }
+    /// b.insert(70).unwrap();
+    /// b.insert(3).unwrap();
+    /// assert_eq!(a.difference(&b).iter().collect::<Vec<_>>(), [1, 100]);
+    /// ```
+    #[must_use]
+    pub fn difference(&self, other: &ParamSet) -> ParamSet {
+        let mut out = *self;
+        for (a, b) in out.bits.iter_mut().zip(other.bits.iter()) {
+            *a &= !*b;
+        }
+        out
+    }
 }

@@ -192,6 +192,10 @@ pub struct Calibration<const N: usize> {
     pub analysis: Identifiability,
     /// Singular values of the unit-scaled Jacobian of the identifiable parameters.
     pub singular_values: Vec<f64>,
+    /// The data-deficient parameters of `analysis` that the analysis at the starting model
+    /// kept and a fit's check at its fitted model dropped (the data determine them only
+    /// while the model is off: a report says so, since the start's figures kept them).
+    pub found_at_fit: ParamSet,
     /// One per requested algorithm, in the order asked.
     pub runs: Vec<Run<N>>,
     /// With two or more algorithms.
@@ -205,6 +209,8 @@ pub enum Failure {
     Deficient {
         analysis: Box<Identifiability>,
         singular_values: Vec<f64>,
+        /// As [`Calibration::found_at_fit`] (empty when the start's analysis refused).
+        found_at_fit: ParamSet,
     },
     /// The core refused or failed (`algorithm` when one algorithm failed).
     Core {
@@ -351,7 +357,13 @@ fn run_all<const N: usize>(
     let opts = settings.options(Algorithm::Ols, requested, None, None);
     let analysis = rows.analyze(start, &opts, &mut ws).map_err(core(None))?;
     let singular_values = ws.singular_values().to_vec();
-    refuse_deficient(&analysis, &singular_values, settings, prior.as_deref())?;
+    refuse_deficient(
+        &analysis,
+        &singular_values,
+        &ParamSet::new(),
+        settings,
+        prior.as_deref(),
+    )?;
     let results: Vec<Result<(Run<N>, Vec<f64>), Failure>> = settings
         .algorithms
         .par_iter()
@@ -380,14 +392,24 @@ fn run_all<const N: usize>(
         .collect();
     let fits = results.into_iter().collect::<Result<Vec<_>, _>>()?;
     // Parameters the data determine only while the model is off: the fits' analysis.
-    let (mut analysis, mut singular_values) = (analysis, singular_values);
+    let (start_analysis, mut analysis, mut singular_values) = (analysis, analysis, singular_values);
+    let mut found_at_fit = ParamSet::new();
     if let Some((run, sv)) = fits
         .iter()
         .find(|(run, _)| run.ident.analysis.data_deficient != analysis.data_deficient)
     {
         analysis = run.ident.analysis;
         singular_values = sv.clone();
-        refuse_deficient(&analysis, &singular_values, settings, prior.as_deref())?;
+        found_at_fit = analysis
+            .data_deficient
+            .difference(&start_analysis.data_deficient);
+        refuse_deficient(
+            &analysis,
+            &singular_values,
+            &found_at_fit,
+            settings,
+            prior.as_deref(),
+        )?;
     }
     let runs: Vec<Run<N>> = fits.into_iter().map(|(run, _)| run).collect();
     let consensus = (runs.len() >= 2).then(|| Consensus::check(&runs, &analysis.identifiable));
@@ -396,6 +418,7 @@ fn run_all<const N: usize>(
         settings: settings.clone(),
         analysis,
         singular_values,
+        found_at_fit,
         runs,
         consensus,
     })
@@ -418,6 +441,7 @@ pub fn contact_params<const N: usize>(start: &Robot<N>, settings: &Settings) -> 
 fn refuse_deficient(
     analysis: &kincal::identify::Identifiability,
     singular_values: &[f64],
+    found_at_fit: &ParamSet,
     settings: &Settings,
     prior: Option<&Prior>,
 ) -> Result<(), Failure> {
@@ -430,6 +454,7 @@ fn refuse_deficient(
         return Err(Failure::Deficient {
             analysis: Box::new(*analysis),
             singular_values: singular_values.to_vec(),
+            found_at_fit: *found_at_fit,
         });
     }
     Ok(())

@@ -281,6 +281,7 @@ pub fn calibration_of<const N: usize>(start: &Robot<N>, d: &Diagnosis<N>) -> Cal
         settings,
         analysis: d.fit.analysis,
         singular_values: Vec::new(),
+        found_at_fit: kincal::ParamSet::new(),
         runs: vec![Run {
             ident: d.fit,
             seconds: 0.0,

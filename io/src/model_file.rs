@@ -278,6 +278,10 @@ pub struct NotKeptJson {
     /// The kept parameter whose Jacobian column is most aligned with this one.
     pub aligned_with: Option<String>,
     pub cosine: Option<f64>,
+    /// Data-deficient at the fitted model, kept by the analysis at the starting model
+    /// (whose errors made the columns differ): `Calibration::found_at_fit`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub found_at_fit: bool,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -548,7 +552,11 @@ fn stats(s: &ResidualStats) -> StatsJson {
     }
 }
 
-fn not_kept<const N: usize>(set: &ParamSet, a: &Identifiability) -> Vec<NotKeptJson> {
+fn not_kept<const N: usize>(
+    set: &ParamSet,
+    a: &Identifiability,
+    at_fit: &ParamSet,
+) -> Vec<NotKeptJson> {
     set.iter()
         .map(|i| {
             let p = a.partner.get(i).copied().flatten();
@@ -556,22 +564,26 @@ fn not_kept<const N: usize>(set: &ParamSet, a: &Identifiability) -> Vec<NotKeptJ
                 label: label::<N>(i),
                 aligned_with: p.map(|p| label::<N>(p.param.0)),
                 cosine: p.map(|p| p.cosine),
+                found_at_fit: at_fit.contains(i),
             }
         })
         .collect()
 }
 
-/// The identifiability report as written to files.
+/// The identifiability report as written to files (`found_at_fit`: as
+/// `Calibration::found_at_fit`).
 pub fn identifiability_json<const N: usize>(
     a: &Identifiability,
     singular_values: &[f64],
+    found_at_fit: &ParamSet,
 ) -> IdentifiabilityJson {
+    let none = ParamSet::new();
     IdentifiabilityJson {
         requested: labels::<N>(&a.requested),
         identifiable: labels::<N>(&a.identifiable),
-        structurally_redundant: not_kept::<N>(&a.structural, a),
-        data_deficient: not_kept::<N>(&a.data_deficient, a),
-        not_observable: not_kept::<N>(&a.gauge, a),
+        structurally_redundant: not_kept::<N>(&a.structural, a, &none),
+        data_deficient: not_kept::<N>(&a.data_deficient, a, found_at_fit),
+        not_observable: not_kept::<N>(&a.gauge, a, &none),
         rank: a.rank,
         condition_number: finite_or_none(a.condition_number),
         singular_values: singular_values.to_vec(),
@@ -737,7 +749,11 @@ impl ModelFile {
                         held: main.prior_held.iter().map(label::<N>).collect(),
                     }),
                 },
-                identifiability: identifiability_json::<N>(&cal.analysis, &cal.singular_values),
+                identifiability: identifiability_json::<N>(
+                    &cal.analysis,
+                    &cal.singular_values,
+                    &cal.found_at_fit,
+                ),
                 residuals: ResidualsJson {
                     before: stats(&main.initial),
                     after: stats(&main.fitted),

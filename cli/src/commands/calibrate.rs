@@ -24,8 +24,9 @@ data could separate them) and data-deficient ones (these poses cannot) are repor
 identified parameter their Jacobian column is most aligned with. The data test is repeated
 at the fitted model: a parameter the poses separate only while the model is off (ARIA's tool
 poses and the base's x, with --effects base_frame) is data-deficient too, held at its initial
-value while the rest is refitted. Data-deficient parameters are an error (exit 4, report on
-stderr) unless --allow-data-deficiency.
+value while the rest is refitted; the report marks it `at the fitted model` and the model
+file's data_deficient entry has found_at_fit = true. Data-deficient parameters are an error
+(exit 4, report on stderr) unless --allow-data-deficiency.
 
 Prints the identifiability report (rank, condition number), the parameter table (nominal,
 identified, change and standard error; lengths in mm, angles in degrees), residuals before
@@ -381,6 +382,7 @@ pub fn summary<const N: usize>(
     s.push_str(&report::identifiability::<N>(
         &cal.analysis,
         &cal.singular_values,
+        &cal.found_at_fit,
         poses,
         rows,
     ));
@@ -603,12 +605,13 @@ fn failure_error<const N: usize>(
         Failure::Deficient {
             analysis,
             singular_values,
+            found_at_fit,
         } => CliError::numeric(format!(
             "{source}: rank deficient: the data determine {} of the {} structurally identifiable parameters\n{}\
              hint: add poses that move the data-deficient parameters, or pass --allow-data-deficiency to fit the identifiable subset",
             analysis.rank,
             analysis.requested.len() - analysis.structural.len(),
-            report::identifiability::<N>(&analysis, &singular_values, poses, rows)
+            report::identifiability::<N>(&analysis, &singular_values, &found_at_fit, poses, rows)
         )),
         Failure::Core { algorithm, error } => {
             let e = core_error(error, source, line_of);

@@ -759,8 +759,13 @@ impl Study<'_> {
 
     /// Identifiability, the parameters against the truth and each algorithm's recovery.
     fn identification_text(&self, cal: &Calibration<N>, poses: usize) -> String {
-        let mut text =
-            report::identifiability::<N>(&cal.analysis, &cal.singular_values, poses, 6 * poses);
+        let mut text = report::identifiability::<N>(
+            &cal.analysis,
+            &cal.singular_values,
+            &cal.found_at_fit,
+            poses,
+            6 * poses,
+        );
         let _ = writeln!(
             text,
             "\nParameters (like the paper's Table 3; lengths in mm, angles in degrees;\n  max |err|: the largest |estimate − truth| of the algorithms):"
