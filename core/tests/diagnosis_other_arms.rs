@@ -33,7 +33,11 @@
 //! out); strong out-of-library effects never `explained`, 75/75 (`partially_explained`
 //! with a library effect absorbing part, or `unexplained` for the bending). Weaker ones
 //! (ρ 0.7–1.9, not scored) are sometimes `explained` by base_frame or joint_compliance: what
-//! is left after those is within the noise.
+//! is left after those is within the noise. With the reflector on the flange's axis
+//! (0, 0, 0.06) m instead, no diagnosis failed either (strong library effects 106/106,
+//! no over-claim 75/75), though some of this file's ρ fits, started from the truth's
+//! geometry, then crawl past 1,000 iterations in both solvers (ρ left NaN there).
+//! A diagnosis that fails counts against the suite (`ERROR`).
 //!
 //! Found on the way: `sim::add_effect` drew an angle's magnitudes for a slide (1e-3 m/N of
 //! compliance: decimetres on a column), now a slide's (`add_effect_draws_slide_magnitudes_…`).
@@ -325,14 +329,18 @@ fn detectability<const N: usize>(
     let start = only_effects(truth, EffectSet::NONE);
     // An effect at its realistic size on a heavy arm leaves centimetres before scaling,
     // where the solvers converge slowly (the column arm's compliance, position only: OLS
-    // 460 iterations, OPT2 93, same minimum): up to 1,000 iterations.
+    // 460 iterations, OPT2 93, same minimum): up to 1,000 iterations, then OPT2.
     let mut opts = IdentifyOptions::new(Algorithm::Ols, start.geometric_param_set());
     opts.max_iterations = 1000;
     opts.weight_pos = inst.sigma_pos_m.powi(-2);
     opts.weight_rot = inst.sigma_rot_rad.powi(-2);
     opts.allow_data_deficiency = true;
     let mut ws = Box::<Workspace<64>>::default();
-    let fit = identify(&start, &data, &opts, &mut ws).unwrap_or_else(|e| {
+    let fit = identify(&start, &data, &opts, &mut ws).or_else(|_| {
+        opts.algorithm = Algorithm::Opt2;
+        identify(&start, &data, &opts, &mut ws)
+    });
+    let fit = fit.unwrap_or_else(|e| {
         panic!(
             "geometric fit: {e:?}; start rms {:?}; outside {outside:?}",
             rms(&start, &data)
@@ -427,8 +435,22 @@ fn run_case<const N: usize>(
     let data = measure(&truth, outside.as_ref(), &states, inst, true, &mut mrng);
     let groups: Vec<u32> = states.iter().map(|(_, g)| *g).collect();
     let mut poses = vec![PoseDiagnosis::default(); data.len()];
-    let d = diagnose(nominal, &data, &groups, &Config::default(), &mut poses, ws)
-        .unwrap_or_else(|e| panic!("{arm} {hidden:?} seed {seed}: {e}"));
+    let d = match diagnose(nominal, &data, &groups, &Config::default(), &mut poses, ws) {
+        Ok(d) => d,
+        Err(e) => {
+            return Outcome {
+                arm,
+                inst: inst.name,
+                reason: format!("diagnosis failed: {e}"),
+                hidden,
+                rho,
+                status: Status::Unexplained,
+                said: "ERROR".into(),
+                right: false,
+                closed_withheld: 0.0,
+            };
+        }
+    };
     let status = d.verdict.status;
     let right = match hidden {
         Hidden::None => status == Status::NoGap,
@@ -548,6 +570,8 @@ fn report_and_check(out: &[Outcome], per_kind: usize) {
          library effects right {}/{}; strong out-of-library effects not over-claimed {}/{}",
         none.0, none.1, lib.0, lib.1, outside.0, outside.1
     );
+    let failed: Vec<_> = out.iter().filter(|o| o.said == "ERROR").collect();
+    assert!(failed.is_empty(), "diagnoses that failed: {failed:?}");
     let frac = |(r, n): (usize, usize)| if n == 0 { 1.0 } else { r as f64 / n as f64 };
     assert!(lib.1 > 0 && outside.1 > 0, "no strong cases scored");
     assert!(frac(none) >= 0.9, "no_gap without an effect: {none:?}");
