@@ -200,7 +200,7 @@ fn run<const N: usize>(
     };
     let cal = py
         .detach(|| calibration::calibrate(start, &data.meas, settings))
-        .map_err(|f| failure(py, f, set))?;
+        .map_err(|f| failure::<N>(py, f, set))?;
     let (file, _) =
         pose_calibration::model_file(name, &cal, set, source, &data, flags.allow_out_of_limits);
     // The robot the model file describes: what loading the saved file gives.
@@ -215,15 +215,47 @@ fn run<const N: usize>(
     })
 }
 
-fn failure(py: Python<'_>, f: Failure, set: &MeasurementSet) -> PyErr {
+/// The data-deficient parameters of a refusal, each with the identified parameter its
+/// column is most aligned with (as the CLI's report), and whether it was found at the
+/// fitted model.
+fn deficient_list<const N: usize>(
+    analysis: &kincal::identify::Identifiability,
+    found_at_fit: &kincal::ParamSet,
+) -> String {
+    let label = kincal_io::units::param_label::<N>;
+    analysis
+        .data_deficient
+        .iter()
+        .map(|i| {
+            let why = match analysis.partner.get(i).copied().flatten() {
+                Some(p) => format!("aligned with {}", label(p.param.0)),
+                None => "no effect on the measured pose".to_string(),
+            };
+            let at_fit = if found_at_fit.contains(i) {
+                ", at the fitted model"
+            } else {
+                ""
+            };
+            format!("{} ({why}{at_fit})", label(i))
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn failure<const N: usize>(py: Python<'_>, f: Failure, set: &MeasurementSet) -> PyErr {
     match f {
-        Failure::Deficient { analysis, .. } => errors::numeric(
+        Failure::Deficient {
+            analysis,
+            found_at_fit,
+            ..
+        } => errors::numeric(
             py,
             format!(
-                "{}: rank deficient: the data determine {} of the {} structurally identifiable parameters (pass allow_data_deficiency=True to fit the identifiable subset)",
+                "{}: rank deficient: the data determine {} of the {} structurally identifiable parameters; data-deficient: {} (pass allow_data_deficiency=True to fit the identifiable subset)",
                 set.source,
                 analysis.rank,
-                analysis.requested.len() - analysis.structural.len()
+                analysis.requested.len() - analysis.structural.len(),
+                deficient_list::<N>(&analysis, &found_at_fit)
             ),
         ),
         Failure::Core { algorithm, error } => {

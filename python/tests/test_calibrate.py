@@ -84,8 +84,25 @@ def test_calibrate_arguments_and_data_errors(study, tmp_path):
     few = tmp_path / "few.csv"
     lines = path.read_text().splitlines()
     few.write_text("\n".join(lines[:4]) + "\n")
-    with pytest.raises(kincal.NumericError):
+    with pytest.raises(kincal.NumericError, match="data-deficient: "):
         kincal.calibrate(few, kincal.aria())
+
+
+def test_a_deficiency_found_at_the_fit_is_named(kincal_bin, tmp_path):
+    """ARIA's ten calibration-tool poses (the demo's data) hold the flange's x axis along the
+    base's x: the base's x and link 6's a are told apart only while the model is off. The
+    refusal names the pair and where it was found; allowed, the model file says so."""
+    r = run_cli(kincal_bin, "demo", "--out", str(tmp_path / "out"))
+    assert r.returncode == 0, r.stderr
+    data = tmp_path / "out" / "calibration_noise_free.csv"
+    with pytest.raises(kincal.NumericError,
+                       match=r"data-deficient: base_px \(aligned with a_6, at the fitted model\)"):
+        kincal.calibrate(data, kincal.aria(), effects=["base_frame"])
+    model = kincal.calibrate(data, kincal.aria(), effects=["base_frame"],
+                             allow_data_deficiency=True)
+    deficient = model.model_file()["calibration"]["identifiability"]["data_deficient"]
+    assert deficient == [{"label": "base_px", "aligned_with": "a_6", "cosine": 1.0,
+                          "found_at_fit": True}]
 
 
 def test_pose_errors_are_the_cli_validate_figures(study, kincal_bin, tmp_path):
