@@ -107,10 +107,20 @@ fn verdict(t: &mut String, r: &Report) {
             ))
         )
     });
+    // What the chosen model leaves, held out, against the floor: above it, the verdict is
+    // at most partially_explained.
+    let rest = chosen
+        .and_then(|m| m.remaining_gap_z)
+        .map_or(String::new(), |z| {
+            format!(
+                "; remaining gap z = {z:.1}{}",
+                if z > Z { " (above the noise)" } else { "" }
+            )
+        });
     let confounded = r.confounded_names();
     let _ = writeln!(
         t,
-        "\nVERDICT: {}{best}{}",
+        "\nVERDICT: {}{best}{rest}{}",
         r.status.unwrap_or("undecided (noise floor unknown)"),
         if confounded.is_empty() {
             String::new()
