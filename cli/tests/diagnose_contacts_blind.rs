@@ -178,7 +178,8 @@ fn write_case(dir: &Path, hidden: Hidden, seed: u64) {
     fs::write(dir.join("constraints.toml"), toml).unwrap();
 }
 
-fn run_case(hidden: Hidden, seed: u64) -> (String, String, bool) {
+/// Writes the case and runs `kincal diagnose` on it with the true σ stated: its JSON.
+fn diagnose_case(hidden: Hidden, seed: u64) -> Value {
     let dir = tempfile::tempdir().unwrap();
     write_case(dir.path(), hidden, seed);
     let sigma_mm = format!("{}", SIGMA_M * 1e3);
@@ -200,8 +201,12 @@ fn run_case(hidden: Hidden, seed: u64) -> (String, String, bool) {
         dir.path(),
     );
     assert!(o.status.success(), "{hidden:?} {seed}: {}", text(&o));
-    let v: Value =
-        serde_json::from_str(&fs::read_to_string(dir.path().join("d.json")).unwrap()).unwrap();
+    serde_json::from_str(&fs::read_to_string(dir.path().join("d.json")).unwrap()).unwrap()
+}
+
+/// The verdict's status, what it named, and whether that is right for `hidden`.
+fn run_case(hidden: Hidden, seed: u64) -> (String, String, bool) {
+    let v = diagnose_case(hidden, seed);
     let status = v["verdict"]["status"].as_str().unwrap_or("?").to_string();
     let named = v["verdict"]["effects"].to_string();
     let confounded = v["verdict"]["confounded_with"].to_string();
@@ -268,29 +273,7 @@ fn contacts_blind() {
 fn noise_only_gap_test_rate() {
     let mut zs = Vec::new();
     for k in 0..30u64 {
-        let dir = tempfile::tempdir().unwrap();
-        write_case(dir.path(), Hidden::None, 1000 + k);
-        let sigma_mm = format!("{}", SIGMA_M * 1e3);
-        let o = kincal(
-            &[
-                "diagnose",
-                "contacts.csv",
-                "--robot",
-                "aria",
-                "--constraints",
-                "constraints.toml",
-                "--sigma-pos-mm",
-                &sigma_mm,
-                "--json",
-                "d.json",
-                "--out",
-                "unused.json",
-            ],
-            dir.path(),
-        );
-        assert!(o.status.success(), "{}", text(&o));
-        let v: Value =
-            serde_json::from_str(&fs::read_to_string(dir.path().join("d.json")).unwrap()).unwrap();
+        let v = diagnose_case(Hidden::None, 1000 + k);
         let z = v["gap_z"].as_f64().unwrap();
         let geo = v["candidates"][0]["heldout_rms_mm"].as_f64().unwrap();
         let floor = v["noise_floor"]["heldout_rms_at_floor_mm"]
