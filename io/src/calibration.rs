@@ -392,17 +392,19 @@ fn run_all<const N: usize>(
         .collect();
     let fits = results.into_iter().collect::<Result<Vec<_>, _>>()?;
     // Parameters the data determine only while the model is off: the fits' analysis.
-    let (start_analysis, mut analysis, mut singular_values) = (analysis, analysis, singular_values);
+    let (mut analysis, mut singular_values) = (analysis, singular_values);
     let mut found_at_fit = ParamSet::new();
     if let Some((run, sv)) = fits
         .iter()
         .find(|(run, _)| run.ident.analysis.data_deficient != analysis.data_deficient)
     {
+        found_at_fit = run
+            .ident
+            .analysis
+            .data_deficient
+            .difference(&analysis.data_deficient);
         analysis = run.ident.analysis;
         singular_values = sv.clone();
-        found_at_fit = analysis
-            .data_deficient
-            .difference(&start_analysis.data_deficient);
         refuse_deficient(
             &analysis,
             &singular_values,

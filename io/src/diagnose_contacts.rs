@@ -604,7 +604,6 @@ mod tests {
     #[test]
     fn explained_needs_the_remaining_gap_within_the_noise() {
         let sigma = Some(2e-5);
-        let geo = model(EffectSet::NONE, 12, 0.3e-3);
         let scale = EffectSet::of(Effect::JointScale);
         // Closes (0.3 − 0.06)/(0.3 − 0.0324) ≈ 90 % but leaves 0.06 mm: z far above 3.
         let r = verdict(
@@ -620,7 +619,14 @@ mod tests {
         assert!(rz > Z, "{rz}");
         assert!(r.models[1].gap_closed_fraction.unwrap() > 0.8);
         // Leaves the floor itself: explained.
-        let r = verdict(&[geo, model(scale, 12, 0.0324e-3)], sigma).unwrap();
+        let r = verdict(
+            &[
+                model(EffectSet::NONE, 12, 0.3e-3),
+                model(scale, 12, 0.0324e-3),
+            ],
+            sigma,
+        )
+        .unwrap();
         assert_eq!(r.status, Some("explained"));
         assert!(r.models[1].remaining_gap_z.unwrap() < Z);
     }

@@ -216,27 +216,26 @@ fn run<const N: usize>(
 }
 
 /// The data-deficient parameters of a refusal, each with the identified parameter its
-/// column is most aligned with (as the CLI's report), and whether it was found at the
-/// fitted model.
+/// column is most aligned with and whether it was found at the fitted model: the model
+/// file's entries (`identifiability_json`), worded on one line.
 fn deficient_list<const N: usize>(
     analysis: &kincal::identify::Identifiability,
     found_at_fit: &kincal::ParamSet,
 ) -> String {
-    let label = kincal_io::units::param_label::<N>;
-    analysis
+    kincal_io::model_file::identifiability_json::<N>(analysis, &[], found_at_fit)
         .data_deficient
         .iter()
-        .map(|i| {
-            let why = match analysis.partner.get(i).copied().flatten() {
-                Some(p) => format!("aligned with {}", label(p.param.0)),
-                None => "no effect on the measured pose".to_string(),
-            };
-            let at_fit = if found_at_fit.contains(i) {
+        .map(|e| {
+            let why = e.aligned_with.as_ref().map_or_else(
+                || "no effect on the measured pose".to_string(),
+                |p| format!("aligned with {p}"),
+            );
+            let at_fit = if e.found_at_fit {
                 ", at the fitted model"
             } else {
                 ""
             };
-            format!("{} ({why}{at_fit})", label(i))
+            format!("{} ({why}{at_fit})", e.label)
         })
         .collect::<Vec<_>>()
         .join(", ")
