@@ -83,6 +83,19 @@ fn holds(
     tilt: f64,
     rng: &mut SplitMix64,
 ) -> Vec<Contact<7>> {
+    try_holds(robot, p, r0, q0, n, tilt, rng).expect("IK failed")
+}
+
+/// [`holds`], `None` when IK does not find `n` of them in `10·n` tries.
+fn try_holds(
+    robot: &Robot<7>,
+    p: [f64; 3],
+    r0: nalgebra::Rotation3<f64>,
+    q0: [f64; 7],
+    n: usize,
+    tilt: f64,
+    rng: &mut SplitMix64,
+) -> Option<Vec<Contact<7>>> {
     let opts = IkOptions {
         extra_seeds: 4,
         first_solution: true,
@@ -100,8 +113,7 @@ fn holds(
             out.push(Contact::new(sol.q));
         }
     }
-    assert_eq!(out.len(), n, "IK failed");
-    out
+    (out.len() == n).then_some(out)
 }
 
 struct Set {
@@ -306,6 +318,18 @@ fn noisy_holds(
     sigma: f64,
     rng: &mut SplitMix64,
 ) -> Vec<Contact<7>> {
+    try_noisy_holds(robot, p, q0, n, sigma, rng).expect("IK failed")
+}
+
+/// [`noisy_holds`], `None` when IK cannot hold one of the noisy points.
+fn try_noisy_holds(
+    robot: &Robot<7>,
+    p: [f64; 3],
+    q0: [f64; 7],
+    n: usize,
+    sigma: f64,
+    rng: &mut SplitMix64,
+) -> Option<Vec<Contact<7>>> {
     let r0 = robot.fk(&JointState::new(q0)).expect("fk").rotation;
     let mut out = Vec::new();
     while out.len() < n {
@@ -316,9 +340,9 @@ fn noisy_holds(
             *v = sigma * (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
         }
         let q = [p[0] + g[0], p[1] + g[1], p[2] + g[2]];
-        out.extend(holds(robot, q, r0, q0, 1, 0.4, rng));
+        out.extend(try_holds(robot, q, r0, q0, 1, 0.4, rng)?);
     }
-    out
+    Some(out)
 }
 
 #[test]
@@ -638,4 +662,92 @@ fn robust_fit_down_weights_outlier_contacts_and_recovers_the_geometry() {
             robust.test.scale_pos_m
         );
     }
+}
+
+/// `n` targets with `per` noisy contacts each (σ per axis, metres) and the true points
+/// (targets IK cannot hold are drawn again).
+fn noisy_targets(truth: &Robot<7>, n: usize, per: usize, sigma: f64, rng: &mut SplitMix64) -> Set {
+    let mut set = Set {
+        contacts: vec![],
+        groups: vec![],
+        distances: vec![],
+        targets: vec![],
+    };
+    while set.groups.len() < n {
+        let q0 = rng.q_within(truth.limits()).map(|v| 0.6 * v);
+        let t0 = truth
+            .fk(&JointState::new(q0))
+            .expect("fk")
+            .translation
+            .vector;
+        let p = [t0.x, t0.y, t0.z];
+        let Some(c) = try_noisy_holds(truth, p, q0, per, sigma, rng) else {
+            continue;
+        };
+        set.groups.push(Group {
+            kind: GroupKind::Target,
+            start: set.contacts.len(),
+            len: c.len(),
+        });
+        set.contacts.extend(c);
+        set.targets.push(p);
+    }
+    set
+}
+
+/// The held-out sum of squares of targets scored at a fit from other targets exceeds the
+/// held-out rows' own χ² mean by `tr(KC)` (`held_out_estimation_error`): measured over
+/// repeated noise, the excess is there (the test can fail without the term) and the
+/// predicted one matches it.
+#[test]
+fn held_out_excess_matches_the_estimation_error_trace() {
+    use kincal::identify::held_out_estimation_error;
+    let truth = truth(7);
+    let (sigma, per) = (1e-4, 8);
+    let (mut excess, mut predicted, mut var_pred) = (Vec::new(), Vec::new(), Vec::new());
+    for seed in 0..128u64 {
+        let mut rng = SplitMix64::new(5000 + seed);
+        let mut train = noisy_targets(&truth, 8, per, sigma, &mut rng);
+        train.distances.push(Distance {
+            a: 0,
+            b: 1,
+            m: dist(train.targets[0], train.targets[1]),
+            weight: 1.0,
+        });
+        let test = noisy_targets(&truth, 6, per, sigma, &mut rng);
+        let mut ws = workspace();
+        let mut opts = IdentifyOptions::new(Algorithm::Ols, geometric());
+        opts.weight_pos = 1.0 / (sigma * sigma);
+        let fit = identify_constrained(&nominal(), &data(&train), &opts, &mut ws).expect("fit");
+        let e = held_out_estimation_error(&fit, &data(&train), &data(&test), &opts, &mut ws)
+            .expect("estimation error");
+        let q: f64 = (0..test.groups.len())
+            .map(|g| {
+                let est = group_estimate(&fit.robot, &data(&test), g).expect("estimate");
+                est.rms_m * est.rms_m * est.contacts as f64 / (sigma * sigma)
+            })
+            .sum();
+        let dof = (3 * (per - 1) * test.groups.len()) as f64;
+        excess.push(q - dof);
+        predicted.push(e.trace);
+        var_pred.push(2.0 * dof + 2.0 * e.trace_sq + 4.0 * e.trace);
+    }
+    let n = excess.len() as f64;
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let (m_ex, m_pred) = (mean(&excess), mean(&predicted));
+    let se = (mean(&var_pred) / n).sqrt();
+    eprintln!("excess {m_ex:.1} predicted {m_pred:.1} (se of the mean {se:.1})");
+    assert!(m_ex > 3.0 * se, "no measurable excess: {m_ex} (se {se})");
+    assert!(
+        (m_ex - m_pred).abs() < 3.0 * se,
+        "excess {m_ex} vs predicted {m_pred} (se {se})"
+    );
+    // Standardised by each draw's own predicted mean and variance, the sums have variance
+    // about 1 (a sample variance of `n` draws of a skewed quadratic form: 0.5..2).
+    let z: Vec<f64> = (0..excess.len())
+        .map(|i| (excess[i] - predicted[i]) / var_pred[i].sqrt())
+        .collect();
+    let v_z = z.iter().map(|x| x * x).sum::<f64>() / n;
+    eprintln!("variance of the standardised sums {v_z:.2}");
+    assert!((0.5..2.0).contains(&v_z), "{v_z}");
 }

@@ -20,8 +20,8 @@
 //! frame to be scored in.
 
 use kincal::identify::{
-    Algorithm, IdentifyOptions, Loss, PoseResidual, RobustOptions, distance_estimate,
-    group_estimate, identify_constrained, identify_constrained_robust,
+    Algorithm, Identification, IdentifyOptions, Loss, PoseResidual, RobustOptions,
+    distance_estimate, group_estimate, identify_constrained, identify_constrained_robust,
 };
 use kincal::{ParamSet, Robot};
 use serde_json::{Value, json};
@@ -190,7 +190,8 @@ pub fn groups_of(set: &MeasurementSet, by: GroupBy) -> Result<(Vec<usize>, Vec<S
 /// Fits the requested parameters on the rows of `cd` with a positive weight (OLS, then
 /// OPT2 if OLS does not converge; identifiable subset); with `robust`, by IRLS with that
 /// loss (core `identify_constrained_robust`, as `calibrate --robust`: held-out rows keep
-/// their zero weight). Returns the model and the algorithm's name.
+/// their zero weight). Returns the identification (model, fitted set) and the algorithm's
+/// name.
 pub fn fit<const N: usize>(
     start: &Robot<N>,
     cd: &ContactData<N>,
@@ -198,7 +199,7 @@ pub fn fit<const N: usize>(
     weight_pos: f64,
     max_iterations: u32,
     robust: Option<Loss>,
-) -> Result<(Robot<N>, &'static str), String> {
+) -> Result<(Box<Identification<N>>, &'static str), String> {
     let mut ws = new_workspace();
     let mut last = String::new();
     for algorithm in [Algorithm::Ols, Algorithm::Opt2] {
@@ -227,7 +228,7 @@ pub fn fit<const N: usize>(
             }
         };
         match result {
-            Ok(id) => return Ok((id.robot, algorithm.name())),
+            Ok(id) => return Ok((Box::new(id), algorithm.name())),
             Err(e @ kincal::Error::NotConverged { .. }) => last = e.to_string(),
             Err(e) => return Err(e.to_string()),
         }
@@ -373,6 +374,7 @@ pub fn run<const N: usize>(
             plan.max_iterations,
             plan.robust,
         )
+        .map(|(id, algorithm)| (id.robot, algorithm))
         .map_err(|e| Error::numeric(format!("{}: fold {}: {e}", set.source, f + 1)))?;
         let fail =
             |e: kincal::Error| Error::numeric(format!("{}: fold {}: {e}", set.source, f + 1));

@@ -5,7 +5,7 @@
 use std::fmt::Write as _;
 
 use kincal_io::crossval_contacts::GroupBy;
-use kincal_io::diagnose_contacts::{ModelReport, Report, Z, effects_name};
+use kincal_io::diagnose_contacts::{FORM_NOT_DETERMINED, ModelReport, Report, Z, effects_name};
 
 /// The readable report: the noise floor, one line per model, what is not a candidate and
 /// the verdict.
@@ -59,7 +59,8 @@ fn noise_floor(t: &mut String, r: &Report) {
             let _ = writeln!(
                 t,
                 "Noise floor: stated σ = {:.4} mm per axis; held-out RMS at the floor {n:.4} mm \
-                 (parameter-estimation error not included); geometric model {:.4} mm, gap z = {gz:.1}",
+                 (the folds' parameter-estimation error included); geometric model {:.4} mm, \
+                 gap z = {gz:.1}",
                 r.sigma_m.unwrap_or(0.0) * 1e3,
                 r.geometric_rms_mm()
             );
@@ -133,6 +134,16 @@ fn verdict(t: &mut String, r: &Report) {
             t,
             "No candidate predicts the held-out placements significantly better than the \
              geometric model (z > {Z})."
+        );
+    }
+    if r.reason == Some(FORM_NOT_DETERMINED) {
+        let _ = writeln!(
+            t,
+            "Not `explained`: joint_cyclic's terms (sin/cos of q and 2q per joint) fit most \
+             smooth joint errors over the narrow ranges of contact data, and contact data \
+             have no check of the form (the instrument diagnosis tests it against the next \
+             harmonics): a cyclic transmission error or another smooth function of the \
+             joints."
         );
     }
 }

@@ -5,6 +5,8 @@
 
 use libm::sqrt;
 
+use crate::identify::EstimationError;
+
 /// Wilcoxon signed-rank z of paired differences `d` (positive: the second model is
 /// better), in its normal approximation: zero and non-finite differences dropped, mid-ranks
 /// and the tie correction for equal |d| — the instrument diagnosis' paired statistic (one
@@ -26,23 +28,35 @@ pub fn signed_rank_z(d: &mut [f64]) -> f64 {
 
 /// Gap test of held-out contacts against a stated noise floor σ (1σ per axis, metres).
 ///
-/// A held-out target with `n` contacts scored about the mean of those same contacts has,
-/// at the floor, `E[Σ‖e‖²] = 3σ²(n − 1)` (3 components, one mean estimated): `dof` =
-/// `3·Σ(n_t − 1)` over targets. `sum_sq_m2` is `Σ‖e‖²` over all scored contacts.
-/// Returns (z of `Σ‖e‖²/σ²` against χ²(dof) by Wilson–Hilferty, the floor's RMS per
-/// contact `sqrt(3σ²·Σ(n_t − 1)/Σn_t)` \[m\]). The parameter-estimation error of the fit
-/// is not in the floor (it makes the test slightly liberal: a held-out fit cannot quite
-/// reach it). (0, 0) without dof or with σ ≤ 0.
+/// At the floor, a held-out target with `n` contacts scored about the mean of those same
+/// contacts has `E[Σ‖e‖²] = 3σ²(n − 1)` (3 components, one mean estimated) and a plane
+/// `σ²(n − 3)` (distances to its own plane): `dof` sums these over the scored groups, and
+/// `sum_sq_m2` is their `Σ‖e‖²`. The fits the groups were scored at carry their own
+/// estimation error, which the held-out rows see as an excess `est`
+/// ([`crate::identify::held_out_estimation_error`], summed over folds): whitened, the sum
+/// has mean `μ = dof + tr` and variance `V = 2·dof + 2·tr² + 4·tr`, matched by a scaled
+/// χ² (`c·χ²(ν)`, `c = V/2μ`, `ν = 2μ²/V`) and turned into a z by Wilson–Hilferty.
+/// Returns (z, the floor's RMS per contact `sqrt(σ²·μ/Σn_t)` \[m\], estimation error
+/// included). (0, 0) without dof or with σ ≤ 0.
 #[must_use]
-pub fn contact_gap_z(sum_sq_m2: f64, contacts: usize, dof: usize, sigma_m: f64) -> (f64, f64) {
+pub fn contact_gap_z(
+    sum_sq_m2: f64,
+    contacts: usize,
+    dof: usize,
+    est: EstimationError,
+    sigma_m: f64,
+) -> (f64, f64) {
     if dof == 0 || contacts == 0 || sigma_m.is_nan() || sigma_m <= 0.0 {
         return (0.0, 0.0);
     }
-    let k = dof as f64;
-    let v = 2.0 / (9.0 * k);
-    let q = sum_sq_m2 / (sigma_m * sigma_m);
-    let z = (libm::cbrt(q.max(0.0) / k) - (1.0 - v)) / sqrt(v);
-    (z, sqrt(sigma_m * sigma_m * k / contacts as f64))
+    let (k, t, t2) = (dof as f64, est.trace.max(0.0), est.trace_sq.max(0.0));
+    let mean = k + t;
+    let var = 2.0 * k + 2.0 * t2 + 4.0 * t;
+    let (scale, nu) = (var / (2.0 * mean), 2.0 * mean * mean / var);
+    let v = 2.0 / (9.0 * nu);
+    let q = sum_sq_m2 / (sigma_m * sigma_m) / scale;
+    let z = (libm::cbrt(q.max(0.0) / nu) - (1.0 - v)) / sqrt(v);
+    (z, sqrt(sigma_m * sigma_m * mean / contacts as f64))
 }
 
 #[cfg(test)]
@@ -64,15 +78,37 @@ mod tests {
     }
 
     #[test]
+    fn estimation_error_moves_the_floor_and_widens_the_test() {
+        // The same sum is at the floor once the fits' estimation error (trace 60) is
+        // expected, and far above it without.
+        let sigma = 1e-4;
+        let sum_sq = sigma * sigma * (270.0 + 60.0);
+        let est = EstimationError {
+            trace: 60.0,
+            trace_sq: 900.0,
+        };
+        let (z0, _) = contact_gap_z(sum_sq, 100, 270, EstimationError::default(), sigma);
+        let (z, floor) = contact_gap_z(sum_sq, 100, 270, est, sigma);
+        assert!(z0 > 2.0 && z.abs() < 0.1, "{z0} {z}");
+        assert!((floor - sqrt(sigma * sigma * 330.0 / 100.0)).abs() < 1e-15);
+        // The law is right-skewed: its 0.99865 quantile (z = 3) lies beyond the mean plus
+        // 3 sd, so a sum there gives z a little below 3.
+        let (mean, sd) = (330.0, (2.0f64 * 270.0 + 2.0 * 900.0 + 4.0 * 60.0).sqrt());
+        let (z3, _) = contact_gap_z(sigma * sigma * (mean + 3.0 * sd), 100, 270, est, sigma);
+        assert!((2.6..3.0).contains(&z3), "{z3}");
+    }
+
+    #[test]
     fn gap_z_is_near_zero_at_the_floor_and_large_above_it() {
         // At the floor Σ‖e‖² = 3σ²·Σ(n−1): z ≈ Wilson–Hilferty's small offset.
         let sigma = 1e-4;
-        let (z, floor) = contact_gap_z(3.0 * sigma * sigma * 90.0, 100, 270, sigma);
+        let none = EstimationError::default();
+        let (z, floor) = contact_gap_z(3.0 * sigma * sigma * 90.0, 100, 270, none, sigma);
         assert!(z.abs() < 0.1, "{z}");
         assert!((floor - sqrt(sigma * sigma * 270.0 / 100.0)).abs() < 1e-15);
         // Twice the floor in RMS (4× in sum of squares) on 270 dof: far beyond 3.
-        let (z, _) = contact_gap_z(4.0 * 3.0 * sigma * sigma * 90.0, 100, 270, sigma);
+        let (z, _) = contact_gap_z(4.0 * 3.0 * sigma * sigma * 90.0, 100, 270, none, sigma);
         assert!(z > 10.0, "{z}");
-        assert_eq!(contact_gap_z(1.0, 10, 0, sigma), (0.0, 0.0));
+        assert_eq!(contact_gap_z(1.0, 10, 0, none, sigma), (0.0, 0.0));
     }
 }

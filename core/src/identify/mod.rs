@@ -25,6 +25,7 @@
 mod at_fit;
 pub mod constraints;
 mod data;
+mod held_out;
 mod identifiability;
 pub mod instrument_sessions;
 mod memo;
@@ -42,6 +43,7 @@ pub use constraints::{
 };
 pub use data::{ComponentMask, Measurement, ResidualStats, residual_stats};
 pub(crate) use data::{distinct_points, validate as validate_data};
+pub use held_out::{EstimationError, held_out_estimation_error};
 pub(crate) use identifiability::structural_step;
 pub use identifiability::{Identifiability, Partner, analyze};
 pub use instrument_sessions::{InstrumentSession, fit_session_frame};
