@@ -695,12 +695,56 @@ fn noisy_targets(truth: &Robot<7>, n: usize, per: usize, sigma: f64, rng: &mut S
     set
 }
 
-/// The held-out sum of squares of targets scored at a fit from other targets exceeds the
-/// held-out rows' own χ² mean by `tr(KC)` (`held_out_estimation_error`): measured over
-/// repeated noise, the excess is there (the test can fail without the term) and the
-/// predicted one matches it.
-#[test]
-fn held_out_excess_matches_the_estimation_error_trace() {
+/// `n` planes with `per` contacts each, the true points spread ±0.1 m over each plane and
+/// off by N(0, σ) per axis (planes IK cannot hold are drawn again).
+fn noisy_planes(truth: &Robot<7>, n: usize, per: usize, sigma: f64, rng: &mut SplitMix64) -> Set {
+    let mut set = Set {
+        contacts: vec![],
+        groups: vec![],
+        distances: vec![],
+        targets: vec![],
+    };
+    'plane: while set.groups.len() < n {
+        let q0 = rng.q_within(truth.limits()).map(|v| 0.6 * v);
+        let t0 = truth.fk(&JointState::new(q0)).expect("fk");
+        let c0 = t0.translation.vector;
+        let normal = nalgebra::Vector3::from(rng.unit_vector());
+        let u = normal
+            .cross(&nalgebra::Vector3::new(0.3, 0.5, 0.8))
+            .normalize();
+        let v = normal.cross(&u);
+        let mut c = Vec::new();
+        for _ in 0..per {
+            let p = c0 + u * rng.uniform(-0.1, 0.1) + v * rng.uniform(-0.1, 0.1);
+            let Some(h) = try_noisy_holds(truth, [p.x, p.y, p.z], q0, 1, sigma, rng) else {
+                continue 'plane;
+            };
+            c.extend(h);
+        }
+        set.groups.push(Group {
+            kind: GroupKind::Plane,
+            start: set.contacts.len(),
+            len: c.len(),
+        });
+        set.contacts.extend(c);
+    }
+    set
+}
+
+/// The floor's degrees of freedom of a held-out group: `3(n − 1)` for a target scored
+/// about its own mean, `n − 3` for a plane scored about its own plane.
+fn floor_dof(g: &Group) -> f64 {
+    match g.kind {
+        GroupKind::Plane => (g.len - 3) as f64,
+        _ => (3 * (g.len - 1)) as f64,
+    }
+}
+
+/// The held-out sum of squares of targets (planes) scored at a fit from other targets
+/// exceeds the held-out rows' own χ² mean (`floor_dof`) by `tr(KC)`
+/// (`held_out_estimation_error`): measured over repeated noise, the excess is there (the
+/// test can fail without the term) and the predicted one matches it.
+fn check_held_out_excess(planes: bool) {
     use kincal::identify::held_out_estimation_error;
     let truth = truth(7);
     let (sigma, per) = (1e-4, 8);
@@ -714,7 +758,11 @@ fn held_out_excess_matches_the_estimation_error_trace() {
             m: dist(train.targets[0], train.targets[1]),
             weight: 1.0,
         });
-        let test = noisy_targets(&truth, 6, per, sigma, &mut rng);
+        let test = if planes {
+            noisy_planes(&truth, 4, 12, sigma, &mut rng)
+        } else {
+            noisy_targets(&truth, 6, per, sigma, &mut rng)
+        };
         let mut ws = workspace();
         let mut opts = IdentifyOptions::new(Algorithm::Ols, geometric());
         opts.weight_pos = 1.0 / (sigma * sigma);
@@ -727,7 +775,7 @@ fn held_out_excess_matches_the_estimation_error_trace() {
                 est.rms_m * est.rms_m * est.contacts as f64 / (sigma * sigma)
             })
             .sum();
-        let dof = (3 * (per - 1) * test.groups.len()) as f64;
+        let dof: f64 = test.groups.iter().map(floor_dof).sum();
         excess.push(q - dof);
         predicted.push(e.trace);
         var_pred.push(2.0 * dof + 2.0 * e.trace_sq + 4.0 * e.trace);
@@ -750,4 +798,14 @@ fn held_out_excess_matches_the_estimation_error_trace() {
     let v_z = z.iter().map(|x| x * x).sum::<f64>() / n;
     eprintln!("variance of the standardised sums {v_z:.2}");
     assert!((0.5..2.0).contains(&v_z), "{v_z}");
+}
+
+#[test]
+fn held_out_excess_matches_the_estimation_error_trace() {
+    check_held_out_excess(false);
+}
+
+#[test]
+fn held_out_excess_of_planes_matches_the_estimation_error_trace() {
+    check_held_out_excess(true);
 }

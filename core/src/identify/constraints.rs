@@ -19,8 +19,10 @@
 //! predicted tool points, and the reduced problem has residuals `e_i = p̄ − p_i` with the
 //! exact Jacobian `J_i − J̄` (`p̄` is linear in the `p_i`). For an unknown plane the normal
 //! `n` is the eigenvector of the smallest eigenvalue of the group's scatter about `p̄`, and
-//! `e_i = −n·(p_i − p̄)` with the Jacobian `nᵀ(J_i − J̄)` (Kaufman's variable projection:
-//! the cost is exact, its gradient too, only the Gauss–Newton matrix omits `∂n/∂θ`). A
+//! `e_i = −n·(p_i − p̄)` with the Jacobian `nᵀ(J_i − J̄)` less its fit on the plane's two
+//! tilts (`plane_tilt`: the term `∂n/∂θ`, first order, which Kaufman's variable projection
+//! would drop; without it the Gauss–Newton matrix, the standard errors and the rank test
+//! credited a plane with information its refitted tilt absorbs). A
 //! distance adds `e = D − ‖p̄_a − p̄_b‖` with `J = uᵀ(J̄_a − J̄_b)`, `u` the unit vector from
 //! `p̄_b` to `p̄_a`: the targets stay the means of their contacts (a distance does not pull
 //! them), which makes the objective a proper least-squares problem in the robot
@@ -448,6 +450,49 @@ fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+/// The tilts of an unknown plane: in-plane unit vectors `u`, `v` (orthonormal to `normal`)
+/// and the Cholesky factor `[l00, l10, l11]` of the weighted scatter of the contacts along
+/// them, `M = Σ w·t tᵀ` with `t = [u·(p − p̄), v·(p − p̄)]`. A refitted plane tilts with
+/// the model, absorbing from each parameter's rows `nᵀJ_i` their fit on `t_i`: the reduced
+/// problem's Gauss–Newton matrix is `Σ w r_iᵀr_i − BᵀM⁻¹B` (`B = Σ w t_i r_i`), the
+/// Jacobian of the residual with the normal re-estimated (the term `∂n/∂θ` variable
+/// projection would otherwise drop; it is first order, not small). `None` for a degenerate
+/// scatter (then [`plane_normal`] has refused the group already).
+fn plane_tilt(normal: [f64; 3], scatter: &[[f64; 3]; 3]) -> Option<([f64; 3], [f64; 3], [f64; 3])> {
+    let axis = if normal[0].abs() < 0.6 {
+        [1.0, 0.0, 0.0]
+    } else {
+        [0.0, 1.0, 0.0]
+    };
+    let u = unit_normal(cross3(&normal, &axis));
+    let v = cross3(&normal, &u);
+    let quad = |a: &[f64; 3], b: &[f64; 3]| {
+        let mut x = 0.0;
+        for i in 0..3 {
+            for j in 0..3 {
+                x += a[i] * scatter[i][j] * b[j];
+            }
+        }
+        x
+    };
+    let (muu, muv, mvv) = (quad(&u, &u), quad(&u, &v), quad(&v, &v));
+    if muu.is_nan() || muu <= 0.0 {
+        return None;
+    }
+    let l00 = sqrt(muu);
+    let l10 = muv / l00;
+    let d = mvv - l10 * l10;
+    (d > 0.0).then(|| (u, v, [l00, l10, sqrt(d)]))
+}
+
+fn cross3(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
 fn unit_normal(n: [f64; 3]) -> [f64; 3] {
     let l = sqrt(dot3(&n, &n));
     if l > 0.0 {
@@ -503,17 +548,49 @@ fn fold_group<const N: usize, const P: usize>(
         GroupKind::KnownPlane { normal, .. } => unit_normal(normal),
         _ => [0.0; 3],
     };
+    // Rows 3 and 4 are never folded (contact rows are position rows): an unknown plane
+    // keeps there `B = Σ w·t_i·nᵀJ_i` of its tilts (see `plane_tilt`), then on the Givens
+    // path `M⁻¹B`.
     let mut rows = [[0.0; P]; 6];
     let mut jbar = [[0.0; P]; 3];
-    // Givens path: the centred rows need J̄ first (one more Jacobian pass).
+    let tilt = match g.kind {
+        GroupKind::Plane if w_sum > 0.0 && !ws.cost_only => plane_tilt(normal, &scatter),
+        _ => None,
+    };
+    let t_of = |p: &[f64; 3], (u, v, _): &([f64; 3], [f64; 3], [f64; 3])| {
+        let d = [p[0] - pbar[0], p[1] - pbar[1], p[2] - pbar[2]];
+        [dot3(u, &d), dot3(v, &d)]
+    };
+    // Givens path: the centred rows need J̄ first (one more Jacobian pass), and a plane's
+    // rows their tilts' fit.
     let pre_centre = centred && !ws.to_gram;
     if pre_centre && w_sum > 0.0 {
         for c in contacts.iter().filter(|c| c.weight > 0.0) {
-            contact_rows(robot, c, n_cols, ws, &mut rows)?;
+            let p = contact_rows(robot, c, n_cols, ws, &mut rows)?;
             for (jb, r) in jbar.iter_mut().zip(rows.iter()) {
                 for (x, y) in jb.iter_mut().zip(r.iter()).take(n_cols) {
                     *x += c.weight / w_sum * y;
                 }
+            }
+            if let Some(tl) = &tilt {
+                let t = t_of(&p, tl);
+                let [r0, r1, r2, b0, b1, _] = &mut rows;
+                let js = r0.iter().zip(r1.iter()).zip(r2.iter());
+                for (((x, y), z), (b0, b1)) in js.zip(b0.iter_mut().zip(b1.iter_mut())).take(n_cols)
+                {
+                    let nj = normal[0] * x + normal[1] * y + normal[2] * z;
+                    *b0 += c.weight * t[0] * nj;
+                    *b1 += c.weight * t[1] * nj;
+                }
+            }
+        }
+        if let Some((_, _, l)) = &tilt {
+            // M⁻¹B = L⁻ᵀL⁻¹B, column by column.
+            let [.., b0, b1, _] = &mut rows;
+            for (b0, b1) in b0.iter_mut().zip(b1.iter_mut()).take(n_cols) {
+                let y0 = *b0 / l[0];
+                *b1 = (*b1 - l[1] * y0) / l[2] / l[2];
+                *b0 = (y0 - l[1] * *b1) / l[0];
             }
         }
     }
@@ -555,9 +632,26 @@ fn fold_group<const N: usize, const P: usize>(
                     _ => -dot3(&normal, &[p[0] - pbar[0], p[1] - pbar[1], p[2] - pbar[2]]),
                 };
                 w[0] = wp;
-                let [r0, r1, r2, ..] = &mut rows;
+                let [r0, r1, r2, b0, b1, ..] = &mut rows;
                 for ((x, y), z) in r0.iter_mut().zip(r1.iter()).zip(r2.iter()).take(n_cols) {
                     *x = normal[0] * *x + normal[1] * y + normal[2] * z;
+                }
+                if let Some(tl) = &tilt {
+                    let t = t_of(&p, tl);
+                    for ((x, b0), b1) in r0
+                        .iter_mut()
+                        .zip(b0.iter_mut())
+                        .zip(b1.iter_mut())
+                        .take(n_cols)
+                    {
+                        if pre_centre {
+                            // The row less its fit on the tilts (`M⁻¹B` in rows 3, 4).
+                            *x -= t[0] * *b0 + t[1] * *b1;
+                        } else {
+                            *b0 += c.weight * t[0] * *x;
+                            *b1 += c.weight * t[1] * *x;
+                        }
+                    }
                 }
             }
         }
@@ -585,6 +679,18 @@ fn fold_group<const N: usize, const P: usize>(
                     *x = normal[0] * jbar[0][j] + normal[1] * jbar[1][j] + normal[2] * jbar[2][j];
                 }
                 ws.gram.downdate(nj.get(..n_cols).unwrap_or(&[]), wd)?;
+                if let Some((_, _, l)) = &tilt {
+                    // − BᵀM⁻¹B = − (L⁻¹B)ᵀ(L⁻¹B): two rows.
+                    let [.., b0, b1, _] = &mut rows;
+                    for (y0, y1) in b0.iter_mut().zip(b1.iter_mut()).take(n_cols) {
+                        *y0 /= l[0];
+                        *y1 = (*y1 - l[1] * *y0) / l[2];
+                    }
+                    ws.gram
+                        .downdate(b0.get(..n_cols).unwrap_or(&[]), opts.weight_pos)?;
+                    ws.gram
+                        .downdate(b1.get(..n_cols).unwrap_or(&[]), opts.weight_pos)?;
+                }
             }
         }
     }
@@ -1757,6 +1863,97 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// An unknown plane's Gram matrix is `JᵀJ` of the finite-difference Jacobian of its
+    /// residuals with the plane refitted at every model (offset and tilt), on both paths:
+    /// the contacts hold the tool point on one plane (IK), where that Jacobian is the
+    /// Gauss–Newton one.
+    #[test]
+    fn plane_gram_matches_the_finite_difference_jacobian_with_the_plane_refitted() {
+        use crate::ik::{IkOptions, solve_ik};
+        let robot = aria::nominal();
+        let seed = crate::JointState::new(aria::TOOL_SEED_Q);
+        let t0 = robot.fk(&seed).unwrap();
+        let (u, v) = (
+            nalgebra::Vector3::new(0.8, 0.6, 0.0),
+            nalgebra::Vector3::new(-0.36, 0.48, 0.8),
+        );
+        let contacts: [Contact<6>; 7] = core::array::from_fn(|k| {
+            let a = 0.9 * k as f64;
+            let p = t0.translation.vector + u * (0.06 * libm::cos(a)) + v * (0.04 * libm::sin(a));
+            let pose = Transform::from_parts(nalgebra::Translation3::from(p), t0.rotation);
+            let sol = solve_ik(&robot, &pose, &seed, &IkOptions::default()).unwrap();
+            assert!(sol.residual_pos_m < 1e-9, "{}", sol.residual_pos_m);
+            Contact::new(sol.q)
+        });
+        let groups = [Group {
+            kind: GroupKind::Plane,
+            start: 0,
+            len: 7,
+        }];
+        let d = ConstraintData {
+            instrument: &[],
+            contacts: &contacts,
+            groups: &groups,
+            distances: &[],
+            sessions: &[],
+        };
+        let mut ws = ws();
+        fold_all(&robot, &d, true, &mut ws);
+        let gram = *ws.gram.gram();
+        fold_all(&robot, &d, false, &mut ws);
+        let n = params().len();
+        let n0 = plane_normal(point_moments(&robot, &contacts).unwrap().2, 0).unwrap();
+        // Signed distances to the plane refitted at `r` (normal's sign kept).
+        let residuals = |r: &Robot<6>| -> [f64; 7] {
+            let (_, pbar, scatter) = point_moments(r, &contacts).unwrap();
+            let mut nr = plane_normal(scatter, 0).unwrap();
+            if dot3(&nr, &n0) < 0.0 {
+                nr = [-nr[0], -nr[1], -nr[2]];
+            }
+            core::array::from_fn(|k| {
+                let p = contacts[k].tool_point(r).unwrap();
+                dot3(&nr, &[p[0] - pbar[0], p[1] - pbar[1], p[2] - pbar[2]])
+            })
+        };
+        let mut jac = [[0.0; 7]; 48];
+        for (k, i) in params().iter().enumerate() {
+            let h = 1e-6;
+            let x = robot.param(ParamIndex(i)).unwrap();
+            let mut rp = robot;
+            rp.set_param(ParamIndex(i), x + h).unwrap();
+            let mut rm = robot;
+            rm.set_param(ParamIndex(i), x - h).unwrap();
+            let (a, b) = (residuals(&rp), residuals(&rm));
+            for row in 0..7 {
+                jac[k][row] = (a[row] - b[row]) / (2.0 * h);
+            }
+        }
+        let r = ws.lsq.r();
+        let mut tilt_matters = false;
+        for a in 0..n {
+            for b in a..n {
+                let fd: f64 = (0..7).map(|row| jac[a][row] * jac[b][row]).sum();
+                let givens: f64 = (0..=a).map(|i| r[i][a] * r[i][b]).sum();
+                let scale = gram[a][a].abs().max(gram[b][b].abs()).max(1e-6);
+                assert!(
+                    (gram[a][b] - fd).abs() <= 1e-6 * scale,
+                    "G[{a}][{b}] {} vs FD {fd}",
+                    gram[a][b]
+                );
+                assert!(
+                    (gram[a][b] - givens).abs() <= 1e-9 * scale,
+                    "G[{a}][{b}] {} vs Givens {givens}",
+                    gram[a][b]
+                );
+                tilt_matters |= gram[a][a] > 1e-6 && a == b;
+            }
+        }
+        assert!(
+            tilt_matters,
+            "every diagonal entry vanished: the test says nothing"
+        );
     }
 
     #[test]
