@@ -73,20 +73,8 @@ fn rot(axis: [f64; 3], angle: f64) -> nalgebra::Rotation3<f64> {
 }
 
 /// Joint states holding the tool point of `robot` at `p` in `n` orientations tilted up to
-/// `tilt` rad from `r0` (IK on the true robot, seeded at `q0`).
-fn holds(
-    robot: &Robot<7>,
-    p: [f64; 3],
-    r0: nalgebra::Rotation3<f64>,
-    q0: [f64; 7],
-    n: usize,
-    tilt: f64,
-    rng: &mut SplitMix64,
-) -> Vec<Contact<7>> {
-    try_holds(robot, p, r0, q0, n, tilt, rng).expect("IK failed")
-}
-
-/// [`holds`], `None` when IK does not find `n` of them in `10·n` tries.
+/// `tilt` rad from `r0` (IK on the true robot, seeded at `q0`); `None` when IK does not
+/// find `n` of them in `10·n` tries.
 fn try_holds(
     robot: &Robot<7>,
     p: [f64; 3],
@@ -146,7 +134,7 @@ fn synthetic(robot: &Robot<7>, n_targets: usize, n_planes: usize, per: usize, se
         let t0 = robot.fk(&JointState::new(q0)).expect("fk");
         let p = t0.translation.vector;
         let p = [p.x, p.y, p.z];
-        let c = holds(robot, p, t0.rotation, q0, per, 0.4, &mut rng);
+        let c = try_holds(robot, p, t0.rotation, q0, per, 0.4, &mut rng).expect("IK failed");
         s.targets.push(p);
         add(&mut s, GroupKind::Target, c);
     }
@@ -170,15 +158,10 @@ fn synthetic(robot: &Robot<7>, n_targets: usize, n_planes: usize, per: usize, se
         let mut c = Vec::new();
         for _ in 0..per + 2 {
             let p = c0 + u * rng.uniform(-0.1, 0.1) + v * rng.uniform(-0.1, 0.1);
-            c.extend(holds(
-                robot,
-                [p.x, p.y, p.z],
-                t0.rotation,
-                q0,
-                1,
-                0.3,
-                &mut rng,
-            ));
+            c.extend(
+                try_holds(robot, [p.x, p.y, p.z], t0.rotation, q0, 1, 0.3, &mut rng)
+                    .expect("IK failed"),
+            );
         }
         add(&mut s, GroupKind::Plane, c);
     }
@@ -309,19 +292,8 @@ fn without_a_distance_one_length_is_the_scale_gauge() {
 }
 
 /// `n` joint states holding the true tool point at `p + noise` (σ per axis, metres) in
-/// orientations tilted up to 0.4 rad from the orientation at `q0`.
-fn noisy_holds(
-    robot: &Robot<7>,
-    p: [f64; 3],
-    q0: [f64; 7],
-    n: usize,
-    sigma: f64,
-    rng: &mut SplitMix64,
-) -> Vec<Contact<7>> {
-    try_noisy_holds(robot, p, q0, n, sigma, rng).expect("IK failed")
-}
-
-/// [`noisy_holds`], `None` when IK cannot hold one of the noisy points.
+/// orientations tilted up to 0.4 rad from the orientation at `q0`; `None` when IK cannot
+/// hold one of the noisy points.
 fn try_noisy_holds(
     robot: &Robot<7>,
     p: [f64; 3],
@@ -353,29 +325,7 @@ fn noisy_estimates_lie_within_their_standard_errors() {
     let mut outside_3 = 0;
     for seed in 0..12u64 {
         let mut rng = SplitMix64::new(1000 + seed);
-        let mut set = Set {
-            contacts: vec![],
-            groups: vec![],
-            distances: vec![],
-            targets: vec![],
-        };
-        for _ in 0..16 {
-            let q0 = rng.q_within(truth.limits()).map(|v| 0.6 * v);
-            let t0 = truth
-                .fk(&JointState::new(q0))
-                .expect("fk")
-                .translation
-                .vector;
-            let p = [t0.x, t0.y, t0.z];
-            let c = noisy_holds(&truth, p, q0, 8, sigma, &mut rng);
-            set.groups.push(Group {
-                kind: GroupKind::Target,
-                start: set.contacts.len(),
-                len: c.len(),
-            });
-            set.contacts.extend(c);
-            set.targets.push(p);
-        }
+        let mut set = noisy_targets(&truth, 16, 8, sigma, &mut rng);
         set.distances.push(Distance {
             a: 0,
             b: 1,
@@ -463,7 +413,7 @@ fn known_targets_known_plane_and_partial_coordinates_make_the_base_observable() 
             0.3,
         ];
         set.contacts
-            .extend(holds(&truth, p, r0, q0, 1, 0.3, &mut rng));
+            .extend(try_holds(&truth, p, r0, q0, 1, 0.3, &mut rng).expect("IK failed"));
     }
     set.groups.push(Group {
         kind: GroupKind::KnownPlane {
@@ -596,12 +546,12 @@ fn robust_fit_down_weights_outlier_contacts_and_recovers_the_geometry() {
             .translation
             .vector;
         let p = [t0.x, t0.y, t0.z];
-        let mut c = noisy_holds(&truth, p, q0, 8, sigma, &mut rng);
+        let mut c = try_noisy_holds(&truth, p, q0, 8, sigma, &mut rng).expect("IK failed");
         if t % 4 == 1 {
             // The ball seated 9 mm off (a chip in the socket): 90 σ.
             let off = [p[0] + 0.008, p[1] - 0.004, p[2]];
             c.pop();
-            c.extend(noisy_holds(&truth, off, q0, 1, sigma, &mut rng));
+            c.extend(try_noisy_holds(&truth, off, q0, 1, sigma, &mut rng).expect("IK failed"));
             outliers.push(set.contacts.len() + c.len() - 1);
         }
         set.groups.push(Group {
