@@ -104,6 +104,7 @@ fn try_holds(
     (out.len() == n).then_some(out)
 }
 
+#[derive(Default)]
 struct Set {
     contacts: Vec<Contact<7>>,
     groups: Vec<Group>,
@@ -111,16 +112,22 @@ struct Set {
     targets: Vec<[f64; 3]>,
 }
 
+/// Readings within 60 % of the limits and the tool point of `robot` there.
+fn reachable_point(robot: &Robot<7>, rng: &mut SplitMix64) -> ([f64; 7], [f64; 3]) {
+    let q0 = rng.q_within(robot.limits()).map(|v| 0.6 * v);
+    let t = robot
+        .fk(&JointState::new(q0))
+        .expect("fk")
+        .translation
+        .vector;
+    (q0, [t.x, t.y, t.z])
+}
+
 /// `n_targets` targets (the first two a known distance apart) with `per` contacts each,
 /// plus `n_planes` planes with `per + 2` contacts each.
 fn synthetic(robot: &Robot<7>, n_targets: usize, n_planes: usize, per: usize, seed: u64) -> Set {
     let mut rng = SplitMix64::new(seed);
-    let mut s = Set {
-        contacts: vec![],
-        groups: vec![],
-        distances: vec![],
-        targets: vec![],
-    };
+    let mut s = Set::default();
     let add = |s: &mut Set, kind: GroupKind, c: Vec<Contact<7>>| {
         s.groups.push(Group {
             kind,
@@ -531,21 +538,10 @@ fn robust_fit_down_weights_outlier_contacts_and_recovers_the_geometry() {
     let truth = truth(7);
     let sigma = 1e-4;
     let mut rng = SplitMix64::new(4242);
-    let mut set = Set {
-        contacts: vec![],
-        groups: vec![],
-        distances: vec![],
-        targets: vec![],
-    };
+    let mut set = Set::default();
     let mut outliers = Vec::new();
     for t in 0..16 {
-        let q0 = rng.q_within(truth.limits()).map(|v| 0.6 * v);
-        let t0 = truth
-            .fk(&JointState::new(q0))
-            .expect("fk")
-            .translation
-            .vector;
-        let p = [t0.x, t0.y, t0.z];
+        let (q0, p) = reachable_point(&truth, &mut rng);
         let mut c = try_noisy_holds(&truth, p, q0, 8, sigma, &mut rng).expect("IK failed");
         if t % 4 == 1 {
             // The ball seated 9 mm off (a chip in the socket): 90 σ.
@@ -617,20 +613,9 @@ fn robust_fit_down_weights_outlier_contacts_and_recovers_the_geometry() {
 /// `n` targets with `per` noisy contacts each (σ per axis, metres) and the true points
 /// (targets IK cannot hold are drawn again).
 fn noisy_targets(truth: &Robot<7>, n: usize, per: usize, sigma: f64, rng: &mut SplitMix64) -> Set {
-    let mut set = Set {
-        contacts: vec![],
-        groups: vec![],
-        distances: vec![],
-        targets: vec![],
-    };
+    let mut set = Set::default();
     while set.groups.len() < n {
-        let q0 = rng.q_within(truth.limits()).map(|v| 0.6 * v);
-        let t0 = truth
-            .fk(&JointState::new(q0))
-            .expect("fk")
-            .translation
-            .vector;
-        let p = [t0.x, t0.y, t0.z];
+        let (q0, p) = reachable_point(truth, rng);
         let Some(c) = try_noisy_holds(truth, p, q0, per, sigma, rng) else {
             continue;
         };
@@ -648,12 +633,7 @@ fn noisy_targets(truth: &Robot<7>, n: usize, per: usize, sigma: f64, rng: &mut S
 /// `n` planes with `per` contacts each, the true points spread ±0.1 m over each plane and
 /// off by N(0, σ) per axis (planes IK cannot hold are drawn again).
 fn noisy_planes(truth: &Robot<7>, n: usize, per: usize, sigma: f64, rng: &mut SplitMix64) -> Set {
-    let mut set = Set {
-        contacts: vec![],
-        groups: vec![],
-        distances: vec![],
-        targets: vec![],
-    };
+    let mut set = Set::default();
     'plane: while set.groups.len() < n {
         let q0 = rng.q_within(truth.limits()).map(|v| 0.6 * v);
         let t0 = truth.fk(&JointState::new(q0)).expect("fk");
@@ -681,17 +661,8 @@ fn noisy_planes(truth: &Robot<7>, n: usize, per: usize, sigma: f64, rng: &mut Sp
     set
 }
 
-/// The floor's degrees of freedom of a held-out group: `3(n − 1)` for a target scored
-/// about its own mean, `n − 3` for a plane scored about its own plane.
-fn floor_dof(g: &Group) -> f64 {
-    match g.kind {
-        GroupKind::Plane => (g.len - 3) as f64,
-        _ => (3 * (g.len - 1)) as f64,
-    }
-}
-
 /// The held-out sum of squares of targets (planes) scored at a fit from other targets
-/// exceeds the held-out rows' own χ² mean (`floor_dof`) by `tr(KC)`
+/// exceeds the held-out rows' own χ² mean (`GroupKind::floor_dof`) by `tr(KC)`
 /// (`held_out_estimation_error`): measured over repeated noise, the excess is there (the
 /// test can fail without the term) and the predicted one matches it.
 fn check_held_out_excess(planes: bool) {
@@ -725,7 +696,11 @@ fn check_held_out_excess(planes: bool) {
                 est.rms_m * est.rms_m * est.contacts as f64 / (sigma * sigma)
             })
             .sum();
-        let dof: f64 = test.groups.iter().map(floor_dof).sum();
+        let dof: f64 = test
+            .groups
+            .iter()
+            .map(|g| g.kind.floor_dof(g.len) as f64)
+            .sum();
         excess.push(q - dof);
         predicted.push(e.trace);
         var_pred.push(2.0 * dof + 2.0 * e.trace_sq + 4.0 * e.trace);

@@ -71,9 +71,7 @@ struct Scored {
     /// Σ‖e‖ \[m\].
     sum_m: f64,
     contacts: usize,
-    /// What the held-out contacts alone leave at the floor, in units of σ²: `3(n − 1)` for a
-    /// target (its mean re-estimated), `n − 3` for a plane (its plane), `3n` and `n` when
-    /// the target or plane is known.
+    /// What the held-out contacts alone leave at the floor (`GroupKind::floor_dof`).
     dof: usize,
 }
 
@@ -111,16 +109,6 @@ impl Held {
     }
 }
 
-/// The floor's degrees of freedom of `n` held-out contacts of a group of `kind`.
-fn floor_dof(kind: GroupKind, n: usize) -> usize {
-    match kind {
-        GroupKind::Target => 3 * n.saturating_sub(1),
-        GroupKind::Plane => n.saturating_sub(3),
-        GroupKind::KnownTarget(_) => 3 * n,
-        GroupKind::KnownPlane { .. } => n,
-    }
-}
-
 /// Scores `robot` on the held-out (positive-weight) rows of `cd`.
 fn score<const N: usize>(robot: &Robot<N>, cd: &ContactData<N>) -> Result<Held, kincal::Error> {
     let d = cd.view();
@@ -143,7 +131,7 @@ fn score<const N: usize>(robot: &Robot<N>, cd: &ContactData<N>) -> Result<Held, 
             sum_sq_m2: e.rms_m * e.rms_m * n,
             sum_m: e.mean_m * n,
             contacts: e.contacts,
-            dof: floor_dof(group.kind, e.contacts),
+            dof: group.kind.floor_dof(e.contacts),
         });
     }
     for (k, spec) in cd.distance_specs.iter().enumerate() {
@@ -661,7 +649,7 @@ mod tests {
                         sum_sq_m2: ss,
                         sum_m: 8.0 * dist_m,
                         contacts: 8,
-                        dof: floor_dof(GroupKind::Target, 8),
+                        dof: GroupKind::Target.floor_dof(8),
                     })
                     .collect(),
                 distances: Vec::new(),

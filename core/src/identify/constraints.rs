@@ -141,6 +141,19 @@ impl GroupKind {
             GroupKind::KnownTarget(_) | GroupKind::KnownPlane { .. }
         )
     }
+    /// What `n` contacts of a group of this kind leave at the noise floor, in units of σ²
+    /// per axis, once the group's own unknowns are fitted to them: `3(n − 1)` for an unknown
+    /// target (its mean), `n − 3` for an unknown plane (distances to its own plane), `3n`
+    /// and `n` when known. The held-out gap test's degrees of freedom.
+    #[must_use]
+    pub const fn floor_dof(self, n: usize) -> usize {
+        match self {
+            GroupKind::Target => 3 * n.saturating_sub(1),
+            GroupKind::Plane => n.saturating_sub(3),
+            GroupKind::KnownTarget(_) => 3 * n,
+            GroupKind::KnownPlane { .. } => n,
+        }
+    }
     /// Contacts a group of this kind needs: 2 for an unknown target, 3 for an unknown
     /// plane, 1 when known (the front ends refuse fewer, see [`super::check_sessions`]).
     #[must_use]
