@@ -29,7 +29,7 @@ use std::path::Path;
 use kincal::diagnosis::Status;
 use kincal::diagnosis::contacts::{contact_gap_z, signed_rank_z};
 use kincal::identify::{
-    Algorithm, EstimationError, GroupKind, IdentifyOptions, distance_estimate, group_estimate,
+    Algorithm, EstimationError, IdentifyOptions, distance_estimate, group_estimate,
     held_out_estimation_error,
 };
 use kincal::{Effect, EffectSet, ParamSet, Robot};
@@ -635,6 +635,7 @@ pub fn json(r: &Report) -> Value {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use kincal::identify::GroupKind;
 
     /// A model whose held-out score is `groups` targets of 8 contacts each, every contact
     /// `dist_m` from its re-estimated target (`per_group` its Σ‖e‖²).
