@@ -734,3 +734,54 @@ fn held_out_excess_matches_the_estimation_error_trace() {
 fn held_out_excess_of_planes_matches_the_estimation_error_trace() {
     check_held_out_excess(true);
 }
+
+/// A common weight scale (`weight_pos`, as `--sigma-pos-mm` sets it) changes no fit's
+/// optimum: every stop rule and step control is relative to the cost. With a power of two
+/// (exact in floating point) the iterates are the same bit for bit; with the weight of a
+/// stated σ = 0.17 mm (1/σ² = 3.46e7, rounding differs) the fitted parameters agree far
+/// inside their standard errors.
+#[test]
+fn a_common_weight_scale_leaves_the_fit_unchanged() {
+    let truth = truth(7);
+    let mut rng = SplitMix64::new(4242);
+    let mut set = noisy_targets(&truth, 12, 8, 1.7e-4, &mut rng);
+    set.distances.push(Distance {
+        a: 0,
+        b: 1,
+        m: dist(set.targets[0], set.targets[1]),
+        weight: 1.0,
+    });
+    let fit_with = |weight_pos: f64| {
+        let mut ws = workspace();
+        let mut opts = IdentifyOptions::new(Algorithm::Ols, geometric());
+        opts.weight_pos = weight_pos;
+        identify_constrained(&nominal(), &data(&set), &opts, &mut ws).expect("identify")
+    };
+    let unit = fit_with(1.0);
+    let pow2 = fit_with(2f64.powi(24));
+    assert_eq!(unit.iterations, pow2.iterations);
+    for i in unit.analysis.identifiable.iter() {
+        let (a, b) = (
+            unit.robot.param(ParamIndex(i)).unwrap(),
+            pow2.robot.param(ParamIndex(i)).unwrap(),
+        );
+        assert_eq!(a.to_bits(), b.to_bits(), "{}: {a} vs {b}", name(i));
+    }
+    let sigma = fit_with(1.0 / (1.7e-4f64 * 1.7e-4));
+    assert_eq!(
+        unit.analysis.identifiable.iter().collect::<Vec<_>>(),
+        sigma.analysis.identifiable.iter().collect::<Vec<_>>()
+    );
+    for i in unit.analysis.identifiable.iter() {
+        let (a, b) = (
+            unit.robot.param(ParamIndex(i)).unwrap(),
+            sigma.robot.param(ParamIndex(i)).unwrap(),
+        );
+        assert!(
+            (a - b).abs() <= 1e-6 * unit.std_errors[i],
+            "{}: {a} vs {b} (se {})",
+            name(i),
+            unit.std_errors[i]
+        );
+    }
+}

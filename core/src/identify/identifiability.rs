@@ -503,7 +503,19 @@ pub(super) fn greedy<const P: usize>(
     // with a non-zero diagonal there): Gram–Schmidt against it only zeroes the leading
     // entries, exactly. `prefix` counts these implicit basis vectors.
     let mut prefix = 0;
-    let longest = (0..n).map(|k| column_norm(ws, k)).fold(0.0, f64::max);
+    let mut longest = 0.0f64;
+    for k in 0..n {
+        let norm = column_norm(ws, k);
+        // A non-finite factor is an error, never a classification: NaN fails every
+        // comparison, so its column would read as zero ("redundant") below.
+        if !norm.is_finite() {
+            return Err(Error::NonFinite {
+                what: crate::error::Quantity::Parameter,
+                index: ws.cols.get(k).copied().unwrap_or(k),
+            });
+        }
+        longest = longest.max(norm);
+    }
     for k in 0..n {
         let norm = column_norm(ws, k);
         let norm = if norm > ZERO_COLUMN_REL * longest {

@@ -327,6 +327,15 @@ fn reflector6(x0: f64, x: &[f64; 6]) -> Option<(f64, f64, [f64; 6])> {
         };
         return Some((mu, tau, x.map(|xi| xi * inv_v0)));
     }
+    // Subnormal entries (rounding residue of a column that is zero in exact arithmetic)
+    // first go up by 2^600, exactly: `1/m` would overflow to ∞ and ∞·0 made the whole
+    // factor NaN from this column on. `τ` and `v` do not change with a common scale of
+    // `x0` and `x`, `μ` scales with it.
+    let (x0, x, m, unscale) = if m < SUBNORMAL_GUARD {
+        (x0 * UP, x.map(|v| v * UP), m * UP, 1.0 / UP)
+    } else {
+        (x0, *x, m, 1.0)
+    };
     // Scaled by the largest magnitude: no square can overflow or underflow.
     let inv = 1.0 / m;
     let sigma: f64 = x.iter().map(|v| (v * inv) * (v * inv)).sum();
@@ -340,8 +349,15 @@ fn reflector6(x0: f64, x: &[f64; 6]) -> Option<(f64, f64, [f64; 6])> {
         // The rows' part underflowed against x0: nothing to fold to rounding.
         return None;
     }
-    Some((mu, -v0 / mu, x.map(|xi| xi / v0)))
+    Some((mu * unscale, -v0 / mu, x.map(|xi| xi / v0)))
 }
+
+/// Below this largest magnitude [`reflector6`] scales its entries up by [`UP`] first
+/// (2^-600: then `1/m` is finite, and the scaled entries stay below 2^0).
+const SUBNORMAL_GUARD: f64 = f64::from_bits((1023 - 600) << 52);
+
+/// 2^600.
+const UP: f64 = f64::from_bits((1023 + 600) << 52);
 
 /// Writes the first `M` rows of `a` (columns `..n`) and their right-hand sides `b`, each
 /// scaled by the square root of its weight, to `rows` and `beta`: the block
@@ -716,5 +732,53 @@ mod tests {
         assert_eq!(acc.r(), before.r());
         assert_eq!(acc.qtb(), before.qtb());
         assert_eq!(acc.rss(), before.rss());
+    }
+
+    /// Rows whose entries in a column are subnormal (the rounding residue of a column that
+    /// is zero in exact arithmetic, as a structurally redundant one leaves after the
+    /// columns before it are folded) keep the factor finite, and the reflection is the
+    /// one of the same rows scaled up by a power of two. Regression: `1/m` overflowed to ∞
+    /// and the factor was NaN from that column on; the identifiability analysis then read
+    /// every later column as zero ("structurally redundant"): MUKCa's `panda_3` with
+    /// `joint_scale` and `joint_cyclic` lost 20 cyclic terms at weight 1, 4 at weight 2.
+    #[test]
+    fn subnormal_entries_reflect_as_their_scaled_copy() {
+        let x = [2.2767e-320, 4.0474e-320, 2.5296e-320, 0.0, 0.0, 0.0];
+        for x0 in [0.0, -3.0e-321, 1.0e-319] {
+            let (mu, tau, v) = reflector6(x0, &x).expect("something to fold");
+            assert!(mu.is_finite() && tau.is_finite() && v.iter().all(|t| t.is_finite()));
+            let up = 2f64.powi(1000);
+            let (mu_up, tau_up, v_up) = reflector6(x0 * up, &x.map(|t| t * up)).unwrap();
+            // Subnormal inputs carry few significant bits: agreement to 1e-3 relative.
+            assert!((mu * up / mu_up - 1.0).abs() < 1e-3, "{mu} vs {mu_up}");
+            assert!((tau / tau_up - 1.0).abs() < 1e-3, "{tau} vs {tau_up}");
+            for (a, b) in v.iter().zip(v_up.iter()) {
+                assert!((a - b).abs() <= 1e-3 * b.abs(), "{a} vs {b}");
+            }
+        }
+        // In the accumulator: a column of subnormal entries between normal ones.
+        let mut acc = Box::new(LsqAccumulator::<P>::new());
+        acc.reset(3).unwrap();
+        let mut rng = Rng(5);
+        for _ in 0..4 {
+            let mut a = [[0.0; P]; 6];
+            for r in 0..3 {
+                a[r][0] = rng.sym();
+                a[r][1] = 1e-320 * (1.0 + rng.sym());
+                a[r][2] = rng.sym();
+            }
+            acc.add_rows6(&a, &[0.0; 6], &[1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
+                .unwrap();
+        }
+        for i in 0..3 {
+            for j in i..3 {
+                assert!(acc.r()[i][j].is_finite(), "R[{i}][{j}] {}", acc.r()[i][j]);
+            }
+        }
+        assert!(
+            acc.r()[2][2] > 0.1,
+            "the last column survives: {}",
+            acc.r()[2][2]
+        );
     }
 }
