@@ -13,21 +13,13 @@ use kincal::identify::{
 };
 use kincal::params::ParamSet;
 use kincal::{Effect, EffectSet};
-use mukca::{P, PANDAS, panda, realdata, recording};
+use mukca::{P, PANDAS, geometry_and_ball, panda, recording, root_or_skip};
 
 #[test]
 fn every_panda_recording_converges_in_few_iterations() {
-    let root = realdata();
-    if !root.join("mukca/data").is_dir() {
-        eprintln!("MUKCa not found under {}: skipped", root.display());
-        return;
-    }
+    let Some(root) = root_or_skip() else { return };
     let nominal = panda();
-    // The geometry and the ball centre (tool translation), as `kincal calibrate` asks.
-    let mut requested = nominal.geometric_param_set();
-    for k in 0..3 {
-        requested.insert(5 * 7 + 6 + k).expect("tool translation");
-    }
+    let requested = geometry_and_ball(&nominal);
     let ols = IdentifyOptions::new(Algorithm::Ols, requested);
     let lm = IdentifyOptions::new(Algorithm::Opt2, requested);
     let mut ws = Box::<Workspace<P>>::default();
@@ -98,16 +90,9 @@ const FINGERPRINTS: &[(&str, u64)] = &[
 
 #[test]
 fn every_panda_fit_is_bit_for_bit_the_recorded_one() {
-    let root = realdata();
-    if !root.join("mukca/data").is_dir() {
-        eprintln!("MUKCa not found under {}: skipped", root.display());
-        return;
-    }
+    let Some(root) = root_or_skip() else { return };
     let nominal = panda();
-    let mut requested = nominal.geometric_param_set();
-    for k in 0..3 {
-        requested.insert(5 * 7 + 6 + k).expect("tool translation");
-    }
+    let requested = geometry_and_ball(&nominal);
     let ols = IdentifyOptions::new(Algorithm::Ols, requested);
     let mut ws = Box::<Workspace<P>>::default();
     let mut bad = Vec::new();
@@ -174,11 +159,7 @@ fn panda_3_fold_1(r: &mukca::Recording) -> (Vec<Contact<7>>, Vec<Group>, Vec<Dis
 /// with it.
 #[test]
 fn scale_and_cyclic_fit_on_contacts_is_independent_of_the_weight_scale() {
-    let root = realdata();
-    if !root.join("mukca/data").is_dir() {
-        eprintln!("MUKCa not found under {}: skipped", root.display());
-        return;
-    }
+    let Some(root) = root_or_skip() else { return };
     let r = recording(&root, "panda_3");
     let (contacts, groups, distances) = panda_3_fold_1(&r);
     let data = ConstraintData {
@@ -189,14 +170,10 @@ fn scale_and_cyclic_fit_on_contacts_is_independent_of_the_weight_scale() {
         sessions: &[],
     };
     let nominal = panda();
-    let mut requested = nominal.geometric_param_set();
-    for k in 0..3 {
-        requested.insert(5 * 7 + 6 + k).expect("tool translation");
-    }
     let effects = EffectSet::default()
         .with(Effect::JointScale)
         .with(Effect::JointCyclic);
-    let requested = requested.union(&effects.params(7));
+    let requested = geometry_and_ball(&nominal).union(&effects.params(7));
     let mut ws = Box::<Workspace<P>>::default();
     let mut reference: Option<(ParamSet, f64)> = None;
     for w in [1.0, 2.0, 1.0 / (0.17e-3f64).powi(2)] {

@@ -95,6 +95,28 @@ pub fn realdata() -> PathBuf {
     )
 }
 
+/// The data folder when MUKCa is there; `None` (and a note on stderr) when a test should
+/// skip.
+pub fn root_or_skip() -> Option<PathBuf> {
+    let root = realdata();
+    if root.join("mukca/data").is_dir() {
+        Some(root)
+    } else {
+        eprintln!("MUKCa not found under {}: skipped", root.display());
+        None
+    }
+}
+
+/// The geometry and the ball centre (tool translation) of `nominal`, as `kincal
+/// calibrate` requests them on contact data.
+pub fn geometry_and_ball(nominal: &Robot<7>) -> kincal::params::ParamSet {
+    let mut requested = nominal.geometric_param_set();
+    for k in 0..3 {
+        requested.insert(5 * 7 + 6 + k).expect("tool translation");
+    }
+    requested
+}
+
 /// One robot's contacts (locations in name order, socket 0 then 1), sockets, distances.
 pub struct Recording {
     pub name: &'static str,
