@@ -391,14 +391,9 @@ fn known_targets_known_plane_and_partial_coordinates_make_the_base_observable() 
     let mut rng = SplitMix64::new(77);
     // Three known targets, one contact each.
     for _ in 0..3 {
-        let q0 = rng.q_within(truth.limits()).map(|v| 0.6 * v);
-        let t = truth
-            .fk(&JointState::new(q0))
-            .expect("fk")
-            .translation
-            .vector;
+        let (q0, t) = reachable_point(&truth, &mut rng);
         set.groups.push(Group {
-            kind: GroupKind::KnownTarget([t.x, t.y, t.z]),
+            kind: GroupKind::KnownTarget(t),
             start: set.contacts.len(),
             len: 1,
         });
@@ -635,9 +630,8 @@ fn noisy_targets(truth: &Robot<7>, n: usize, per: usize, sigma: f64, rng: &mut S
 fn noisy_planes(truth: &Robot<7>, n: usize, per: usize, sigma: f64, rng: &mut SplitMix64) -> Set {
     let mut set = Set::default();
     'plane: while set.groups.len() < n {
-        let q0 = rng.q_within(truth.limits()).map(|v| 0.6 * v);
-        let t0 = truth.fk(&JointState::new(q0)).expect("fk");
-        let c0 = t0.translation.vector;
+        let (q0, c0) = reachable_point(truth, rng);
+        let c0 = nalgebra::Vector3::from(c0);
         let normal = nalgebra::Vector3::from(rng.unit_vector());
         let u = normal
             .cross(&nalgebra::Vector3::new(0.3, 0.5, 0.8))

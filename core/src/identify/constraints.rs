@@ -1804,13 +1804,7 @@ mod tests {
         let c = case();
         // Targets and the known target only (their rows are linear in the tool points).
         let groups = [c.groups[0], c.groups[1]];
-        let d = ConstraintData {
-            instrument: &[],
-            contacts: &c.contacts[..9],
-            groups: &groups,
-            distances: &[],
-            sessions: &[],
-        };
+        let d = only_contacts(&c.contacts[..9], &groups);
         // FD Jacobian of the centred residuals p_i − p̄ of each group.
         let residuals = |r: &Robot<6>| -> std::vec::Vec<f64> {
             let mut out = std::vec![0.0; 27];
@@ -1865,13 +1859,7 @@ mod tests {
             start: 0,
             len: 7,
         }];
-        let d = ConstraintData {
-            instrument: &[],
-            contacts: &contacts,
-            groups: &groups,
-            distances: &[],
-            sessions: &[],
-        };
+        let d = only_contacts(&contacts, &groups);
         let n0 = plane_normal(point_moments(&robot, &contacts).unwrap().2, 0).unwrap();
         // Signed distances to the plane refitted at `r` (normal's sign kept).
         let residuals = |r: &Robot<6>| -> std::vec::Vec<f64> {
@@ -1982,13 +1970,7 @@ mod tests {
             start: 0,
             len: 4,
         }];
-        let d = ConstraintData {
-            instrument: &[],
-            contacts: &line,
-            groups: &groups,
-            distances: &[],
-            sessions: &[],
-        };
+        let d = only_contacts(&line, &groups);
         assert_eq!(
             group_estimate(&aria::nominal(), &d, 0),
             Err(Error::DegenerateGroup { group: 0 })
@@ -2023,6 +2005,17 @@ mod tests {
         let want = [r[0][2], r[1][2], r[2][2]];
         let dot = (n[0] * want[0] + n[1] * want[1] + n[2] * want[2]).abs();
         assert!((dot - 1.0).abs() < 1e-12, "{n:?} vs {want:?}");
+    }
+
+    /// Contacts in `groups` alone: no instrument rows, distances or sessions.
+    fn only_contacts<'a>(contacts: &'a [Contact<6>], groups: &'a [Group]) -> ConstraintData<'a, 6> {
+        ConstraintData {
+            instrument: &[],
+            contacts,
+            groups,
+            distances: &[],
+            sessions: &[],
+        }
     }
 
     /// Every contact group kind and a distance, without instrument rows (whose fold has no
