@@ -69,7 +69,7 @@ case ${FUZZ_FAST:-} in
 *) fail "FUZZ_FAST must be 1 or 0, got '$FUZZ_FAST'" ;;
 esac
 
-echo "==> building the fuzz targets (first build: several minutes)"
+echo "==> building the fuzz targets (first build: several minutes)  [$(date -u +%T)]"
 cargo fuzz build "${build_flags[@]}"
 
 total=0
@@ -77,7 +77,7 @@ for t in "${targets[@]}"; do
     mkdir -p "corpus/$t" "seeds/$t"
     log="artifacts/$t.log"
     mkdir -p artifacts
-    echo "==> $t for $what"
+    echo "==> $t for $what  [$(date -u +%T)]"
     # -timeout: one input taking longer than 10 s is a hang; -rss_limit_mb: 2 GiB.
     if ! cargo fuzz run "${build_flags[@]}" "$t" "corpus/$t" "seeds/$t" -- \
         "${budget[@]}" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \

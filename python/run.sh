@@ -8,7 +8,7 @@ PY_DIR=$PWD
 ROOT=$(cd .. && pwd)
 CI=${CI:-false}
 fail() { printf 'error: %s\n' "$*" >&2; exit 1; }
-step() { printf '\n--> %s\n' "$*"; }
+step() { printf '\n--> %s  [%s]\n' "$*" "$(date -u +%T)"; }
 
 PYTHON=${PYTHON:-python3}
 command -v "$PYTHON" >/dev/null 2>&1 || fail "$PYTHON is missing (Debian: apt-get install python3 python3-venv)"

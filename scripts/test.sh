@@ -11,7 +11,8 @@ export CARGO_TERM_COLOR=${CARGO_TERM_COLOR:-never}
 # target's size on disk.
 if [ "$CI" = true ]; then export CARGO_INCREMENTAL=${CARGO_INCREMENTAL:-0}; fi
 
-step() { printf '\n==> %s\n' "$*"; }
+# Each step prints the wall clock, so a slow CI log shows where its time went.
+step() { printf '\n==> %s  [%s]\n' "$*" "$(date -u +%T)"; }
 fail() { printf 'error: %s\n' "$*" >&2; exit 1; }
 
 need_apt() { # need_apt COMMAND PACKAGE...

@@ -39,7 +39,7 @@ for tool in octave-cli:"octave liboctave-dev" mkoctfile:liboctave-dev gnuplot:gn
     fi
 done
 
-printf '\n=== cargo build --release -p kincal-ffi -p kincal-cli\n'
+printf '\n=== cargo build --release -p kincal-ffi -p kincal-cli  [%s]\n' "$(date -u +%T)"
 cargo build --release -p kincal-ffi -p kincal-cli
 
 out=${KINCAL_OUT:-}
@@ -53,7 +53,7 @@ export KINCAL_OUT=$out
 
 target=${CARGO_TARGET_DIR:-$root/target}
 [[ $target = /* ]] || target=$root/$target
-printf '\n=== the test-panic gateway (cargo build -p kincal-ffi --features test-panic)\n'
+printf '\n=== the test-panic gateway (cargo build -p kincal-ffi --features test-panic)  [%s]\n' "$(date -u +%T)"
 cargo build -p kincal-ffi --features test-panic
 mkdir -p "$out/panic_mex"
 cp "$target/debug/libkincal.a" "$out/panic_mex/libkincal-test-panic.a"
@@ -62,7 +62,7 @@ mkoctfile --mex -DKINCAL_TEST_PANIC -I"$root/include" -o "$out/panic_mex/kincal_
 rm -f "$out/panic_mex/"*.o
 export KINCAL_PANIC_MEX=$out/panic_mex/kincal_mex_panic.mex
 
-printf '\n=== octave-cli: make_kincal, run_tests (outputs in %s)\n' "$out"
+printf '\n=== octave-cli: make_kincal, run_tests (outputs in %s)  [%s]\n' "$out" "$(date -u +%T)"
 cd "$root/matlab"
 # tempname() in the tests then lands in a folder of the temporary folder this script removes;
 # the check after the run fails if a test left anything there or in the system's folder.

@@ -102,7 +102,7 @@ summary=()
 for config in "${configs[@]}"; do
     triple=${config%%:*}
     opt=${config#*:}
-    printf '\n=== panic-never: %s, opt-level %s\n' "$triple" "$opt"
+    printf '\n=== panic-never: %s, opt-level %s  [%s]\n' "$triple" "$opt" "$(date -u +%T)"
     if ! rustup target list --installed 2>/dev/null | grep -qx "$triple"; then
         rustup target add "$triple" >/dev/null 2>&1 || fail "rustup target add $triple"
     fi

@@ -34,7 +34,7 @@ work=$(mktemp -d "${TMPDIR:-/tmp}/kincal-ffi-test.XXXXXX")
 trap 'rm -rf "$work"' EXIT
 cd "$root"
 
-step() { printf '\n=== %s\n' "$*"; }
+step() { printf '\n=== %s  [%s]\n' "$*" "$(date -u +%T)"; }
 fail() {
     echo "run.sh: FAILED: $*" >&2
     exit 1
