@@ -68,6 +68,14 @@ case ${FUZZ_FAST:-} in
 1) build_flags=(-s none --no-trace-compares) ;;
 *) fail "FUZZ_FAST must be 1 or 0, got '$FUZZ_FAST'" ;;
 esac
+# FUZZ_DEV=1: the dev profile (opt-level 0, debug assertions, ASan still on). It builds in
+# about 4 min instead of 16 (the release fuzz build is one single-threaded codegen unit per
+# crate) but executes 50-170x fewer inputs per second: what scripts/test.sh uses for its smoke.
+case ${FUZZ_DEV:-} in
+'' | 0) ;;
+1) build_flags+=(--dev) ;;
+*) fail "FUZZ_DEV must be 1 or 0, got '$FUZZ_DEV'" ;;
+esac
 
 echo "==> building the fuzz targets (first build: several minutes)  [$(date -u +%T)]"
 cargo fuzz build "${build_flags[@]}"

@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # The Python package's tests (README; a step of scripts/test.sh): a virtual environment with
-# maturin, pytest, numpy and Pinocchio (`pin`), one release build of the abi3 wheel, its
-# installation, then pytest. With CI=true a missing tool is a failure, never a skip.
+# maturin, pytest, numpy and Pinocchio (`pin`), one build of the abi3 wheel, its installation,
+# then pytest. With CI=true a missing tool is a failure, never a skip.
+# KINCAL_WHEEL_PROFILE: the cargo profile of the wheel (default release; scripts/test.sh uses
+# dev, whose core and nalgebra are optimised (Cargo.toml), with debug assertions and overflow
+# checks on: the same bindings, without a full release build of every dependency).
 set -euo pipefail
 cd "$(dirname "$0")"
 PY_DIR=$PWD
@@ -30,11 +33,16 @@ step "maturin, pytest, numpy, pin"
 
 step "format and lints (python/ is a workspace of its own)"
 cargo fmt --manifest-path Cargo.toml -- --check
-PYO3_PYTHON="$VENV/bin/python" cargo clippy -q --manifest-path Cargo.toml --release -- -D warnings
+PROFILE=${KINCAL_WHEEL_PROFILE:-release}
+case $PROFILE in
+release | dev) ;;
+*) fail "KINCAL_WHEEL_PROFILE must be release or dev, got '$PROFILE'" ;;
+esac
+PYO3_PYTHON="$VENV/bin/python" cargo clippy -q --manifest-path Cargo.toml --profile "$PROFILE" -- -D warnings
 
-step "wheel (maturin build --release, abi3)"
+step "wheel (maturin build --profile $PROFILE, abi3)"
 rm -rf "$CARGO_TARGET_DIR/wheels"
-"$VENV/bin/maturin" build --release --quiet --interpreter "$VENV/bin/python" \
+"$VENV/bin/maturin" build --profile "$PROFILE" --quiet --interpreter "$VENV/bin/python" \
     --out "$CARGO_TARGET_DIR/wheels"
 "$VENV/bin/python" -m pip install -q --disable-pip-version-check --force-reinstall --no-deps \
     "$CARGO_TARGET_DIR"/wheels/kincal-*.whl

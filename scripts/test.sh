@@ -70,11 +70,28 @@ VENV=${KINCAL_VENV:-${CARGO_TARGET_DIR:-$ROOT/target}/python-venv}
     || fail "pip could not install mcap"
 export KINCAL_PYTHON=$VENV/bin/python
 
+# One release build of the CLI serves every later step: the real-data studies too slow
+# unoptimised (cli/tests/real_data_hilti.rs runs it from the debug test binary), the C++
+# consumer's model-file test, the Octave cross-checks and the Python tests.
+step "release build of the CLI (for the slow real-data studies and the later steps)"
+cargo build --release -p kincal-cli
+TARGET_DIR=${CARGO_TARGET_DIR:-$ROOT/target}
+case $TARGET_DIR in /*) ;; *) TARGET_DIR=$ROOT/$TARGET_DIR ;; esac
+export KINCAL_RELEASE_BIN=$TARGET_DIR/release/kincal
+export KINCAL_BIN=${KINCAL_BIN:-$KINCAL_RELEASE_BIN}
+
 step "Rust unit, integration and doc tests"
 cargo test --workspace
 
-step "real-data studies too slow unoptimised (release)"
-cargo test --release -p kincal-cli --test real_data_hilti -- --ignored
+# The Python tests build their wheel in the dev profile (python/run.sh): the same bindings
+# with debug assertions on, without a second full release build of every dependency.
+export KINCAL_WHEEL_PROFILE=${KINCAL_WHEEL_PROFILE:-dev}
+# The fuzz smoke builds its targets in the dev profile (fuzz/smoke.sh: 4 min instead of 16).
+export FUZZ_DEV=${FUZZ_DEV:-1}
+# The panic-never proof at every firmware opt-level and the host's 3 (which also runs
+# tests/cpp/panic_never.c); host:s, the fifth of the full matrix (`bash
+# tests/cpp/panic_never.sh`), is left out to keep the run short: each build is 4-6 min.
+export KINCAL_PANIC_NEVER_CONFIGS=${KINCAL_PANIC_NEVER_CONFIGS:-"thumbv7em-none-eabihf:3 host:3 thumbv7em-none-eabihf:s thumbv7em-none-eabihf:z"}
 
 for extra in tests/cpp/run.sh matlab/tests/run.sh python/run.sh fuzz/smoke.sh; do
     if [ -f "$extra" ]; then

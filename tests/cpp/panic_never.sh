@@ -16,7 +16,7 @@
 # the host target with $CC, which also links and runs tests/cpp/panic_never.c (FK, IK,
 # prepared handle, validation on the no_std build).
 #
-# Usage: tests/cpp/panic_never.sh [TARGET:OPT ...]
+# Usage: tests/cpp/panic_never.sh [TARGET:OPT ...]   (TARGET `host`: the host's triple)
 #   default: thumbv7em-none-eabihf:3 thumbv7em-none-eabihf:s thumbv7em-none-eabihf:z HOST:3 HOST:s
 # Opt-level z holds on the firmware target because the firmware path uses no nalgebra operator
 # whose assertions need inlining to vanish (at z the optimiser stops inlining `column(k)`,
@@ -24,8 +24,11 @@
 # through kincal::fixed3 (nalgebra's arithmetic bit for bit on the storage arrays), reads
 # caller arrays with `as_chunks` instead of `chunks_exact` (whose length division by a run-time
 # chunk size stays), and indexes with `get`. Opt-level 1 and host z are not in the matrix.
-# Environment: CARGO_TARGET_DIR (default ./target of the workspace), CC (default gcc).
-# Each configuration rebuilds kincal-ffi and its dependencies (about 1-2 min each).
+# Environment: CARGO_TARGET_DIR (default ./target of the workspace), CC (default gcc),
+# KINCAL_PANIC_NEVER_JOBS (configurations built at once; default: the number of CPUs).
+# Each configuration rebuilds kincal-ffi and its dependencies in a target folder of its own
+# (3-6 min each on a 2-core machine, nearly all of it one single-threaded fat-LTO codegen
+# unit), so the configurations are built side by side and checked one after the other.
 set -euo pipefail
 
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
@@ -98,18 +101,51 @@ check_nm() {
     fi
 }
 
+# One configuration's staticlib, built in its own target folder (so builds can run side by
+# side) and copied to $work/libkincal-TRIPLE-OPT.a; the build log goes to $work/build-….log.
+build_config() {
+    local triple=$1 opt=$2 dir=$target/panic-never/$1-$2
+    CARGO_TARGET_DIR=$dir CARGO_PROFILE_PANIC_NEVER_OPT_LEVEL=$opt cargo rustc -p kincal-ffi \
+        --profile panic-never --no-default-features --features panic-never \
+        --crate-type staticlib --target "$triple" >"$work/build-$triple-$opt.log" 2>&1 &&
+        cp "$dir/$triple/panic-never/libkincal.a" "$work/libkincal-$triple-$opt.a"
+}
+
+# "host:OPT" names the host's triple.
+configs=("${configs[@]/#host:/$host:}")
+for config in "${configs[@]}"; do
+    triple=${config%%:*}
+    if ! rustup target list --installed 2>/dev/null | grep -qx "$triple"; then
+        rustup target add "$triple" >/dev/null 2>&1 || fail "rustup target add $triple"
+    fi
+done
+jobs_max=${KINCAL_PANIC_NEVER_JOBS:-$(nproc 2>/dev/null || echo 2)}
+[[ $jobs_max =~ ^[1-9][0-9]*$ ]] || fail "KINCAL_PANIC_NEVER_JOBS must be a positive whole number, got '$jobs_max'"
+printf '\n=== panic-never builds: %s, %s at once  [%s]\n' "${configs[*]}" "$jobs_max" "$(date -u +%T)"
+for config in "${configs[@]}"; do
+    while [[ $(jobs -rp | wc -l) -ge $jobs_max ]]; do wait -n || true; done
+    (
+        build_config "${config%%:*}" "${config#*:}"
+        echo $? >"$work/rc-${config%%:*}-${config#*:}"
+    ) &
+done
+wait
+for config in "${configs[@]}"; do
+    triple=${config%%:*}
+    opt=${config#*:}
+    if [[ $(cat "$work/rc-$triple-$opt" 2>/dev/null) != 0 ]]; then
+        cat "$work/build-$triple-$opt.log" >&2
+        fail "the panic-never build for $triple at opt-level $opt failed (log above)"
+    fi
+done
+echo "built  [$(date -u +%T)]"
+
 summary=()
 for config in "${configs[@]}"; do
     triple=${config%%:*}
     opt=${config#*:}
-    printf '\n=== panic-never: %s, opt-level %s  [%s]\n' "$triple" "$opt" "$(date -u +%T)"
-    if ! rustup target list --installed 2>/dev/null | grep -qx "$triple"; then
-        rustup target add "$triple" >/dev/null 2>&1 || fail "rustup target add $triple"
-    fi
-    CARGO_PROFILE_PANIC_NEVER_OPT_LEVEL=$opt cargo rustc -p kincal-ffi --profile panic-never \
-        --no-default-features --features panic-never --crate-type staticlib --target "$triple"
+    printf '\n=== panic-never: %s, opt-level %s\n' "$triple" "$opt"
     lib=$work/libkincal-$triple-$opt.a
-    cp "$target/$triple/panic-never/libkincal.a" "$lib"
 
     # The staticlib exports exactly the header's functions.
     defined=$(nm -g --defined-only "$lib" 2>/dev/null | sed -nE 's/^[0-9a-f]+ T (kincal_[a-z0-9_]+)$/\1/p' | sort -u)
