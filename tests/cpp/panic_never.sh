@@ -124,16 +124,14 @@ jobs_max=${KINCAL_PANIC_NEVER_JOBS:-$(nproc 2>/dev/null || echo 2)}
 printf '\n=== panic-never builds: %s, %s at once  [%s]\n' "${configs[*]}" "$jobs_max" "$(date -u +%T)"
 for config in "${configs[@]}"; do
     while [[ $(jobs -rp | wc -l) -ge $jobs_max ]]; do wait -n || true; done
-    (
-        build_config "${config%%:*}" "${config#*:}"
-        echo $? >"$work/rc-${config%%:*}-${config#*:}"
-    ) &
+    build_config "${config%%:*}" "${config#*:}" &
 done
 wait
+# build_config copies the staticlib only when its build succeeded.
 for config in "${configs[@]}"; do
     triple=${config%%:*}
     opt=${config#*:}
-    if [[ $(cat "$work/rc-$triple-$opt" 2>/dev/null) != 0 ]]; then
+    if [[ ! -f $work/libkincal-$triple-$opt.a ]]; then
         cat "$work/build-$triple-$opt.log" >&2
         fail "the panic-never build for $triple at opt-level $opt failed (log above)"
     fi

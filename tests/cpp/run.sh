@@ -13,7 +13,8 @@
 #     pkg-config (shared and static) and through CMake find_package(kincal) (static, shared);
 #  5. the panic-never proof (tests/cpp/panic_never.sh): the no_std build for
 #     thumbv7em-none-eabihf (rust-lld) and the host (gcc, also running tests/cpp/panic_never.c)
-#     at opt-levels 3 and s, and the firmware target also at z, every export outside
+#     at opt-levels 3 and s, and the firmware target also at z (scripts/test.sh leaves out
+#     host at s: KINCAL_PANIC_NEVER_CONFIGS), every export outside
 #     tests/cpp/not_panic_proven.txt checked with nm in the linked binary, and a canary that
 #     must break the link on each.
 #
