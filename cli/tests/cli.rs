@@ -700,3 +700,89 @@ fn a_robot_description_file_is_a_robot() {
     assert_eq!(code(&o), 3, "{}", stderr(&o));
     assert!(stderr(&o).contains("bad.toml:"), "{}", stderr(&o));
 }
+
+/// `--algorithm all` with an algorithm that fails while OLS (the model's) converges: the
+/// model is written, the failure is a warning, a line of the report and an entry of the
+/// model file, the others are compared without it; when OLS itself fails nothing is
+/// written (exit 4), and a single algorithm that fails is the command's failure.
+#[test]
+fn algorithm_all_goes_on_without_a_failed_algorithm() {
+    let f = Fixture::new();
+    // On these data OLS converges in 5 iterations, OPT1 needs 10 (found by trying 2..12).
+    let all = |iterations: &str, out: &str| {
+        f.run(&[
+            "calibrate",
+            "data.csv",
+            "--robot",
+            "aria",
+            "--algorithm",
+            "all",
+            "--bounds-deg",
+            "60",
+            "--max-iterations",
+            iterations,
+            "--out",
+            out,
+        ])
+    };
+    let o = all("6", "six.json");
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("warning: OPT1 failed: data.csv: no convergence after 6 iterations")
+            && err.contains("the model is OLS's"),
+        "{err}"
+    );
+    assert!(
+        stdout(&o).contains("OPT1 failed: no convergence"),
+        "{}",
+        stdout(&o)
+    );
+    let m = f.json("six.json");
+    let cal = &m["calibration"];
+    assert_eq!(cal["algorithm"], "ols");
+    let results: Vec<&str> = cal["results"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["algorithm"].as_str().unwrap())
+        .collect();
+    assert_eq!(results, ["ols", "opt2"]);
+    let failed = cal["failed"].as_array().unwrap();
+    assert_eq!(failed.len(), 1);
+    assert_eq!(failed[0]["algorithm"], "opt1");
+    assert!(
+        failed[0]["error"]
+            .as_str()
+            .unwrap()
+            .contains("no convergence after 6 iterations")
+    );
+    assert_eq!(cal["consensus"]["agree"], true);
+    assert_recovers_truth(cal["results"][0]["parameters"].as_array().unwrap(), "OLS");
+    // The file reads back with the runs it holds.
+    let o = f.run(&["validate", "six.json", "data.csv", "--quiet"]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+
+    // OLS, whose fit is the model, fails: nothing is written.
+    let o = all("3", "three.json");
+    assert_eq!(code(&o), 4, "{}", stderr(&o));
+    assert!(stderr(&o).contains("OLS failed: data.csv: no convergence after 3 iterations"));
+    assert!(!f.path("three.json").exists());
+    // One algorithm asked, and it fails: the command fails.
+    let o = f.run(&[
+        "calibrate",
+        "data.csv",
+        "--robot",
+        "aria",
+        "--algorithm",
+        "opt1",
+        "--bounds-deg",
+        "60",
+        "--max-iterations",
+        "6",
+        "--out",
+        "opt1.json",
+    ]);
+    assert_eq!(code(&o), 4, "{}", stderr(&o));
+    assert!(!f.path("opt1.json").exists());
+}

@@ -196,11 +196,19 @@ pub struct Calibration<const N: usize> {
     /// kept and a fit's check at its fitted model dropped (the data determine them only
     /// while the model is off: a report says so, since the start's figures kept them).
     pub found_at_fit: ParamSet,
-    /// One per requested algorithm, in the order asked.
+    /// One per requested algorithm that succeeded, in the order asked; the first is the
+    /// first algorithm asked (the model's: a calibration whose first algorithm fails fails).
     pub runs: Vec<Run<N>>,
+    /// The other requested algorithms that failed, in the order asked, with their error:
+    /// with `--algorithm all` an OPT1 or OPT2 that does not converge costs its column of
+    /// the comparison, not the OLS model.
+    pub failed: FailedRuns,
     /// With two or more algorithms.
     pub consensus: Option<Consensus>,
 }
+
+/// Requested algorithms that failed, with their error (see [`Calibration::failed`]).
+pub type FailedRuns = Vec<(Algorithm, kincal::Error)>;
 
 /// Why a calibration stopped.
 #[derive(Debug, Clone)]
@@ -390,7 +398,7 @@ fn run_all<const N: usize>(
             Ok((run, ws.singular_values().to_vec()))
         })
         .collect();
-    let fits = results.into_iter().collect::<Result<Vec<_>, _>>()?;
+    let (fits, failed) = split_failed(results)?;
     // Parameters the data determine only while the model is off: the fits' analysis.
     let (mut analysis, mut singular_values) = (analysis, singular_values);
     let mut found_at_fit = ParamSet::new();
@@ -422,8 +430,26 @@ fn run_all<const N: usize>(
         singular_values,
         found_at_fit,
         runs,
+        failed,
         consensus,
     })
+}
+
+/// The successful fits and the failed algorithms of `results` (in the order asked), or the
+/// first algorithm's failure: its fit is the model, so without it there is no calibration.
+fn split_failed<T>(results: Vec<Result<T, Failure>>) -> Result<(Vec<T>, FailedRuns), Failure> {
+    let (mut fits, mut failed) = (Vec::new(), Vec::new());
+    for (k, result) in results.into_iter().enumerate() {
+        match result {
+            Ok(fit) => fits.push(fit),
+            Err(Failure::Core {
+                algorithm: Some(algorithm),
+                error,
+            }) if k > 0 => failed.push((algorithm, error)),
+            Err(f) => return Err(f),
+        }
+    }
+    Ok((fits, failed))
 }
 
 /// The parameters a calibration from contact rows requests: those of `settings` plus the

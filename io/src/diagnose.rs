@@ -287,6 +287,7 @@ pub fn calibration_of<const N: usize>(start: &Robot<N>, d: &Diagnosis<N>) -> Cal
             seconds: 0.0,
             robust: None,
         }],
+        failed: Vec::new(),
         consensus: None,
     }
 }

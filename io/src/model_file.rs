@@ -151,6 +151,10 @@ pub struct CalibrationJson {
     pub identifiability: IdentifiabilityJson,
     pub residuals: ResidualsJson,
     pub results: Vec<ResultJson>,
+    /// Requested algorithms that failed (`--algorithm all`: OPT1 or OPT2 not converged),
+    /// absent from `results` and from the consensus.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub failed: Vec<FailedRunJson>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub consensus: Option<ConsensusJson>,
     /// The robust fit (with `calibrate --robust`): loss, thresholds, and the model's run.
@@ -320,6 +324,13 @@ pub struct ResultJson {
     /// This run's robust fit (with `calibrate --robust`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub robust: Option<RobustRunJson>,
+}
+
+/// A requested algorithm that failed, and why (the core's error, as text).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FailedRunJson {
+    pub algorithm: String,
+    pub error: String,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -759,6 +770,14 @@ impl ModelFile {
                     after: stats(&main.fitted),
                 },
                 results,
+                failed: cal
+                    .failed
+                    .iter()
+                    .map(|(a, e)| FailedRunJson {
+                        algorithm: a.name().to_string(),
+                        error: e.to_string(),
+                    })
+                    .collect(),
                 consensus: cal.consensus.as_ref().map(consensus_json::<N>),
                 robust: None,
                 warnings: Vec::new(),

@@ -201,6 +201,7 @@ fn run<const N: usize>(
     let cal = py
         .detach(|| calibration::calibrate(start, &data.meas, settings))
         .map_err(|f| failure::<N>(py, f, set))?;
+    warn_failed(py, &cal)?;
     let (file, _) =
         pose_calibration::model_file(name, &cal, set, source, &data, flags.allow_out_of_limits);
     // The robot the model file describes: what loading the saved file gives.
@@ -213,6 +214,26 @@ fn run<const N: usize>(
         robot,
         file,
     })
+}
+
+/// A `UserWarning` per requested algorithm that failed while the model's succeeded
+/// (`algorithm="all"`): the model file records it under `calibration.failed`.
+fn warn_failed<const N: usize>(py: Python<'_>, cal: &calibration::Calibration<N>) -> PyResult<()> {
+    let category = py.get_type::<pyo3::exceptions::PyUserWarning>();
+    let model = cal
+        .runs
+        .first()
+        .map_or(String::new(), |r| r.ident.algorithm.name().to_uppercase());
+    for (algorithm, error) in &cal.failed {
+        let text = format!(
+            "{} failed: {error} (left out of the comparison; the model is {model}'s)",
+            algorithm.name().to_uppercase(),
+        );
+        let message = std::ffi::CString::new(text.replace('\0', " "))
+            .map_err(|e| errors::numeric(py, e.to_string()))?;
+        PyErr::warn(py, category.as_any(), &message, 1)?;
+    }
+    Ok(())
 }
 
 /// The data-deficient parameters of a refusal, each with the identified parameter its

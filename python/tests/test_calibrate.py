@@ -57,6 +57,34 @@ def test_python_gives_the_cli_model_file(study, kincal_bin, tmp_path, flags, kwa
     assert model.model_file() == json.loads(out.read_text())
 
 
+def test_a_failed_algorithm_is_a_warning_and_recorded(kincal_bin, tmp_path):
+    """algorithm="all" with too few iterations for OPT1 or OPT2 but enough for OLS (on the
+    demo's noise-free calibration-tool poses, where OLS converges in 5 iterations and OPT1
+    needs more): the model is OLS's, each failure a UserWarning and a `calibration.failed`
+    entry, the model file the command line's byte for byte."""
+    r = run_cli(kincal_bin, "demo", "--out", str(tmp_path / "demo"))
+    assert r.returncode == 0, r.stderr
+    path = tmp_path / "demo" / "calibration_noise_free.csv"
+    for k in range(3, 15):
+        out = tmp_path / f"cli{k}.json"
+        done = run_cli(kincal_bin, "calibrate", str(path), "--robot", "aria", "--algorithm",
+                       "all", "--bounds-deg", "60", "--max-iterations", str(k), "--out", str(out))
+        if done.returncode == 0 and " failed: " in done.stderr:
+            break
+    else:
+        pytest.fail("no iteration limit between 3 and 14 fails OPT1 or OPT2 but not OLS")
+    with pytest.warns(UserWarning, match=r"OPT[12] failed: .*no convergence") as caught:
+        model = kincal.calibrate(str(path), kincal.aria(), algorithm="all", bounds_deg=60,
+                                 max_iterations=k)
+    cal = model.model_file()["calibration"]
+    assert cal["algorithm"] == "ols"
+    assert [f["algorithm"] for f in cal["failed"]] == [
+        str(w.message)[:4].strip().lower() for w in caught if "failed" in str(w.message)]
+    mine = tmp_path / "py.json"
+    model.save(mine)
+    assert mine.read_bytes() == out.read_bytes()
+
+
 def test_calibration_recovers_the_truth(study):
     path, truth = study
     model = kincal.calibrate(path, kincal.aria(), algorithm="opt2")

@@ -37,7 +37,9 @@ run in parallel and are shown side by side with a consensus check: two algorithm
 on a parameter when they differ by more than 3 combined standard errors
 (sqrt(se_a² + se_b²), each run's errors rescaled to the smallest residual variance of the
 runs, so a run stuck on its bounds does not widen the tolerance) plus 1e-8 in SI units. The model file then stores the OLS model and
-records OPT1, OPT2 and the consensus.
+records OPT1, OPT2 and the consensus. An OPT1 or OPT2 that fails (e.g. no convergence
+within --max-iterations) is a warning: the comparison goes on without it and the model
+file lists it under calibration.failed with its error; OLS failing fails the command.
 
 Weighting: the cost is Σ w_pos·|Δp|² + w_rot·|Δφ|² with Δp in metres and Δφ in radians.
 The default weights are 1 and 1 (the paper's). --weight-pos/--weight-rot set them
@@ -310,6 +312,7 @@ fn calibrate<const N: usize>(
             labels.line(i)
         })
     })?;
+    warn_failed(&cal, &settings, &set.source, |i| labels.line(i));
 
     let data_json = DataJson {
         path: args.data.display().to_string(),
@@ -403,6 +406,12 @@ pub fn summary<const N: usize>(
             "Identified parameters by algorithm{robust_note} (lengths in mm, angles in degrees):\n"
         ));
         s.push_str(&report::side_by_side::<N>(cal));
+    }
+    for (algorithm, error) in &cal.failed {
+        s.push_str(&format!(
+            "  {} failed: {error} (not in the table nor the consensus)\n",
+            algorithm.name().to_uppercase()
+        ));
     }
     s.push('\n');
     let (wp, wr) = cal.settings.weighting.weights();
@@ -591,6 +600,37 @@ pub fn robust_report<const N: usize>(
     s
 }
 
+/// One warning per requested algorithm that failed while the model's succeeded (the
+/// error as [`failure_error`] words it, hint included): the calibration goes on without
+/// that algorithm's column.
+fn warn_failed<const N: usize>(
+    cal: &calibration::Calibration<N>,
+    settings: &Settings,
+    source: &str,
+    line_of: impl Fn(usize) -> Option<u64> + Copy,
+) {
+    let model = cal
+        .runs
+        .first()
+        .map_or(String::new(), |r| r.ident.algorithm.name().to_uppercase());
+    for &(algorithm, error) in &cal.failed {
+        let f = Failure::Core {
+            algorithm: Some(algorithm),
+            error,
+        };
+        let e = failure_error::<N>(f, settings, source, 0, 0, line_of);
+        let (what, hint) = e
+            .message
+            .split_once('\n')
+            .map_or((e.message.as_str(), String::new()), |(w, h)| {
+                (w, format!("\n{h}"))
+            });
+        eprintln!(
+            "kincal: warning: {what}; left out of the comparison (the model is {model}'s){hint}"
+        );
+    }
+}
+
 /// The CLI error of a failed calibration: a rank-deficiency report (exit 4) or the core
 /// error with its CSV line and a hint.
 fn failure_error<const N: usize>(
@@ -676,6 +716,7 @@ fn calibrate_contacts<const N: usize>(
     let line_of = |i: usize| cd.row_of(i).and_then(|r| set.rows.get(r)).map(|r| r.line);
     let cal = result
         .map_err(|f| failure_error::<N>(f, settings, &set.source, cd.rows(), rows, line_of))?;
+    warn_failed(&cal, settings, &set.source, line_of);
     let robot = &cal.runs[0].ident.robot;
     let cons_json = cd
         .report_json(robot)

@@ -695,6 +695,13 @@ impl Study<'_> {
                 }
             })?;
         pb.finish_and_clear();
+        // The study compares all three algorithms: one failing fails it.
+        if let Some((algorithm, error)) = cal.failed.first() {
+            return Err(CliError::numeric(format!(
+                "{label} data: {} failed: {error}",
+                algorithm.name().to_uppercase()
+            )));
+        }
         let model_path = self.out_dir.join(file);
         let mf = ModelFile::from_calibration(
             "aria",
