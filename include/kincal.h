@@ -2974,6 +2974,7 @@ kincal_status kincal_identify_options_set_prior(const struct kincal_robot *robot
  starting from `robot`, with `opts->algorithm` (OLS, OPT1 or OPT2), and writes the identified
  model to `robot_out` and the report (identifiability analysis, residuals before and after,
  standard errors, correlations, parameters on a bound) to `report_out` (NULL if not wanted).
+ OLS and OPT2 give each fitted link angle (θ0, α, β) within half a turn of its initial value.
 
  - `robot`: initial model (read only). `robot_out` may point to the same struct.
  - `data`: the measurements (see `kincal_measurements`); their poses in metres.

@@ -857,6 +857,7 @@ unsafe fn entry(
 /// starting from `robot`, with `opts->algorithm` (OLS, OPT1 or OPT2), and writes the identified
 /// model to `robot_out` and the report (identifiability analysis, residuals before and after,
 /// standard errors, correlations, parameters on a bound) to `report_out` (NULL if not wanted).
+/// OLS and OPT2 give each fitted link angle (θ0, α, β) within half a turn of its initial value.
 ///
 /// - `robot`: initial model (read only). `robot_out` may point to the same struct.
 /// - `data`: the measurements (see `kincal_measurements`); their poses in metres.

@@ -576,7 +576,7 @@ impl Consensus {
                         param: idx,
                         a: ra.ident.algorithm,
                         b: rb.ident.algorithm,
-                        difference: (va - vb).abs(),
+                        difference: parameter_difference::<N>(idx, va, vb),
                         combined_std_error: combined,
                         tolerance: CONSENSUS_K_SIGMA * combined + CONSENSUS_FLOOR_SI,
                     };
@@ -602,9 +602,57 @@ impl Consensus {
     }
 }
 
+/// |a − b| for parameter `idx`, whole turns apart counting as equal for a link angle
+/// (θ0, α, β: the kinematics see them through sines and cosines only): the same model
+/// reached by two algorithms a turn apart is no disagreement.
+pub fn parameter_difference<const N: usize>(idx: ParamIndex, a: f64, b: f64) -> f64 {
+    let d = a - b;
+    if is_link_angle::<N>(idx) {
+        let tau = std::f64::consts::TAU;
+        (d - tau * (d / tau).round()).abs()
+    } else {
+        d.abs()
+    }
+}
+
+/// Whether `idx` is a link's θ0, α or β.
+pub fn is_link_angle<const N: usize>(idx: ParamIndex) -> bool {
+    use kincal::params::LinkParam;
+    matches!(
+        kincal::ParamId::from_index(idx, N),
+        Ok(kincal::ParamId::Link {
+            kind: LinkParam::Theta0 | LinkParam::Alpha | LinkParam::Beta,
+            ..
+        })
+    )
+}
+
 impl Disagreement {
     /// Difference over tolerance (> 1: disagreement).
     pub fn ratio(&self) -> f64 {
         self.difference / self.tolerance
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::TAU;
+
+    /// Link angles a whole number of turns apart are no disagreement; lengths, and angles
+    /// a part of a turn apart, differ by their plain difference.
+    #[test]
+    fn a_link_angle_a_turn_apart_is_the_same() {
+        let theta0_6 = ParamIndex(25);
+        let alpha_1 = ParamIndex(3);
+        let d_1 = ParamIndex(1);
+        assert!(parameter_difference::<6>(theta0_6, 0.1 + 3.0 * TAU, 0.1) < 1e-12);
+        assert!((parameter_difference::<6>(alpha_1, -TAU + 0.5, 0.2) - 0.3).abs() < 1e-12);
+        assert_eq!(
+            parameter_difference::<6>(theta0_6, 0.5, 0.2),
+            (0.5f64 - 0.2).abs()
+        );
+        assert_eq!(parameter_difference::<6>(d_1, TAU, 0.0), TAU);
+        assert!(is_link_angle::<6>(theta0_6) && !is_link_angle::<6>(d_1));
     }
 }

@@ -102,6 +102,12 @@ pub fn check_data<const N: usize>(
     f
 }
 
+/// `x` to six decimals, for a message (a tolerance given as 60° is stored as
+/// 59.99999999999999° after its round trip through radians).
+fn round6(x: f64) -> f64 {
+    (x * 1e6).round() / 1e6
+}
+
 /// Warnings about a written calibration: a residual worse after than before (position or
 /// orientation), identified changes far outside the OPT1 intervals.
 pub fn check_result(file: &ModelFile) -> Vec<String> {
@@ -150,8 +156,8 @@ pub fn check_result(file: &ModelFile) -> Vec<String> {
     if !far.is_empty() {
         w.push(format!(
             "identified changes beyond {CHANGE_BOUND_FACTOR}× the tolerance (±{} mm, ±{}°): {}: a wrong nominal model, unit or data?",
-            cal.options.bounds_length_mm,
-            cal.options.bounds_angle_deg,
+            round6(cal.options.bounds_length_mm),
+            round6(cal.options.bounds_angle_deg),
             far.join(", ")
         ));
     }

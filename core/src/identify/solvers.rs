@@ -18,9 +18,11 @@ use crate::linalg::minnorm::min_norm_solve;
 use crate::linalg::tri::{solve_upper_transpose, upper_inverse_gram};
 use crate::math::sqrt;
 use crate::model::Robot;
-use crate::params::{ParamId, ParamSet};
+use crate::params::{LinkParam, ParamId, ParamSet};
 
 /// Identifies the identifiable subset of `opts.requested` from `data`, starting at `robot`.
+/// OLS and OPT2 report each fitted link angle (θ0, α, β) within half a turn of its starting
+/// value (whole turns removed: the same model); OPT1 keeps its intervals.
 ///
 /// Errors: bad data ([`Error::NonFinite`] with the pose index, [`Error::BadPose`]), a
 /// requested effect whose input is missing ([`Error::MissingInput`]), too few rows,
@@ -231,6 +233,8 @@ fn fit_set<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
                 out.at_bound.insert(i)?;
             }
         }
+    } else {
+        wrap_link_angles(&mut out.robot, &ws.cols[..n], &ws.start[..n])?;
     }
     if opts.covariance {
         covariance(data, opts, n, rows, fit.factor, ws, out)?;
@@ -248,6 +252,34 @@ fn fit_set<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
         )?;
     }
     Ok(fit.fitted)
+}
+
+/// Brings each fitted link angle (θ0, α, β of `cols`) that ended more than half a turn
+/// from its starting value in `start` back by whole turns. The kinematics see these angles
+/// only through their sines and cosines, so the model is the same (to rounding); but an
+/// unbounded fit of a weakly determined angle (a tool point 0.1 mm off the last axis) can
+/// walk several turns, and "θ0_6 = −2,344°" reads as nonsense and compares wrongly with
+/// another algorithm's 16°. Angles within half a turn of their start are left bit for bit.
+fn wrap_link_angles<const N: usize>(
+    robot: &mut Robot<N>,
+    cols: &[usize],
+    start: &[f64],
+) -> Result<()> {
+    for (&i, &s) in cols.iter().zip(start) {
+        let angle = matches!(
+            ParamId::from_index(ParamIndex(i), N),
+            Ok(ParamId::Link {
+                kind: LinkParam::Theta0 | LinkParam::Alpha | LinkParam::Beta,
+                ..
+            })
+        );
+        let v = robot.param(ParamIndex(i))?;
+        let turns = libm::round((v - s) / core::f64::consts::TAU);
+        if angle && turns != 0.0 {
+            robot.set_param(ParamIndex(i), v - turns * core::f64::consts::TAU)?;
+        }
+    }
+    Ok(())
 }
 
 /// What [`solve_confirmed`] fitted.
@@ -1239,4 +1271,53 @@ fn covariance<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use core::f64::consts::TAU;
+
+    /// Link angles a whole number of turns from their start come back within half a turn,
+    /// the same model (FK equal to rounding); an angle within half a turn, a length and a
+    /// frame angle are left bit for bit.
+    #[test]
+    #[allow(clippy::unwrap_used)]
+    fn link_angles_come_back_by_whole_turns() {
+        let start = crate::aria::nominal();
+        let theta0_2 = 5; // link 1's θ0
+        let beta_2 = 9; // link 1's β
+        let alpha_3 = 13; // link 2's α
+        let d_1 = 1;
+        let base_rx = 5 * 6 + 3; // a base-frame rotation parameter
+        let cols = [d_1, theta0_2, beta_2, alpha_3, base_rx];
+        let starts: std::vec::Vec<f64> = cols
+            .iter()
+            .map(|&i| start.param(ParamIndex(i)).unwrap())
+            .collect();
+        let mut fitted = start;
+        let moved = [10.0, TAU + 0.1, 3.0, -2.0 * TAU - 0.2, TAU + 0.3];
+        for ((&i, &s), &m) in cols.iter().zip(&starts).zip(&moved) {
+            fitted.set_param(ParamIndex(i), s + m).unwrap();
+        }
+        let before = fitted;
+        wrap_link_angles(&mut fitted, &cols, &starts).unwrap();
+        let got: std::vec::Vec<f64> = cols
+            .iter()
+            .map(|&i| fitted.param(ParamIndex(i)).unwrap())
+            .collect();
+        assert_eq!(got[0].to_bits(), (starts[0] + 10.0).to_bits());
+        assert!((got[1] - (starts[1] + 0.1)).abs() < 1e-12, "{}", got[1]);
+        assert_eq!(got[2].to_bits(), (starts[2] + 3.0).to_bits());
+        assert!((got[3] - (starts[3] - 0.2)).abs() < 1e-12, "{}", got[3]);
+        assert_eq!(got[4].to_bits(), (starts[4] + TAU + 0.3).to_bits());
+        let mut rng = crate::rng::SplitMix64::new(3);
+        for _ in 0..20 {
+            let q: [f64; 6] = core::array::from_fn(|_| rng.range(-3.0, 3.0));
+            let (a, b) = (before.fk_q(&q).unwrap(), fitted.fk_q(&q).unwrap());
+            assert!((a.translation.vector - b.translation.vector).norm() < 1e-12);
+            assert!((a.rotation.matrix() - b.rotation.matrix()).norm() < 1e-12);
+        }
+    }
 }
