@@ -867,3 +867,41 @@ fn fitted_link_angles_stay_within_half_a_turn_of_the_start() {
         }
     }
 }
+
+/// OLS on near-axis data (see [`near_axis_csv`]) where Gauss–Newton crawled (200
+/// iterations each keeping 1/1,024–1/65,536 of its step, exit 4 on both seeds): handed over
+/// to the trust region at the first such cut, it ends at OPT2's minimum.
+#[test]
+fn ols_on_a_point_near_the_last_axis_ends_at_the_trust_regions_minimum() {
+    let dir = tempfile::tempdir().unwrap();
+    for seed in [1u64, 4] {
+        fs::write(dir.path().join("d.csv"), near_axis_csv(1e-4, seed)).unwrap();
+        let fit = |algorithm: &str| {
+            let out = format!("{algorithm}.json");
+            let o = kincal(
+                &[
+                    "calibrate",
+                    "d.csv",
+                    "--robot",
+                    "aria",
+                    "--algorithm",
+                    algorithm,
+                    "--out",
+                    &out,
+                ],
+                dir.path(),
+            );
+            assert_eq!(code(&o), 0, "seed {seed}, {algorithm}: {}", stderr(&o));
+            let m: Value =
+                serde_json::from_str(&fs::read_to_string(dir.path().join(&out)).unwrap()).unwrap();
+            m["calibration"]["residuals"]["after"]["rms_pos_mm"]
+                .as_f64()
+                .unwrap()
+        };
+        let (ols, opt2) = (fit("ols"), fit("opt2"));
+        assert!(
+            (ols - opt2).abs() <= 1e-9 * opt2,
+            "seed {seed}: {ols} vs {opt2} mm"
+        );
+    }
+}
