@@ -85,6 +85,12 @@ impl Fixture {
     fn run(&self, args: &[&str]) -> Output {
         kincal(args, self.dir.path())
     }
+    /// `kincal calibrate data.csv --robot aria` followed by `args`.
+    fn calibrate(&self, args: &[&str]) -> Output {
+        let mut all = vec!["calibrate", "data.csv", "--robot", "aria"];
+        all.extend_from_slice(args);
+        self.run(&all)
+    }
     fn json(&self, name: &str) -> Value {
         serde_json::from_str(&fs::read_to_string(self.path(name)).unwrap()).unwrap()
     }
@@ -119,14 +125,7 @@ fn assert_recovers_truth(params: &[Value], what: &str) {
 #[test]
 fn calibrate_predict_validate_round_trip() {
     let f = Fixture::new();
-    let o = f.run(&[
-        "calibrate",
-        "data.csv",
-        "--robot",
-        "aria",
-        "--out",
-        "model.json",
-    ]);
+    let o = f.calibrate(&["--out", "model.json"]);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
     let out = stdout(&o);
     assert!(out.contains("identifiable:           24 (rank 24"), "{out}");
@@ -243,11 +242,7 @@ fn predict_joint_only_data_without_pose_id() {
 fn algorithm_all_records_three_results_and_the_consensus() {
     let f = Fixture::new();
     // Table 3's θ0_4 = −0.8 rad lies outside the default ±5°: widen OPT1's intervals.
-    let o = f.run(&[
-        "calibrate",
-        "data.csv",
-        "--robot",
-        "aria",
+    let o = f.calibrate(&[
         "--algorithm",
         "all",
         "--bounds-deg",
@@ -296,16 +291,7 @@ fn algorithm_all_records_three_results_and_the_consensus() {
     }
 
     // With the paper's 5° OPT1 is held on its bounds: the consensus check must say so.
-    let o = f.run(&[
-        "calibrate",
-        "data.csv",
-        "--robot",
-        "aria",
-        "--algorithm",
-        "all",
-        "--out",
-        "narrow.json",
-    ]);
+    let o = f.calibrate(&["--algorithm", "all", "--out", "narrow.json"]);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
     assert!(stdout(&o).contains("AT BOUND") || stdout(&o).contains('*'));
     let m = f.json("narrow.json");
@@ -450,24 +436,10 @@ fn exit_codes_and_messages() {
 fn an_input_file_is_never_overwritten() {
     let f = Fixture::new();
     let before = fs::read(f.path("data.csv")).unwrap();
-    let o = f.run(&[
-        "calibrate",
-        "data.csv",
-        "--robot",
-        "aria",
-        "--out",
-        "data.csv",
-    ]);
+    let o = f.calibrate(&["--out", "data.csv"]);
     assert_eq!(code(&o), 2, "{}", stderr(&o));
     assert!(stderr(&o).contains("never overwritten"), "{}", stderr(&o));
-    let o = f.run(&[
-        "calibrate",
-        "data.csv",
-        "--robot",
-        "aria",
-        "--out",
-        "./data.csv",
-    ]);
+    let o = f.calibrate(&["--out", "./data.csv"]);
     assert_eq!(code(&o), 2, "{}", stderr(&o));
     let o = f.run(&["predict", "aria", "data.csv", "--out", "data.csv"]);
     assert_eq!(code(&o), 2, "{}", stderr(&o));
@@ -476,14 +448,7 @@ fn an_input_file_is_never_overwritten() {
     assert_eq!(fs::read(f.path("data.csv")).unwrap(), before);
 
     // The model file is an input of predict and validate too.
-    let o = f.run(&[
-        "calibrate",
-        "data.csv",
-        "--robot",
-        "aria",
-        "--out",
-        "m.json",
-    ]);
+    let o = f.calibrate(&["--out", "m.json"]);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
     let model = fs::read(f.path("m.json")).unwrap();
     let o = f.run(&["predict", "m.json", "data.csv", "--out", "m.json"]);
@@ -496,14 +461,7 @@ fn an_input_file_is_never_overwritten() {
 #[test]
 fn a_newer_schema_version_is_refused() {
     let f = Fixture::new();
-    let o = f.run(&[
-        "calibrate",
-        "data.csv",
-        "--robot",
-        "aria",
-        "--out",
-        "m.json",
-    ]);
+    let o = f.calibrate(&["--out", "m.json"]);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
     let text = fs::read_to_string(f.path("m.json")).unwrap();
     let future = text.replacen(
@@ -709,14 +667,10 @@ fn a_robot_description_file_is_a_robot() {
 fn algorithm_all_goes_on_without_a_failed_algorithm() {
     let f = Fixture::new();
     // On these data OLS converges in 5 iterations, OPT1 needs 10 (found by trying 2..12).
-    let all = |iterations: &str, out: &str| {
-        f.run(&[
-            "calibrate",
-            "data.csv",
-            "--robot",
-            "aria",
+    let run = |algorithm: &str, iterations: &str, out: &str| {
+        f.calibrate(&[
             "--algorithm",
-            "all",
+            algorithm,
             "--bounds-deg",
             "60",
             "--max-iterations",
@@ -725,7 +679,7 @@ fn algorithm_all_goes_on_without_a_failed_algorithm() {
             out,
         ])
     };
-    let o = all("6", "six.json");
+    let o = run("all", "6", "six.json");
     assert_eq!(code(&o), 0, "{}", stderr(&o));
     let err = stderr(&o);
     assert!(
@@ -764,25 +718,12 @@ fn algorithm_all_goes_on_without_a_failed_algorithm() {
     assert_eq!(code(&o), 0, "{}", stderr(&o));
 
     // OLS, whose fit is the model, fails: nothing is written.
-    let o = all("3", "three.json");
+    let o = run("all", "3", "three.json");
     assert_eq!(code(&o), 4, "{}", stderr(&o));
     assert!(stderr(&o).contains("OLS failed: data.csv: no convergence after 3 iterations"));
     assert!(!f.path("three.json").exists());
     // One algorithm asked, and it fails: the command fails.
-    let o = f.run(&[
-        "calibrate",
-        "data.csv",
-        "--robot",
-        "aria",
-        "--algorithm",
-        "opt1",
-        "--bounds-deg",
-        "60",
-        "--max-iterations",
-        "6",
-        "--out",
-        "opt1.json",
-    ]);
+    let o = run("opt1", "6", "opt1.json");
     assert_eq!(code(&o), 4, "{}", stderr(&o));
     assert!(!f.path("opt1.json").exists());
 }
@@ -819,33 +760,30 @@ fn near_axis_csv(off_axis_m: f64, seed: u64) -> String {
     s
 }
 
+/// The model file of `kincal calibrate` on [`near_axis_csv`]'s data of `seed` (0.1 mm off
+/// the axis, written to `dir`), with `args` after the robot; exit 0 asserted.
+fn near_axis_model(dir: &Path, seed: u64, args: &[&str]) -> Value {
+    fs::write(dir.join("d.csv"), near_axis_csv(1e-4, seed)).unwrap();
+    let mut all = vec!["calibrate", "d.csv", "--robot", "aria", "--out", "m.json"];
+    all.extend_from_slice(args);
+    let o = kincal(&all, dir);
+    assert_eq!(code(&o), 0, "seed {seed}, {args:?}: {}", stderr(&o));
+    serde_json::from_str(&fs::read_to_string(dir.join("m.json")).unwrap()).unwrap()
+}
+
 /// A weakly determined link angle fitted without bounds (a tool point 0.1 mm off the last
 /// axis: OPT2 walked θ0_6 three and six turns on these two seeds, reporting −2,344°) is
 /// reported within half a turn of its start, the same model; every algorithm's run.
 #[test]
 fn fitted_link_angles_stay_within_half_a_turn_of_the_start() {
     let dir = tempfile::tempdir().unwrap();
+    let start = aria::nominal();
     for seed in [9u64, 10] {
-        fs::write(dir.path().join("d.csv"), near_axis_csv(1e-4, seed)).unwrap();
-        let o = kincal(
-            &[
-                "calibrate",
-                "d.csv",
-                "--robot",
-                "aria",
-                "--algorithm",
-                "all",
-                "--bounds-deg",
-                "60",
-                "--out",
-                "m.json",
-            ],
+        let m = near_axis_model(
             dir.path(),
+            seed,
+            &["--algorithm", "all", "--bounds-deg", "60"],
         );
-        assert_eq!(code(&o), 0, "seed {seed}: {}", stderr(&o));
-        let m: Value =
-            serde_json::from_str(&fs::read_to_string(dir.path().join("m.json")).unwrap()).unwrap();
-        let start = robot_from_model(&serde_json::json!({"robot": {"parameters": []}}));
         for r in m["calibration"]["results"].as_array().unwrap() {
             for p in r["parameters"].as_array().unwrap() {
                 let label = p["label"].as_str().unwrap();
@@ -875,30 +813,13 @@ fn fitted_link_angles_stay_within_half_a_turn_of_the_start() {
 fn ols_on_a_point_near_the_last_axis_ends_at_the_trust_regions_minimum() {
     let dir = tempfile::tempdir().unwrap();
     for seed in [1u64, 4] {
-        fs::write(dir.path().join("d.csv"), near_axis_csv(1e-4, seed)).unwrap();
-        let fit = |algorithm: &str| {
-            let out = format!("{algorithm}.json");
-            let o = kincal(
-                &[
-                    "calibrate",
-                    "d.csv",
-                    "--robot",
-                    "aria",
-                    "--algorithm",
-                    algorithm,
-                    "--out",
-                    &out,
-                ],
-                dir.path(),
-            );
-            assert_eq!(code(&o), 0, "seed {seed}, {algorithm}: {}", stderr(&o));
-            let m: Value =
-                serde_json::from_str(&fs::read_to_string(dir.path().join(&out)).unwrap()).unwrap();
+        let rms_mm = |algorithm: &str| {
+            let m = near_axis_model(dir.path(), seed, &["--algorithm", algorithm]);
             m["calibration"]["residuals"]["after"]["rms_pos_mm"]
                 .as_f64()
                 .unwrap()
         };
-        let (ols, opt2) = (fit("ols"), fit("opt2"));
+        let (ols, opt2) = (rms_mm("ols"), rms_mm("opt2"));
         assert!(
             (ols - opt2).abs() <= 1e-9 * opt2,
             "seed {seed}: {ols} vs {opt2} mm"
