@@ -550,9 +550,10 @@ impl Finish {
 /// when all 30 cuts raise the cost although the full step is longer than the parameters'
 /// scaled norm and predicts a gain above that rounding level, the fit is not at a minimum:
 /// OPT2's trust region ([`levenberg_marquardt`]) continues from that iterate
-/// ([`crawl_handover`]) instead of reporting convergence. On instrument data the same
-/// handover follows a cut below [`CRAWL_SCALE`] of such a step that lowers the cost: a
-/// sliver of a direction gone bad is no progress.
+/// ([`crawl_handover`]) instead of reporting convergence. Where no damped step is tried
+/// (instrument data; contact data at a singular iterate) the same handover follows a cut
+/// below [`CRAWL_SCALE`] of such a step that lowers the cost: a sliver of a direction gone
+/// bad is no progress.
 ///
 /// Why the handover: along some paths the normal equations become near singular and the
 /// Gauss–Newton step stops being a usable direction while still predicting a large gain.
@@ -746,7 +747,7 @@ fn crawl_handover<const N: usize, const P: usize, D: RowSource<N> + ?Sized>(
 
 /// A Gauss–Newton step longer than the parameters' scaled norm, predicting a gain above
 /// rounding, whose cost falls only once cut below this share, is handed over to the trust
-/// region as if every cut had failed ([`gauss_newton`], instrument data). Why: with a tool
+/// region as if every cut had failed ([`gauss_newton`], where no damped step is tried). Why: with a tool
 /// point 0.1 mm off the last axis (position rows, started at ARIA's Table 1, 46° from the
 /// truth's θ0_4) the first step kept 1/64 and moved into a region where every later one
 /// kept 1/1,024–1/65,536: 200 iterations without convergence on 6 of 12 simulated data
