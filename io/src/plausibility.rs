@@ -109,7 +109,9 @@ fn round6(x: f64) -> f64 {
 }
 
 /// Warnings about a written calibration: a residual worse after than before (position or
-/// orientation), identified changes far outside the OPT1 intervals.
+/// orientation), identified parameters whose standard error exceeds the OPT1 interval's
+/// half-width (the data determine them worse than the manufacturing tolerance does),
+/// identified changes far outside the OPT1 intervals.
 pub fn check_result(file: &ModelFile) -> Vec<String> {
     let mut w = Vec::new();
     let Some(cal) = &file.calibration else {
@@ -153,6 +155,30 @@ pub fn check_result(file: &ModelFile) -> Vec<String> {
             })
         })
         .collect();
+    let vague: Vec<String> = file
+        .robot
+        .parameters
+        .iter()
+        .filter(|p| p.identified)
+        .filter_map(|p| {
+            let (b, se) = (bound(&p.unit)?, p.std_error?);
+            (se > b).then(|| {
+                if p.unit == "m" {
+                    format!("{} ±{:.1} mm", p.label, se * 1e3)
+                } else {
+                    format!("{} ±{:.2}°", p.label, se.to_degrees())
+                }
+            })
+        })
+        .collect();
+    if !vague.is_empty() {
+        w.push(format!(
+            "the data barely determine {}: standard errors above the tolerance (±{} mm, ±{}°), so these estimates may be far off; more poses or measured points, a prior (--prior) or leaving them out of the fit would help",
+            vague.join(", "),
+            round6(cal.options.bounds_length_mm),
+            round6(cal.options.bounds_angle_deg),
+        ));
+    }
     if !far.is_empty() {
         w.push(format!(
             "identified changes beyond {CHANGE_BOUND_FACTOR}× the tolerance (±{} mm, ±{}°): {}: a wrong nominal model, unit or data?",

@@ -87,9 +87,10 @@ full poses, alternating rigid fits for positions; kincal::frames) and starts fro
 Plausibility: measured positions a median of more than 100 reaches from the base cannot be
 the robot's (millimetres under a metre header?) and are refused unless --allow-implausible.
 Positions out of reach or all within 1 % of the reach of the base, a residual worse after
-calibration than before (position or orientation), and identified changes beyond 10× the
---bounds-mm/--bounds-deg tolerance are warnings, on stderr and in the model file
-(calibration.warnings).
+calibration than before (position or orientation), identified parameters whose standard
+error exceeds the --bounds-mm/--bounds-deg tolerance (the data determine them worse than the
+manufacturing tolerance does) and identified changes beyond 10× that tolerance are warnings,
+on stderr and in the model file (calibration.warnings).
 
 Priors (docs/real-data.md, \"Priors\"): --prior [MM,DEG] adds a Gaussian prior around the
 initial model on every link parameter (one σ for lengths [mm] and for angles [deg]; alone:
