@@ -138,39 +138,35 @@ pub fn check_result(file: &ModelFile) -> Vec<String> {
         "rad" => Some(cal.options.bounds_angle_deg.to_radians()),
         _ => None,
     };
-    let far: Vec<String> = file
-        .robot
-        .parameters
-        .iter()
-        .filter(|p| p.identified)
-        .filter_map(|p| {
-            let b = bound(&p.unit)?;
-            let change = p.value - p.nominal;
-            (change.abs() > CHANGE_BOUND_FACTOR * b).then(|| {
-                if p.unit == "m" {
-                    format!("{} {:+.1} mm", p.label, change * 1e3)
-                } else {
-                    format!("{} {:+.2}°", p.label, change.to_degrees())
-                }
-            })
-        })
-        .collect();
-    let vague: Vec<String> = file
-        .robot
-        .parameters
-        .iter()
-        .filter(|p| p.identified)
-        .filter_map(|p| {
-            let (b, se) = (bound(&p.unit)?, p.std_error?);
-            (se > b).then(|| {
-                if p.unit == "m" {
-                    format!("{} ±{:.1} mm", p.label, se * 1e3)
-                } else {
-                    format!("{} ±{:.2}°", p.label, se.to_degrees())
-                }
-            })
-        })
-        .collect();
+    // The identified parameters for which `pick` (given the tolerance) returns an amount,
+    // each named with it: a signed change ("d_7 +267.7 mm") or, `spread`, a standard error
+    // ("theta0_6 ±63.01°").
+    let listed =
+        |spread: bool, pick: &dyn Fn(&crate::model_file::ParamJson, f64) -> Option<f64>| {
+            file.robot
+                .parameters
+                .iter()
+                .filter(|p| p.identified)
+                .filter_map(|p| {
+                    let x = pick(p, bound(&p.unit)?)?;
+                    let (v, unit, digits) = if p.unit == "m" {
+                        (x * 1e3, " mm", 1)
+                    } else {
+                        (x.to_degrees(), "°", 2)
+                    };
+                    Some(if spread {
+                        format!("{} ±{v:.digits$}{unit}", p.label)
+                    } else {
+                        format!("{} {v:+.digits$}{unit}", p.label)
+                    })
+                })
+                .collect::<Vec<String>>()
+        };
+    let far = listed(false, &|p, b| {
+        let change = p.value - p.nominal;
+        (change.abs() > CHANGE_BOUND_FACTOR * b).then_some(change)
+    });
+    let vague = listed(true, &|p, b| p.std_error.filter(|&se| se > b));
     if !vague.is_empty() {
         w.push(format!(
             "the data barely determine {}: standard errors above the tolerance (±{} mm, ±{}°), so these estimates may be far off; more poses or measured points, a prior (--prior) or leaving them out of the fit would help",
