@@ -174,6 +174,23 @@ pub const fn num_geometric_params(n: usize) -> usize {
 }
 
 impl ParamId {
+    /// Whether this is a link's θ0, α or β: an angle the kinematics see only through its
+    /// sine and cosine, so values whole turns apart are the same model.
+    #[must_use]
+    pub fn is_link_angle(self) -> bool {
+        matches!(
+            self,
+            ParamId::Link {
+                kind: LinkParam::Theta0 | LinkParam::Alpha | LinkParam::Beta,
+                ..
+            }
+        )
+    }
+    /// `d` less the nearest whole number of turns (2π): in [−π, π] \[rad\].
+    #[must_use]
+    pub fn less_whole_turns(d: f64) -> f64 {
+        d - libm::round(d / core::f64::consts::TAU) * core::f64::consts::TAU
+    }
     /// Flat index of this parameter in an `n`-joint model.
     // Inlined: the Jacobian computes ~65 column indices per pose, a call each otherwise.
     #[must_use]

@@ -606,25 +606,11 @@ impl Consensus {
 /// (θ0, α, β: the kinematics see them through sines and cosines only): the same model
 /// reached by two algorithms a turn apart is no disagreement.
 pub fn parameter_difference<const N: usize>(idx: ParamIndex, a: f64, b: f64) -> f64 {
-    let d = a - b;
-    if is_link_angle::<N>(idx) {
-        let tau = std::f64::consts::TAU;
-        (d - tau * (d / tau).round()).abs()
+    if kincal::ParamId::from_index(idx, N).is_ok_and(kincal::ParamId::is_link_angle) {
+        kincal::ParamId::less_whole_turns(a - b).abs()
     } else {
-        d.abs()
+        (a - b).abs()
     }
-}
-
-/// Whether `idx` is a link's θ0, α or β.
-pub fn is_link_angle<const N: usize>(idx: ParamIndex) -> bool {
-    use kincal::params::LinkParam;
-    matches!(
-        kincal::ParamId::from_index(idx, N),
-        Ok(kincal::ParamId::Link {
-            kind: LinkParam::Theta0 | LinkParam::Alpha | LinkParam::Beta,
-            ..
-        })
-    )
 }
 
 impl Disagreement {
@@ -653,6 +639,5 @@ mod tests {
             (0.5f64 - 0.2).abs()
         );
         assert_eq!(parameter_difference::<6>(d_1, TAU, 0.0), TAU);
-        assert!(is_link_angle::<6>(theta0_6) && !is_link_angle::<6>(d_1));
     }
 }

@@ -18,7 +18,7 @@ use crate::linalg::minnorm::min_norm_solve;
 use crate::linalg::tri::{solve_upper_transpose, upper_inverse_gram};
 use crate::math::sqrt;
 use crate::model::Robot;
-use crate::params::{LinkParam, ParamId, ParamSet};
+use crate::params::{ParamId, ParamSet};
 
 /// Identifies the identifiable subset of `opts.requested` from `data`, starting at `robot`.
 /// OLS and OPT2 report each fitted link angle (θ0, α, β) within half a turn of its starting
@@ -266,16 +266,12 @@ fn wrap_link_angles<const N: usize>(
     start: &[f64],
 ) -> Result<()> {
     for (&i, &s) in cols.iter().zip(start) {
-        let angle = matches!(
-            ParamId::from_index(ParamIndex(i), N),
-            Ok(ParamId::Link {
-                kind: LinkParam::Theta0 | LinkParam::Alpha | LinkParam::Beta,
-                ..
-            })
-        );
+        if !ParamId::from_index(ParamIndex(i), N).is_ok_and(ParamId::is_link_angle) {
+            continue;
+        }
         let v = robot.param(ParamIndex(i))?;
         let turns = libm::round((v - s) / core::f64::consts::TAU);
-        if angle && turns != 0.0 {
+        if turns != 0.0 {
             robot.set_param(ParamIndex(i), v - turns * core::f64::consts::TAU)?;
         }
     }
